@@ -1,0 +1,228 @@
+//! Sparse linear algebra shared by the solvers: products, and sparse Cholesky
+//! through faer (symbolic analysis once, numeric factorization per matrix).
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+    simplicial, supernodal,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
+use thiserror::Error;
+
+/// A failed factorization.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum LinalgError {
+    #[error("sparse Cholesky: the matrix is not numerically positive definite (pivot {index})")]
+    NotPositiveDefinite { index: usize },
+    #[error("sparse Cholesky: {0}")]
+    Faer(String),
+}
+
+/// y = A x for a CSR matrix.
+pub fn spmv(a: &CsrMatrix<f64>, x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; a.nrows()];
+    spmv_into(a, x, &mut y);
+    y
+}
+
+/// y = A x for a CSR matrix, into a caller's buffer (no allocation).
+pub fn spmv_into(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
+    let (offsets, cols, vals) = a.csr_data();
+    for (i, yi) in y.iter_mut().enumerate() {
+        let (lo, hi) = (offsets[i], offsets[i + 1]);
+        *yi = cols[lo..hi]
+            .iter()
+            .zip(&vals[lo..hi])
+            .map(|(&j, &v)| v * x[j])
+            .sum();
+    }
+}
+
+/// Maximum norm of a vector (0 for an empty one).
+pub fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// Keeps one triangle (`lower`: row ≥ col) of a square matrix, as CSC for faer.
+fn triangle_csc(a: &CsrMatrix<f64>, lower: bool, perm_inv: Option<&[usize]>) -> CscMatrix<f64> {
+    let n = a.nrows();
+    let mut coo = CooMatrix::new(n, n);
+    for (i, j, &v) in a.triplet_iter() {
+        let (pi, pj) = match perm_inv {
+            Some(inv) => (inv[i], inv[j]),
+            None => (i, j),
+        };
+        if (lower && pi >= pj) || (!lower && pi <= pj) {
+            coo.push(pi, pj, v);
+        }
+    }
+    CscMatrix::from(&coo)
+}
+
+fn faer_ref(m: &CscMatrix<f64>) -> SparseColMatRef<'_, usize, f64> {
+    let n = m.nrows();
+    SparseColMatRef::new(
+        SymbolicSparseColMatRef::new_checked(n, m.ncols(), m.col_offsets(), None, m.row_indices()),
+        m.values(),
+    )
+}
+
+/// Sparse Cholesky LLᵀ of a symmetric positive definite matrix (faer,
+/// fill-reducing AMD ordering). The symbolic analysis is kept, so a matrix
+/// with the same pattern is refactored without redoing it.
+pub struct SparseCholesky {
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    lower: CscMatrix<f64>,
+}
+
+impl SparseCholesky {
+    /// Symbolic analysis and numeric factorization of `a` (full symmetric storage).
+    pub fn new(a: &CsrMatrix<f64>) -> Result<Self, LinalgError> {
+        let lower = triangle_csc(a, true, None);
+        let symbolic = factorize_symbolic_cholesky(
+            faer_ref(&lower).symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+        let values = vec![0.0; symbolic.len_val()];
+        let mut this = Self {
+            symbolic,
+            values,
+            lower,
+        };
+        this.factor_current()?;
+        Ok(this)
+    }
+
+    /// Numeric refactorization of a matrix with the pattern of the first one.
+    pub fn refactor(&mut self, a: &CsrMatrix<f64>) -> Result<(), LinalgError> {
+        self.lower = triangle_csc(a, true, None);
+        self.factor_current()
+    }
+
+    fn factor_current(&mut self) -> Result<(), LinalgError> {
+        let par = Par::Seq;
+        let mut mem = MemBuffer::new(
+            self.symbolic
+                .factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+        );
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut self.values,
+                faer_ref(&self.lower),
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+            .map(|_| ())
+            .map_err(|e| match e {
+                faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                    LinalgError::NotPositiveDefinite { index }
+                }
+            })
+    }
+
+    /// Dimension of the factored matrix.
+    pub fn n(&self) -> usize {
+        self.symbolic.nrows()
+    }
+
+    /// Nonzeros of the factor L.
+    pub fn factor_nnz(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Solves A X = B in place for the columns of `rhs`.
+    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let par = Par::Seq;
+        let mut mem = MemBuffer::new(
+            self.symbolic
+                .solve_in_place_scratch::<f64>(rhs.ncols(), par),
+        );
+        faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, &self.values)
+            .solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+    }
+
+    /// Solves A x = b in place for one vector.
+    pub fn solve_vec(&self, b: &mut [f64]) {
+        let n = b.len();
+        self.solve_in_place(faer::MatMut::from_column_major_slice_mut(b, n, 1));
+    }
+}
+
+/// Measured dimension of the kernel of a symmetric positive semidefinite
+/// matrix: the number of pivots of its Cholesky factorization (AMD ordering)
+/// that fall below `rel_tol` times the largest diagonal entry. Each such pivot
+/// is replaced by that diagonal entry (a rank-one spring), which removes one
+/// kernel direction and lets the factorization go on.
+pub fn kernel_dimension(a: &CsrMatrix<f64>, rel_tol: f64) -> Result<usize, LinalgError> {
+    let scale = a
+        .diagonal_as_csr()
+        .values()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    if scale == 0.0 {
+        return Ok(a.nrows());
+    }
+    let lower = triangle_csc(a, true, None);
+    let symbolic = factorize_symbolic_cholesky(
+        faer_ref(&lower).symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        Default::default(),
+    )
+    .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+    let inv: Option<Vec<usize>> = symbolic.perm().map(|p| p.arrays().1.to_vec());
+    let regularization = LltRegularization {
+        dynamic_regularization_delta: scale,
+        dynamic_regularization_epsilon: rel_tol * scale,
+    };
+    let mut values = vec![0.0; symbolic.len_val()];
+    let par = Par::Seq;
+    let info = match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let upper = triangle_csc(a, false, inv.as_deref());
+            let mut mem = MemBuffer::new(simplicial::factorize_simplicial_numeric_llt_scratch::<
+                usize,
+                f64,
+            >(a.nrows()));
+            simplicial::factorize_simplicial_numeric_llt(
+                &mut values,
+                faer_ref(&upper),
+                regularization,
+                s,
+                MemStack::new(&mut mem),
+            )
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let lower = triangle_csc(a, true, inv.as_deref());
+            let mut mem = MemBuffer::new(supernodal::factorize_supernodal_numeric_llt_scratch::<
+                usize,
+                f64,
+            >(s, par, Default::default()));
+            supernodal::factorize_supernodal_numeric_llt(
+                &mut values,
+                faer_ref(&lower),
+                regularization,
+                s,
+                par,
+                MemStack::new(&mut mem),
+                Default::default(),
+            )
+        }
+    };
+    info.map(|i| i.dynamic_regularization_count)
+        .map_err(|e| match e {
+            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                LinalgError::NotPositiveDefinite { index }
+            }
+        })
+}

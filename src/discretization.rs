@@ -1,0 +1,163 @@
+//! One scene on one mesh, turned into the algebraic given-friction subproblem,
+//! and the way back from its unknowns to both bodies' nodal displacements.
+
+use contactlab_solvers::{ContactNode, GivenFrictionProblem, ProblemError};
+use thiserror::Error;
+
+use crate::assembly;
+use crate::dofs::{ContactDofs, DofMap};
+use crate::mesh::{Body, Mesh};
+use crate::mesh_size::MeshSize;
+use crate::scene::{Scene, SceneError};
+
+/// Building a discretization failed.
+#[derive(Debug, Error)]
+pub enum BuildError {
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    #[error("assembled problem is inconsistent: {0}")]
+    Problem(#[from] ProblemError),
+}
+
+/// The paper's scene on one mesh.
+#[derive(Clone, Debug)]
+pub struct Discretization {
+    pub mesh: Mesh,
+    pub dofs: DofMap,
+    /// The given-friction subproblem with g = 0.
+    pub problem: GivenFrictionProblem,
+    /// Applied nodal forces (per node, x and y), before the change of variables.
+    pub forces: Vec<[f64; 2]>,
+    /// Σ p2 · (to − from) of the scene's loads (condition (13): negative).
+    pub total_load: f64,
+}
+
+impl Discretization {
+    /// Validates the scene (condition (13) included) and assembles it on mesh `h`.
+    pub fn new(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
+        scene.validate()?;
+        let mesh = Mesh::new(h);
+        let dofs = DofMap::new(&mesh);
+        let a = assembly::stiffness(&mesh, &dofs, &scene.material);
+        let m = assembly::mass(&mesh, &dofs);
+        let forces = assembly::top_traction_forces(&mesh, &scene.loads);
+        let f = assembly::load_vector(&dofs, &forces);
+        let contacts = contact_nodes(&mesh, dofs.contacts());
+        let problem = GivenFrictionProblem::new(a, f, m, contacts)?;
+        Ok(Self {
+            mesh,
+            dofs,
+            problem,
+            forces,
+            total_load: scene.total_vertical_load(),
+        })
+    }
+
+    pub fn h(&self) -> MeshSize {
+        self.mesh.size()
+    }
+
+    /// x of each contact node, increasing.
+    pub fn contact_x(&self) -> Vec<f64> {
+        self.dofs.contacts().iter().map(|c| c.x).collect()
+    }
+
+    /// The rigid vertical translation of the upper body, z'' = (0, 1), in the
+    /// unknowns: +1 on v''_2 away from Γ_K, −1 on every jump t_i (paper (11)).
+    pub fn kernel_vector(&self) -> Vec<f64> {
+        let u: Vec<[f64; 2]> = (0..self.mesh.num_nodes())
+            .map(|node| match self.mesh.locate(node).0 {
+                Body::Lower => [0.0, 0.0],
+                Body::Upper => [0.0, 1.0],
+            })
+            .collect();
+        self.dofs.from_physical(&u)
+    }
+
+    /// Nodal displacements of both bodies (per node, x and y).
+    pub fn displacements(&self, v: &[f64]) -> Vec<[f64; 2]> {
+        self.dofs.to_physical(v)
+    }
+
+    /// Evaluates this mesh's P1 field `u` (per node) of `body` at a point of it.
+    pub fn evaluate(&self, u: &[[f64; 2]], body: Body, x: f64, y: f64) -> [f64; 2] {
+        let h = self.mesh.h();
+        let y0 = match body {
+            Body::Lower => 0.0,
+            Body::Upper => 0.5,
+        };
+        let (fx, fy) = (x / h, (y - y0) / h);
+        let i = (fx.floor() as usize).min(self.mesh.n() - 2);
+        let j = (fy.floor() as usize).min(self.mesh.rows() - 2);
+        let (xi, eta) = (fx - i as f64, fy - j as f64);
+        let node = |di, dj| u[self.mesh.node(body, i + di, j + dj)];
+        // Lower-right triangle (LL, LR, UR) where ξ ≥ η, else (LL, UR, UL).
+        let (corners, weights) = if xi >= eta {
+            (
+                [node(0, 0), node(1, 0), node(1, 1)],
+                [1.0 - xi, xi - eta, eta],
+            )
+        } else {
+            (
+                [node(0, 0), node(1, 1), node(0, 1)],
+                [1.0 - eta, xi, eta - xi],
+            )
+        };
+        let mut out = [0.0; 2];
+        for (c, w) in corners.iter().zip(weights) {
+            out[0] += w * c[0];
+            out[1] += w * c[1];
+        }
+        out
+    }
+
+    /// Unknowns of this mesh interpolating (linearly, per body) the unknowns
+    /// `v` of another discretization of the same scene: prolongation from a
+    /// coarse level, or injection from a fine one (nested meshes).
+    pub fn transfer_from(&self, other: &Discretization, v: &[f64]) -> Vec<f64> {
+        let u_other = other.displacements(v);
+        let u: Vec<[f64; 2]> = (0..self.mesh.num_nodes())
+            .map(|node| {
+                let (body, ..) = self.mesh.locate(node);
+                let [x, y] = self.mesh.coords(node);
+                other.evaluate(&u_other, body, x, y)
+            })
+            .collect();
+        self.dofs.from_physical(&u)
+    }
+
+    /// A quantity given per contact node of another discretization, linearly
+    /// interpolated along Γ_K to this one's contact nodes.
+    pub fn transfer_contact(&self, other: &Discretization, values: &[f64]) -> Vec<f64> {
+        let h = other.mesh.h();
+        let last = values.len() - 1;
+        self.contact_x()
+            .iter()
+            .map(|&x| {
+                let i = ((x / h).floor() as usize).min(last.saturating_sub(1));
+                let w = (x / h - i as f64).clamp(0.0, 1.0);
+                if last == 0 {
+                    values[0]
+                } else {
+                    (1.0 - w) * values[i] + w * values[i + 1]
+                }
+            })
+            .collect()
+    }
+}
+
+fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs]) -> Vec<ContactNode> {
+    let h = mesh.h();
+    let last = contacts.len() - 1;
+    contacts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ContactNode {
+            t: c.t,
+            s: c.s,
+            // Trapezoid rule on Γ_K: h inside, h/2 at both ends.
+            weight: if i == 0 || i == last { h / 2.0 } else { h },
+            g: 0.0,
+        })
+        .collect()
+}

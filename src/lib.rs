@@ -1,0 +1,17 @@
+//! contactlab: a testbed for the semicoercive two-body contact problem with
+//! Coulomb friction of Zhiltsov & Namm (2019). This crate holds the mechanics
+//! (mesh, P1 assembly, scenes, the friction fixed point, the comparison
+//! harness, the CLI); the solvers of the algebraic given-friction subproblem
+//! live in `contactlab-solvers`.
+
+pub mod assembly;
+pub mod cli;
+pub mod discretization;
+pub mod dofs;
+pub mod material;
+pub mod mesh;
+pub mod mesh_size;
+pub mod scene;
+pub mod scene_file;
+
+pub use contactlab_solvers as solvers;

@@ -1,0 +1,269 @@
+//! Scenes: material, friction coefficient, tractions on the top side of the
+//! upper body, and mesh levels. The paper's problems 1, 2 and 3 are built in.
+
+use serde::{Deserialize, Deserializer, Serialize};
+use thiserror::Error;
+
+use crate::material::Material;
+use crate::mesh_size::MeshSize;
+
+/// A vertical traction P''_2 (force per unit length, negative pushes down),
+/// constant on the segment `from ≤ x ≤ to` of the top side y = 1.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Traction {
+    #[serde(deserialize_with = "fraction")]
+    pub from: f64,
+    #[serde(deserialize_with = "fraction")]
+    pub to: f64,
+    pub p2: f64,
+}
+
+/// The scene of one computation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub name: String,
+    #[serde(default)]
+    pub material: Material,
+    /// Coulomb friction coefficient 𝓕 (paper: 0.5).
+    #[serde(default = "default_friction")]
+    pub friction: f64,
+    pub loads: Vec<Traction>,
+    /// Mesh continuation levels, coarse to fine; the last is the finest.
+    #[serde(default = "default_levels")]
+    pub levels: Vec<MeshSize>,
+}
+
+fn default_friction() -> f64 {
+    0.5
+}
+
+fn default_levels() -> Vec<MeshSize> {
+    MeshSize::schedule_to(MeshSize::from_level(6).expect("1/64 is in range"))
+}
+
+/// An input that cannot define a solvable scene.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum SceneError {
+    #[error("{field} = {value} is invalid: {expected}")]
+    Invalid {
+        field: String,
+        value: String,
+        expected: String,
+    },
+    #[error(
+        "the loads violate the paper's condition (13): their total vertical force on the upper body is {total}, \
+         but it must be strictly negative (pushing the upper body onto the lower one), \
+         otherwise the semicoercive problem has no solution (Theorem 1); make the sum of p2·(to − from) negative"
+    )]
+    NoSolution { total: f64 },
+    #[error("unknown problem {0}: the built-in problems are 1, 2 and 3 (or give a scene file)")]
+    UnknownProblem(u32),
+}
+
+fn invalid(field: &str, value: impl ToString, expected: &str) -> SceneError {
+    SceneError::Invalid {
+        field: field.to_string(),
+        value: value.to_string(),
+        expected: expected.to_string(),
+    }
+}
+
+impl Scene {
+    /// The paper's problems (section 5): P''_2 = −60 on the left third of the
+    /// top side (1), −120 on the left third (2), −60 on the whole top (3).
+    pub fn paper_problem(number: u32) -> Result<Self, SceneError> {
+        let (p2, to) = match number {
+            1 => (-60.0, 1.0 / 3.0),
+            2 => (-120.0, 1.0 / 3.0),
+            3 => (-60.0, 1.0),
+            other => return Err(SceneError::UnknownProblem(other)),
+        };
+        Ok(Self {
+            name: format!("problem {number}"),
+            material: Material::default(),
+            friction: default_friction(),
+            loads: vec![Traction { from: 0.0, to, p2 }],
+            levels: default_levels(),
+        })
+    }
+
+    /// The finest mesh level.
+    pub fn finest(&self) -> MeshSize {
+        *self.levels.last().expect("validated scenes have levels")
+    }
+
+    /// Sets the continuation schedule 1/8, ..., h (or just h if h > 1/8).
+    pub fn set_finest(&mut self, h: MeshSize) {
+        self.levels = MeshSize::schedule_to(h);
+    }
+
+    /// Total vertical force of the loads on the upper body, Σ p2 · (to − from):
+    /// the left side of the paper's condition (13) without body forces.
+    pub fn total_vertical_load(&self) -> f64 {
+        self.loads.iter().map(|l| l.p2 * (l.to - l.from)).sum()
+    }
+
+    /// Checks every field, then condition (13).
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let m = &self.material;
+        if !(m.young.is_finite() && m.young > 0.0) {
+            return Err(invalid(
+                "material.young (--young)",
+                m.young,
+                "Young's modulus must be a positive number (the paper: 73e3)",
+            ));
+        }
+        if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
+            return Err(invalid(
+                "material.poisson (--poisson)",
+                m.poisson,
+                "Poisson's ratio must lie in (-1, 0.5) (the paper: 0.34)",
+            ));
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(invalid(
+                "friction (--friction)",
+                self.friction,
+                "the friction coefficient must be a number ≥ 0 (the paper: 0.5; 0 is frictionless)",
+            ));
+        }
+        if self.loads.is_empty() {
+            return Err(invalid(
+                "loads",
+                "[]",
+                "give at least one traction segment {from, to, p2} on the top side",
+            ));
+        }
+        for (i, l) in self.loads.iter().enumerate() {
+            let field = |name: &str| format!("loads[{i}].{name}");
+            for (name, x) in [("from", l.from), ("to", l.to)] {
+                if !(x.is_finite() && (0.0..=1.0).contains(&x)) {
+                    return Err(invalid(&field(name), x, "segment ends must lie in [0, 1]"));
+                }
+            }
+            if l.from >= l.to {
+                return Err(invalid(
+                    &field("to"),
+                    l.to,
+                    &format!("a segment must have from < to, here from = {}", l.from),
+                ));
+            }
+            if !l.p2.is_finite() {
+                return Err(invalid(
+                    &field("p2"),
+                    l.p2,
+                    "the traction must be a finite number",
+                ));
+            }
+        }
+        if self.levels.is_empty() {
+            return Err(invalid(
+                "levels",
+                "[]",
+                "give at least one mesh level, e.g. [\"1/64\"]",
+            ));
+        }
+        for pair in self.levels.windows(2) {
+            if pair[1].level() <= pair[0].level() {
+                return Err(invalid(
+                    "levels",
+                    format!("{} then {}", pair[0], pair[1]),
+                    "levels must go from coarse to fine, e.g. [\"1/8\", \"1/16\", \"1/32\", \"1/64\"]",
+                ));
+            }
+        }
+        let total = self.total_vertical_load();
+        if total >= 0.0 {
+            return Err(SceneError::NoSolution { total });
+        }
+        Ok(())
+    }
+}
+
+/// A coordinate given as a number or as a fraction string such as "1/3".
+fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Repr {
+        Number(f64),
+        Text(String),
+    }
+    match Repr::deserialize(d)? {
+        Repr::Number(x) => Ok(x),
+        Repr::Text(t) => parse_fraction(&t).ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "'{t}' is not a number or a fraction such as \"1/3\""
+            ))
+        }),
+    }
+}
+
+/// Parses "a/b" or a decimal.
+pub fn parse_fraction(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let value = match t.split_once('/') {
+        Some((a, b)) => a.trim().parse::<f64>().ok()? / b.trim().parse::<f64>().ok()?,
+        None => t.parse::<f64>().ok()?,
+    };
+    value.is_finite().then_some(value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_problems_carry_the_papers_totals() {
+        for (k, total) in [(1, -20.0), (2, -40.0), (3, -60.0)] {
+            let s = Scene::paper_problem(k).unwrap();
+            s.validate().unwrap();
+            assert!((s.total_vertical_load() - total).abs() < 1e-12);
+        }
+        assert!(matches!(
+            Scene::paper_problem(4),
+            Err(SceneError::UnknownProblem(4))
+        ));
+    }
+
+    #[test]
+    fn upward_or_zero_total_load_has_no_solution() {
+        let mut s = Scene::paper_problem(1).unwrap();
+        s.loads[0].p2 = 60.0;
+        assert!(matches!(s.validate(), Err(SceneError::NoSolution { total }) if total > 0.0));
+        s.loads[0].p2 = 0.0;
+        assert!(matches!(s.validate(), Err(SceneError::NoSolution { total }) if total == 0.0));
+        // Mixed signs summing to zero: still no solution.
+        s.loads = vec![
+            Traction {
+                from: 0.0,
+                to: 0.5,
+                p2: -10.0,
+            },
+            Traction {
+                from: 0.5,
+                to: 1.0,
+                p2: 10.0,
+            },
+        ];
+        assert!(matches!(s.validate(), Err(SceneError::NoSolution { .. })));
+    }
+
+    #[test]
+    fn invalid_fields_are_named() {
+        let bad = |f: fn(&mut Scene), field: &str| {
+            let mut s = Scene::paper_problem(1).unwrap();
+            f(&mut s);
+            let msg = s.validate().unwrap_err().to_string();
+            assert!(msg.contains(field), "{msg}");
+        };
+        bad(|s| s.material.young = 0.0, "material.young");
+        bad(|s| s.material.poisson = 0.5, "material.poisson");
+        bad(|s| s.material.poisson = f64::NAN, "material.poisson");
+        bad(|s| s.friction = -0.1, "friction");
+        bad(|s| s.loads[0].to = 1.5, "loads[0].to");
+        bad(|s| s.loads[0].from = 0.5, "loads[0].to");
+        bad(|s| s.levels.reverse(), "levels");
+    }
+}
