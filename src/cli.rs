@@ -9,7 +9,11 @@ use clap::{Args, Parser, Subcommand};
 use crate::discretization::Discretization;
 use crate::material::PlaneModel;
 use crate::mesh_size::MeshSize;
+use crate::output::{csv_bytes, fixed, json_bytes, write_atomic};
+use crate::profile::PROFILE_COLUMNS;
 use crate::scene::Scene;
+use crate::settings::Settings;
+use contactlab_solvers::{Observer, Progress, Stage};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
 /// the semicoercive two-body contact problem with Coulomb friction of
@@ -27,6 +31,9 @@ pub enum Command {
     /// nonzeros of A, contact nodes, the applied load and the measured
     /// dimension of the kernel of A.
     Info(InfoArgs),
+    /// Solve a scene: the Coulomb fixed point around a given-friction solver.
+    /// Prints a summary; with --out writes profile.csv and summary.json.
+    Solve(SolveArgs),
 }
 
 /// Which scene, on which mesh, with which material: a built-in problem of the
@@ -92,6 +99,81 @@ impl SceneArgs {
     }
 }
 
+/// Solver and fixed-point settings, as overrides of the defaults (the
+/// paper's values) or of a scene file's settings.
+#[derive(Debug, Clone, Default, Args)]
+pub struct SettingsArgs {
+    /// The paper's ε: the friction fixed point stops when max|Δg| ≤ ε
+    /// (default 1e-4).
+    #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
+    pub epsilon: Option<f64>,
+    /// Cap on friction iterations (default 50).
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub max_friction_iterations: Option<usize>,
+    /// Clarabel: gap and feasibility tolerance, sets tol_gap_abs, tol_gap_rel
+    /// and tol_feas (default 1e-10).
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub clarabel_tol: Option<f64>,
+    /// Clarabel: interior-point iteration cap (default 200).
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub clarabel_max_iter: Option<u32>,
+    /// Clarabel: turn its Ruiz equilibration off.
+    #[arg(long)]
+    pub clarabel_no_equilibrate: bool,
+    /// Clarabel: solve in the raw unknowns instead of σ·v (σ = max A_ii).
+    #[arg(long)]
+    pub clarabel_no_scaling: bool,
+    /// Clarabel: print its own iteration log (to stdout).
+    #[arg(long)]
+    pub clarabel_verbose: bool,
+}
+
+impl SettingsArgs {
+    /// Applies the given flags on top of `settings`.
+    pub fn apply(&self, settings: &mut Settings) {
+        if let Some(e) = self.epsilon {
+            settings.coulomb.epsilon = e;
+        }
+        if let Some(n) = self.max_friction_iterations {
+            settings.coulomb.max_iterations = n;
+        }
+        let c = &mut settings.solver.clarabel;
+        if let Some(t) = self.clarabel_tol {
+            c.tol_gap_abs = t;
+            c.tol_gap_rel = t;
+            c.tol_feas = t;
+        }
+        if let Some(n) = self.clarabel_max_iter {
+            c.max_iter = n;
+        }
+        c.equilibrate &= !self.clarabel_no_equilibrate;
+        c.scale_unknowns &= !self.clarabel_no_scaling;
+        c.verbose |= self.clarabel_verbose;
+    }
+
+    /// Default settings with these flags applied, validated.
+    pub fn resolve(&self) -> Result<Settings> {
+        let mut settings = Settings::default();
+        self.apply(&mut settings);
+        settings.validate().map_err(anyhow::Error::msg)?;
+        Ok(settings)
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct SolveArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Given-friction solver (see `contactlab solvers`): clarabel, ...
+    #[arg(long, default_value = "clarabel")]
+    pub solver: String,
+    /// Directory for profile.csv and summary.json (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
 #[derive(Debug, Args)]
 pub struct InfoArgs {
     #[command(flatten)]
@@ -129,7 +211,110 @@ pub fn main() -> ExitCode {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info(args) => info(&args),
+        Command::Solve(args) => solve(&args),
     }
+}
+
+/// Logs the friction loop to stderr.
+pub struct LogObserver;
+
+impl Observer for LogObserver {
+    fn observe(&mut self, p: &Progress) {
+        if p.stage == Stage::Friction {
+            eprintln!(
+                "friction iteration {:>3}: max|Δg| = {:.3e}  ({:.2} s)",
+                p.iteration, p.residual, p.seconds
+            );
+        }
+    }
+
+    fn wants(&self, stage: Stage) -> bool {
+        stage == Stage::Friction
+    }
+}
+
+fn solve(args: &SolveArgs) -> Result<()> {
+    let scene = args.scene.resolve()?;
+    let settings = args.settings.resolve()?;
+    crate::run::solver_entry(&args.solver)?;
+    eprintln!(
+        "solving {} at h = {} with {}",
+        scene.name,
+        scene.finest(),
+        args.solver
+    );
+    let run = crate::run::solve_scene(&scene, &settings, &args.solver, &mut LogObserver)?;
+    let summary = run.summary(&settings);
+    print_summary(&summary);
+    if let Some(dir) = &args.out {
+        let rows = run
+            .profile
+            .iter()
+            .map(|r| r.values().iter().map(|v| fixed(*v)).collect::<Vec<_>>());
+        write_atomic(
+            &dir.join("profile.csv"),
+            &csv_bytes(&PROFILE_COLUMNS, rows)?,
+        )?;
+        write_atomic(&dir.join("summary.json"), &json_bytes(&summary)?)?;
+        println!(
+            "wrote {} and {}",
+            dir.join("profile.csv").display(),
+            dir.join("summary.json").display()
+        );
+    }
+    if !run.coulomb.status.is_converged() {
+        anyhow::bail!(
+            "the solve did not converge: {} ({})",
+            run.coulomb.status,
+            run.coulomb.detail
+        );
+    }
+    Ok(())
+}
+
+fn print_summary(s: &crate::run::Summary) {
+    let intervals: Vec<String> = s
+        .separated_intervals
+        .iter()
+        .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
+        .collect();
+    println!(
+        "{}, h = {}, solver {}, plane {}, friction coefficient {}",
+        s.problem, s.h, s.solver, s.plane, s.friction_coefficient
+    );
+    println!("status              {} ({})", s.status, s.detail);
+    println!("friction iterations {}", s.friction_iterations);
+    println!(
+        "separated           {} = {:.2}% of Γ_K (jump < -{:.1e})",
+        if intervals.is_empty() {
+            "none".to_string()
+        } else {
+            intervals.join(" ∪ ")
+        },
+        100.0 * s.separated_fraction,
+        s.separation_tolerance
+    );
+    println!("max pressure        {:.6}", s.max_pressure);
+    println!(
+        "contact force       {:.10} (applied load {})",
+        s.total_contact_force, s.total_applied_load
+    );
+    println!("objective           {:.10e}", s.objective);
+    println!(
+        "KKT residual        {:.2e} (stationarity {:.1e}, natural map {:.1e}, complementarity {:.1e})",
+        s.residuals.kkt(),
+        s.residuals.stationarity,
+        s.residuals.natural_map,
+        s.residuals.complementarity
+    );
+    println!(
+        "iterations          {} outer, {} inner",
+        s.iterations_outer, s.iterations_inner
+    );
+    println!(
+        "time                {:.3} s (set-up {:.3} s)",
+        s.seconds, s.seconds_setup
+    );
 }
 
 fn info(args: &InfoArgs) -> Result<()> {

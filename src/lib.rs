@@ -8,10 +8,15 @@ pub mod assembly;
 pub mod cli;
 pub mod discretization;
 pub mod dofs;
+pub mod friction;
 pub mod material;
 pub mod mesh;
 pub mod mesh_size;
+pub mod output;
+pub mod profile;
+pub mod run;
 pub mod scene;
 pub mod scene_file;
+pub mod settings;
 
 pub use contactlab_solvers as solvers;

@@ -3,7 +3,18 @@
 //! meshes: the mechanics crate builds a [`GivenFrictionProblem`] and every
 //! solver here takes it and returns the same [`Solution`] type.
 
+pub mod conic;
 pub mod linalg;
+pub mod observer;
 pub mod problem;
+pub mod registry;
+pub mod residuals;
+pub mod solution;
+pub mod solver;
 
+pub use conic::{ConicSettings, ConicSolver};
+pub use observer::{History, Observer, Progress, Silent, Stage};
 pub use problem::{ContactNode, GivenFrictionProblem, ProblemError};
+pub use residuals::Residuals;
+pub use solution::{Iterations, Solution, Status, Timing};
+pub use solver::{GivenFrictionSolver, Start};

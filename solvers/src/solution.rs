@@ -1,0 +1,124 @@
+//! What every solver returns for a given-friction subproblem.
+
+use serde::{Deserialize, Serialize};
+
+/// How a solver stopped. Only [`Status::Converged`] means its own stopping
+/// test was met at full accuracy; everything else is reported as it is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// The solver's own stopping test was met.
+    Converged,
+    /// Met only relaxed tolerances (Clarabel's AlmostSolved).
+    ReducedAccuracy,
+    /// An iteration cap was reached first.
+    MaxIterations,
+    /// A time limit was reached first.
+    TimeLimit,
+    /// The solver stopped making progress.
+    InsufficientProgress,
+    /// The constraints admit no point (should not happen here: v = 0 is feasible).
+    Infeasible,
+    /// The objective is unbounded below: the load violates condition (13).
+    Unbounded,
+    /// A factorization or another numerical step failed.
+    NumericalError,
+    /// A NaN or an infinity appeared in the iterates.
+    NonFinite,
+    /// The solver was not run (e.g. a problem it cannot take).
+    NotRun,
+}
+
+impl Status {
+    pub fn is_converged(self) -> bool {
+        self == Status::Converged
+    }
+
+    /// Stable lower-case name, as written in output files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Converged => "converged",
+            Status::ReducedAccuracy => "reduced_accuracy",
+            Status::MaxIterations => "max_iterations",
+            Status::TimeLimit => "time_limit",
+            Status::InsufficientProgress => "insufficient_progress",
+            Status::Infeasible => "infeasible",
+            Status::Unbounded => "unbounded",
+            Status::NumericalError => "numerical_error",
+            Status::NonFinite => "non_finite",
+            Status::NotRun => "not_run",
+        }
+    }
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Iteration counts. Their meaning depends on the solver: interior-point
+/// iterations for Clarabel; Uzawa iterations (MU) and relaxation sweeps (MPR)
+/// for the paper's method; Newton steps for a Newton method.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Iterations {
+    /// Main loop: interior-point, Uzawa or Newton iterations.
+    pub outer: usize,
+    /// Inner loop: relaxation sweeps (0 where there is none).
+    pub inner: usize,
+}
+
+/// Wall-clock seconds, set-up (building, factorizing) apart from solving.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    pub setup: f64,
+    pub solve: f64,
+}
+
+impl Timing {
+    pub fn total(&self) -> f64 {
+        self.setup + self.solve
+    }
+}
+
+/// A solution of the given-friction subproblem with its multipliers per
+/// contact node (in contact order, increasing x).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    /// The unknowns v (displacements, jumps t_i and slips s_i).
+    pub v: Vec<f64>,
+    /// Contact pressure p_i ≥ 0 per unit length (the paper's l = −σ_n).
+    pub pressure: Vec<f64>,
+    /// x-component of the contact traction on the lower body per unit length,
+    /// q_i with |q_i| ≤ g_i, opposing the slip where the contact slips.
+    pub friction_traction: Vec<f64>,
+    pub status: Status,
+    /// A sentence on why the solver stopped, for logs and output files.
+    pub detail: String,
+    pub iterations: Iterations,
+    pub timing: Timing,
+}
+
+impl Solution {
+    /// A solution with no usable iterate (the solver could not start).
+    pub fn failed(n: usize, contacts: usize, status: Status, detail: impl Into<String>) -> Self {
+        Self {
+            v: vec![0.0; n],
+            pressure: vec![0.0; contacts],
+            friction_traction: vec![0.0; contacts],
+            status,
+            detail: detail.into(),
+            iterations: Iterations::default(),
+            timing: Timing::default(),
+        }
+    }
+
+    /// True when every number in the solution is finite.
+    pub fn is_finite(&self) -> bool {
+        self.v
+            .iter()
+            .chain(&self.pressure)
+            .chain(&self.friction_traction)
+            .all(|x| x.is_finite())
+    }
+}

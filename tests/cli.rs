@@ -1,0 +1,104 @@
+//! The binary: outputs of `solve`, and help.
+
+use std::process::Command;
+
+fn contactlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(args)
+        .output()
+        .expect("run contactlab")
+}
+
+#[test]
+fn solve_writes_the_documented_profile_and_summary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let o = contactlab(&[
+        "solve",
+        "--problem",
+        "1",
+        "--h",
+        "1/8",
+        "--solver",
+        "clarabel",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let profile = std::fs::read_to_string(out.join("profile.csv")).unwrap();
+    let mut lines = profile.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "x,u1_lower,u2_lower,u1_upper,u2_upper,jump,slip,pressure,friction_traction"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 9, "one row per contact node at h = 1/8");
+    for w in rows.windows(2) {
+        assert!(w[0][0] < w[1][0], "rows in increasing x");
+    }
+    for r in &rows {
+        assert!(
+            (r[5] - (r[2] - r[4])).abs() <= 1e-12,
+            "jump = u2_lower − u2_upper"
+        );
+        assert!(
+            (r[6] - (r[1] - r[3])).abs() <= 1e-12,
+            "slip = u1_lower − u1_upper"
+        );
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "problem",
+        "h",
+        "solver",
+        "friction_coefficient",
+        "friction_iterations",
+        "status",
+        "separated_intervals",
+        "separated_fraction",
+        "max_pressure",
+        "total_contact_force",
+        "total_applied_load",
+        "objective",
+        "residuals",
+        "seconds",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+    assert_eq!(summary["status"], "converged");
+    assert_eq!(summary["h"], "1/8");
+    // No temporary files are left behind.
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    let o = contactlab(&["--help"]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    let subcommands: Vec<String> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .map(|l| l.split_whitespace().next().unwrap().to_string())
+        .filter(|c| c != "help")
+        .collect();
+    assert!(subcommands.len() >= 2, "{text}");
+    for c in subcommands {
+        let o = contactlab(&[&c, "--help"]);
+        assert!(o.status.success(), "{c} --help failed");
+        let help = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            help.contains("Usage:") && help.lines().count() > 3,
+            "{c}: {help}"
+        );
+    }
+}

@@ -1,0 +1,221 @@
+//! The conic oracle: KKT by the solver-independent residuals, equilibrium,
+//! the frictionless limit, the contact zones, and closed-form answers.
+
+use contactlab::discretization::Discretization;
+use contactlab::mesh_size::MeshSize;
+use contactlab::run::{Run, solve_scene};
+use contactlab::scene::Scene;
+use contactlab::settings::Settings;
+use contactlab::solvers::{
+    ConicSettings, ConicSolver, ContactNode, GivenFrictionProblem, GivenFrictionSolver, Residuals,
+    Silent,
+};
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
+
+/// The oracle's accuracy claim in the solver-independent KKT measure at its
+/// default tolerance (1e-10): the relaxation tests compare pressures to 1e-4
+/// and displacements to 1e-6, so the oracle must be well inside those.
+const ORACLE_KKT: f64 = 1e-6;
+
+fn solve(problem: u32, k: u32, friction: f64) -> Run {
+    let mut scene = Scene::paper_problem(problem).unwrap();
+    scene.set_finest(MeshSize::from_level(k).unwrap());
+    scene.friction = friction;
+    solve_scene(&scene, &Settings::default(), "clarabel", &mut Silent).unwrap()
+}
+
+#[test]
+fn kkt_residuals_vanish_for_every_problem_with_and_without_friction() {
+    for problem in [1, 2, 3] {
+        for friction in [0.0, 0.5] {
+            let run = solve(problem, 4, friction);
+            assert!(run.coulomb.status.is_converged(), "{}", run.coulomb.detail);
+            let r = run.residuals;
+            assert!(
+                r.kkt() < ORACLE_KKT,
+                "problem {problem}, 𝓕 = {friction}: {r:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn contact_forces_carry_the_whole_applied_load() {
+    // The upper body's vertical rigid mode leaves nothing else to carry it.
+    for (problem, load) in [(1, 20.0), (2, 40.0), (3, 60.0)] {
+        for friction in [0.0, 0.5] {
+            let run = solve(problem, 4, friction);
+            let s = &run.coulomb.solution;
+            let total: f64 = run
+                .discretization
+                .problem
+                .contacts()
+                .iter()
+                .zip(&s.pressure)
+                .map(|(c, p)| c.weight * p)
+                .sum();
+            assert!(
+                (total - load).abs() <= 1e-8 * load,
+                "problem {problem}: {total} vs {load}"
+            );
+            assert_eq!(run.discretization.total_load, -load);
+        }
+    }
+}
+
+#[test]
+fn frictionless_limit_has_no_friction_and_stops_after_one_step() {
+    let run = solve(1, 4, 0.0);
+    assert_eq!(run.coulomb.history.len(), 1);
+    assert!(run.coulomb.status.is_converged());
+    let scale = run
+        .coulomb
+        .solution
+        .pressure
+        .iter()
+        .fold(0.0f64, |m, p| m.max(*p));
+    for q in &run.coulomb.solution.friction_traction {
+        assert!(q.abs() <= 1e-9 * scale, "friction traction {q} with 𝓕 = 0");
+    }
+}
+
+#[test]
+fn problem_3_stays_closed_and_problems_1_and_2_open_near_x_equal_1() {
+    let closed = solve(3, 4, 0.5);
+    assert!(
+        closed.separation.intervals.is_empty(),
+        "{:?}",
+        closed.separation
+    );
+    for problem in [1, 2] {
+        let run = solve(problem, 4, 0.5);
+        let zones = &run.separation.intervals;
+        assert_eq!(zones.len(), 1, "{zones:?}");
+        let [a, b] = zones[0];
+        assert_eq!(b, 1.0);
+        assert!(a > 0.5 && a < 1.0, "{zones:?}");
+        // Inside the open zone the pressure vanishes; outside, the jump does.
+        for row in &run.profile {
+            if row.x > a + 1e-9 {
+                assert!(row.pressure <= 1e-6 * 60.0, "{row:?}");
+            } else if row.x < a - 1e-9 {
+                assert!(row.jump.abs() <= 1e-6 * 1e-3, "{row:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn friction_narrows_the_separation_zone() {
+    // Paper, figures 3-4: with friction the bodies separate on less of Γ_K.
+    let without = solve(1, 5, 0.0).separation.fraction;
+    let with = solve(1, 5, 0.5).separation.fraction;
+    assert!(with < without, "{with} vs {without}");
+}
+
+/// A 2-unknown given-friction problem: v = (t, s), A = [[a, b], [b, c]].
+fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> GivenFrictionProblem {
+    let mut coo = CooMatrix::new(2, 2);
+    for (i, j, v) in [(0, 0, a), (0, 1, b), (1, 0, b), (1, 1, c)] {
+        coo.push(i, j, v);
+    }
+    let id = CsrMatrix::identity(2);
+    GivenFrictionProblem::new(
+        CsrMatrix::from(&coo),
+        f.to_vec(),
+        id,
+        vec![ContactNode {
+            t: 0,
+            s: 1,
+            weight: w,
+            g,
+        }],
+    )
+    .unwrap()
+}
+
+fn oracle(p: &GivenFrictionProblem) -> (Vec<f64>, f64, f64) {
+    let s = ConicSolver::new(ConicSettings::default()).solve(p, None, &mut Silent);
+    assert!(s.status.is_converged(), "{}", s.detail);
+    let r = Residuals::compute(p, &s.v, &s.pressure, &s.friction_traction);
+    assert!(r.kkt() < 1e-7, "{r:?} v = {:?}", s.v);
+    (s.v, s.pressure[0], s.friction_traction[0])
+}
+
+fn close(x: f64, y: f64) -> bool {
+    (x - y).abs() <= 1e-7 * (1.0 + y.abs())
+}
+
+#[test]
+fn closed_form_two_unknown_problems_in_each_regime() {
+    let (a, b, c, w, g) = (4.0, 1.0, 3.0, 0.5, 2.0);
+    // Open and sticking: f_t < 0 pulls t negative; friction holds s = 0.
+    // t = f_t / a, λ = 0; μ = b t − f_s with |μ| ≤ w g.
+    let (ft, fs) = (-2.0, 0.3);
+    let (v, p, q) = oracle(&two_unknowns(a, b, c, [ft, fs], w, g));
+    let t = ft / a;
+    assert!(close(v[0], t) && v[0] < 0.0 && close(v[1], 0.0), "{v:?}");
+    assert!(close(p, 0.0), "p = {p}");
+    assert!(close(q, (b * t - fs) / w), "q = {q}");
+    // Closed and sticking: f_t > 0 pushes into contact, |f_s| ≤ w g.
+    // t = 0, s = 0, λ = f_t, μ = −f_s.
+    let (ft, fs) = (2.0, 0.7);
+    let (v, p, q) = oracle(&two_unknowns(a, b, c, [ft, fs], w, g));
+    assert!(close(v[0], 0.0) && close(v[1], 0.0), "{v:?}");
+    assert!(close(p, ft / w) && p > 0.0, "p = {p}");
+    assert!(close(q, -fs / w) && q.abs() < g, "q = {q}");
+    // Closed and slipping: |f_s| > w g: s = (f_s − w g sign f_s) / c,
+    // λ = f_t − b s, and the traction on the lower body is at its bound,
+    // opposite to the slip: q = −g sign(s).
+    let (ft, fs) = (2.0, 2.5);
+    let (v, p, q) = oracle(&two_unknowns(a, b, c, [ft, fs], w, g));
+    let s = (fs - w * g) / c;
+    assert!(close(v[0], 0.0) && close(v[1], s) && s > 0.0, "{v:?}");
+    assert!(close(p, (ft - b * s) / w), "p = {p}");
+    assert!(close(q, -g), "q = {q}");
+    let (v, _, q) = oracle(&two_unknowns(a, b, c, [ft, -fs], w, g));
+    assert!(v[1] < 0.0 && close(q, g), "slip {} traction {q}", v[1]);
+}
+
+#[test]
+fn residuals_detect_each_kind_of_violation() {
+    let problem = two_unknowns(4.0, 1.0, 3.0, [2.0, 2.5], 0.5, 2.0);
+    let s = (2.5 - 1.0) / 3.0;
+    let exact = (vec![0.0, s], vec![(2.0 - s) / 0.5], vec![-2.0]);
+    let r = Residuals::compute(&problem, &exact.0, &exact.1, &exact.2);
+    assert!(r.kkt() < 1e-14, "{r:?}");
+    let bad = |v: Vec<f64>, p: f64, q: f64| Residuals::compute(&problem, &v, &[p], &[q]);
+    assert!(bad(vec![0.1, s], exact.1[0], -2.0).primal > 0.01);
+    assert!(bad(vec![0.0, s], -1.0, -2.0).dual > 0.01);
+    assert!(bad(vec![-0.1, s], exact.1[0], -2.0).complementarity > 0.01);
+    assert!(bad(vec![0.0, s], exact.1[0], -2.5).cone > 0.01);
+    assert!(bad(vec![0.0, s], exact.1[0], 2.0).slip > 0.01); // traction with the slip
+    assert!(bad(vec![0.0, s], exact.1[0] * 1.1, -2.0).stationarity > 0.01);
+    assert!(bad(vec![0.0, s], exact.1[0], -1.0).natural_map > 0.01); // slipping below the bound
+    assert!(bad(vec![f64::NAN, s], exact.1[0], -2.0).kkt().is_infinite());
+}
+
+#[test]
+fn an_unbounded_problem_is_not_reported_solved() {
+    // Condition (13) violated at the algebraic level: lift the upper body.
+    let d = Discretization::new(
+        &Scene::paper_problem(1).unwrap(),
+        MeshSize::from_level(3).unwrap(),
+    )
+    .unwrap();
+    let f: Vec<f64> = d.problem.f().iter().map(|x| -x).collect();
+    let p = GivenFrictionProblem::new(
+        d.problem.a().clone(),
+        f,
+        d.problem.mass().clone(),
+        d.problem.contacts().to_vec(),
+    )
+    .unwrap();
+    let s = ConicSolver::default().solve(&p, None, &mut Silent);
+    assert!(
+        !s.status.is_converged(),
+        "status {:?}: {}",
+        s.status,
+        s.detail
+    );
+}
