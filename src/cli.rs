@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
+use crate::continuation::Schedule;
 use crate::discretization::Discretization;
 use crate::material::PlaneModel;
 use crate::mesh_size::MeshSize;
@@ -13,7 +14,7 @@ use crate::output::{csv_bytes, fixed, json_bytes, write_atomic};
 use crate::profile::PROFILE_COLUMNS;
 use crate::scene::Scene;
 use crate::settings::Settings;
-use contactlab_solvers::{Observer, Progress, Stage};
+use contactlab_solvers::{Observer, Progress, Smoothing, Stage};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
 /// the semicoercive two-body contact problem with Coulomb friction of
@@ -34,6 +35,31 @@ pub enum Command {
     /// Solve a scene: the Coulomb fixed point around a given-friction solver.
     /// Prints a summary; with --out writes profile.csv and summary.json.
     Solve(SolveArgs),
+    /// Reproduce the paper's Table 1: the relaxation solver with mesh
+    /// continuation on problems 1-3, our iteration counts beside the
+    /// paper's. Writes DIR/table1.csv and prints a Markdown table.
+    Table1(Table1Args),
+}
+
+#[derive(Debug, Args)]
+pub struct Table1Args {
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub out: PathBuf,
+    /// Finest mesh (continuation runs 1/8, ..., h).
+    #[arg(long, value_name = "1/2^k", default_value = "1/64")]
+    pub h: MeshSize,
+    /// Problems to run.
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 3])]
+    pub problems: Vec<u32>,
+    /// Continuation schedules to run.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
+    pub schedules: Vec<Schedule>,
+    /// Plane strain or plane stress (default strain).
+    #[arg(long, value_enum)]
+    pub plane: Option<PlaneModel>,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
 }
 
 /// Which scene, on which mesh, with which material: a built-in problem of the
@@ -103,8 +129,9 @@ impl SceneArgs {
 /// paper's values) or of a scene file's settings.
 #[derive(Debug, Clone, Default, Args)]
 pub struct SettingsArgs {
-    /// The paper's ε: the friction fixed point stops when max|Δg| ≤ ε
-    /// (default 1e-4).
+    /// The paper's ε, for every loop that uses it: the friction fixed point
+    /// stops when max|Δg| ≤ ε, Uzawa when max|Δl| ≤ ε, relaxation sweeps when
+    /// max|Δv| ≤ 1e-4·ε·h_finest (default 1e-4).
     #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
     pub epsilon: Option<f64>,
     /// Cap on friction iterations (default 50).
@@ -126,6 +153,31 @@ pub struct SettingsArgs {
     /// Clarabel: print its own iteration log (to stdout).
     #[arg(long)]
     pub clarabel_verbose: bool,
+    /// Relaxation: penalty r of the modified Lagrangian (default 1e12).
+    #[arg(long, value_name = "R", allow_hyphen_values = true)]
+    pub r: Option<f64>,
+    /// Relaxation: proximal weight ρ of (ρ/2)‖v − v^k‖²_L2 (default 1, the
+    /// paper; 0 turns the proximal regularization off).
+    #[arg(long, value_name = "RHO", allow_hyphen_values = true)]
+    pub proximal: Option<f64>,
+    /// Relaxation: treatment of |s| along slip coordinates: `exact` (soft
+    /// thresholding) or a Huber width δ such as `1e-10` (default 1e-10).
+    #[arg(long, value_name = "exact|DELTA")]
+    pub smoothing: Option<String>,
+    /// Relaxation: sweep threshold factor: sweeps stop when
+    /// max|Δv| ≤ factor·ε·h_finest (default 1e-4, the paper).
+    #[arg(long, value_name = "F", allow_hyphen_values = true)]
+    pub sweep_factor: Option<f64>,
+    /// Relaxation: cap on Uzawa iterations per given-friction solve (default 1000).
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub max_uzawa: Option<usize>,
+    /// Relaxation: cap on sweeps per Uzawa iteration (default 2000000).
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub max_sweeps: Option<usize>,
+    /// Mesh continuation schedule: revisit the coarse levels in every
+    /// friction iteration, or only in the first (default revisit).
+    #[arg(long, value_enum)]
+    pub schedule: Option<Schedule>,
 }
 
 impl SettingsArgs {
@@ -133,6 +185,26 @@ impl SettingsArgs {
     pub fn apply(&self, settings: &mut Settings) {
         if let Some(e) = self.epsilon {
             settings.coulomb.epsilon = e;
+            settings.solver.relaxation.epsilon = e;
+        }
+        let rx = &mut settings.solver.relaxation;
+        if let Some(r) = self.r {
+            rx.r = r;
+        }
+        if let Some(p) = self.proximal {
+            rx.proximal = p;
+        }
+        if let Some(f) = self.sweep_factor {
+            rx.sweep_factor = f;
+        }
+        if let Some(n) = self.max_uzawa {
+            rx.max_uzawa = n;
+        }
+        if let Some(n) = self.max_sweeps {
+            rx.max_sweeps = n;
+        }
+        if let Some(s) = self.schedule {
+            settings.schedule = s;
         }
         if let Some(n) = self.max_friction_iterations {
             settings.coulomb.max_iterations = n;
@@ -155,6 +227,9 @@ impl SettingsArgs {
     pub fn resolve(&self) -> Result<Settings> {
         let mut settings = Settings::default();
         self.apply(&mut settings);
+        if let Some(text) = &self.smoothing {
+            settings.solver.relaxation.smoothing = parse_smoothing(text)?;
+        }
         settings.validate().map_err(anyhow::Error::msg)?;
         Ok(settings)
     }
@@ -164,7 +239,8 @@ impl SettingsArgs {
 pub struct SolveArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Given-friction solver (see `contactlab solvers`): clarabel, ...
+    /// Given-friction solver: clarabel (conic oracle) or relaxation (the
+    /// paper's prox-Uzawa with pointwise relaxation and mesh continuation).
     #[arg(long, default_value = "clarabel")]
     pub solver: String,
     /// Directory for profile.csv and summary.json (created if missing).
@@ -212,6 +288,20 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info(args) => info(&args),
         Command::Solve(args) => solve(&args),
+        Command::Table1(args) => table1(&args),
+    }
+}
+
+/// `exact` or a Huber width.
+fn parse_smoothing(text: &str) -> Result<Smoothing> {
+    if text.trim().eq_ignore_ascii_case("exact") {
+        return Ok(Smoothing::Exact);
+    }
+    match text.trim().parse::<f64>() {
+        Ok(delta) if delta.is_finite() && delta > 0.0 => Ok(Smoothing::Huber { delta }),
+        _ => anyhow::bail!(
+            "--smoothing = '{text}' is invalid: give `exact` or a positive Huber width such as 1e-10"
+        ),
     }
 }
 
@@ -269,6 +359,33 @@ fn solve(args: &SolveArgs) -> Result<()> {
             run.coulomb.detail
         );
     }
+    Ok(())
+}
+
+fn table1(args: &Table1Args) -> Result<()> {
+    let settings = args.settings.resolve()?;
+    for &p in &args.problems {
+        Scene::paper_problem(p)?;
+    }
+    let plane = args.plane.unwrap_or(PlaneModel::Strain);
+    let rows = crate::table1::table1(
+        &args.problems,
+        &args.schedules,
+        &settings,
+        args.h,
+        plane,
+        |p, s| {
+            eprintln!("table1: problem {p}, schedule {s}");
+            Box::new(LogObserver)
+        },
+    )?;
+    for r in &rows {
+        eprintln!("problem {} ({}): {:.1} s", r.problem, r.schedule, r.seconds);
+    }
+    let path = args.out.join("table1.csv");
+    write_atomic(&path, &crate::table1::table1_csv(&rows)?)?;
+    print!("{}", crate::table1::table1_markdown(&rows));
+    eprintln!("wrote {}", path.display());
     Ok(())
 }
 

@@ -6,6 +6,8 @@
 
 pub mod assembly;
 pub mod cli;
+pub mod compare;
+pub mod continuation;
 pub mod discretization;
 pub mod dofs;
 pub mod friction;
@@ -18,5 +20,6 @@ pub mod run;
 pub mod scene;
 pub mod scene_file;
 pub mod settings;
+pub mod table1;
 
 pub use contactlab_solvers as solvers;

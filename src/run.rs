@@ -6,6 +6,7 @@ use contactlab_solvers::registry;
 use contactlab_solvers::{Observer, Residuals};
 use serde::Serialize;
 
+use crate::continuation::{Continuation, LevelCount};
 use crate::discretization::Discretization;
 use crate::friction::{CoulombSolution, SingleLevel, friction_fixed_point};
 use crate::profile::{
@@ -25,6 +26,8 @@ pub struct Run {
     pub profile: Vec<ProfileRow>,
     pub separation: Separation,
     pub objective: f64,
+    /// Work per mesh level (one entry when run on the finest level only).
+    pub levels: Vec<LevelCount>,
 }
 
 /// Looks up a registered solver or says which exist.
@@ -37,8 +40,9 @@ pub fn solver_entry(name: &str) -> Result<&'static registry::Entry> {
     })
 }
 
-/// Solves `scene` (finest level = its last) with the Coulomb fixed point
-/// around the named solver.
+/// Solves `scene` with the Coulomb fixed point around the named solver: by
+/// mesh continuation over the scene's levels if the solver warm-starts,
+/// otherwise on the finest level.
 pub fn solve_scene(
     scene: &Scene,
     settings: &Settings,
@@ -46,16 +50,36 @@ pub fn solve_scene(
     observer: &mut dyn Observer,
 ) -> Result<Run> {
     let entry = solver_entry(solver)?;
+    let mut settings = settings.clone();
+    settings.solver.relaxation.h_finest = scene.finest().h();
     if let Err(e) = settings.validate() {
         bail!(e);
     }
-    let finest = Discretization::new(scene, scene.finest())?;
     let mut inner = (entry.build)(&settings.solver);
-    let coulomb = {
+    let (finest, coulomb, levels) = if entry.continuation && scene.levels.len() > 1 {
+        let levels = scene
+            .levels
+            .iter()
+            .map(|&h| Discretization::new(scene, h))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut step = Continuation::new(levels, inner.as_mut(), settings.schedule);
+        let coulomb = friction_fixed_point(&mut step, scene.friction, &settings.coulomb, observer);
+        (step.finest().clone(), coulomb, step.counts.clone())
+    } else {
+        let finest = Discretization::new(scene, scene.finest())?;
         let mut step = SingleLevel::new(finest.problem.clone(), inner.as_mut());
-        friction_fixed_point(&mut step, scene.friction, &settings.coulomb, observer)
+        let coulomb = friction_fixed_point(&mut step, scene.friction, &settings.coulomb, observer);
+        let total = coulomb.total_iterations();
+        let count = LevelCount {
+            h: finest.h(),
+            visits: coulomb.history.len(),
+            uzawa: total.outer,
+            sweeps: total.inner,
+            seconds: coulomb.history.iter().map(|h| h.seconds).sum(),
+        };
+        (finest, coulomb, vec![count])
     };
-    Ok(report(scene.clone(), entry.name, finest, coulomb))
+    Ok(report(scene.clone(), entry.name, finest, coulomb, levels))
 }
 
 /// Residuals, profile and separation of a finished fixed point.
@@ -64,6 +88,7 @@ pub fn report(
     solver: &'static str,
     mut discretization: Discretization,
     coulomb: CoulombSolution,
+    levels: Vec<LevelCount>,
 ) -> Run {
     discretization
         .problem
@@ -91,6 +116,7 @@ pub fn report(
         profile,
         separation,
         objective,
+        levels,
     }
 }
 
@@ -119,6 +145,7 @@ pub struct Summary {
     pub seconds_setup: f64,
     pub seconds_solve: f64,
     pub history: Vec<crate::friction::FrictionIteration>,
+    pub levels: Vec<LevelCount>,
     pub settings: Settings,
 }
 
@@ -156,6 +183,7 @@ impl Run {
             seconds_setup: setup,
             seconds_solve: self.coulomb.seconds - setup,
             history: self.coulomb.history.clone(),
+            levels: self.levels.clone(),
             settings: settings.clone(),
         }
     }

@@ -4,14 +4,27 @@
 use contactlab_solvers::registry::SolverSettings;
 use serde::{Deserialize, Serialize};
 
+use crate::continuation::Schedule;
 use crate::friction::CoulombSettings;
 
 /// Settings of the Coulomb fixed point and of every registered solver.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Settings {
     pub coulomb: CoulombSettings,
+    /// Mesh continuation schedule for solvers that warm-start.
+    pub schedule: Schedule,
     pub solver: SolverSettings,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            coulomb: CoulombSettings::default(),
+            schedule: Schedule::Revisit,
+            solver: SolverSettings::default(),
+        }
+    }
 }
 
 impl Settings {

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::conic::{ConicSettings, ConicSolver};
+use crate::relaxation::{ProxUzawa, RelaxationSettings};
 use crate::solver::GivenFrictionSolver;
 
 /// The settings of every registered solver (one section each in scene files).
@@ -11,12 +12,14 @@ use crate::solver::GivenFrictionSolver;
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSettings {
     pub clarabel: ConicSettings,
+    pub relaxation: RelaxationSettings,
 }
 
 impl SolverSettings {
     /// Checks every solver's settings; the message names the field.
     pub fn validate(&self) -> Result<(), String> {
-        self.clarabel.validate()
+        self.clarabel.validate()?;
+        self.relaxation.validate()
     }
 }
 
@@ -32,12 +35,20 @@ pub struct Entry {
 }
 
 /// The registry.
-pub const SOLVERS: &[Entry] = &[Entry {
-    name: "clarabel",
-    about: "conic oracle: interior point (Clarabel) with SOC friction cones",
-    build: |s| Box::new(ConicSolver::new(s.clarabel.clone())),
-    continuation: false,
-}];
+pub const SOLVERS: &[Entry] = &[
+    Entry {
+        name: "clarabel",
+        about: "conic oracle: interior point (Clarabel) with SOC friction cones",
+        build: |s| Box::new(ConicSolver::new(s.clarabel.clone())),
+        continuation: false,
+    },
+    Entry {
+        name: "relaxation",
+        about: "the paper's method: prox-Uzawa on the modified Lagrangian, pointwise relaxation inside",
+        build: |s| Box::new(ProxUzawa::new(s.relaxation.clone())),
+        continuation: true,
+    },
+];
 
 /// Looks a solver up by name.
 pub fn by_name(name: &str) -> Option<&'static Entry> {

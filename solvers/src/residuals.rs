@@ -51,8 +51,20 @@ pub struct Residuals {
 
 impl Residuals {
     /// Computes every residual of (v, p, q) for `problem`.
+    /// Sizes that do not fit the problem give infinite residuals.
     pub fn compute(problem: &GivenFrictionProblem, v: &[f64], p: &[f64], q: &[f64]) -> Self {
         let contacts = problem.contacts();
+        if v.len() != problem.n() || p.len() != contacts.len() || q.len() != contacts.len() {
+            let inf = f64::INFINITY;
+            return Residuals {
+                stationarity: inf,
+                natural_map: inf,
+                displacement_scale: 1.0,
+                pressure_scale: 1.0,
+                force_scale: 1.0,
+                ..Default::default()
+            };
+        }
         let f_scale = nonzero(max_abs(problem.f()), 1.0);
         let max_diag = max_abs(problem.a().diagonal_as_csr().values());
         let max_w = contacts.iter().fold(0.0f64, |m, c| m.max(c.weight));
