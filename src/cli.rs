@@ -12,8 +12,10 @@ use crate::material::PlaneModel;
 use crate::mesh_size::MeshSize;
 use crate::output::{csv_bytes, fixed, json_bytes, write_atomic};
 use crate::profile::PROFILE_COLUMNS;
+use crate::reproduce::ReproduceSpec;
 use crate::scene::Scene;
 use crate::settings::Settings;
+use crate::sweep::{Factor, SweepSpec};
 use contactlab_solvers::{Observer, Progress, Smoothing, Stage};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
@@ -39,6 +41,136 @@ pub enum Command {
     /// continuation on problems 1-3, our iteration counts beside the
     /// paper's. Writes DIR/table1.csv and prints a Markdown table.
     Table1(Table1Args),
+    /// Compare every registered solver with the oracle on one scene: the
+    /// given-friction subproblem at the oracle's g and the whole Coulomb
+    /// problem. Writes DIR/compare.csv (accuracy) and DIR/compare_timing.csv;
+    /// prints a Markdown table.
+    Compare(CompareArgs),
+    /// Sweep the paper's solver over r, ε, the smoothing of |s| and the
+    /// continuation schedule (whole Coulomb problem), and every solver over
+    /// its tolerance (given-friction subproblem, a work-precision diagram).
+    /// Writes DIR/sweep.csv, DIR/sweep_timing.csv and charts in DIR/charts.
+    Sweep(SweepArgs),
+    /// The main job: the paper's three problems with every solver, Table 1,
+    /// the contact-zone profiles, the comparison, a reduced sweep, charts,
+    /// a manifest and a README, all into DIR.
+    Reproduce(ReproduceArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ReproduceArgs {
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub out: PathBuf,
+    /// A small run for tests and smoke checks (h = 1/16, fewer points).
+    #[arg(long)]
+    pub quick: bool,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// Problems of the paper to sweep.
+    #[arg(long, value_delimiter = ',', default_values_t = [1])]
+    pub problems: Vec<u32>,
+    /// Finest meshes (each with continuation from 1/8).
+    #[arg(long = "h", value_name = "1/2^k", value_delimiter = ',', default_values_t = [MeshSize::from_level(5).expect("in range")])]
+    pub meshes: Vec<MeshSize>,
+    /// Factors to vary, one at a time around the paper's settings.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Factor::R, Factor::Epsilon, Factor::Smoothing, Factor::Schedule, Factor::Tolerance])]
+    pub vary: Vec<Factor>,
+    /// Values of r (default 1e0, 1e1, ..., 1e14).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub r_values: Vec<f64>,
+    /// Values of ε (default 1e-2, ..., 1e-8).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub epsilon_values: Vec<f64>,
+    /// Smoothing values: `exact` or Huber widths (default exact, 1e-6, 1e-8, 1e-10, 1e-12).
+    #[arg(long, value_delimiter = ',')]
+    pub smoothing_values: Vec<String>,
+    /// Solvers of the tolerance sweep (default: every registered solver).
+    #[arg(long, value_delimiter = ',')]
+    pub solvers: Vec<String>,
+    /// Wall-clock budget of one given-friction solve, in seconds.
+    #[arg(long, default_value_t = 30.0, allow_hyphen_values = true)]
+    pub time_limit: f64,
+    /// Run in parallel on all cores (times are then not recorded).
+    #[arg(long)]
+    pub parallel: bool,
+    /// Extra timed runs of each tolerance-sweep solve (time: their minimum).
+    #[arg(long, default_value_t = 2)]
+    pub repeats: usize,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+impl SweepArgs {
+    /// The sweep described by these flags.
+    pub fn spec(&self) -> Result<SweepSpec> {
+        let mut spec = SweepSpec {
+            problems: self.problems.clone(),
+            meshes: self.meshes.clone(),
+            factors: self.vary.clone(),
+            solvers: solver_list(&self.solvers)?,
+            time_limit: self.time_limit,
+            parallel: self.parallel,
+            repeats: self.repeats,
+            ..SweepSpec::default()
+        };
+        for &p in &spec.problems {
+            Scene::paper_problem(p)?;
+        }
+        if !self.r_values.is_empty() {
+            spec.r_values = self.r_values.clone();
+        }
+        if !self.epsilon_values.is_empty() {
+            spec.epsilon_values = self.epsilon_values.clone();
+        }
+        if !self.smoothing_values.is_empty() {
+            spec.smoothing_values = self
+                .smoothing_values
+                .iter()
+                .map(|s| parse_smoothing(s))
+                .collect::<Result<_>>()?;
+        }
+        if !(self.time_limit.is_finite() && self.time_limit > 0.0) {
+            anyhow::bail!(
+                "--time-limit = {} is invalid: give a positive number of seconds",
+                self.time_limit
+            );
+        }
+        for (name, values) in [
+            ("--r-values", &spec.r_values),
+            ("--epsilon-values", &spec.epsilon_values),
+        ] {
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+                anyhow::bail!("{name} holds {v}: every value must be a positive number");
+            }
+        }
+        Ok(spec)
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Solvers to compare (default: every registered solver).
+    #[arg(long, value_delimiter = ',')]
+    pub solvers: Vec<String>,
+    /// Timed runs per solver after the first (the first is a warm-up and
+    /// gives the accuracy figures); times are their minimum.
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
 }
 
 #[derive(Debug, Args)]
@@ -289,6 +421,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(args) => info(&args),
         Command::Solve(args) => solve(&args),
         Command::Table1(args) => table1(&args),
+        Command::Compare(args) => compare(&args),
+        Command::Sweep(args) => sweep(&args),
+        Command::Reproduce(args) => reproduce(&args),
     }
 }
 
@@ -386,6 +521,124 @@ fn table1(args: &Table1Args) -> Result<()> {
     write_atomic(&path, &crate::table1::table1_csv(&rows)?)?;
     print!("{}", crate::table1::table1_markdown(&rows));
     eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{bar:30}] {pos}/{len} {msg} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_prefix(what.to_string());
+    bar
+}
+
+/// The solvers named, or every registered one; unknown names are errors.
+fn solver_list(names: &[String]) -> Result<Vec<&'static str>> {
+    if names.is_empty() {
+        return Ok(contactlab_solvers::registry::names());
+    }
+    names
+        .iter()
+        .map(|n| crate::run::solver_entry(n).map(|e| e.name))
+        .collect()
+}
+
+fn compare(args: &CompareArgs) -> Result<()> {
+    let scene = args.scene.resolve()?;
+    let settings = args.settings.resolve()?;
+    let solvers = solver_list(&args.solvers)?;
+    let bar = progress_bar(
+        (2 + solvers.len() * 2 * (1 + args.repeats)) as u64,
+        "compare",
+    );
+    let rows = crate::compare::compare(&scene, &settings, &solvers, args.repeats, |s| {
+        bar.set_message(s.to_string());
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    use crate::compare::*;
+    write_atomic(
+        &args.out.join("compare.csv"),
+        &csv_bytes(&COMPARE_COLUMNS, compare_records(&rows))?,
+    )?;
+    write_atomic(
+        &args.out.join("compare_timing.csv"),
+        &csv_bytes(&COMPARE_TIMING_COLUMNS, timing_records(&rows))?,
+    )?;
+    print!("{}", compare_markdown(&rows));
+    eprintln!(
+        "wrote {}/compare.csv and compare_timing.csv",
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn sweep(args: &SweepArgs) -> Result<()> {
+    let spec = args.spec()?;
+    let settings = args.settings.resolve()?;
+    let rows = run_sweep(&spec, &settings)?;
+    write_sweep(&args.out, &rows)?;
+    let failed = rows.iter().filter(|r| !r.converged).count();
+    eprintln!(
+        "wrote {}/sweep.csv ({} runs, {failed} did not converge), sweep_timing.csv and charts",
+        args.out.display(),
+        rows.len()
+    );
+    Ok(())
+}
+
+/// Runs a sweep with a progress bar.
+pub fn run_sweep(spec: &SweepSpec, settings: &Settings) -> Result<Vec<crate::sweep::SweepRow>> {
+    let runs = crate::sweep::plan(spec, settings);
+    let bar = progress_bar(runs.len() as u64, "sweep");
+    let rows = crate::sweep::sweep(spec, settings, &|run| {
+        bar.set_message(format!(
+            "{} = {} ({})",
+            run.factor.as_str(),
+            run.value,
+            run.solver
+        ));
+        bar.inc(1);
+    })?;
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// Writes sweep.csv, sweep_timing.csv and the sweep's charts.
+pub fn write_sweep(out: &std::path::Path, rows: &[crate::sweep::SweepRow]) -> Result<Vec<PathBuf>> {
+    use crate::sweep::*;
+    write_atomic(
+        &out.join("sweep.csv"),
+        &csv_bytes(&SWEEP_COLUMNS, sweep_records(rows))?,
+    )?;
+    write_atomic(
+        &out.join("sweep_timing.csv"),
+        &csv_bytes(&SWEEP_TIMING_COLUMNS, sweep_timing_records(rows))?,
+    )?;
+    crate::report::write_all(&out.join("charts"), &crate::report::sweep_charts(rows))
+}
+
+fn reproduce(args: &ReproduceArgs) -> Result<()> {
+    let settings = args.settings.resolve()?;
+    let spec = if args.quick {
+        ReproduceSpec::quick()
+    } else {
+        ReproduceSpec::full()
+    };
+    crate::reproduce::reproduce(&args.out, &spec, &settings, &|line| {
+        eprintln!("reproduce: {line}")
+    })?;
+    eprintln!(
+        "wrote {} (see {}/README.md)",
+        args.out.display(),
+        args.out.display()
+    );
     Ok(())
 }
 

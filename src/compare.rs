@@ -136,3 +136,312 @@ pub fn solve_given_friction(
     finest.problem.set_friction_bound(g)?;
     Ok((finest, solution, counts))
 }
+
+/// Which problem a comparison row is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// One given-friction subproblem, g from the oracle's Coulomb solution.
+    GivenFriction,
+    /// The whole Coulomb problem (fixed point around the solver).
+    Coulomb,
+}
+
+impl Mode {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Mode::GivenFriction => "given_friction",
+            Mode::Coulomb => "coulomb",
+        }
+    }
+}
+
+/// One solver on one problem, against the oracle's solution of the same problem.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CompareRow {
+    pub problem: String,
+    pub h: String,
+    pub mode: Mode,
+    pub solver: String,
+    pub status: String,
+    pub friction_iterations: usize,
+    pub outer: usize,
+    pub inner: usize,
+    pub agreement: Agreement,
+    pub separated: Vec<[f64; 2]>,
+    pub separated_fraction: f64,
+    pub residuals: contactlab_solvers::Residuals,
+    /// Minimum wall-clock seconds of the solver's work over the timed runs.
+    pub seconds: f64,
+    /// Convergence history of the first run (for charts).
+    #[serde(skip)]
+    pub history: Vec<contactlab_solvers::Progress>,
+    /// The first run's solution (for profiles).
+    #[serde(skip)]
+    pub solution: Solution,
+}
+
+/// The oracle's Coulomb solution of a scene, which every comparison is
+/// measured against, and its g (the operating point of the subproblem).
+pub const ORACLE: &str = "clarabel";
+
+/// Runs every solver in `solvers` on the given-friction subproblem (g from
+/// the oracle's Coulomb solution) and on the whole Coulomb problem, and
+/// measures each against the oracle. Times are the minimum over `repeats`
+/// runs after the first one (a warm-up that also gives the accuracy figures).
+pub fn compare(
+    scene: &Scene,
+    settings: &Settings,
+    solvers: &[&str],
+    repeats: usize,
+    mut tick: impl FnMut(&str),
+) -> Result<Vec<CompareRow>> {
+    use contactlab_solvers::{History, Residuals, Silent, Stage};
+
+    use crate::profile::{SEPARATION_TOL, largest_displacement, separation};
+    use crate::run::solve_scene;
+
+    let mut history = History::of(&[
+        Stage::Friction,
+        Stage::Uzawa,
+        Stage::InteriorPoint,
+        Stage::Newton,
+    ]);
+    let oracle = solve_scene(scene, settings, ORACLE, &mut history)?;
+    if !oracle.coulomb.status.is_converged() {
+        bail!(
+            "the oracle did not converge on {}: {}",
+            scene.name,
+            oracle.coulomb.detail
+        );
+    }
+    tick("oracle");
+    let g = oracle.coulomb.g.clone();
+    let (d, reference, _) = solve_given_friction(scene, settings, ORACLE, &g, &mut Silent)?;
+    tick("oracle");
+    let sep = |d: &Discretization, s: &Solution| {
+        let x = d.contact_x();
+        let jump: Vec<f64> = d.problem.contacts().iter().map(|c| s.v[c.t]).collect();
+        separation(&x, &jump, SEPARATION_TOL * largest_displacement(d, s))
+    };
+    let mut rows = Vec::new();
+    for &solver in solvers {
+        // The subproblem with the oracle's g.
+        let mut hist = History::of(&[Stage::Uzawa, Stage::InteriorPoint, Stage::Newton]);
+        let (_, first, _) = solve_given_friction(scene, settings, solver, &g, &mut hist)?;
+        tick(solver);
+        let mut best = f64::INFINITY;
+        for _ in 0..repeats {
+            let (_, s, _) = solve_given_friction(scene, settings, solver, &g, &mut Silent)?;
+            best = best.min(s.timing.total());
+            tick(solver);
+        }
+        let separation = sep(&d, &first);
+        rows.push(CompareRow {
+            problem: scene.name.clone(),
+            h: d.h().to_string(),
+            mode: Mode::GivenFriction,
+            solver: solver.to_string(),
+            status: first.status.to_string(),
+            friction_iterations: 0,
+            outer: first.iterations.outer,
+            inner: first.iterations.inner,
+            agreement: agreement(&d, &first, &reference),
+            separated: separation.intervals,
+            separated_fraction: separation.fraction,
+            residuals: Residuals::compute(
+                &d.problem,
+                &first.v,
+                &first.pressure,
+                &first.friction_traction,
+            ),
+            seconds: if repeats == 0 {
+                first.timing.total()
+            } else {
+                best
+            },
+            history: hist.events,
+            solution: first,
+        });
+        // The whole Coulomb problem.
+        let mut hist = History::of(&[
+            Stage::Friction,
+            Stage::Uzawa,
+            Stage::InteriorPoint,
+            Stage::Newton,
+        ]);
+        let run = solve_scene(scene, settings, solver, &mut hist)?;
+        tick(solver);
+        let mut best = f64::INFINITY;
+        for _ in 0..repeats {
+            best = best.min(
+                solve_scene(scene, settings, solver, &mut Silent)?
+                    .coulomb
+                    .seconds,
+            );
+            tick(solver);
+        }
+        let total = run.coulomb.total_iterations();
+        rows.push(CompareRow {
+            problem: scene.name.clone(),
+            h: d.h().to_string(),
+            mode: Mode::Coulomb,
+            solver: solver.to_string(),
+            status: run.coulomb.status.to_string(),
+            friction_iterations: run.coulomb.history.len(),
+            outer: total.outer,
+            inner: total.inner,
+            agreement: agreement(
+                &oracle.discretization,
+                &run.coulomb.solution,
+                &oracle.coulomb.solution,
+            ),
+            separated: run.separation.intervals.clone(),
+            separated_fraction: run.separation.fraction,
+            residuals: run.residuals,
+            seconds: if repeats == 0 {
+                run.coulomb.seconds
+            } else {
+                best
+            },
+            history: hist.events,
+            solution: run.coulomb.solution,
+        });
+    }
+    Ok(rows)
+}
+
+/// Columns of `compare.csv` (accuracy; deterministic).
+pub const COMPARE_COLUMNS: [&str; 24] = [
+    "problem",
+    "h",
+    "mode",
+    "solver",
+    "status",
+    "friction_iterations",
+    "outer_iterations",
+    "inner_iterations",
+    "displacement_max",
+    "displacement_l2",
+    "pressure_max",
+    "pressure_l2",
+    "traction_max",
+    "traction_l2",
+    "objective_gap",
+    "separated",
+    "separated_fraction",
+    "kkt",
+    "primal",
+    "dual",
+    "complementarity",
+    "cone",
+    "slip",
+    "stationarity",
+];
+
+/// Columns of `compare_timing.csv`.
+pub const COMPARE_TIMING_COLUMNS: [&str; 5] = ["problem", "h", "mode", "solver", "seconds_min"];
+
+/// Formats separated intervals as `[a;b] [c;d]` (no commas, for CSV).
+pub fn intervals_text(intervals: &[[f64; 2]]) -> String {
+    intervals
+        .iter()
+        .map(|[a, b]| format!("[{a:.4};{b:.4}]"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The accuracy rows as CSV fields.
+pub fn compare_records(rows: &[CompareRow]) -> Vec<Vec<String>> {
+    use crate::output::fixed;
+    rows.iter()
+        .map(|r| {
+            let a = &r.agreement;
+            let q = &r.residuals;
+            vec![
+                r.problem.clone(),
+                r.h.clone(),
+                r.mode.as_str().to_string(),
+                r.solver.clone(),
+                r.status.clone(),
+                r.friction_iterations.to_string(),
+                r.outer.to_string(),
+                r.inner.to_string(),
+                fixed(a.displacement_max),
+                fixed(a.displacement_l2),
+                fixed(a.pressure_max),
+                fixed(a.pressure_l2),
+                fixed(a.traction_max),
+                fixed(a.traction_l2),
+                fixed(a.objective_gap),
+                intervals_text(&r.separated),
+                format!("{:.6}", r.separated_fraction),
+                fixed(q.kkt()),
+                fixed(q.primal),
+                fixed(q.dual),
+                fixed(q.complementarity),
+                fixed(q.cone),
+                fixed(q.slip),
+                fixed(q.stationarity),
+            ]
+        })
+        .collect()
+}
+
+/// The timing rows as CSV fields.
+pub fn timing_records(rows: &[CompareRow]) -> Vec<Vec<String>> {
+    rows.iter()
+        .map(|r| {
+            vec![
+                r.problem.clone(),
+                r.h.clone(),
+                r.mode.as_str().to_string(),
+                r.solver.clone(),
+                format!("{:.6}", r.seconds),
+            ]
+        })
+        .collect()
+}
+
+/// A Markdown table of the comparison.
+pub fn compare_markdown(rows: &[CompareRow]) -> String {
+    let mut out = String::from(
+        "| problem | h | mode | solver | status | Δu max | Δp max | Δq max | separated | KKT residual | iterations | time (s) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let iterations = match (r.friction_iterations, r.inner) {
+            (0, 0) => format!("{}", r.outer),
+            (0, i) => format!("{} / {}", r.outer, i),
+            (f, 0) => format!("{f}: {}", r.outer),
+            (f, i) => format!("{f}: {} / {}", r.outer, i),
+        };
+        let sep = if r.separated.is_empty() {
+            "none".to_string()
+        } else {
+            r.separated
+                .iter()
+                .map(|[a, b]| format!("[{a:.3}, {b:.3}]"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        out += &format!(
+            "| {} | {} | {} | {} | {} | {:.1e} | {:.1e} | {:.1e} | {} ({:.1}%) | {:.1e} | {} | {:.3} |\n",
+            r.problem,
+            r.h,
+            r.mode.as_str(),
+            r.solver,
+            r.status,
+            r.agreement.displacement_max,
+            r.agreement.pressure_max,
+            r.agreement.traction_max,
+            sep,
+            100.0 * r.separated_fraction,
+            r.residuals.kkt(),
+            iterations,
+            r.seconds
+        );
+    }
+    out + "\nΔ: max difference from the oracle (clarabel) relative to its largest value. Iterations: \
+           [friction iterations:] outer (interior-point, Uzawa or Newton) [/ sweeps]. Time: minimum over the timed runs.\n"
+}

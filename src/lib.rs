@@ -5,21 +5,26 @@
 //! live in `contactlab-solvers`.
 
 pub mod assembly;
+pub mod charts;
 pub mod cli;
 pub mod compare;
 pub mod continuation;
 pub mod discretization;
 pub mod dofs;
 pub mod friction;
+pub mod manifest;
 pub mod material;
 pub mod mesh;
 pub mod mesh_size;
 pub mod output;
 pub mod profile;
+pub mod report;
+pub mod reproduce;
 pub mod run;
 pub mod scene;
 pub mod scene_file;
 pub mod settings;
+pub mod sweep;
 pub mod table1;
 
 pub use contactlab_solvers as solvers;

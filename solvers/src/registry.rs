@@ -32,6 +32,10 @@ pub struct Entry {
     /// Whether it warm-starts, so that mesh continuation (coarse levels
     /// first) pays off; otherwise it is run on the finest level only.
     pub continuation: bool,
+    /// Sets the solver's accuracy knob (for work-precision diagrams).
+    pub set_tolerance: fn(&mut SolverSettings, f64),
+    /// Values of that knob a work-precision diagram runs through.
+    pub tolerances: &'static [f64],
 }
 
 /// The registry.
@@ -41,12 +45,20 @@ pub const SOLVERS: &[Entry] = &[
         about: "conic oracle: interior point (Clarabel) with SOC friction cones",
         build: |s| Box::new(ConicSolver::new(s.clarabel.clone())),
         continuation: false,
+        set_tolerance: |s, t| {
+            s.clarabel.tol_gap_abs = t;
+            s.clarabel.tol_gap_rel = t;
+            s.clarabel.tol_feas = t;
+        },
+        tolerances: &[1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
     },
     Entry {
         name: "relaxation",
         about: "the paper's method: prox-Uzawa on the modified Lagrangian, pointwise relaxation inside",
         build: |s| Box::new(ProxUzawa::new(s.relaxation.clone())),
         continuation: true,
+        set_tolerance: |s, t| s.relaxation.epsilon = t,
+        tolerances: &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
     },
 ];
 

@@ -49,6 +49,8 @@ pub struct RelaxationSettings {
     pub max_uzawa: usize,
     /// Cap on relaxation sweeps per Uzawa iteration.
     pub max_sweeps: usize,
+    /// Wall-clock budget per call in seconds (default: none).
+    pub time_limit: f64,
 }
 
 /// Default Huber width: below what the paper's sweep threshold resolves at
@@ -68,6 +70,7 @@ impl Default for RelaxationSettings {
             },
             max_uzawa: 1000,
             max_sweeps: 2_000_000,
+            time_limit: f64::INFINITY,
         }
     }
 }
@@ -104,6 +107,12 @@ impl RelaxationSettings {
         }
         if self.max_uzawa == 0 {
             return Err("relaxation.max_uzawa = 0 is invalid: allow at least 1 Uzawa iteration (default 1000)".into());
+        }
+        if self.time_limit.is_nan() || self.time_limit <= 0.0 {
+            return Err(format!(
+                "relaxation.time_limit = {} is invalid: give a positive number of seconds (default: none)",
+                self.time_limit
+            ));
         }
         if self.max_sweeps == 0 {
             return Err(
@@ -211,6 +220,14 @@ pub fn prox_uzawa(
             if change <= sweep_tol {
                 converged_inner = true;
                 break;
+            }
+            if q % 256 == 0 && t0.elapsed().as_secs_f64() > settings.time_limit {
+                status = Status::TimeLimit;
+                detail = format!(
+                    "time limit {} s reached in Uzawa iteration {k} after {sweeps} sweeps (max|Δv| = {change:.3e})",
+                    settings.time_limit
+                );
+                break 'uzawa;
             }
         }
         if !converged_inner {

@@ -1,0 +1,466 @@
+//! Parameter sweeps. One factor at a time around the paper's settings:
+//! - `r`, `epsilon`, `smoothing`, `schedule`: the whole Coulomb problem with
+//!   the paper's solver (relaxation), errors against a tight oracle solution;
+//! - `tolerance`: every registered solver through its own accuracy knob on
+//!   the given-friction subproblem at the oracle's g (the work-precision
+//!   diagram: no outer loop blurs the comparison).
+//!
+//! Every planned run gives a row, converged or not: the status says which.
+
+use anyhow::Result;
+use contactlab_solvers::registry;
+use contactlab_solvers::{Residuals, Silent, Smoothing};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::compare::{Agreement, Mode, ORACLE, agreement, solve_given_friction};
+use crate::continuation::Schedule;
+use crate::discretization::Discretization;
+use crate::mesh_size::MeshSize;
+use crate::run::{Run, solve_scene};
+use crate::scene::Scene;
+use crate::settings::Settings;
+use contactlab_solvers::Solution;
+
+/// What a sweep varies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Factor {
+    /// Penalty r of the modified Lagrangian.
+    R,
+    /// The paper's ε (Coulomb, Uzawa and sweep thresholds together).
+    Epsilon,
+    /// Huber width δ of |s|, and the exact minimizer.
+    Smoothing,
+    /// Continuation schedule.
+    Schedule,
+    /// Each solver's own tolerance, on the given-friction subproblem.
+    Tolerance,
+}
+
+impl Factor {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Factor::R => "r",
+            Factor::Epsilon => "epsilon",
+            Factor::Smoothing => "smoothing",
+            Factor::Schedule => "schedule",
+            Factor::Tolerance => "tolerance",
+        }
+    }
+}
+
+/// What to sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSpec {
+    pub problems: Vec<u32>,
+    pub meshes: Vec<MeshSize>,
+    pub factors: Vec<Factor>,
+    pub r_values: Vec<f64>,
+    pub epsilon_values: Vec<f64>,
+    pub smoothing_values: Vec<Smoothing>,
+    pub schedules: Vec<Schedule>,
+    /// Solvers of the tolerance factor (default: all registered).
+    pub solvers: Vec<&'static str>,
+    /// Wall-clock budget of one given-friction solve, seconds.
+    pub time_limit: f64,
+    /// Run in parallel (then times are not recorded: they would not compare).
+    pub parallel: bool,
+    /// Extra timed runs of each tolerance-factor run (short given-friction
+    /// solves); their time is the minimum over all runs.
+    pub repeats: usize,
+    /// Take every k-th value of each solver's tolerance list (1: all).
+    pub tolerance_stride: usize,
+}
+
+impl Default for SweepSpec {
+    fn default() -> Self {
+        Self {
+            problems: vec![1],
+            meshes: vec![MeshSize::from_level(5).expect("in range")],
+            factors: vec![
+                Factor::R,
+                Factor::Epsilon,
+                Factor::Smoothing,
+                Factor::Schedule,
+                Factor::Tolerance,
+            ],
+            r_values: (0..=14).map(|k| 10f64.powi(k)).collect(),
+            epsilon_values: (2..=8).map(|k| 10f64.powi(-k)).collect(),
+            smoothing_values: std::iter::once(Smoothing::Exact)
+                .chain((6..=12).step_by(2).map(|k| Smoothing::Huber {
+                    delta: 10f64.powi(-k),
+                }))
+                .collect(),
+            schedules: vec![Schedule::Revisit, Schedule::FinestOnly],
+            solvers: registry::names(),
+            time_limit: 30.0,
+            parallel: false,
+            repeats: 2,
+            tolerance_stride: 1,
+        }
+    }
+}
+
+/// One planned run.
+#[derive(Clone, Debug)]
+pub struct PlannedRun {
+    pub problem: u32,
+    pub h: MeshSize,
+    pub factor: Factor,
+    pub mode: Mode,
+    pub solver: &'static str,
+    /// The varied value as text (a number, `exact`, a schedule).
+    pub value: String,
+    pub settings: Settings,
+}
+
+/// One row of `sweep.csv`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepRow {
+    pub problem: u32,
+    pub h: String,
+    pub factor: &'static str,
+    pub mode: &'static str,
+    pub solver: String,
+    pub value: String,
+    pub r: f64,
+    pub epsilon: f64,
+    pub smoothing: String,
+    pub schedule: String,
+    pub status: String,
+    pub converged: bool,
+    pub friction_iterations: usize,
+    pub outer: usize,
+    pub inner: usize,
+    pub agreement: Agreement,
+    pub kkt: f64,
+    pub separated_fraction: f64,
+    /// Seconds of solver work (None in parallel sweeps).
+    pub seconds: Option<f64>,
+}
+
+/// Expands a spec into runs.
+pub fn plan(spec: &SweepSpec, base: &Settings) -> Vec<PlannedRun> {
+    let mut runs = Vec::new();
+    let mut base = base.clone();
+    base.solver.relaxation.time_limit = spec.time_limit;
+    base.solver.clarabel.time_limit = spec.time_limit;
+    for &problem in &spec.problems {
+        for &h in &spec.meshes {
+            let mut push = |factor, mode, solver, value: String, settings: Settings| {
+                runs.push(PlannedRun {
+                    problem,
+                    h,
+                    factor,
+                    mode,
+                    solver,
+                    value,
+                    settings,
+                })
+            };
+            for &factor in &spec.factors {
+                match factor {
+                    Factor::R => {
+                        for &r in &spec.r_values {
+                            let mut s = base.clone();
+                            s.solver.relaxation.r = r;
+                            push(factor, Mode::Coulomb, "relaxation", format!("{r:e}"), s);
+                        }
+                    }
+                    Factor::Epsilon => {
+                        for &e in &spec.epsilon_values {
+                            let mut s = base.clone();
+                            s.solver.relaxation.epsilon = e;
+                            s.coulomb.epsilon = e;
+                            push(factor, Mode::Coulomb, "relaxation", format!("{e:e}"), s);
+                        }
+                    }
+                    Factor::Smoothing => {
+                        for &sm in &spec.smoothing_values {
+                            let mut s = base.clone();
+                            s.solver.relaxation.smoothing = sm;
+                            push(factor, Mode::Coulomb, "relaxation", sm.label(), s);
+                        }
+                    }
+                    Factor::Schedule => {
+                        for &sc in &spec.schedules {
+                            let mut s = base.clone();
+                            s.schedule = sc;
+                            push(factor, Mode::Coulomb, "relaxation", sc.to_string(), s);
+                        }
+                    }
+                    Factor::Tolerance => {
+                        for &name in &spec.solvers {
+                            let Some(entry) = registry::by_name(name) else {
+                                continue;
+                            };
+                            for &t in entry
+                                .tolerances
+                                .iter()
+                                .step_by(spec.tolerance_stride.max(1))
+                            {
+                                let mut s = base.clone();
+                                (entry.set_tolerance)(&mut s.solver, t);
+                                push(factor, Mode::GivenFriction, entry.name, format!("{t:e}"), s);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    runs
+}
+
+/// The references of one (problem, h): the oracle's Coulomb solution with a
+/// tight fixed-point tolerance, and its given-friction subproblem.
+pub struct Reference {
+    pub scene: Scene,
+    pub coulomb: Run,
+    pub g: Vec<f64>,
+    pub subproblem: (Discretization, Solution),
+}
+
+/// Fixed-point tolerance of the reference Coulomb solution (the oracle's
+/// pressures are accurate to ~1e-8 relative, so 1e-6 on g is reachable).
+pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-6;
+
+pub fn reference(problem: u32, h: MeshSize, base: &Settings) -> Result<Reference> {
+    let mut scene = Scene::paper_problem(problem)?;
+    scene.set_finest(h);
+    let mut s = base.clone();
+    s.coulomb.epsilon = REFERENCE_COULOMB_EPSILON;
+    let coulomb = solve_scene(&scene, &s, ORACLE, &mut Silent)?;
+    if !coulomb.coulomb.status.is_converged() {
+        anyhow::bail!(
+            "the reference (oracle) did not converge on problem {problem} at h = {h}: {}",
+            coulomb.coulomb.detail
+        );
+    }
+    let g = coulomb.coulomb.g.clone();
+    let (d, sol, _) = solve_given_friction(&scene, base, ORACLE, &g, &mut Silent)?;
+    Ok(Reference {
+        scene,
+        coulomb,
+        g,
+        subproblem: (d, sol),
+    })
+}
+
+/// Runs one planned run against its reference.
+pub fn run_one(
+    run: &PlannedRun,
+    reference: &Reference,
+    timed: bool,
+    repeats: usize,
+) -> Result<SweepRow> {
+    let rx = &run.settings.solver.relaxation;
+    let (
+        status,
+        converged,
+        friction_iterations,
+        outer,
+        inner,
+        agree,
+        kkt,
+        separated_fraction,
+        seconds,
+    ) = match run.mode {
+        Mode::Coulomb => {
+            let out = solve_scene(&reference.scene, &run.settings, run.solver, &mut Silent)?;
+            let total = out.coulomb.total_iterations();
+            let agree = agreement(
+                &reference.coulomb.discretization,
+                &out.coulomb.solution,
+                &reference.coulomb.coulomb.solution,
+            );
+            (
+                out.coulomb.status,
+                out.coulomb.status.is_converged(),
+                out.coulomb.history.len(),
+                total.outer,
+                total.inner,
+                agree,
+                out.residuals.kkt(),
+                out.separation.fraction,
+                out.coulomb.seconds,
+            )
+        }
+        Mode::GivenFriction => {
+            let (d, s, _) = solve_given_friction(
+                &reference.scene,
+                &run.settings,
+                run.solver,
+                &reference.g,
+                &mut Silent,
+            )?;
+            let mut seconds = s.timing.total();
+            if timed {
+                for _ in 0..repeats {
+                    let (_, again, _) = solve_given_friction(
+                        &reference.scene,
+                        &run.settings,
+                        run.solver,
+                        &reference.g,
+                        &mut Silent,
+                    )?;
+                    seconds = seconds.min(again.timing.total());
+                }
+            }
+            let agree = agreement(&d, &s, &reference.subproblem.1);
+            let kkt = Residuals::compute(&d.problem, &s.v, &s.pressure, &s.friction_traction).kkt();
+            let x = d.contact_x();
+            let jump: Vec<f64> = d.problem.contacts().iter().map(|c| s.v[c.t]).collect();
+            let tol = crate::profile::SEPARATION_TOL * crate::profile::largest_displacement(&d, &s);
+            let fraction = crate::profile::separation(&x, &jump, tol).fraction;
+            (
+                s.status,
+                s.status.is_converged(),
+                0,
+                s.iterations.outer,
+                s.iterations.inner,
+                agree,
+                kkt,
+                fraction,
+                seconds,
+            )
+        }
+    };
+    Ok(SweepRow {
+        problem: run.problem,
+        h: run.h.to_string(),
+        factor: run.factor.as_str(),
+        mode: run.mode.as_str(),
+        solver: run.solver.to_string(),
+        value: run.value.clone(),
+        r: rx.r,
+        epsilon: rx.epsilon,
+        smoothing: rx.smoothing.label(),
+        schedule: run.settings.schedule.to_string(),
+        status: status.to_string(),
+        converged,
+        friction_iterations,
+        outer,
+        inner,
+        agreement: agree,
+        kkt,
+        separated_fraction,
+        seconds: timed.then_some(seconds),
+    })
+}
+
+/// Runs a sweep; `tick` is called after every run (for a progress bar).
+pub fn sweep(
+    spec: &SweepSpec,
+    base: &Settings,
+    tick: &(dyn Fn(&PlannedRun) + Sync),
+) -> Result<Vec<SweepRow>> {
+    let runs = plan(spec, base);
+    let mut references = Vec::new();
+    for &problem in &spec.problems {
+        for &h in &spec.meshes {
+            references.push(((problem, h), reference(problem, h, base)?));
+        }
+    }
+    let find = |run: &PlannedRun| {
+        &references
+            .iter()
+            .find(|((p, h), _)| *p == run.problem && *h == run.h)
+            .expect("a reference per problem and mesh")
+            .1
+    };
+    let one = |run: &PlannedRun| {
+        let row = run_one(run, find(run), !spec.parallel, spec.repeats);
+        tick(run);
+        row
+    };
+    if spec.parallel {
+        runs.par_iter().map(one).collect()
+    } else {
+        runs.iter().map(one).collect()
+    }
+}
+
+/// Columns of `sweep.csv` (accuracy and counts; deterministic).
+pub const SWEEP_COLUMNS: [&str; 24] = [
+    "run",
+    "problem",
+    "h",
+    "factor",
+    "mode",
+    "solver",
+    "value",
+    "r",
+    "epsilon",
+    "smoothing",
+    "schedule",
+    "status",
+    "converged",
+    "friction_iterations",
+    "outer_iterations",
+    "inner_iterations",
+    "displacement_max",
+    "displacement_l2",
+    "pressure_max",
+    "pressure_l2",
+    "traction_max",
+    "objective_gap",
+    "kkt",
+    "separated_fraction",
+];
+
+/// Columns of `sweep_timing.csv` (run = the row of `sweep.csv`).
+pub const SWEEP_TIMING_COLUMNS: [&str; 5] = ["run", "factor", "solver", "value", "seconds"];
+
+/// Rows as CSV fields.
+pub fn sweep_records(rows: &[SweepRow]) -> Vec<Vec<String>> {
+    use crate::output::fixed;
+    rows.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            vec![
+                i.to_string(),
+                r.problem.to_string(),
+                r.h.clone(),
+                r.factor.to_string(),
+                r.mode.to_string(),
+                r.solver.clone(),
+                r.value.clone(),
+                format!("{:e}", r.r),
+                format!("{:e}", r.epsilon),
+                r.smoothing.clone(),
+                r.schedule.clone(),
+                r.status.clone(),
+                r.converged.to_string(),
+                r.friction_iterations.to_string(),
+                r.outer.to_string(),
+                r.inner.to_string(),
+                fixed(r.agreement.displacement_max),
+                fixed(r.agreement.displacement_l2),
+                fixed(r.agreement.pressure_max),
+                fixed(r.agreement.pressure_l2),
+                fixed(r.agreement.traction_max),
+                fixed(r.agreement.objective_gap),
+                fixed(r.kkt),
+                format!("{:.6}", r.separated_fraction),
+            ]
+        })
+        .collect()
+}
+
+/// Timing rows as CSV fields (empty seconds where not timed).
+pub fn sweep_timing_records(rows: &[SweepRow]) -> Vec<Vec<String>> {
+    rows.iter()
+        .enumerate()
+        .map(|(i, r)| {
+            vec![
+                i.to_string(),
+                r.factor.to_string(),
+                r.solver.clone(),
+                r.value.clone(),
+                r.seconds.map(|s| format!("{s:.6}")).unwrap_or_default(),
+            ]
+        })
+        .collect()
+}
