@@ -25,7 +25,9 @@ pub struct Manifest {
 }
 
 impl Manifest {
-    pub fn collect(settings: &Settings, run: serde_json::Value) -> Self {
+    /// `out`: the results directory, left out of the dirty check (it is
+    /// being rewritten).
+    pub fn collect(settings: &Settings, run: serde_json::Value, out: &std::path::Path) -> Self {
         let git = |args: &[&str]| {
             Command::new("git")
                 .args(args)
@@ -38,8 +40,21 @@ impl Manifest {
             command: std::env::args().collect(),
             contactlab_version: env!("CARGO_PKG_VERSION"),
             git_commit: git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into()),
-            git_dirty: git(&["status", "--porcelain", "--untracked-files=no"])
-                .map(|s| !s.is_empty()),
+            git_dirty: {
+                let mut args = vec![
+                    "status".to_string(),
+                    "--porcelain".into(),
+                    "--untracked-files=no".into(),
+                ];
+                if out.is_relative() {
+                    args.extend([
+                        "--".into(),
+                        ".".into(),
+                        format!(":(exclude){}", out.display()),
+                    ]);
+                }
+                git(&args.iter().map(String::as_str).collect::<Vec<_>>()).map(|s| !s.is_empty())
+            },
             rustc: env!("CONTACTLAB_RUSTC_VERSION"),
             cpu: cpu_model(),
             cores: std::thread::available_parallelism()

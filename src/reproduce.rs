@@ -280,6 +280,7 @@ pub fn reproduce(
             "solvers": solvers,
             "wall_seconds": seconds,
         }),
+        out,
     );
     write_atomic(&out.join("manifest.json"), &json_bytes(&manifest)?)?;
     let readme = readme(
