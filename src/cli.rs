@@ -72,8 +72,12 @@ pub struct ReproduceArgs {
 #[derive(Debug, Args)]
 pub struct SweepArgs {
     /// Problems of the paper to sweep.
-    #[arg(long, value_delimiter = ',', default_values_t = [1])]
+    #[arg(long, value_delimiter = ',', default_values_t = [1], conflicts_with = "scene")]
     pub problems: Vec<u32>,
+    /// A scene file to sweep instead of the paper's problems (its material,
+    /// friction and loads; its settings are the sweep's base settings).
+    #[arg(long, value_name = "FILE")]
+    pub scene: Option<PathBuf>,
     /// Finest meshes (each with continuation from 1/8).
     #[arg(long = "h", value_name = "1/2^k", value_delimiter = ',', default_values_t = [MeshSize::from_level(5).expect("in range")])]
     pub meshes: Vec<MeshSize>,
@@ -111,8 +115,16 @@ pub struct SweepArgs {
 impl SweepArgs {
     /// The sweep described by these flags.
     pub fn spec(&self) -> Result<SweepSpec> {
+        let scenes = match &self.scene {
+            Some(path) => vec![crate::scene_file::load(path)?.0],
+            None => self
+                .problems
+                .iter()
+                .map(|&p| Scene::paper_problem(p))
+                .collect::<Result<_, _>>()?,
+        };
         let mut spec = SweepSpec {
-            problems: self.problems.clone(),
+            scenes,
             meshes: self.meshes.clone(),
             factors: self.vary.clone(),
             solvers: solver_list(&self.solvers)?,
@@ -121,9 +133,6 @@ impl SweepArgs {
             repeats: self.repeats,
             ..SweepSpec::default()
         };
-        for &p in &spec.problems {
-            Scene::paper_problem(p)?;
-        }
         if !self.r_values.is_empty() {
             spec.r_values = self.r_values.clone();
         }
@@ -232,9 +241,15 @@ pub struct SceneArgs {
 impl SceneArgs {
     /// The scene with the overrides applied, validated (condition (13) included).
     pub fn resolve(&self) -> Result<Scene> {
-        let mut scene = match (&self.scene, self.problem) {
+        Ok(self.load()?.0)
+    }
+
+    /// The scene and the settings it brings (a scene file's sections, else
+    /// the defaults), with the scene overrides applied and validated.
+    pub fn load(&self) -> Result<(Scene, Settings)> {
+        let (mut scene, settings) = match (&self.scene, self.problem) {
             (Some(path), _) => crate::scene_file::load(path)?,
-            (None, Some(n)) => Scene::paper_problem(n)?,
+            (None, Some(n)) => (Scene::paper_problem(n)?, Settings::default()),
             (None, None) => anyhow::bail!("give --problem N or --scene FILE"),
         };
         if let Some(h) = self.h {
@@ -253,8 +268,37 @@ impl SceneArgs {
             scene.friction = f;
         }
         scene.validate()?;
-        Ok(scene)
+        Ok((scene, settings))
     }
+}
+
+/// Where a settings field is set on the command line, for error messages.
+const FLAGS: [(&str, &str); 13] = [
+    ("coulomb.epsilon", "--epsilon"),
+    ("coulomb.max_iterations", "--max-friction-iterations"),
+    ("relaxation.r", "--r"),
+    ("relaxation.epsilon", "--epsilon"),
+    ("relaxation.sweep_factor", "--sweep-factor"),
+    ("relaxation.proximal", "--proximal"),
+    ("relaxation.smoothing.huber.delta", "--smoothing"),
+    ("relaxation.max_uzawa", "--max-uzawa"),
+    ("relaxation.max_sweeps", "--max-sweeps"),
+    ("relaxation.time_limit", "--time-limit"),
+    ("clarabel.tol_", "--clarabel-tol"),
+    ("clarabel.max_iter", "--clarabel-max-iter"),
+    ("clarabel.time_limit", "--time-limit"),
+];
+
+/// Adds the command-line flag to a message that starts with a settings field.
+fn with_flag(message: String) -> String {
+    for (field, flag) in FLAGS {
+        if message.starts_with(field)
+            && let Some((name, rest)) = message.split_once(' ')
+        {
+            return format!("{name} ({flag}) {rest}");
+        }
+    }
+    message
 }
 
 /// Solver and fixed-point settings, as overrides of the defaults (the
@@ -357,12 +401,19 @@ impl SettingsArgs {
 
     /// Default settings with these flags applied, validated.
     pub fn resolve(&self) -> Result<Settings> {
-        let mut settings = Settings::default();
+        self.resolve_on(Settings::default())
+    }
+
+    /// `base` (e.g. a scene file's settings) with these flags applied, validated.
+    pub fn resolve_on(&self, base: Settings) -> Result<Settings> {
+        let mut settings = base;
         self.apply(&mut settings);
         if let Some(text) = &self.smoothing {
             settings.solver.relaxation.smoothing = parse_smoothing(text)?;
         }
-        settings.validate().map_err(anyhow::Error::msg)?;
+        settings
+            .validate()
+            .map_err(|m| anyhow::Error::msg(with_flag(m)))?;
         Ok(settings)
     }
 }
@@ -459,9 +510,12 @@ impl Observer for LogObserver {
 }
 
 fn solve(args: &SolveArgs) -> Result<()> {
-    let scene = args.scene.resolve()?;
-    let settings = args.settings.resolve()?;
+    let (scene, base) = args.scene.load()?;
+    let settings = args.settings.resolve_on(base)?;
     crate::run::solver_entry(&args.solver)?;
+    if let Some(dir) = &args.out {
+        ensure_writable(dir)?;
+    }
     eprintln!(
         "solving {} at h = {} with {}",
         scene.name,
@@ -499,6 +553,7 @@ fn solve(args: &SolveArgs) -> Result<()> {
 
 fn table1(args: &Table1Args) -> Result<()> {
     let settings = args.settings.resolve()?;
+    ensure_writable(&args.out)?;
     for &p in &args.problems {
         Scene::paper_problem(p)?;
     }
@@ -522,6 +577,20 @@ fn table1(args: &Table1Args) -> Result<()> {
     print!("{}", crate::table1::table1_markdown(&rows));
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// Fails early, before any long computation, if `dir` cannot be written.
+pub fn ensure_writable(dir: &std::path::Path) -> Result<()> {
+    let probe = dir.join(format!(".contactlab-write-test-{}", std::process::id()));
+    std::fs::create_dir_all(dir)
+        .and_then(|_| std::fs::write(&probe, b""))
+        .and_then(|_| std::fs::remove_file(&probe))
+        .with_context(|| {
+            format!(
+                "--out {}: the output directory cannot be written; choose a writable directory",
+                dir.display()
+            )
+        })
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
@@ -550,9 +619,10 @@ fn solver_list(names: &[String]) -> Result<Vec<&'static str>> {
 }
 
 fn compare(args: &CompareArgs) -> Result<()> {
-    let scene = args.scene.resolve()?;
-    let settings = args.settings.resolve()?;
+    let (scene, base) = args.scene.load()?;
+    let settings = args.settings.resolve_on(base)?;
     let solvers = solver_list(&args.solvers)?;
+    ensure_writable(&args.out)?;
     let bar = progress_bar(
         (2 + solvers.len() * 2 * (1 + args.repeats)) as u64,
         "compare",
@@ -581,7 +651,12 @@ fn compare(args: &CompareArgs) -> Result<()> {
 
 fn sweep(args: &SweepArgs) -> Result<()> {
     let spec = args.spec()?;
-    let settings = args.settings.resolve()?;
+    let base = match &args.scene {
+        Some(path) => crate::scene_file::load(path)?.1,
+        None => Settings::default(),
+    };
+    let settings = args.settings.resolve_on(base)?;
+    ensure_writable(&args.out)?;
     let rows = run_sweep(&spec, &settings)?;
     write_sweep(&args.out, &rows)?;
     let failed = rows.iter().filter(|r| !r.converged).count();
@@ -626,6 +701,7 @@ pub fn write_sweep(out: &std::path::Path, rows: &[crate::sweep::SweepRow]) -> Re
 
 fn reproduce(args: &ReproduceArgs) -> Result<()> {
     let settings = args.settings.resolve()?;
+    ensure_writable(&args.out)?;
     let spec = if args.quick {
         ReproduceSpec::quick()
     } else {

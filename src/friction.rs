@@ -19,6 +19,9 @@ pub struct CoulombSettings {
     pub epsilon: f64,
     /// Cap on given-friction solves.
     pub max_iterations: usize,
+    /// Stop as not contracting when max|Δg| has not fallen over this many
+    /// iterations (0: never).
+    pub stall_window: usize,
 }
 
 impl Default for CoulombSettings {
@@ -26,6 +29,7 @@ impl Default for CoulombSettings {
         Self {
             epsilon: 1e-4,
             max_iterations: 50,
+            stall_window: 5,
         }
     }
 }
@@ -161,6 +165,14 @@ pub fn friction_fixed_point(
             );
             return finish(Status::Converged, detail, solution, g, history);
         }
+        let w = settings.stall_window;
+        if w > 0 && m > w && change >= history[m - 1 - w].change {
+            let detail = format!(
+                "the fixed point is not contracting: max|Δg| went from {:.3e} to {change:.3e} over the last {w} friction iterations",
+                history[m - 1 - w].change
+            );
+            return finish(Status::InsufficientProgress, detail, solution, g, history);
+        }
         if m == settings.max_iterations {
             let detail = format!(
                 "friction iteration cap {m} reached with max|Δg| = {change:.3e} > ε = {:e}",
@@ -250,6 +262,7 @@ mod tests {
         let s = CoulombSettings {
             epsilon: 1e-9,
             max_iterations: 200,
+            ..Default::default()
         };
         let out = friction_fixed_point(&mut step, 0.5, &s, &mut Silent);
         assert_eq!(out.status, Status::Converged);
@@ -271,10 +284,20 @@ mod tests {
         let s = CoulombSettings {
             epsilon: 1e-4,
             max_iterations: 7,
+            stall_window: 0,
         };
         let out = friction_fixed_point(&mut step, 0.5, &s, &mut Silent);
         assert_eq!(out.status, Status::MaxIterations);
         assert_eq!(out.history.len(), 7);
         assert!(out.history.last().unwrap().contraction.unwrap() > 1.0);
+        // With stall detection it stops as soon as W steps bring no decrease.
+        let s = CoulombSettings {
+            epsilon: 1e-4,
+            max_iterations: 50,
+            stall_window: 3,
+        };
+        let out = friction_fixed_point(&mut step, 0.5, &s, &mut Silent);
+        assert_eq!(out.status, Status::InsufficientProgress);
+        assert_eq!(out.history.len(), 4, "{}", out.detail);
     }
 }

@@ -45,18 +45,36 @@ fn parse_value(v: &str) -> f64 {
     v.parse().unwrap_or(f64::NAN)
 }
 
+/// The file-name tag of one scene and mesh in sweep charts: `problem_1_h32`.
+pub fn sweep_tag(scene: &str, h: &str) -> String {
+    let slug: String = scene
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{slug}_h{}", h.replace("1/", ""))
+}
+
 /// Charts of a sweep: work-precision, and iterations and errors against r and ε.
 pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
     let mut out = Vec::new();
-    let groups: Vec<(u32, String)> = {
-        let mut g: Vec<(u32, String)> = rows.iter().map(|r| (r.problem, r.h.clone())).collect();
+    let groups: Vec<(String, String)> = {
+        let mut g: Vec<(String, String)> = rows
+            .iter()
+            .map(|r| (r.problem.clone(), r.h.clone()))
+            .collect();
         g.dedup();
         g.sort();
         g.dedup();
         g
     };
     for (problem, h) in groups {
-        let tag = format!("p{problem}_h{}", h.replace("1/", ""));
+        let tag = sweep_tag(&problem, &h);
         let rows: Vec<&SweepRow> = rows
             .iter()
             .filter(|r| r.problem == problem && r.h == h)
@@ -125,7 +143,7 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
             out.push((
                 format!("sweep_{factor}_iterations_{tag}"),
                 chart(
-                    format!("Iterations against {name}, relaxation, problem {problem}, h = {h}"),
+                    format!("Iterations against {name}, relaxation, {problem}, h = {h}"),
                     name,
                     "iterations (count)",
                     true,
@@ -157,9 +175,7 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
             out.push((
                 format!("sweep_{factor}_error_{tag}"),
                 chart(
-                    format!(
-                        "Error against {name}, relaxation vs oracle, problem {problem}, h = {h}"
-                    ),
+                    format!("Error against {name}, relaxation vs oracle, {problem}, h = {h}"),
                     name,
                     "relative error / residual (dimensionless)",
                     true,
@@ -212,9 +228,7 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
             out.push((
                 format!("sweep_smoothing_{tag}"),
                 chart(
-                    format!(
-                        "Smoothing of |s|: pressure error vs oracle, problem {problem}, h = {h}"
-                    ),
+                    format!("Smoothing of |s|: pressure error vs oracle, {problem}, h = {h}"),
                     "Huber width δ [length]",
                     "max pressure error (relative)",
                     true,

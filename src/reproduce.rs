@@ -57,7 +57,6 @@ impl ReproduceSpec {
             problems: vec![1, 2, 3],
             repeats: 2,
             sweep: SweepSpec {
-                problems: vec![1],
                 meshes: vec![sweep_h],
                 time_limit: 10.0,
                 ..SweepSpec::default()
@@ -75,7 +74,6 @@ impl ReproduceSpec {
             problems: vec![1, 2, 3],
             repeats: 0,
             sweep: SweepSpec {
-                problems: vec![1],
                 meshes: vec![h],
                 r_values: vec![1e4, 1e8, 1e12],
                 epsilon_values: vec![1e-2, 1e-4, 1e-6],
@@ -579,7 +577,7 @@ fn readme(
     }
 
     // Sweep.
-    let tag = format!("p1_h{}", spec.sweep_h.to_string().replace("1/", ""));
+    let tag = crate::report::sweep_tag(&spec.sweep.scenes[0].name, &spec.sweep_h.to_string());
     let _ = writeln!(
         s,
         "\n## Speed against accuracy, and the choice of r and ε (problem 1, h = {})\n",

@@ -20,26 +20,24 @@ pub struct Traction {
 }
 
 /// The scene of one computation.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Scene {
     pub name: String,
-    #[serde(default)]
     pub material: Material,
     /// Coulomb friction coefficient 𝓕 (paper: 0.5).
-    #[serde(default = "default_friction")]
     pub friction: f64,
     pub loads: Vec<Traction>,
     /// Mesh continuation levels, coarse to fine; the last is the finest.
-    #[serde(default = "default_levels")]
     pub levels: Vec<MeshSize>,
 }
 
-fn default_friction() -> f64 {
+/// The paper's friction coefficient.
+pub fn default_friction() -> f64 {
     0.5
 }
 
-fn default_levels() -> Vec<MeshSize> {
+/// The paper's continuation levels 1/8 ... 1/64.
+pub fn default_levels() -> Vec<MeshSize> {
     MeshSize::schedule_to(MeshSize::from_level(6).expect("1/64 is in range"))
 }
 

@@ -3,9 +3,76 @@
 
 use std::path::Path;
 
+use contactlab_solvers::registry::SolverSettings;
+use serde::Deserialize;
 use thiserror::Error;
 
-use crate::scene::{Scene, SceneError};
+use crate::continuation::Schedule;
+use crate::friction::CoulombSettings;
+use crate::material::Material;
+use crate::mesh_size::MeshSize;
+use crate::scene::{Scene, SceneError, Traction, default_friction, default_levels};
+use crate::settings::Settings;
+
+/// The scene file format: a scene and, optionally, the settings of a run.
+///
+/// ```toml
+/// name = "problem 1"
+/// friction = 0.5                  # Coulomb coefficient
+/// levels = ["1/8", "1/16", "1/32", "1/64"]
+/// schedule = "revisit"            # optional
+///
+/// [material]                      # optional, the paper's values by default
+/// young = 73e3
+/// poisson = 0.34
+/// plane = "strain"
+///
+/// [[loads]]                       # vertical tractions on the top side y = 1
+/// from = 0.0
+/// to = "1/3"
+/// p2 = -60.0
+///
+/// [coulomb]                       # optional
+/// epsilon = 1e-4
+///
+/// [solver.relaxation]             # optional, one section per solver
+/// r = 1e12
+/// ```
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub name: String,
+    #[serde(default)]
+    pub material: Material,
+    #[serde(default = "default_friction")]
+    pub friction: f64,
+    pub loads: Vec<Traction>,
+    #[serde(default = "default_levels")]
+    pub levels: Vec<MeshSize>,
+    pub schedule: Option<Schedule>,
+    pub coulomb: Option<CoulombSettings>,
+    pub solver: Option<SolverSettings>,
+}
+
+impl SceneFile {
+    /// The scene and the settings the file gives (defaults where it is silent).
+    pub fn split(self) -> (Scene, Settings) {
+        let defaults = Settings::default();
+        let settings = Settings {
+            coulomb: self.coulomb.unwrap_or(defaults.coulomb),
+            schedule: self.schedule.unwrap_or(defaults.schedule),
+            solver: self.solver.unwrap_or(defaults.solver),
+        };
+        let scene = Scene {
+            name: self.name,
+            material: self.material,
+            friction: self.friction,
+            loads: self.loads,
+            levels: self.levels,
+        };
+        (scene, settings)
+    }
+}
 
 /// A scene file that cannot be used.
 #[derive(Debug, Error)]
@@ -19,16 +86,14 @@ pub enum SceneFileError {
         column: usize,
         message: String,
     },
-    #[error("scene file {path}: {source}")]
-    Invalid {
-        path: String,
-        #[source]
-        source: SceneError,
-    },
+    #[error("scene file {path}: {error}")]
+    Invalid { path: String, error: SceneError },
+    #[error("scene file {path}: {message}")]
+    Settings { path: String, message: String },
 }
 
 /// Reads, parses and validates a scene file.
-pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
+pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
     let shown = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| SceneFileError::Read {
         path: shown.clone(),
@@ -41,22 +106,30 @@ pub fn load(path: &Path) -> Result<Scene, SceneFileError> {
             e.utf8_error().valid_up_to()
         ),
     })?;
-    let scene = parse(&text).map_err(|(line, column, message)| SceneFileError::Parse {
+    let (scene, settings) = parse(&text)
+        .map_err(|(line, column, message)| SceneFileError::Parse {
+            path: shown.clone(),
+            line,
+            column,
+            message,
+        })?
+        .split();
+    scene.validate().map_err(|error| SceneFileError::Invalid {
         path: shown.clone(),
-        line,
-        column,
-        message,
+        error,
     })?;
-    scene.validate().map_err(|source| SceneFileError::Invalid {
-        path: shown,
-        source,
-    })?;
-    Ok(scene)
+    settings
+        .validate()
+        .map_err(|message| SceneFileError::Settings {
+            path: shown,
+            message,
+        })?;
+    Ok((scene, settings))
 }
 
 /// Parses scene text; on error gives (line, column, one-line message).
-pub fn parse(text: &str) -> Result<Scene, (usize, usize, String)> {
-    toml::from_str::<Scene>(text).map_err(|e| {
+pub fn parse(text: &str) -> Result<SceneFile, (usize, usize, String)> {
+    toml::from_str::<SceneFile>(text).map_err(|e| {
         let offset = e.span().map(|s| s.start).unwrap_or(0).min(text.len());
         let before = &text[..floor_char_boundary(text, offset)];
         let line = before.matches('\n').count() + 1;

@@ -53,7 +53,8 @@ impl Factor {
 /// What to sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepSpec {
-    pub problems: Vec<u32>,
+    /// Scenes to sweep (their own levels are replaced by 1/8 ... each mesh).
+    pub scenes: Vec<Scene>,
     pub meshes: Vec<MeshSize>,
     pub factors: Vec<Factor>,
     pub r_values: Vec<f64>,
@@ -76,7 +77,7 @@ pub struct SweepSpec {
 impl Default for SweepSpec {
     fn default() -> Self {
         Self {
-            problems: vec![1],
+            scenes: vec![Scene::paper_problem(1).expect("built in")],
             meshes: vec![MeshSize::from_level(5).expect("in range")],
             factors: vec![
                 Factor::R,
@@ -105,7 +106,9 @@ impl Default for SweepSpec {
 /// One planned run.
 #[derive(Clone, Debug)]
 pub struct PlannedRun {
-    pub problem: u32,
+    /// Index of the scene in the spec.
+    pub scene: usize,
+    pub problem: String,
     pub h: MeshSize,
     pub factor: Factor,
     pub mode: Mode,
@@ -118,7 +121,8 @@ pub struct PlannedRun {
 /// One row of `sweep.csv`.
 #[derive(Clone, Debug, Serialize)]
 pub struct SweepRow {
-    pub problem: u32,
+    /// The scene's name.
+    pub problem: String,
     pub h: String,
     pub factor: &'static str,
     pub mode: &'static str,
@@ -146,11 +150,12 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Vec<PlannedRun> {
     let mut base = base.clone();
     base.solver.relaxation.time_limit = spec.time_limit;
     base.solver.clarabel.time_limit = spec.time_limit;
-    for &problem in &spec.problems {
+    for (index, scene) in spec.scenes.iter().enumerate() {
         for &h in &spec.meshes {
             let mut push = |factor, mode, solver, value: String, settings: Settings| {
                 runs.push(PlannedRun {
-                    problem,
+                    scene: index,
+                    problem: scene.name.clone(),
                     h,
                     factor,
                     mode,
@@ -226,15 +231,16 @@ pub struct Reference {
 /// pressures are accurate to ~1e-8 relative, so 1e-6 on g is reachable).
 pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-6;
 
-pub fn reference(problem: u32, h: MeshSize, base: &Settings) -> Result<Reference> {
-    let mut scene = Scene::paper_problem(problem)?;
+pub fn reference(scene: &Scene, h: MeshSize, base: &Settings) -> Result<Reference> {
+    let mut scene = scene.clone();
     scene.set_finest(h);
     let mut s = base.clone();
     s.coulomb.epsilon = REFERENCE_COULOMB_EPSILON;
     let coulomb = solve_scene(&scene, &s, ORACLE, &mut Silent)?;
     if !coulomb.coulomb.status.is_converged() {
         anyhow::bail!(
-            "the reference (oracle) did not converge on problem {problem} at h = {h}: {}",
+            "the reference (oracle) did not converge on {} at h = {h}: {}",
+            scene.name,
             coulomb.coulomb.detail
         );
     }
@@ -328,7 +334,7 @@ pub fn run_one(
         }
     };
     Ok(SweepRow {
-        problem: run.problem,
+        problem: run.problem.clone(),
         h: run.h.to_string(),
         factor: run.factor.as_str(),
         mode: run.mode.as_str(),
@@ -358,15 +364,15 @@ pub fn sweep(
 ) -> Result<Vec<SweepRow>> {
     let runs = plan(spec, base);
     let mut references = Vec::new();
-    for &problem in &spec.problems {
+    for (index, scene) in spec.scenes.iter().enumerate() {
         for &h in &spec.meshes {
-            references.push(((problem, h), reference(problem, h, base)?));
+            references.push(((index, h), reference(scene, h, base)?));
         }
     }
     let find = |run: &PlannedRun| {
         &references
             .iter()
-            .find(|((p, h), _)| *p == run.problem && *h == run.h)
+            .find(|((p, h), _)| *p == run.scene && *h == run.h)
             .expect("a reference per problem and mesh")
             .1
     };
@@ -421,7 +427,7 @@ pub fn sweep_records(rows: &[SweepRow]) -> Vec<Vec<String>> {
         .map(|(i, r)| {
             vec![
                 i.to_string(),
-                r.problem.to_string(),
+                r.problem.clone(),
                 r.h.clone(),
                 r.factor.to_string(),
                 r.mode.to_string(),

@@ -173,7 +173,6 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
 #[test]
 fn sweep_rows_that_do_not_converge_are_marked_not_dropped() {
     let spec = SweepSpec {
-        problems: vec![1],
         meshes: vec![MeshSize::from_level(3).unwrap()],
         factors: vec![Factor::R, Factor::Epsilon],
         r_values: vec![1e-2, 1e12],

@@ -1,0 +1,306 @@
+//! Every invalid input gets a one-line error naming the problem and a
+//! non-zero exit, never a panic; scene files load exactly; the parser never
+//! panics on random input.
+
+use std::process::Command;
+
+use contactlab::scene::Scene;
+use contactlab::scene_file;
+use contactlab::settings::Settings;
+use proptest::prelude::*;
+
+enum Input<'a> {
+    Args(&'a [&'a str]),
+    /// A scene file (raw bytes) passed to `solve --scene`, plus extra args.
+    Scene(&'a [u8], &'a [&'a str]),
+}
+
+fn run(input: &Input<'_>, dir: &std::path::Path) -> std::process::Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_contactlab"));
+    match input {
+        Input::Args(args) => {
+            cmd.args(*args);
+        }
+        Input::Scene(bytes, extra) => {
+            let path = dir.join("scene.toml");
+            std::fs::write(&path, bytes).unwrap();
+            cmd.args(["solve", "--h", "1/8", "--scene", path.to_str().unwrap()])
+                .args(*extra);
+        }
+    }
+    cmd.output().unwrap()
+}
+
+const GOOD: &str = "name = \"x\"\n[[loads]]\nfrom = 0.0\nto = \"1/3\"\np2 = -60.0\n";
+
+#[test]
+fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad_load_outside = GOOD.replace("to = \"1/3\"", "to = 1.5");
+    let bad_load_reversed = GOOD.replace("from = 0.0", "from = 0.5");
+    let upward = GOOD.replace("-60.0", "60.0");
+    let truncated = &GOOD[..GOOD.len() - 12];
+    let unknown_key = format!("{GOOD}colour = \"red\"\n");
+    let bad_setting = format!("{GOOD}[solver.relaxation]\nr = -1.0\n");
+    let bad_level = format!("levels = [\"1/3\"]\n{GOOD}");
+    let cases: Vec<(Input<'_>, &str)> = vec![
+        (
+            Input::Args(&["info", "--problem", "4"]),
+            "unknown problem 4",
+        ),
+        (
+            Input::Args(&["sweep", "--problems", "7"]),
+            "unknown problem 7",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--solver", "simplex"]),
+            "unknown solver 'simplex'",
+        ),
+        (
+            Input::Args(&["compare", "--problem", "1", "--solvers", "simplex"]),
+            "unknown solver 'simplex'",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--h", "1/60"]),
+            "power-of-two",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--h", "1/1024"]),
+            "out of range",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--h", "abc"]),
+            "--h",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--young", "0"]),
+            "material.young",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--young", "-5"]),
+            "material.young",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--young", "nan"]),
+            "material.young",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--poisson", "0.5"]),
+            "material.poisson",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--poisson", "-1"]),
+            "material.poisson",
+        ),
+        (
+            Input::Args(&["info", "--problem", "1", "--friction", "-0.1"]),
+            "friction",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--r", "0"]),
+            "relaxation.r (--r)",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--r", "-1e12"]),
+            "--r",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--epsilon", "0"]),
+            "--epsilon",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--epsilon", "-1e-4"]),
+            "--epsilon",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--max-friction-iterations", "0"]),
+            "--max-friction-iterations",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--max-friction-iterations", "-3"]),
+            "--max-friction-iterations",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--max-uzawa", "0"]),
+            "--max-uzawa",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--max-sweeps", "0"]),
+            "--max-sweeps",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--clarabel-max-iter", "0"]),
+            "--clarabel-max-iter",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--clarabel-tol", "-1e-8"]),
+            "--clarabel-tol",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--smoothing", "abc"]),
+            "--smoothing",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--proximal", "-1"]),
+            "--proximal",
+        ),
+        (
+            Input::Args(&["sweep", "--r-values", "1e4,-1"]),
+            "--r-values",
+        ),
+        (
+            Input::Args(&[
+                "solve",
+                "--problem",
+                "1",
+                "--h",
+                "1/8",
+                "--out",
+                "/dev/null/x",
+            ]),
+            "--out",
+        ),
+        (
+            Input::Args(&["solve", "--scene", "/nonexistent/scene.toml"]),
+            "cannot read scene file",
+        ),
+        (
+            Input::Scene(bad_load_outside.as_bytes(), &[]),
+            "loads[0].to",
+        ),
+        (
+            Input::Scene(bad_load_reversed.as_bytes(), &[]),
+            "loads[0].to",
+        ),
+        (Input::Scene(upward.as_bytes(), &[]), "condition (13)"),
+        (Input::Scene(b"name = \n", &[]), "line 1"),
+        (Input::Scene(truncated.as_bytes(), &[]), "scene file"),
+        (Input::Scene(b"name = \"x\"\n\xff\xfe\n", &[]), "not UTF-8"),
+        (
+            Input::Scene(unknown_key.as_bytes(), &[]),
+            "unknown field `colour`",
+        ),
+        (Input::Scene(bad_setting.as_bytes(), &[]), "relaxation.r"),
+        (Input::Scene(bad_level.as_bytes(), &[]), "power-of-two"),
+        (Input::Scene(b"", &[]), "missing field"),
+    ];
+    for (input, expected) in &cases {
+        let o = run(input, dir.path());
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        let what = match input {
+            Input::Args(a) => a.join(" "),
+            Input::Scene(b, _) => format!("scene file {:?}", String::from_utf8_lossy(b)),
+        };
+        assert!(!o.status.success(), "{what}: exit code 0");
+        assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+        let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(lines.len(), 1, "{what}: not one line: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{what}: message does not name '{expected}': {stderr}"
+        );
+        let parts: Vec<&str> = stderr.trim().split(": ").filter(|p| p.len() > 20).collect();
+        for (k, p) in parts.iter().enumerate() {
+            assert!(
+                !parts[k + 1..].contains(p),
+                "{what}: message repeats itself: {stderr}"
+            );
+        }
+    }
+}
+
+#[test]
+fn example_scene_files_load_to_exactly_the_built_in_scenes() {
+    for n in 1..=3 {
+        let path = format!("{}/scenes/problem{n}.toml", env!("CARGO_MANIFEST_DIR"));
+        let (scene, settings) = scene_file::load(std::path::Path::new(&path)).unwrap();
+        assert_eq!(scene, Scene::paper_problem(n).unwrap(), "problem {n}");
+        assert_eq!(settings, Settings::default(), "problem {n}");
+    }
+}
+
+#[test]
+fn a_good_scene_file_overrides_what_it_sets() {
+    let text = format!(
+        "{GOOD}friction = 0.25\n[material]\nplane = \"stress\"\n[solver.relaxation]\nr = 1e8\nsmoothing = \"exact\"\n"
+    );
+    // TOML tables end at the next table header, so put top-level keys first.
+    let text = text.replace("friction = 0.25\n", "");
+    let text = format!("friction = 0.25\n{text}");
+    let (scene, settings) = scene_file::parse(&text).unwrap().split();
+    assert_eq!(scene.friction, 0.25);
+    assert_eq!(
+        scene.material.plane,
+        contactlab::material::PlaneModel::Stress
+    );
+    assert_eq!(settings.solver.relaxation.r, 1e8);
+    assert_eq!(
+        settings.solver.relaxation.smoothing,
+        contactlab::solvers::Smoothing::Exact
+    );
+    assert_eq!(settings.coulomb, Settings::default().coulomb);
+}
+
+/// Fragments that look like scene files, to reach deeper into the parser
+/// than random text does.
+fn fragment() -> impl Strategy<Value = String> {
+    let key = prop::sample::select(vec![
+        "name",
+        "friction",
+        "levels",
+        "schedule",
+        "young",
+        "poisson",
+        "plane",
+        "from",
+        "to",
+        "p2",
+        "epsilon",
+        "r",
+        "smoothing",
+        "max_uzawa",
+        "tol_feas",
+        "colour",
+    ]);
+    let value = prop_oneof![
+        any::<f64>().prop_map(|x| format!("{x:?}")),
+        any::<i64>().prop_map(|x| x.to_string()),
+        "[a-z0-9/ .\"-]{0,12}".prop_map(|s| format!("\"{s}\"")),
+        Just("[\"1/8\", \"1/16\"]".to_string()),
+        Just("inf".to_string()),
+        Just("nan".to_string()),
+        Just("{ huber = { delta = 1e-9 } }".to_string()),
+    ];
+    let header = prop::sample::select(vec![
+        "",
+        "[material]\n",
+        "[[loads]]\n",
+        "[coulomb]\n",
+        "[solver.relaxation]\n",
+        "[solver.clarabel]\n",
+        "[solver]\n",
+    ]);
+    (header, key, value).prop_map(|(h, k, v)| format!("{h}{k} = {v}\n"))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    #[test]
+    fn the_parser_never_panics_on_random_text(text in "\\PC{0,200}") {
+        let _ = scene_file::parse(&text);
+    }
+
+    #[test]
+    fn scene_like_files_parse_validate_and_build_without_panicking(parts in prop::collection::vec(fragment(), 0..12)) {
+        let text: String = format!("name = \"x\"\n{}", parts.concat());
+        if let Ok(file) = scene_file::parse(&text) {
+            let (scene, settings) = file.split();
+            let _ = settings.validate();
+            if scene.validate().is_ok() {
+                let h = contactlab::mesh_size::MeshSize::from_level(2).unwrap();
+                let _ = contactlab::discretization::Discretization::new(&scene, h);
+            }
+        }
+    }
+}
