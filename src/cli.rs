@@ -15,6 +15,7 @@ use crate::profile::PROFILE_COLUMNS;
 use crate::reproduce::ReproduceSpec;
 use crate::scene::Scene;
 use crate::settings::Settings;
+use crate::stability::StabilitySpec;
 use crate::sweep::{Factor, SweepSpec};
 use contactlab_solvers::{Observer, Progress, Smoothing, Stage};
 
@@ -55,6 +56,24 @@ pub enum Command {
     /// the contact-zone profiles, the comparison, a reduced sweep, charts,
     /// a manifest and a README, all into DIR.
     Reproduce(ReproduceArgs),
+    /// The stability map: each method across stress conditions (r, ε,
+    /// smoothing, the proximal term, the friction coefficient, loads near
+    /// condition (13), fine meshes, Clarabel's tolerances), every run
+    /// classified converged, slow, stalled, diverged, wrong or refused.
+    /// Writes DIR/stability.csv, DIR/stability_friction.csv and charts.
+    Stability(StabilityArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct StabilityArgs {
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub out: PathBuf,
+    /// A small map for tests (h = 1/8, few values).
+    #[arg(long)]
+    pub quick: bool,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
 }
 
 #[derive(Debug, Args)]
@@ -475,6 +494,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => compare(&args),
         Command::Sweep(args) => sweep(&args),
         Command::Reproduce(args) => reproduce(&args),
+        Command::Stability(args) => stability(&args),
     }
 }
 
@@ -716,6 +736,43 @@ fn reproduce(args: &ReproduceArgs) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+fn stability(args: &StabilityArgs) -> Result<()> {
+    let settings = args.settings.resolve()?;
+    ensure_writable(&args.out)?;
+    let spec = if args.quick {
+        StabilitySpec::quick()
+    } else {
+        StabilitySpec::standard()
+    };
+    let rows = write_stability(&args.out, &spec, &settings, &|line| {
+        eprintln!("stability: {line}")
+    })?;
+    let mut counts = std::collections::BTreeMap::new();
+    for r in &rows {
+        *counts.entry(r.class.as_str()).or_insert(0) += 1;
+    }
+    eprintln!("wrote {}/stability.csv: {counts:?}", args.out.display());
+    Ok(())
+}
+
+/// Runs the stability map and writes its files; returns the rows.
+pub fn write_stability(
+    out: &std::path::Path,
+    spec: &StabilitySpec,
+    settings: &Settings,
+    log: &dyn Fn(&str),
+) -> Result<Vec<crate::stability::StabilityRow>> {
+    use crate::stability::*;
+    let (rows, traces) = crate::stability::stability(spec, settings, log)?;
+    write_atomic(&out.join("stability.csv"), &stability_csv(&rows)?)?;
+    write_atomic(
+        &out.join("stability_friction.csv"),
+        &friction_trace_csv(&traces)?,
+    )?;
+    crate::report::write_all(&out.join("charts"), &stability_charts(&rows, &traces))?;
+    Ok(rows)
 }
 
 fn print_summary(s: &crate::run::Summary) {

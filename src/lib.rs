@@ -24,6 +24,7 @@ pub mod run;
 pub mod scene;
 pub mod scene_file;
 pub mod settings;
+pub mod stability;
 pub mod sweep;
 pub mod table1;
 

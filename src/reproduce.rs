@@ -25,6 +25,7 @@ use crate::report::{ProfilePair, convergence_chart, profile_charts, sweep_charts
 use crate::run::solve_scene;
 use crate::scene::Scene;
 use crate::settings::Settings;
+use crate::stability::StabilitySpec;
 use crate::sweep::{
     Factor, SWEEP_COLUMNS, SWEEP_TIMING_COLUMNS, SweepRow, SweepSpec, sweep, sweep_records,
     sweep_timing_records,
@@ -45,6 +46,8 @@ pub struct ReproduceSpec {
     #[serde(skip)]
     pub sweep: SweepSpec,
     pub sweep_h: MeshSize,
+    /// The stability map.
+    pub stability: StabilitySpec,
 }
 
 impl ReproduceSpec {
@@ -62,6 +65,7 @@ impl ReproduceSpec {
                 ..SweepSpec::default()
             },
             sweep_h,
+            stability: StabilitySpec::standard(),
         }
     }
 
@@ -84,6 +88,7 @@ impl ReproduceSpec {
                 ..SweepSpec::default()
             },
             sweep_h: h,
+            stability: StabilitySpec::quick(),
         }
     }
 }
@@ -98,7 +103,7 @@ const PAPER_SEPARATION: [(u32, &str, &str); 3] = [
 
 /// Files every reproduce run writes (relative to the output directory),
 /// besides the per-problem profiles and charts.
-pub const FILES: [&str; 8] = [
+pub const FILES: [&str; 10] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -107,6 +112,8 @@ pub const FILES: [&str; 8] = [
     "separation.csv",
     "sweep.csv",
     "sweep_timing.csv",
+    "stability.csv",
+    "stability_friction.csv",
 ];
 
 /// One problem's separation, ours beside the paper's.
@@ -267,6 +274,20 @@ pub fn reproduce(
     )?;
     charts.extend(sweep_charts(&sweep_rows));
 
+    log("stability map");
+    let (stability_rows, traces) = crate::stability::stability(&spec.stability, settings, &|l| {
+        log(&format!("stability: {l}"))
+    })?;
+    write_atomic(
+        &out.join("stability.csv"),
+        &crate::stability::stability_csv(&stability_rows)?,
+    )?;
+    write_atomic(
+        &out.join("stability_friction.csv"),
+        &crate::stability::friction_trace_csv(&traces)?,
+    )?;
+    charts.extend(crate::stability::stability_charts(&stability_rows, &traces));
+
     log("charts");
     let written = write_all(&charts_dir, &charts)?;
     let seconds = started.elapsed().as_secs_f64();
@@ -281,7 +302,7 @@ pub fn reproduce(
         out,
     );
     write_atomic(&out.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let readme = readme(
+    let mut readme = readme(
         spec,
         &manifest,
         &t1,
@@ -292,9 +313,52 @@ pub fn reproduce(
         out,
         seconds,
     );
+    // The stability map goes before the list of files.
+    let at = readme.find("\n## Files\n").unwrap_or(readme.len());
+    readme.insert_str(at, &stability_readme(&stability_rows, &written, out));
     write_atomic(&out.join("README.md"), readme.as_bytes())?;
     log(&format!("done in {seconds:.0} s"));
     Ok(())
+}
+
+fn stability_readme(
+    rows: &[crate::stability::StabilityRow],
+    charts: &[std::path::PathBuf],
+    out: &Path,
+) -> String {
+    let mut s = String::from(
+        "\n## Where each method fails: the stability map\n\n\
+         Every run is classified (see `src/stability.rs`): refused (no solution: condition (13) fails, or the solver \
+         reports unbounded), diverged (NaN, numerical breakdown, or a growing fixed point), stalled (a cap, a time \
+         budget, reduced accuracy, or a fixed point that stopped contracting), wrong (converged by its own test but KKT \
+         residual > 1e-4 or pressure off the oracle's by > 1e-3), slow (right, but more than 10× the work of the \
+         default run), converged. All runs are in `stability.csv`; max|Δg| and contraction per friction iteration in \
+         `stability_friction.csv`.\n\n",
+    );
+    s += &crate::stability::readme_section(rows);
+    s += "\n";
+    for name in [
+        "stability_friction",
+        "stability_r",
+        "stability_epsilon",
+        "stability_smoothing",
+        "stability_load",
+        "stability_mesh",
+    ] {
+        if let Some(p) = charts
+            .iter()
+            .find(|p| p.file_stem().is_some_and(|f| f.to_string_lossy() == name))
+        {
+            s += &format!(
+                "![{name}]({})\n",
+                p.strip_prefix(out).unwrap_or(p).display()
+            );
+        }
+    }
+    s += "\n<details><summary>Every run that did not simply converge</summary>\n\n";
+    s += &crate::stability::summary_markdown(rows);
+    s += "\n</details>\n";
+    s
 }
 
 fn write_profile(path: &Path, rows: &[ProfileRow]) -> Result<()> {

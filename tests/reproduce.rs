@@ -153,6 +153,15 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             ("Convergence histories", "iteration", "residual", true)
         } else if name.starts_with("sweep_") {
             ("problem 1", "", "", false)
+        } else if name == "stability_friction" {
+            (
+                "Coulomb fixed point",
+                "friction coefficient",
+                "contraction",
+                false,
+            )
+        } else if name.starts_with("stability_") {
+            ("Stability", "", "", false)
         } else {
             panic!("unexpected chart {name}");
         };
@@ -167,7 +176,7 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         }
         seen += 1;
     }
-    assert!(seen >= 12 + 3 + 1 + 4, "only {seen} charts");
+    assert!(seen >= 12 + 3 + 1 + 4 + 6, "only {seen} charts");
 }
 
 #[test]
