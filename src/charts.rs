@@ -50,6 +50,15 @@ impl Series {
     }
 }
 
+/// Where the legend goes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Legend {
+    #[default]
+    UpperRight,
+    UpperLeft,
+    LowerRight,
+}
+
 /// A chart: title, axis labels with units, scales, series.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chart {
@@ -59,6 +68,7 @@ pub struct Chart {
     pub log_x: bool,
     pub log_y: bool,
     pub series: Vec<Series>,
+    pub legend: Legend,
 }
 
 const PALETTE: [RGBColor; 8] = [
@@ -214,7 +224,11 @@ impl Chart {
             .configure_series_labels()
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
+            .position(match self.legend {
+                Legend::UpperRight => SeriesLabelPosition::UpperRight,
+                Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
+                Legend::LowerRight => SeriesLabelPosition::LowerRight,
+            })
             .draw()
             .map_err(err)?;
         Ok(())
@@ -275,6 +289,7 @@ mod tests {
                         .dashed(),
                     Series::line("third", vec![(3.0, 3.0)]).scatter(),
                 ],
+                legend: Legend::UpperLeft,
             };
             let svg = chart.to_svg().unwrap();
             assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
+use crate::bench::BenchSpec;
 use crate::continuation::Schedule;
 use crate::discretization::Discretization;
 use crate::material::PlaneModel;
@@ -62,6 +63,42 @@ pub enum Command {
     /// classified converged, slow, stalled, diverged, wrong or refused.
     /// Writes DIR/stability.csv, DIR/stability_friction.csv and charts.
     Stability(StabilityArgs),
+    /// Measure speed: assembly, one sweep against one SpMV, each solver on
+    /// the given-friction subproblem and on the whole Coulomb problem, for
+    /// h = 1/8 to 1/256, as medians after a warm-up on one thread and as
+    /// ratios to one sparse factorization. Writes DIR/performance.csv,
+    /// DIR/performance_goals.md and charts.
+    Bench(BenchArgs),
+    /// (internal) Solve one scene and print time and peak memory as JSON.
+    #[command(hide = true)]
+    BenchOne(BenchOneArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "results")]
+    pub out: PathBuf,
+    /// A small run for tests (h = 1/8, 1/16, one run each).
+    #[arg(long)]
+    pub quick: bool,
+    /// Timed runs after the warm-up (the median is reported).
+    #[arg(long, allow_hyphen_values = true)]
+    pub runs: Option<usize>,
+    /// Seconds: a solver slower than this on one mesh (or predicted to be on
+    /// the next) is not run on finer meshes.
+    #[arg(long, allow_hyphen_values = true)]
+    pub budget: Option<f64>,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchOneArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long, default_value = "newton")]
+    pub solver: String,
 }
 
 #[derive(Debug, Args)]
@@ -495,6 +532,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sweep(args) => sweep(&args),
         Command::Reproduce(args) => reproduce(&args),
         Command::Stability(args) => stability(&args),
+        Command::Bench(args) => bench(&args),
+        Command::BenchOne(args) => bench_one(&args),
     }
 }
 
@@ -773,6 +812,50 @@ pub fn write_stability(
     )?;
     crate::report::write_all(&out.join("charts"), &stability_charts(&rows, &traces))?;
     Ok(rows)
+}
+
+fn bench(args: &BenchArgs) -> Result<()> {
+    let settings = args.settings.resolve()?;
+    ensure_writable(&args.out)?;
+    let mut spec = if args.quick {
+        BenchSpec::quick()
+    } else {
+        BenchSpec::standard()
+    };
+    if let Some(r) = args.runs {
+        spec.runs = r;
+    }
+    if let Some(b) = args.budget {
+        if !(b.is_finite() && b > 0.0) {
+            anyhow::bail!("--budget = {b} is invalid: give a positive number of seconds");
+        }
+        spec.budget = b;
+    }
+    let (_, goals, _) =
+        crate::bench::write_bench(&args.out, &spec, &settings, &|l| eprintln!("bench: {l}"))?;
+    print!("{}", crate::bench::goals_markdown(&goals));
+    eprintln!(
+        "wrote {}/performance.csv, performance_goals.md and charts",
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn bench_one(args: &BenchOneArgs) -> Result<()> {
+    let scene = args.scene.resolve()?;
+    faer::set_global_parallelism(faer::Par::Seq);
+    let run = crate::run::solve_scene(
+        &scene,
+        &Settings::default(),
+        &args.solver,
+        &mut contactlab_solvers::Silent,
+    )?;
+    let peak = crate::bench::peak_memory_kb();
+    println!(
+        "{}",
+        serde_json::json!({"seconds": run.coulomb.seconds, "status": run.coulomb.status.to_string(), "peak_kb": peak})
+    );
+    Ok(())
 }
 
 fn print_summary(s: &crate::run::Summary) {

@@ -5,6 +5,7 @@
 //! live in `contactlab-solvers`.
 
 pub mod assembly;
+pub mod bench;
 pub mod charts;
 pub mod cli;
 pub mod compare;

@@ -26,6 +26,7 @@ fn chart(
         log_x,
         log_y,
         series,
+        legend: Default::default(),
     }
 }
 

@@ -10,6 +10,7 @@ use anyhow::Result;
 use contactlab_solvers::{Silent, registry};
 use serde::Serialize;
 
+use crate::bench::BenchSpec;
 use crate::compare::{
     COMPARE_COLUMNS, COMPARE_TIMING_COLUMNS, CompareRow, Mode, compare, compare_markdown,
     compare_records, timing_records,
@@ -48,6 +49,8 @@ pub struct ReproduceSpec {
     pub sweep_h: MeshSize,
     /// The stability map.
     pub stability: StabilitySpec,
+    /// The benchmark.
+    pub bench: BenchSpec,
 }
 
 impl ReproduceSpec {
@@ -66,6 +69,7 @@ impl ReproduceSpec {
             },
             sweep_h,
             stability: StabilitySpec::standard(),
+            bench: BenchSpec::standard(),
         }
     }
 
@@ -89,6 +93,7 @@ impl ReproduceSpec {
             },
             sweep_h: h,
             stability: StabilitySpec::quick(),
+            bench: BenchSpec::quick(),
         }
     }
 }
@@ -103,7 +108,7 @@ const PAPER_SEPARATION: [(u32, &str, &str); 3] = [
 
 /// Files every reproduce run writes (relative to the output directory),
 /// besides the per-problem profiles and charts.
-pub const FILES: [&str; 10] = [
+pub const FILES: [&str; 12] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -114,6 +119,8 @@ pub const FILES: [&str; 10] = [
     "sweep_timing.csv",
     "stability.csv",
     "stability_friction.csv",
+    "performance.csv",
+    "performance_goals.md",
 ];
 
 /// One problem's separation, ours beside the paper's.
@@ -288,6 +295,10 @@ pub fn reproduce(
     )?;
     charts.extend(crate::stability::stability_charts(&stability_rows, &traces));
 
+    log("benchmark");
+    let (perf_rows, goals, _) =
+        crate::bench::write_bench(out, &spec.bench, settings, &|l| log(&format!("bench: {l}")))?;
+
     log("charts");
     let written = write_all(&charts_dir, &charts)?;
     let seconds = started.elapsed().as_secs_f64();
@@ -316,6 +327,8 @@ pub fn reproduce(
     // The stability map goes before the list of files.
     let at = readme.find("\n## Files\n").unwrap_or(readme.len());
     readme.insert_str(at, &stability_readme(&stability_rows, &written, out));
+    let at = readme.find("\n## Files\n").unwrap_or(readme.len());
+    readme.insert_str(at, &performance_readme(&perf_rows, &goals));
     write_atomic(&out.join("README.md"), readme.as_bytes())?;
     log(&format!("done in {seconds:.0} s"));
     Ok(())
@@ -358,6 +371,58 @@ fn stability_readme(
     s += "\n<details><summary>Every run that did not simply converge</summary>\n\n";
     s += &crate::stability::summary_markdown(rows);
     s += "\n</details>\n";
+    s
+}
+
+fn performance_readme(rows: &[crate::bench::PerfRow], goals: &[crate::bench::Goal]) -> String {
+    let mut s = String::from(
+        "\n## Speed (problem 1, one thread, medians after a warm-up)\n\n\
+         Every time is also given as a ratio to one sparse Cholesky factorization and solve of the stiffness matrix \
+         with the semicoercive mode removed (one jump pinned), measured in the same run (`performance.csv`; \
+         `contactlab bench` reruns it alone). Solvers stop at a stated per-run budget.\n\n",
+    );
+    s += &crate::bench::goals_markdown(goals);
+    let mut meshes: Vec<&str> = rows.iter().map(|r| r.h.as_str()).collect();
+    meshes.dedup();
+    s += "\nWhole Coulomb problem, median seconds (× one factorization):\n\n| solver |";
+    for h in &meshes {
+        s += &format!(" {h} |");
+    }
+    s += "\n|---|";
+    s += &"---|".repeat(meshes.len());
+    s += "\n";
+    let mut names = vec!["faer LLᵀ"];
+    names.extend(registry::names());
+    for name in names {
+        s += &format!(
+            "| {} |",
+            if name == "faer LLᵀ" {
+                "one factorization + solve"
+            } else {
+                name
+            }
+        );
+        for h in &meshes {
+            let cell = rows
+                .iter()
+                .find(|r| {
+                    r.solver == name
+                        && r.h == *h
+                        && (r.what == "coulomb" || r.what == "factorization")
+                })
+                .map(|r| {
+                    if r.median_seconds.is_finite() {
+                        format!("{:.4} ({:.1}×)", r.median_seconds, r.ratio_to_factorization)
+                    } else {
+                        r.status.clone()
+                    }
+                })
+                .unwrap_or_default();
+            s += &format!(" {cell} |");
+        }
+        s += "\n";
+    }
+    s += "\n![performance_coulomb](charts/performance_coulomb.svg)\n![performance_given_friction](charts/performance_given_friction.svg)\n";
     s
 }
 

@@ -133,7 +133,7 @@ impl StabilitySpec {
             h: k(4),
             h_friction: k(4),
             meshes: vec![k(4), k(5), k(6), k(7), k(8)],
-            mesh_time_limit: 60.0,
+            mesh_time_limit: 20.0,
             time_limit: 10.0,
             r_values: [-2, 0, 2, 4, 6, 8, 10, 12, 14, 16]
                 .iter()
@@ -146,7 +146,7 @@ impl StabilitySpec {
                 }))
                 .collect(),
             friction_values: vec![0.0, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0],
-            friction_solvers: vec!["clarabel"],
+            friction_solvers: vec!["newton", "clarabel"],
             bisection_steps: 5,
             load_totals: vec![20.0, 2.0, 0.2, 2e-2, 2e-3, 2e-4, 2e-6],
             clarabel_tolerances: vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-14],
@@ -166,7 +166,7 @@ impl StabilitySpec {
             epsilon_values: vec![1e-4, 1e-15],
             smoothing_values: vec![Smoothing::Exact, Smoothing::Huber { delta: 1e-6 }],
             friction_values: vec![0.0, 0.5, 16.0],
-            friction_solvers: vec!["clarabel"],
+            friction_solvers: vec!["newton", "clarabel"],
             bisection_steps: 2,
             load_totals: vec![20.0, 2e-4],
             clarabel_tolerances: vec![1e-4, 1e-10, 1e-14],
@@ -538,7 +538,7 @@ fn load_group(
         let reference = solve_scene(&scene, base, "clarabel", &mut Silent)
             .ok()
             .filter(|r| r.coulomb.status.is_converged());
-        for solver in ["clarabel", "relaxation"] {
+        for solver in contactlab_solvers::registry::names() {
             let (run, t) = timed(&scene, settings, solver)?;
             let o = Outcome::from_run(&run, reference.as_ref().filter(|_| solver != "clarabel"), t);
             let c = classify(&o, None, None);
@@ -646,6 +646,23 @@ fn mesh_group(
             rows.push(row(
                 "mesh",
                 "clarabel",
+                &scene,
+                format!("h = {h}, frictionless"),
+                h.divisions() as f64,
+                &o,
+                c,
+            ));
+        }
+        for solver in contactlab_solvers::registry::names()
+            .into_iter()
+            .filter(|s| !["clarabel", "relaxation"].contains(s))
+        {
+            let (run, t) = timed(&scene, &settings, solver)?;
+            let o = Outcome::from_run(&run, oracle_ok.then_some(&oracle.0), t);
+            let c = classify(&o, None, None);
+            rows.push(row(
+                "mesh",
+                solver,
                 &scene,
                 format!("h = {h}, frictionless"),
                 h.divisions() as f64,
@@ -919,6 +936,7 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
                 log_x,
                 log_y: true,
                 series: by_class(group, sweeps),
+                legend: Default::default(),
             },
         ));
     }
@@ -931,6 +949,7 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
             log_x: true,
             log_y: true,
             series: by_class("load", |r| r.kkt),
+            legend: Default::default(),
         },
     ));
     // Contraction of the fixed point against 𝓕, one series per problem.
@@ -983,11 +1002,12 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
             log_x: true,
             log_y: true,
             series,
+            legend: crate::charts::Legend::UpperLeft,
         },
     ));
     // Mesh: sweeps on the finest level against 1/h, per method, with the fitted slope.
     let mut series = Vec::new();
-    for method in ["relaxation", "clarabel"] {
+    for method in contactlab_solvers::registry::names() {
         let pts: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.group == "mesh" && r.method == method && r.class != Class::Stalled)
@@ -1026,6 +1046,7 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
             log_x: true,
             log_y: true,
             series,
+            legend: crate::charts::Legend::UpperLeft,
         },
     ));
     out

@@ -153,6 +153,8 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             ("Convergence histories", "iteration", "residual", true)
         } else if name.starts_with("sweep_") {
             ("problem 1", "", "", false)
+        } else if name.starts_with("performance_") {
+            ("time against unknowns", "unknowns", "median time [s]", true)
         } else if name == "stability_friction" {
             (
                 "Coulomb fixed point",
@@ -176,7 +178,11 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         }
         seen += 1;
     }
-    assert!(seen >= 12 + 3 + 1 + 4 + 6, "only {seen} charts");
+    assert!(seen >= 12 + 3 + 1 + 4 + 6 + 2, "only {seen} charts");
+    assert_eq!(
+        header(&out.join("performance.csv")),
+        contactlab::bench::PERFORMANCE_COLUMNS
+    );
 }
 
 #[test]

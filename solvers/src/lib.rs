@@ -3,8 +3,10 @@
 //! meshes: the mechanics crate builds a [`GivenFrictionProblem`] and every
 //! solver here takes it and returns the same [`Solution`] type.
 
+pub mod condensed;
 pub mod conic;
 pub mod linalg;
+pub mod newton;
 pub mod observer;
 pub mod problem;
 pub mod registry;
@@ -14,6 +16,7 @@ pub mod solution;
 pub mod solver;
 
 pub use conic::{ConicSettings, ConicSolver};
+pub use newton::{CondensedNewton, NewtonSettings};
 pub use observer::{History, Observer, Progress, Silent, Stage};
 pub use problem::{ContactNode, GivenFrictionProblem, ProblemError};
 pub use relaxation::pointwise::Smoothing;

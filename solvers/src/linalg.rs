@@ -3,12 +3,14 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::perm::PermRef;
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
-    simplicial, supernodal,
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, simplicial, supernodal,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, Mat, MatMut, Par, Side};
 use nalgebra_sparse::{CooMatrix, CscMatrix, CsrMatrix};
 use thiserror::Error;
 
@@ -98,6 +100,104 @@ impl SparseCholesky {
         };
         this.factor_current()?;
         Ok(this)
+    }
+
+    /// Factorization with the unknowns `trailing` ordered last, in that order
+    /// (the rest by AMD), and the supernodal layout forced, so that the
+    /// trailing block of L can be read with [`SparseCholesky::trailing_factor`].
+    pub fn with_trailing(a: &CsrMatrix<f64>, trailing: &[usize]) -> Result<Self, LinalgError> {
+        let n = a.nrows();
+        let mut is_trailing = vec![false; n];
+        for &j in trailing {
+            is_trailing[j] = true;
+        }
+        let rest: Vec<usize> = (0..n).filter(|&j| !is_trailing[j]).collect();
+        // AMD on the rest alone.
+        let mut local = vec![usize::MAX; n];
+        for (k, &j) in rest.iter().enumerate() {
+            local[j] = k;
+        }
+        let mut coo = CooMatrix::new(rest.len(), rest.len());
+        for (i, j, &v) in a.triplet_iter() {
+            if !is_trailing[i] && !is_trailing[j] && i >= j {
+                coo.push(local[i], local[j], v);
+            }
+        }
+        let rest_lower = CscMatrix::from(&coo);
+        let mut fwd: Vec<usize> = if rest.is_empty() {
+            Vec::new()
+        } else {
+            let sym = factorize_symbolic_cholesky(
+                faer_ref(&rest_lower).symbolic(),
+                Side::Lower,
+                SymmetricOrdering::Amd,
+                Default::default(),
+            )
+            .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+            match sym.perm() {
+                Some(p) => p.arrays().0.iter().map(|&k| rest[k]).collect(),
+                None => rest.clone(),
+            }
+        };
+        fwd.extend_from_slice(trailing);
+        let mut inv = vec![0usize; n];
+        for (new, &old) in fwd.iter().enumerate() {
+            inv[old] = new;
+        }
+        let lower = triangle_csc(a, true, None);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(
+            faer_ref(&lower).symbolic(),
+            Side::Lower,
+            SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, n)),
+            params,
+        )
+        .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+        let values = vec![0.0; symbolic.len_val()];
+        let mut this = Self {
+            symbolic,
+            values,
+            lower,
+        };
+        this.factor_current()?;
+        Ok(this)
+    }
+
+    /// The dense lower-triangular block of L on the last `k` pivots (in
+    /// elimination order): for a factorization built by
+    /// [`SparseCholesky::with_trailing`], the trailing unknowns in their order.
+    pub fn trailing_factor(&self, k: usize) -> Option<Mat<f64>> {
+        let n = self.n();
+        let off = n.checked_sub(k)?;
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            return None;
+        };
+        let l = supernodal::SupernodalLltRef::new(sym, &self.values);
+        let mut out = Mat::<f64>::zeros(k, k);
+        for s in 0..sym.n_supernodes() {
+            let node = l.supernode(s);
+            let (start, val, pattern) = (node.start(), node.val(), node.pattern());
+            let ncols = val.ncols();
+            if start + ncols <= off {
+                continue;
+            }
+            for c in 0..ncols {
+                let col = start + c;
+                if col < off {
+                    continue;
+                }
+                for r in c..ncols {
+                    out[(start + r - off, col - off)] = val[(r, c)];
+                }
+                for (p, &row) in pattern.iter().enumerate() {
+                    out[(row - off, col - off)] = val[(ncols + p, c)];
+                }
+            }
+        }
+        Some(out)
     }
 
     /// Numeric refactorization of a matrix with the pattern of the first one.

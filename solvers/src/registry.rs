@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::conic::{ConicSettings, ConicSolver};
+use crate::newton::{CondensedNewton, NewtonSettings};
 use crate::relaxation::{ProxUzawa, RelaxationSettings};
 use crate::solver::GivenFrictionSolver;
 
@@ -13,13 +14,15 @@ use crate::solver::GivenFrictionSolver;
 pub struct SolverSettings {
     pub clarabel: ConicSettings,
     pub relaxation: RelaxationSettings,
+    pub newton: NewtonSettings,
 }
 
 impl SolverSettings {
     /// Checks every solver's settings; the message names the field.
     pub fn validate(&self) -> Result<(), String> {
         self.clarabel.validate()?;
-        self.relaxation.validate()
+        self.relaxation.validate()?;
+        self.newton.validate()
     }
 }
 
@@ -59,6 +62,14 @@ pub const SOLVERS: &[Entry] = &[
         continuation: true,
         set_tolerance: |s, t| s.relaxation.epsilon = t,
         tolerances: &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
+    },
+    Entry {
+        name: "newton",
+        about: "fast exact solver: condensation onto the contact unknowns (sparse Cholesky once), semismooth Newton with line search",
+        build: |s| Box::new(CondensedNewton::new(s.newton.clone())),
+        continuation: false,
+        set_tolerance: |s, t| s.newton.tolerance = t,
+        tolerances: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
     },
 ];
 

@@ -1,0 +1,96 @@
+//! Assembly, the reference factorization, and every registered solver on the
+//! given-friction subproblem and on the whole Coulomb problem, per h.
+//! (`contactlab bench` measures the same things quickly up to h = 1/256 and
+//! writes results/performance.csv.)
+
+use contactlab::bench::pinned;
+use contactlab::compare::solve_given_friction;
+use contactlab::discretization::Discretization;
+use contactlab::mesh_size::MeshSize;
+use contactlab::run::solve_scene;
+use contactlab::scene::Scene;
+use contactlab::settings::Settings;
+use contactlab::solvers::linalg::SparseCholesky;
+use contactlab::solvers::{Silent, registry};
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+
+fn scene(k: u32) -> Scene {
+    let mut s = Scene::paper_problem(1).unwrap();
+    s.set_finest(MeshSize::from_level(k).unwrap());
+    s
+}
+
+fn bench(c: &mut Criterion) {
+    faer::set_global_parallelism(faer::Par::Seq);
+    let settings = Settings::default();
+    let mut group = c.benchmark_group("discretization");
+    group.sample_size(10);
+    for k in [4u32, 5, 6] {
+        let s = scene(k);
+        let h = MeshSize::from_level(k).unwrap();
+        let label = h.to_string();
+        group.bench_with_input(BenchmarkId::new("assembly", &label), &(), |b, _| {
+            b.iter(|| black_box(Discretization::new(&s, h).unwrap()))
+        });
+        let d = Discretization::new(&s, h).unwrap();
+        let a = pinned(&d);
+        group.bench_with_input(
+            BenchmarkId::new("factorization_and_solve", &label),
+            &(),
+            |b, _| {
+                b.iter(|| {
+                    let f = SparseCholesky::new(&a).unwrap();
+                    let mut x = d.problem.f().to_vec();
+                    f.solve_vec(&mut x);
+                    black_box(x[0])
+                })
+            },
+        );
+    }
+    group.finish();
+    let mut group = c.benchmark_group("solvers");
+    group.sample_size(10);
+    for k in [4u32, 5] {
+        let s = scene(k);
+        let label = MeshSize::from_level(k).unwrap().to_string();
+        let g = solve_scene(&s, &settings, "newton", &mut Silent)
+            .unwrap()
+            .coulomb
+            .g;
+        for entry in registry::SOLVERS {
+            group.bench_with_input(
+                BenchmarkId::new(format!("given_friction/{}", entry.name), &label),
+                &(),
+                |b, _| {
+                    b.iter(|| {
+                        black_box(
+                            solve_given_friction(&s, &settings, entry.name, &g, &mut Silent)
+                                .unwrap()
+                                .1
+                                .status,
+                        )
+                    })
+                },
+            );
+            group.bench_with_input(
+                BenchmarkId::new(format!("coulomb/{}", entry.name), &label),
+                &(),
+                |b, _| {
+                    b.iter(|| {
+                        black_box(
+                            solve_scene(&s, &settings, entry.name, &mut Silent)
+                                .unwrap()
+                                .coulomb
+                                .status,
+                        )
+                    })
+                },
+            );
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

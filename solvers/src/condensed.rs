@@ -1,0 +1,159 @@
+//! Condensation onto the contact unknowns. With C the jumps and slips
+//! (t_i, s_i) and I everything else, the block A_II is positive definite
+//! whenever fixing the contact unknowns removes every rigid motion (in the
+//! paper's scene the lower body is clamped and holds the upper one through
+//! the contact nodes). Then
+//!
+//! ```text
+//! S = A_CC − A_CI A_II⁻¹ A_IC,    b̂ = f_C − A_CI A_II⁻¹ f_I,
+//! ```
+//!
+//! and the given-friction problem is the same problem in the 2m contact
+//! unknowns y alone: minimize ½ yᵀS y − b̂ᵀy + Σ w_i g_i |s_i| subject to
+//! t_i ≤ 0, with v_I = A_II⁻¹(f_I − A_IC y). S keeps the semicoercive mode
+//! (t = −1, s = 0). The factorization, S and b̂ depend on A and f only, so
+//! they serve every friction iteration and every solver setting.
+
+use faer::Mat;
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
+
+use crate::linalg::{LinalgError, SparseCholesky};
+use crate::problem::GivenFrictionProblem;
+
+/// The condensed problem and what is needed to go back to all unknowns.
+pub struct Condensed {
+    /// A_II, factored.
+    factor: SparseCholesky,
+    /// Unknowns of I in the order of the factor.
+    interior: Vec<usize>,
+    /// A_CI as sparse rows: for contact position k, (interior index, value).
+    a_ci: Vec<Vec<(usize, f64)>>,
+    /// Schur complement S (2m × 2m), positions 2i (t_i) and 2i+1 (s_i).
+    pub s: Mat<f64>,
+    /// b̂ = f_C − A_CI A_II⁻¹ f_I.
+    pub b: Vec<f64>,
+    /// A_II⁻¹ f_I.
+    interior_load: Vec<f64>,
+    /// Nonzeros of the factor of A_II.
+    pub factor_nnz: usize,
+}
+
+impl Condensed {
+    /// Factors A_II (the unknowns coupled to Γ_K ordered last) and forms S and b̂.
+    pub fn new(problem: &GivenFrictionProblem) -> Result<Self, LinalgError> {
+        let n = problem.n();
+        let contacts = problem.contacts();
+        let m2 = 2 * contacts.len();
+        // Position of each unknown: Err(k) for contact position k, Ok(i) for interior index i.
+        let mut position: Vec<Result<usize, usize>> = vec![Ok(usize::MAX); n];
+        for (i, c) in contacts.iter().enumerate() {
+            position[c.t] = Err(2 * i);
+            position[c.s] = Err(2 * i + 1);
+        }
+        let mut interior = Vec::with_capacity(n - m2);
+        for (j, p) in position.iter_mut().enumerate() {
+            if p.is_ok() {
+                *p = Ok(interior.len());
+                interior.push(j);
+            }
+        }
+        let ni = interior.len();
+        let mut a_ii = CooMatrix::new(ni, ni);
+        let mut a_ci: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m2];
+        let mut s = Mat::<f64>::zeros(m2, m2);
+        for (r, c, &v) in problem.a().triplet_iter() {
+            match (position[r], position[c]) {
+                (Ok(i), Ok(j)) => a_ii.push(i, j, v),
+                (Err(k), Ok(j)) => a_ci[k].push((j, v)),
+                (Err(k), Err(l)) => s[(k, l)] += v,
+                (Ok(_), Err(_)) => {} // A_IC = A_CIᵀ
+            }
+        }
+        // B: the interior unknowns coupled to the contact unknowns. Ordered
+        // last, A_IC is zero outside them, so the forward solve of A_II⁻¹A_IC
+        // stays in the trailing block: A_CI A_II⁻¹ A_IC = WᵀW, W = L_BB⁻¹ A_BC.
+        let mut in_b = vec![usize::MAX; ni];
+        let mut boundary = Vec::new();
+        for row in &a_ci {
+            for &(j, _) in row {
+                if in_b[j] == usize::MAX {
+                    in_b[j] = boundary.len();
+                    boundary.push(j);
+                }
+            }
+        }
+        let factor = SparseCholesky::with_trailing(&CsrMatrix::from(&a_ii), &boundary)?;
+        let l_bb = factor
+            .trailing_factor(boundary.len())
+            .ok_or_else(|| LinalgError::Faer("no supernodal trailing block".into()))?;
+        let mut w = Mat::<f64>::zeros(boundary.len(), m2);
+        for (k, row) in a_ci.iter().enumerate() {
+            for &(j, v) in row {
+                w[(in_b[j], k)] += v;
+            }
+        }
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            l_bb.as_ref(),
+            w.as_mut(),
+            faer::Par::Seq,
+        );
+        faer::linalg::matmul::matmul(
+            s.as_mut(),
+            faer::Accum::Add,
+            w.transpose(),
+            w.as_ref(),
+            -1.0,
+            faer::Par::Seq,
+        );
+        // Symmetrize away round-off.
+        for k in 0..m2 {
+            for l in 0..k {
+                let avg = 0.5 * (s[(k, l)] + s[(l, k)]);
+                s[(k, l)] = avg;
+                s[(l, k)] = avg;
+            }
+        }
+        let f = problem.f();
+        let mut interior_load: Vec<f64> = interior.iter().map(|&j| f[j]).collect();
+        factor.solve_vec(&mut interior_load);
+        let mut b = vec![0.0; m2];
+        for (i, c) in contacts.iter().enumerate() {
+            b[2 * i] = f[c.t];
+            b[2 * i + 1] = f[c.s];
+        }
+        for (k, row) in a_ci.iter().enumerate() {
+            b[k] -= row.iter().map(|&(j, v)| v * interior_load[j]).sum::<f64>();
+        }
+        Ok(Self {
+            factor_nnz: factor.factor_nnz(),
+            factor,
+            interior,
+            a_ci,
+            s,
+            b,
+            interior_load,
+        })
+    }
+
+    /// All unknowns v from the contact unknowns y: v_I = A_II⁻¹(f_I − A_IC y).
+    pub fn expand(&self, problem: &GivenFrictionProblem, y: &[f64]) -> Vec<f64> {
+        let mut rhs = vec![0.0; self.interior.len()];
+        for (k, row) in self.a_ci.iter().enumerate() {
+            if y[k] != 0.0 {
+                for &(j, v) in row {
+                    rhs[j] += v * y[k];
+                }
+            }
+        }
+        self.factor.solve_vec(&mut rhs);
+        let mut v = vec![0.0; problem.n()];
+        for (idx, &j) in self.interior.iter().enumerate() {
+            v[j] = self.interior_load[idx] - rhs[idx];
+        }
+        for (i, c) in problem.contacts().iter().enumerate() {
+            v[c.t] = y[2 * i];
+            v[c.s] = y[2 * i + 1];
+        }
+        v
+    }
+}

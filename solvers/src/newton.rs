@@ -1,0 +1,533 @@
+//! A fast exact solver: condensation onto the contact unknowns, then a
+//! semismooth Newton method on the condensed KKT system
+//!
+//! ```text
+//! F  = S y − b̂ + Σ λ_i e_{t_i} − Σ μ_i e_{s_i} = 0,
+//! Φ_N,i = φ(λ_i, −κ t_i) = 0                       (Signorini: λ ≥ 0, t ≤ 0, λt = 0)
+//! Φ_F,i = φ(μ_i + G_i, −φ(G_i − μ_i, −κ s_i)) = 0   (Tresca: μ ∈ [−G, G], the box
+//!                                                    complementarity to κ s; Billups)
+//! ```
+//!
+//! with φ(a, b) = a + b − √(a² + b²) (Fischer-Burmeister), G_i = w_i g_i, λ and
+//! μ the nodal contact and friction forces, κ a stiffness scale. The system is
+//! a monotone mixed complementarity problem, so every stationary point of the
+//! merit Ψ = ½‖(F, Φ_N, Φ_F)‖² solves it.
+//!
+//! Globalization: a Newton direction is taken when it descends Ψ enough,
+//! otherwise −∇Ψ, and an Armijo line search on Ψ follows. Ψ decreases strictly
+//! at every step, so the iterates cannot cycle between active sets (the plain
+//! primal-dual active set method can: see the tests). The multipliers are
+//! eliminated node by node, so each step solves one dense 2m × 2m system.
+
+use std::time::Instant;
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+use serde::{Deserialize, Serialize};
+
+use crate::condensed::Condensed;
+use crate::observer::{Observer, Progress, Stage};
+use crate::problem::GivenFrictionProblem;
+use crate::solution::{Iterations, Solution, Status, Timing};
+use crate::solver::{GivenFrictionSolver, Start};
+
+/// Settings of the condensed semismooth Newton solver.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NewtonSettings {
+    /// Stop when max(‖F‖∞, ‖Φ_N‖∞, ‖Φ_F‖∞) ≤ tolerance · ‖b̂‖∞.
+    pub tolerance: f64,
+    /// Cap on Newton steps per call.
+    pub max_iter: usize,
+    /// Armijo line search on the merit (off: plain full steps).
+    pub line_search: bool,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-12,
+            max_iter: 200,
+            line_search: true,
+        }
+    }
+}
+
+impl NewtonSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(format!(
+                "newton.tolerance = {} is invalid: it must be a positive number (default 1e-12)",
+                self.tolerance
+            ));
+        }
+        if self.max_iter == 0 {
+            return Err(
+                "newton.max_iter = 0 is invalid: allow at least 1 Newton step (default 200)".into(),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// φ(a, b) = a + b − √(a² + b²) and an element (∂a, ∂b) of its generalized gradient.
+#[inline]
+fn fb(a: f64, b: f64) -> (f64, f64, f64) {
+    let r = a.hypot(b);
+    if r == 0.0 {
+        let d = 1.0 - std::f64::consts::FRAC_1_SQRT_2;
+        (0.0, d, d)
+    } else {
+        (a + b - r, 1.0 - a / r, 1.0 - b / r)
+    }
+}
+
+/// The Billups function of the box [−G, G] for μ with F = κ s, and its
+/// partial derivatives (∂μ, ∂F).
+#[inline]
+fn billups(mu: f64, f: f64, g: f64) -> (f64, f64, f64) {
+    let (inner, ia, ib) = fb(g - mu, -f);
+    let (outer, oa, ob) = fb(mu + g, -inner);
+    // ∂inner/∂μ = −ia, ∂inner/∂F = −ib; outer's second argument is −inner.
+    (outer, oa + ob * ia, ob * ib)
+}
+
+/// The state of the Newton iteration: unknowns, residuals and derivatives.
+struct Kkt<'a> {
+    s: &'a Mat<f64>,
+    b: &'a [f64],
+    /// G_i = w_i g_i.
+    g: &'a [f64],
+    kappa: f64,
+}
+
+struct Eval {
+    /// Residuals: F (2m), Φ_N (m), Φ_F (m).
+    phi: Vec<f64>,
+    /// Derivatives: (∂Φ_N/∂λ, ∂Φ_N/∂(−κt)) and (∂Φ_F/∂μ, ∂Φ_F/∂(κs)) per node.
+    dn: Vec<(f64, f64)>,
+    df: Vec<(f64, f64)>,
+}
+
+impl Kkt<'_> {
+    fn m(&self) -> usize {
+        self.g.len()
+    }
+
+    fn eval(&self, y: &[f64], lam: &[f64], mu: &[f64]) -> Eval {
+        let m = self.m();
+        let mut phi = vec![0.0; 4 * m];
+        for (k, (p, bk)) in phi[..2 * m].iter_mut().zip(self.b).enumerate() {
+            *p = y
+                .iter()
+                .enumerate()
+                .map(|(l, yl)| self.s[(k, l)] * yl)
+                .sum::<f64>()
+                - bk;
+        }
+        let mut dn = Vec::with_capacity(m);
+        let mut df = Vec::with_capacity(m);
+        for i in 0..m {
+            phi[2 * i] += lam[i];
+            phi[2 * i + 1] -= mu[i];
+            let (v, a, b) = fb(lam[i], -self.kappa * y[2 * i]);
+            phi[2 * m + i] = v;
+            dn.push((a, b));
+            let (v, c, d) = billups(mu[i], self.kappa * y[2 * i + 1], self.g[i]);
+            phi[3 * m + i] = v;
+            df.push((c, d));
+        }
+        Eval { phi, dn, df }
+    }
+
+    fn merit(e: &Eval) -> f64 {
+        0.5 * e.phi.iter().map(|x| x * x).sum::<f64>()
+    }
+
+    /// ∇Ψ = Jᵀ Φ, in the order (y, λ, μ).
+    fn gradient(&self, e: &Eval) -> Vec<f64> {
+        let m = self.m();
+        let mut grad = vec![0.0; 4 * m];
+        for (k, gk) in grad[..2 * m].iter_mut().enumerate() {
+            *gk = e.phi[..2 * m]
+                .iter()
+                .enumerate()
+                .map(|(l, pl)| self.s[(l, k)] * pl)
+                .sum();
+        }
+        for i in 0..m {
+            let (pn, pf) = (e.phi[2 * m + i], e.phi[3 * m + i]);
+            let (na, nb) = e.dn[i];
+            let (fc, fd) = e.df[i];
+            grad[2 * i] += -self.kappa * nb * pn;
+            grad[2 * i + 1] += self.kappa * fd * pf;
+            grad[2 * m + i] = e.phi[2 * i] + na * pn;
+            grad[3 * m + i] = -e.phi[2 * i + 1] + fc * pf;
+        }
+        grad
+    }
+
+    /// The Newton direction (dy, dλ, dμ) of J d = −Φ, with dλ_i or dt_i and
+    /// dμ_i or ds_i eliminated per node (whichever has the larger
+    /// coefficient), so that one dense 2m × 2m system is solved.
+    fn newton_direction(&self, e: &Eval) -> Option<Vec<f64>> {
+        let m = self.m();
+        let kappa = self.kappa;
+        let mut mat = self.s.clone();
+        let mut rhs: Vec<f64> = e.phi[..2 * m].iter().map(|x| -x).collect();
+        let mut keep_t = vec![true; m];
+        let mut keep_s = vec![true; m];
+        for i in 0..m {
+            let (t, sx) = (2 * i, 2 * i + 1);
+            let (a, b) = e.dn[i];
+            let pn = e.phi[2 * m + i];
+            if a >= b {
+                // dλ = (−Φ_N + κ b dt)/a
+                mat[(t, t)] += kappa * b / a;
+                rhs[t] += pn / a;
+            } else {
+                // dt = (Φ_N + a dλ)/(κ b); column t holds dλ.
+                keep_t[i] = false;
+                for r in 0..2 * m {
+                    let col = self.s[(r, t)];
+                    mat[(r, t)] = col * a / (kappa * b);
+                    rhs[r] -= col * pn / (kappa * b);
+                }
+                mat[(t, t)] += 1.0;
+            }
+            let (c, d) = e.df[i];
+            let pf = e.phi[3 * m + i];
+            if c >= d {
+                // dμ = (−Φ_F − d κ ds)/c
+                mat[(sx, sx)] += d * kappa / c;
+                rhs[sx] -= pf / c;
+            } else {
+                // ds = (−Φ_F − c dμ)/(d κ); column s holds dμ.
+                keep_s[i] = false;
+                for r in 0..2 * m {
+                    let col = self.s[(r, sx)];
+                    mat[(r, sx)] = -col * c / (d * kappa);
+                    rhs[r] += col * pf / (d * kappa);
+                }
+                mat[(sx, sx)] -= 1.0;
+            }
+        }
+        let lu = mat.partial_piv_lu();
+        let x = lu.solve(Mat::from_fn(2 * m, 1, |r, _| rhs[r]));
+        let mut dir = vec![0.0; 4 * m];
+        for i in 0..m {
+            let (t, sx) = (2 * i, 2 * i + 1);
+            let (a, b) = e.dn[i];
+            let pn = e.phi[2 * m + i];
+            if keep_t[i] {
+                dir[t] = x[(t, 0)];
+                dir[2 * m + i] = (-pn + kappa * b * dir[t]) / a;
+            } else {
+                dir[2 * m + i] = x[(t, 0)];
+                dir[t] = (pn + a * dir[2 * m + i]) / (kappa * b);
+            }
+            let (c, d) = e.df[i];
+            let pf = e.phi[3 * m + i];
+            if keep_s[i] {
+                dir[sx] = x[(sx, 0)];
+                dir[3 * m + i] = (-pf - d * kappa * dir[sx]) / c;
+            } else {
+                dir[3 * m + i] = x[(sx, 0)];
+                dir[sx] = (-pf - c * dir[3 * m + i]) / (d * kappa);
+            }
+        }
+        dir.iter().all(|v| v.is_finite()).then_some(dir)
+    }
+}
+
+/// Outcome of the condensed Newton iteration.
+pub struct NewtonOutcome {
+    pub y: Vec<f64>,
+    pub lambda: Vec<f64>,
+    pub mu: Vec<f64>,
+    pub status: Status,
+    pub detail: String,
+    pub steps: usize,
+    /// The merit Ψ after each step (strictly decreasing with the line search).
+    pub merit: Vec<f64>,
+}
+
+/// Semismooth Newton on the condensed KKT system from (y, λ, μ).
+#[allow(clippy::too_many_arguments)]
+pub fn semismooth_newton(
+    s: &Mat<f64>,
+    b: &[f64],
+    g: &[f64],
+    start: (Vec<f64>, Vec<f64>, Vec<f64>),
+    settings: &NewtonSettings,
+    observer: &mut dyn Observer,
+) -> NewtonOutcome {
+    let m = g.len();
+    let diag_mean = (0..2 * m).map(|k| s[(k, k)].abs()).sum::<f64>() / (2 * m).max(1) as f64;
+    let kkt = Kkt {
+        s,
+        b,
+        g,
+        kappa: if diag_mean > 0.0 { diag_mean } else { 1.0 },
+    };
+    let scale = b
+        .iter()
+        .fold(0.0f64, |a, x| a.max(x.abs()))
+        .max(f64::MIN_POSITIVE);
+    let (mut y, mut lam, mut mu) = start;
+    let t0 = Instant::now();
+    let mut e = kkt.eval(&y, &lam, &mu);
+    let mut psi = Kkt::merit(&e);
+    let mut merit = Vec::new();
+    let residual = |e: &Eval| e.phi.iter().fold(0.0f64, |a, x| a.max(x.abs())) / scale;
+    for step in 1..=settings.max_iter {
+        let r = residual(&e);
+        if !r.is_finite() {
+            return finish(
+                y,
+                lam,
+                mu,
+                Status::NonFinite,
+                format!("non-finite residual at Newton step {step}"),
+                step - 1,
+                merit,
+            );
+        }
+        if r <= settings.tolerance {
+            let detail = format!(
+                "residual {r:.2e} ≤ {:e} after {} Newton steps",
+                settings.tolerance,
+                step - 1
+            );
+            return finish(y, lam, mu, Status::Converged, detail, step - 1, merit);
+        }
+        let grad = kkt.gradient(&e);
+        let newton = kkt.newton_direction(&e);
+        let slope = |d: &[f64]| d.iter().zip(&grad).map(|(a, b)| a * b).sum::<f64>();
+        let dir = match newton {
+            Some(d) if !settings.line_search => d,
+            Some(d) if slope(&d) <= -1e-10 * d.iter().map(|x| x * x).sum::<f64>().powf(1.05) => d,
+            _ => grad.iter().map(|x| -x).collect(),
+        };
+        let g0 = slope(&dir);
+        let mut alpha = 1.0;
+        let (mut y1, mut l1, mut m1);
+        loop {
+            y1 = y
+                .iter()
+                .zip(&dir[..2 * m])
+                .map(|(a, d)| a + alpha * d)
+                .collect::<Vec<_>>();
+            l1 = lam
+                .iter()
+                .zip(&dir[2 * m..3 * m])
+                .map(|(a, d)| a + alpha * d)
+                .collect::<Vec<_>>();
+            m1 = mu
+                .iter()
+                .zip(&dir[3 * m..])
+                .map(|(a, d)| a + alpha * d)
+                .collect::<Vec<_>>();
+            let e1 = kkt.eval(&y1, &l1, &m1);
+            let psi1 = Kkt::merit(&e1);
+            if !settings.line_search || (psi1.is_finite() && psi1 <= psi + 1e-4 * alpha * g0) {
+                e = e1;
+                psi = psi1;
+                break;
+            }
+            alpha *= 0.5;
+            if alpha < 1e-14 {
+                let detail = format!(
+                    "line search failed at Newton step {step} (residual {:.2e})",
+                    residual(&e)
+                );
+                return finish(
+                    y,
+                    lam,
+                    mu,
+                    Status::InsufficientProgress,
+                    detail,
+                    step,
+                    merit,
+                );
+            }
+        }
+        y = y1;
+        lam = l1;
+        mu = m1;
+        merit.push(psi);
+        observer.observe(&Progress {
+            stage: Stage::Newton,
+            iteration: step,
+            residual: residual(&e),
+            seconds: t0.elapsed().as_secs_f64(),
+        });
+    }
+    let r = residual(&e);
+    if r <= settings.tolerance {
+        let detail = format!(
+            "residual {r:.2e} ≤ {:e} after {} Newton steps",
+            settings.tolerance, settings.max_iter
+        );
+        return finish(
+            y,
+            lam,
+            mu,
+            Status::Converged,
+            detail,
+            settings.max_iter,
+            merit,
+        );
+    }
+    let detail = format!(
+        "Newton step cap {} reached with residual {r:.2e}",
+        settings.max_iter
+    );
+    finish(
+        y,
+        lam,
+        mu,
+        Status::MaxIterations,
+        detail,
+        settings.max_iter,
+        merit,
+    )
+}
+
+fn finish(
+    y: Vec<f64>,
+    lambda: Vec<f64>,
+    mu: Vec<f64>,
+    status: Status,
+    detail: String,
+    steps: usize,
+    merit: Vec<f64>,
+) -> NewtonOutcome {
+    NewtonOutcome {
+        y,
+        lambda,
+        mu,
+        status,
+        detail,
+        steps,
+        merit,
+    }
+}
+
+/// The condensed semismooth Newton solver. Keeps the condensation (the
+/// factor of A_II, S and b̂) across calls on the same problem operator.
+#[derive(Default)]
+pub struct CondensedNewton {
+    pub settings: NewtonSettings,
+    cache: Option<(u64, Condensed)>,
+}
+
+impl CondensedNewton {
+    pub fn new(settings: NewtonSettings) -> Self {
+        Self {
+            settings,
+            cache: None,
+        }
+    }
+}
+
+impl GivenFrictionSolver for CondensedNewton {
+    fn name(&self) -> &'static str {
+        "newton"
+    }
+
+    fn solve(
+        &mut self,
+        problem: &GivenFrictionProblem,
+        start: Option<Start<'_>>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let (n, contacts) = (problem.n(), problem.contacts());
+        let m = contacts.len();
+        if let Err(e) = self.settings.validate() {
+            return Solution::failed(n, m, Status::NotRun, e);
+        }
+        let t0 = Instant::now();
+        if self
+            .cache
+            .as_ref()
+            .is_none_or(|(id, _)| *id != problem.operator_id())
+        {
+            match Condensed::new(problem) {
+                Ok(c) => self.cache = Some((problem.operator_id(), c)),
+                Err(e) => {
+                    return Solution::failed(
+                        n,
+                        m,
+                        Status::NumericalError,
+                        format!(
+                            "condensation needs the part of A away from the contact unknowns to be positive definite: {e}"
+                        ),
+                    );
+                }
+            }
+        }
+        let setup = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let condensed = &self.cache.as_ref().expect("just filled").1;
+        let g: Vec<f64> = contacts.iter().map(|c| c.weight * c.g).collect();
+        // Start: the given iterate, or all contacts closed and sticking (y = 0)
+        // with the forces that hold that state.
+        let y0: Vec<f64> = match start {
+            Some(s) if s.v.len() == n => {
+                contacts.iter().flat_map(|c| [s.v[c.t], s.v[c.s]]).collect()
+            }
+            _ => vec![0.0; 2 * m],
+        };
+        let force = |k: usize| -> f64 {
+            (0..2 * m).map(|l| condensed.s[(k, l)] * y0[l]).sum::<f64>() - condensed.b[k]
+        };
+        let lam0: Vec<f64> = match start {
+            Some(s) if s.pressure.len() == m => contacts
+                .iter()
+                .zip(s.pressure)
+                .map(|(c, p)| c.weight * p.max(0.0))
+                .collect(),
+            _ => (0..m).map(|i| (-force(2 * i)).max(0.0)).collect(),
+        };
+        let mu0: Vec<f64> = (0..m)
+            .map(|i| force(2 * i + 1).clamp(-g[i], g[i]))
+            .collect();
+        let out = semismooth_newton(
+            &condensed.s,
+            &condensed.b,
+            &g,
+            (y0, lam0, mu0),
+            &self.settings,
+            observer,
+        );
+        let v = condensed.expand(problem, &out.y);
+        let mut solution = Solution {
+            v,
+            pressure: contacts
+                .iter()
+                .zip(&out.lambda)
+                .map(|(c, l)| l / c.weight)
+                .collect(),
+            friction_traction: contacts
+                .iter()
+                .zip(&out.mu)
+                .map(|(c, mu)| mu / c.weight)
+                .collect(),
+            status: out.status,
+            detail: out.detail,
+            iterations: Iterations {
+                outer: out.steps,
+                inner: 0,
+            },
+            timing: Timing {
+                setup,
+                solve: t1.elapsed().as_secs_f64(),
+            },
+        };
+        if !solution.is_finite() {
+            solution.status = Status::NonFinite;
+        }
+        solution
+    }
+}
