@@ -729,6 +729,17 @@ fn sweep(args: &SweepArgs) -> Result<()> {
 
 /// Runs a sweep with a progress bar.
 pub fn run_sweep(spec: &SweepSpec, settings: &Settings) -> Result<Vec<crate::sweep::SweepRow>> {
+    Ok(run_sweep_with_references(spec, settings)?.0)
+}
+
+/// Runs a sweep with a progress bar; also returns its references.
+pub fn run_sweep_with_references(
+    spec: &SweepSpec,
+    settings: &Settings,
+) -> Result<(
+    Vec<crate::sweep::SweepRow>,
+    Vec<crate::sweep::ReferenceInfo>,
+)> {
     let runs = crate::sweep::plan(spec, settings);
     let bar = progress_bar(runs.len() as u64, "sweep");
     let rows = crate::sweep::sweep(spec, settings, &|run| {

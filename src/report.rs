@@ -102,7 +102,7 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
                     format!(
                         "Work-precision, given-friction subproblem, problem {problem}, h = {h}"
                     ),
-                    "max pressure error vs oracle (relative)",
+                    "max pressure error vs reference (relative)",
                     "solver time [s]",
                     true,
                     true,
@@ -176,7 +176,7 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
             out.push((
                 format!("sweep_{factor}_error_{tag}"),
                 chart(
-                    format!("Error against {name}, relaxation vs oracle, {problem}, h = {h}"),
+                    format!("Error against {name}, relaxation vs reference, {problem}, h = {h}"),
                     name,
                     "relative error / residual (dimensionless)",
                     true,
@@ -229,7 +229,7 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
             out.push((
                 format!("sweep_smoothing_{tag}"),
                 chart(
-                    format!("Smoothing of |s|: pressure error vs oracle, {problem}, h = {h}"),
+                    format!("Smoothing of |s|: pressure error vs reference, {problem}, h = {h}"),
                     "Huber width δ [length]",
                     "max pressure error (relative)",
                     true,

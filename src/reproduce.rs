@@ -270,7 +270,7 @@ pub fn reproduce(
     )?;
 
     log(&format!("reduced sweep at h = {}", spec.sweep_h));
-    let sweep_rows = sweep(&spec.sweep, settings, &|_| {})?;
+    let (sweep_rows, references) = sweep(&spec.sweep, settings, &|_| {})?;
     write_atomic(
         &out.join("sweep.csv"),
         &csv_bytes(&SWEEP_COLUMNS, sweep_records(&sweep_rows))?,
@@ -319,7 +319,7 @@ pub fn reproduce(
         &t1,
         &compare_rows,
         &separation_rows,
-        &sweep_rows,
+        (&sweep_rows, &references),
         &written,
         out,
         seconds,
@@ -458,7 +458,7 @@ fn readme(
     t1: &[Table1Row],
     rows: &[CompareRow],
     separation: &[SeparationRow],
-    sweep_rows: &[SweepRow],
+    (sweep_rows, references): (&[SweepRow], &[crate::sweep::ReferenceInfo]),
     charts: &[std::path::PathBuf],
     out: &Path,
     seconds: f64,
@@ -733,15 +733,42 @@ fn readme(
     }
     let _ = writeln!(
         s,
-        "\nEach point is one tolerance (ε for the relaxation, the gap and feasibility tolerance for Clarabel), on the \
-         given-friction subproblem at the oracle's g; error against Clarabel at its default tolerance, so errors below \
-         ~1e-8 are not resolved and zero errors are not drawn. Time of the relaxation over Clarabel's at equal accuracy: {}.\n",
+        "\nEach point is one tolerance (ε for the relaxation, the gap and feasibility tolerance for Clarabel, the \
+         residual tolerance for Newton), on the given-friction subproblem at the reference's g. Errors are measured \
+         against {}, the most accurate solution available (KKT residual ~1e-13); the oracle at its default tolerance \
+         differs from it by {}. Time of the relaxation over Clarabel's at equal accuracy: {}.\n",
+        references
+            .iter()
+            .map(|r| format!("`{}` ({}, h = {})", r.solver, r.problem, r.h))
+            .collect::<Vec<_>>()
+            .join(", "),
+        references
+            .iter()
+            .map(|r| format!("{:.1e} in pressure", r.oracle_pressure_error))
+            .collect::<Vec<_>>()
+            .join(", "),
         if ratios.is_empty() {
             "no common accuracy range in this sweep".to_string()
         } else {
             ratios.join(", ")
         }
     );
+    let mut newton_vs = Vec::new();
+    for target in [1e-4, 1e-6, 1e-8] {
+        if let (Some(a), Some(b)) = (
+            time_at(&wp("newton"), target),
+            time_at(&wp(crate::compare::ORACLE), target),
+        ) {
+            newton_vs.push(format!("{:.0}× at {target:.0e}", b / a));
+        }
+    }
+    if !newton_vs.is_empty() {
+        let _ = writeln!(
+            s,
+            "Clarabel's time over Newton's at equal accuracy: {}.\n",
+            newton_vs.join(", ")
+        );
+    }
     let r_rows: Vec<&SweepRow> = sweep_rows.iter().filter(|r| r.factor == "r").collect();
     let converged_r: Vec<&&SweepRow> = r_rows.iter().filter(|r| r.converged).collect();
     let fastest = converged_r.iter().min_by(|a, b| {

@@ -218,39 +218,58 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Vec<PlannedRun> {
     runs
 }
 
-/// The references of one (problem, h): the oracle's Coulomb solution with a
-/// tight fixed-point tolerance, and its given-friction subproblem.
+/// The references of one (scene, h): the most accurate Coulomb solution
+/// available and its given-friction subproblem, and how far the oracle is
+/// from it.
 pub struct Reference {
     pub scene: Scene,
+    /// The solver that produced the reference (`newton` unless it failed).
+    pub solver: &'static str,
     pub coulomb: Run,
     pub g: Vec<f64>,
     pub subproblem: (Discretization, Solution),
+    /// Max pressure difference of the oracle's subproblem solution from the
+    /// reference (relative): the oracle's own accuracy.
+    pub oracle_pressure_error: f64,
 }
 
-/// Fixed-point tolerance of the reference Coulomb solution (the oracle's
-/// pressures are accurate to ~1e-8 relative, so 1e-6 on g is reachable).
-pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-6;
+/// Fixed-point tolerance of the reference Coulomb solution.
+pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-9;
 
+/// The reference: the exact solver (`newton`, tolerance 1e-12, residuals
+/// ~1e-13) where it converges, cross-checked against the oracle; the oracle
+/// itself otherwise. Errors are then resolved below the oracle's own ~1e-8.
 pub fn reference(scene: &Scene, h: MeshSize, base: &Settings) -> Result<Reference> {
     let mut scene = scene.clone();
     scene.set_finest(h);
     let mut s = base.clone();
     s.coulomb.epsilon = REFERENCE_COULOMB_EPSILON;
-    let coulomb = solve_scene(&scene, &s, ORACLE, &mut Silent)?;
+    s.solver.newton.tolerance = 1e-12;
+    let exact = solve_scene(&scene, &s, "newton", &mut Silent)?;
+    let (solver, coulomb) = if exact.coulomb.status.is_converged() {
+        ("newton", exact)
+    } else {
+        s.coulomb.epsilon = 1e-6;
+        (ORACLE, solve_scene(&scene, &s, ORACLE, &mut Silent)?)
+    };
     if !coulomb.coulomb.status.is_converged() {
         anyhow::bail!(
-            "the reference (oracle) did not converge on {} at h = {h}: {}",
+            "the reference ({solver}) did not converge on {} at h = {h}: {}",
             scene.name,
             coulomb.coulomb.detail
         );
     }
     let g = coulomb.coulomb.g.clone();
-    let (d, sol, _) = solve_given_friction(&scene, base, ORACLE, &g, &mut Silent)?;
+    let (d, sol, _) = solve_given_friction(&scene, &s, solver, &g, &mut Silent)?;
+    let (_, oracle, _) = solve_given_friction(&scene, base, ORACLE, &g, &mut Silent)?;
+    let oracle_pressure_error = agreement(&d, &oracle, &sol).pressure_max;
     Ok(Reference {
         scene,
+        solver,
         coulomb,
         g,
         subproblem: (d, sol),
+        oracle_pressure_error,
     })
 }
 
@@ -356,12 +375,22 @@ pub fn run_one(
     })
 }
 
+/// Which reference a sweep measured against, per scene and mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReferenceInfo {
+    pub problem: String,
+    pub h: String,
+    pub solver: &'static str,
+    /// The oracle's max pressure difference from it (its own accuracy).
+    pub oracle_pressure_error: f64,
+}
+
 /// Runs a sweep; `tick` is called after every run (for a progress bar).
 pub fn sweep(
     spec: &SweepSpec,
     base: &Settings,
     tick: &(dyn Fn(&PlannedRun) + Sync),
-) -> Result<Vec<SweepRow>> {
+) -> Result<(Vec<SweepRow>, Vec<ReferenceInfo>)> {
     let runs = plan(spec, base);
     let mut references = Vec::new();
     for (index, scene) in spec.scenes.iter().enumerate() {
@@ -381,11 +410,21 @@ pub fn sweep(
         tick(run);
         row
     };
-    if spec.parallel {
+    let rows: Result<Vec<SweepRow>> = if spec.parallel {
         runs.par_iter().map(one).collect()
     } else {
         runs.iter().map(one).collect()
-    }
+    };
+    let info = references
+        .iter()
+        .map(|((_, h), r)| ReferenceInfo {
+            problem: r.scene.name.clone(),
+            h: h.to_string(),
+            solver: r.solver,
+            oracle_pressure_error: r.oracle_pressure_error,
+        })
+        .collect();
+    Ok((rows?, info))
 }
 
 /// Columns of `sweep.csv` (accuracy and counts; deterministic).

@@ -196,7 +196,10 @@ fn sweep_rows_that_do_not_converge_are_marked_not_dropped() {
         repeats: 0,
         ..SweepSpec::default()
     };
-    let rows = sweep(&spec, &Settings::default(), &|_| {}).unwrap();
+    let (rows, references) = sweep(&spec, &Settings::default(), &|_| {}).unwrap();
+    // The reference is the exact solver, and the oracle agrees with it to its own accuracy.
+    assert_eq!(references[0].solver, "newton");
+    assert!(references[0].oracle_pressure_error < 1e-6, "{references:?}");
     assert_eq!(rows.len(), 4, "one row per planned run");
     let row = |factor: &str, value: &str| {
         rows.iter()
