@@ -957,10 +957,15 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
     problems.dedup();
     let mut series: Vec<Series> = problems
         .iter()
+        .filter(|p| {
+            traces
+                .iter()
+                .any(|t| &&t.problem == p && t.friction > 0.0 && t.changes.len() >= 5)
+        })
         .map(|p| {
             let mut pts: Vec<(f64, f64)> = traces
                 .iter()
-                .filter(|t| &t.problem == p && t.friction > 0.0)
+                .filter(|t| &t.problem == p && t.friction > 0.0 && t.changes.len() >= 5)
                 .filter_map(|t| {
                     let q: Vec<f64> = t
                         .contractions
@@ -998,11 +1003,12 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
         Chart {
             title: "Coulomb fixed point: contraction factor against 𝓕".into(),
             x_label: "friction coefficient 𝓕".into(),
-            y_label: "contraction max|Δg| ratio (last steps, geometric mean)".into(),
+            y_label: "contraction max|Δg| ratio (last steps, geometric mean; runs of ≥ 5 steps)"
+                .into(),
             log_x: true,
             log_y: true,
             series,
-            legend: crate::charts::Legend::UpperLeft,
+            legend: crate::charts::Legend::LowerRight,
         },
     ));
     // Mesh: sweeps on the finest level against 1/h, per method, with the fitted slope.
@@ -1164,6 +1170,25 @@ pub fn readme_section(rows: &[StabilityRow]) -> String {
             .iter()
             .filter(|r| r.reason.contains("inner solver failed"))
             .count();
+        let mut sticky: Vec<String> = rows
+            .iter()
+            .filter(|r| r.group == "friction")
+            .map(|r| r.problem.clone())
+            .filter(|p| {
+                rows.iter()
+                    .filter(|r| r.group == "friction" && &r.problem == p && r.value > 0.0)
+                    .all(|r| r.class == Class::Converged && r.friction_iterations <= 3)
+            })
+            .collect();
+        sticky.dedup();
+        if !sticky.is_empty() {
+            let _ = writeln!(
+                s,
+                "  On {} the fixed point stops within three steps for every 𝓕 tried: everything sticks, the map g ↦ 𝓕p \
+                 is then locally constant, and there is no contraction factor to draw.",
+                sticky.join(", ")
+            );
+        }
         let _ = writeln!(
             s,
             "  The contraction factor of max|Δg| grows with 𝓕 (chart below) until it reaches 1; past that the fixed point \
