@@ -198,7 +198,7 @@ pub fn compare(
 ) -> Result<Vec<CompareRow>> {
     use contactlab_solvers::{History, Residuals, Silent, Stage};
 
-    use crate::profile::{SEPARATION_TOL, largest_displacement, separation};
+    use crate::profile::separation_of;
     use crate::run::solve_scene;
 
     let mut history = History::of(&[
@@ -219,11 +219,6 @@ pub fn compare(
     let g = oracle.coulomb.g.clone();
     let (d, reference, _) = solve_given_friction(scene, settings, ORACLE, &g, &mut Silent)?;
     tick("oracle");
-    let sep = |d: &Discretization, s: &Solution| {
-        let x = d.contact_x();
-        let jump: Vec<f64> = d.problem.contacts().iter().map(|c| s.v[c.t]).collect();
-        separation(&x, &jump, SEPARATION_TOL * largest_displacement(d, s))
-    };
     let mut rows = Vec::new();
     for &solver in solvers {
         // The subproblem with the oracle's g.
@@ -236,7 +231,7 @@ pub fn compare(
             best = best.min(s.timing.total());
             tick(solver);
         }
-        let separation = sep(&d, &first);
+        let separation = separation_of(&d, &first);
         rows.push(CompareRow {
             problem: scene.name.clone(),
             h: d.h().to_string(),

@@ -87,6 +87,23 @@ pub fn largest_displacement(d: &Discretization, solution: &Solution) -> f64 {
         .fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
+/// The separated part of Γ_K of a solution, at the stated tolerance
+/// SEPARATION_TOL × its largest displacement.
+pub fn separation_of(d: &Discretization, solution: &Solution) -> Separation {
+    let x = d.contact_x();
+    let jump: Vec<f64> = d
+        .problem
+        .contacts()
+        .iter()
+        .map(|c| solution.v[c.t])
+        .collect();
+    separation(
+        &x,
+        &jump,
+        SEPARATION_TOL * largest_displacement(d, solution),
+    )
+}
+
 /// The separated part of Γ_K.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Separation {

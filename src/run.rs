@@ -9,9 +9,7 @@ use serde::Serialize;
 use crate::continuation::{Continuation, LevelCount};
 use crate::discretization::Discretization;
 use crate::friction::{CoulombSolution, SingleLevel, friction_fixed_point};
-use crate::profile::{
-    ProfileRow, SEPARATION_TOL, Separation, contact_profile, largest_displacement, separation,
-};
+use crate::profile::{ProfileRow, Separation, contact_profile, separation_of};
 use crate::scene::Scene;
 use crate::settings::Settings;
 
@@ -102,10 +100,7 @@ pub fn report(
         &s.friction_traction,
     );
     let profile = contact_profile(&discretization, s);
-    let x: Vec<f64> = profile.iter().map(|r| r.x).collect();
-    let jump: Vec<f64> = profile.iter().map(|r| r.jump).collect();
-    let tol = SEPARATION_TOL * largest_displacement(&discretization, s);
-    let separation = separation(&x, &jump, tol);
+    let separation = separation_of(&discretization, s);
     let objective = discretization.problem.objective(&s.v);
     Run {
         scene,

@@ -335,10 +335,7 @@ pub fn run_one(
             }
             let agree = agreement(&d, &s, &reference.subproblem.1);
             let kkt = Residuals::compute(&d.problem, &s.v, &s.pressure, &s.friction_traction).kkt();
-            let x = d.contact_x();
-            let jump: Vec<f64> = d.problem.contacts().iter().map(|c| s.v[c.t]).collect();
-            let tol = crate::profile::SEPARATION_TOL * crate::profile::largest_displacement(&d, &s);
-            let fraction = crate::profile::separation(&x, &jump, tol).fraction;
+            let fraction = crate::profile::separation_of(&d, &s).fraction;
             (
                 s.status,
                 s.status.is_converged(),

@@ -92,14 +92,7 @@ impl SparseCholesky {
             Default::default(),
         )
         .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
-        let values = vec![0.0; symbolic.len_val()];
-        let mut this = Self {
-            symbolic,
-            values,
-            lower,
-        };
-        this.factor_current()?;
-        Ok(this)
+        Self::from_symbolic(symbolic, lower)
     }
 
     /// Factorization with the unknowns `trailing` ordered last, in that order
@@ -156,14 +149,7 @@ impl SparseCholesky {
             params,
         )
         .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
-        let values = vec![0.0; symbolic.len_val()];
-        let mut this = Self {
-            symbolic,
-            values,
-            lower,
-        };
-        this.factor_current()?;
-        Ok(this)
+        Self::from_symbolic(symbolic, lower)
     }
 
     /// The dense lower-triangular block of L on the last `k` pivots (in
@@ -198,6 +184,21 @@ impl SparseCholesky {
             }
         }
         Some(out)
+    }
+
+    /// Numeric factorization of `lower` (lower triangle) after its symbolic analysis.
+    fn from_symbolic(
+        symbolic: SymbolicCholesky<usize>,
+        lower: CscMatrix<f64>,
+    ) -> Result<Self, LinalgError> {
+        let values = vec![0.0; symbolic.len_val()];
+        let mut this = Self {
+            symbolic,
+            values,
+            lower,
+        };
+        this.factor_current()?;
+        Ok(this)
     }
 
     /// Numeric refactorization of a matrix with the pattern of the first one.
