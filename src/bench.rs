@@ -211,19 +211,26 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         };
         let reps = (2_000_000 / n.max(1)).clamp(5, 2000);
         let mut v = vec![0.0; n];
-        let (_, sweep) = timed(spec.runs.max(3), || {
+        let mut y = vec![0.0; n];
+        // Interleaved (sweeps, products, sweeps, ...) so that whatever else the
+        // machine does affects both alike; the first pair is a warm-up.
+        let (mut sweep, mut product) = (Vec::new(), Vec::new());
+        for k in 0..=spec.runs.max(5) {
+            let t = Instant::now();
             for _ in 0..reps {
                 op.sweep(&mut v, &data);
             }
-            Ok(())
-        })?;
-        let mut y = vec![0.0; n];
-        let (_, product) = timed(spec.runs.max(3), || {
+            let ts = t.elapsed().as_secs_f64();
+            let t = Instant::now();
             for _ in 0..reps {
                 spmv_into(&op.h, &v, &mut y);
             }
-            Ok(())
-        })?;
+            let tp = t.elapsed().as_secs_f64();
+            if k > 0 {
+                sweep.push(ts);
+                product.push(tp);
+            }
+        }
         let per = |t: &[f64]| t.iter().map(|x| x / reps as f64).collect::<Vec<f64>>();
         let (sweep, product) = (per(&sweep), per(&product));
         let ratio = median(sweep.clone()) / median(product.clone());

@@ -344,7 +344,8 @@ fn stability_readme(
          Every run is classified (see `src/stability.rs`): refused (no solution: condition (13) fails, or the solver \
          reports unbounded), diverged (NaN, numerical breakdown, or a growing fixed point), stalled (a cap, a time \
          budget, reduced accuracy, or a fixed point that stopped contracting), wrong (converged by its own test but KKT \
-         residual > 1e-4 or pressure off the oracle's by > 1e-3), slow (right, but more than 10× the work of the \
+         residual > 1e-4 or pressure off the oracle's by > 1e-3, or off the exact Newton solution's where the oracle did not \
+         finish), slow (right, but more than 10× the work of the \
          default run), converged. All runs are in `stability.csv`; max|Δg| and contraction per friction iteration in \
          `stability_friction.csv`.\n\n",
     );

@@ -32,15 +32,44 @@ pub fn spmv(a: &CsrMatrix<f64>, x: &[f64]) -> Vec<f64> {
 
 /// y = A x for a CSR matrix, into a caller's buffer (no allocation).
 pub fn spmv_into(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
+    assert_eq!(x.len(), a.ncols(), "spmv: x has the wrong length");
+    assert_eq!(y.len(), a.nrows(), "spmv: y has the wrong length");
     let (offsets, cols, vals) = a.csr_data();
     for (i, yi) in y.iter_mut().enumerate() {
         let (lo, hi) = (offsets[i], offsets[i + 1]);
-        *yi = cols[lo..hi]
-            .iter()
-            .zip(&vals[lo..hi])
-            .map(|(&j, &v)| v * x[j])
-            .sum();
+        // SAFETY: a CsrMatrix keeps its column indices below ncols = x.len().
+        *yi = unsafe { row_dot(&cols[lo..hi], &vals[lo..hi], x) };
     }
+}
+
+/// Σ_k vals[k]·x[cols[k]] of one sparse row, with four independent partial
+/// sums: a Gauss-Seidel sweep waits for each row before the next, so the
+/// latency of one long chain of additions would dominate it. Used by both
+/// the sweep and the product, so that they are compared like with like.
+///
+/// # Safety
+/// Every entry of `cols` must be below `x.len()`, and `vals` must be at least
+/// as long as `cols`.
+#[inline]
+pub unsafe fn row_dot(cols: &[usize], vals: &[f64], x: &[f64]) -> f64 {
+    debug_assert!(vals.len() >= cols.len() && cols.iter().all(|&c| c < x.len()));
+    let n = cols.len();
+    let mut acc = [0.0f64; 4];
+    let mut k = 0;
+    // SAFETY: k + q < n ≤ vals.len(), and cols[k + q] < x.len() by the contract.
+    unsafe {
+        while k + 3 < n {
+            for (q, a) in acc.iter_mut().enumerate() {
+                *a += vals.get_unchecked(k + q) * x.get_unchecked(*cols.get_unchecked(k + q));
+            }
+            k += 4;
+        }
+        while k < n {
+            acc[0] += vals.get_unchecked(k) * x.get_unchecked(*cols.get_unchecked(k));
+            k += 1;
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 /// Maximum norm of a vector (0 for an empty one).

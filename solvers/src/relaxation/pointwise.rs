@@ -88,6 +88,8 @@ pub enum Coordinate {
 pub struct RelaxationOperator {
     pub h: CsrMatrix<f64>,
     pub diag: Vec<f64>,
+    /// 1 / diag, so that free coordinates cost a multiplication.
+    pub inv_diag: Vec<f64>,
     pub role: Vec<Coordinate>,
     /// Trapezoid weights per contact node.
     pub weight: Vec<f64>,
@@ -119,9 +121,10 @@ impl RelaxationOperator {
         } else {
             a + &(m * rho)
         };
-        let diag = (0..h.nrows())
+        let diag: Vec<f64> = (0..h.nrows())
             .map(|i| h.get_entry(i, i).map(|e| e.into_value()).unwrap_or(0.0))
             .collect();
+        let inv_diag = diag.iter().map(|a| 1.0 / a).collect();
         let mut role = vec![Coordinate::Free; h.nrows()];
         for (i, c) in contacts.iter().enumerate() {
             role[c.t] = Coordinate::Jump(i as u32);
@@ -131,6 +134,7 @@ impl RelaxationOperator {
         Self {
             h,
             diag,
+            inv_diag,
             role,
             weight,
         }
@@ -140,20 +144,19 @@ impl RelaxationOperator {
     /// exact minimizer of Φ along it. Returns max_j |Δv_j|. Walks the CSR rows
     /// once and allocates nothing.
     pub fn sweep(&self, v: &mut [f64], data: &SweepData<'_>) -> f64 {
+        assert_eq!(v.len(), self.h.ncols(), "sweep: v has the wrong length");
         let (offsets, cols, vals) = self.h.csr_data();
         let mut max_change = 0.0f64;
         for j in 0..v.len() {
             let (lo, hi) = (offsets[j], offsets[j + 1]);
-            let mut sum = 0.0;
-            for k in lo..hi {
-                sum += vals[k] * v[cols[k]];
-            }
+            // SAFETY: a CsrMatrix keeps its column indices below ncols = v.len().
+            let sum = unsafe { crate::linalg::row_dot(&cols[lo..hi], &vals[lo..hi], v) };
             let a = self.diag[j];
             let old = v[j];
             // Gradient of the quadratic part without the diagonal term.
             let c = sum - a * old - data.b[j];
             let new = match self.role[j] {
-                Coordinate::Free => -c / a,
+                Coordinate::Free => -c * self.inv_diag[j],
                 Coordinate::Jump(i) => {
                     let i = i as usize;
                     minimize_jump(a, c, self.weight[i], data.l[i], data.r)
