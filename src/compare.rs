@@ -5,10 +5,9 @@ use anyhow::{Result, bail};
 use contactlab_solvers::{Observer, Solution};
 use serde::Serialize;
 
-use crate::continuation::{Continuation, LevelCount};
+use crate::continuation::LevelCount;
 use crate::discretization::Discretization;
-use crate::friction::{GivenFrictionStep, SingleLevel};
-use crate::run::solver_entry;
+use crate::run::with_step;
 use crate::scene::Scene;
 use crate::settings::Settings;
 
@@ -104,35 +103,18 @@ pub fn solve_given_friction(
     g: &[f64],
     observer: &mut dyn Observer,
 ) -> Result<(Discretization, Solution, Vec<LevelCount>)> {
-    let entry = solver_entry(solver)?;
-    let mut settings = settings.clone();
-    settings.solver.relaxation.h_finest = scene.finest().h();
-    if let Err(e) = settings.validate() {
-        bail!(e);
-    }
-    let mut inner = (entry.build)(&settings.solver);
-    let (mut finest, solution, counts) = if entry.continuation && scene.levels.len() > 1 {
-        let levels = scene
-            .levels
-            .iter()
-            .map(|&h| Discretization::new(scene, h))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut step = Continuation::new(levels, inner.as_mut(), settings.schedule);
-        let solution = step.solve_step(g, observer);
-        (step.finest().clone(), solution, step.counts.clone())
-    } else {
-        let finest = Discretization::new(scene, scene.finest())?;
-        let mut step = SingleLevel::new(finest.problem.clone(), inner.as_mut());
-        let solution = step.solve_step(g, observer);
-        let count = LevelCount {
+    let (solution, mut finest, counts, _) = with_step(scene, settings, solver, |step, _| {
+        step.solve_step(g, observer)
+    })?;
+    let counts = counts.unwrap_or_else(|| {
+        vec![LevelCount {
             h: finest.h(),
             visits: 1,
             uzawa: solution.iterations.outer,
             sweeps: solution.iterations.inner,
             seconds: solution.timing.total(),
-        };
-        (finest, solution, vec![count])
-    };
+        }]
+    });
     finest.problem.set_friction_bound(g)?;
     Ok((finest, solution, counts))
 }

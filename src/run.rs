@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::continuation::{Continuation, LevelCount};
 use crate::discretization::Discretization;
-use crate::friction::{CoulombSolution, SingleLevel, friction_fixed_point};
+use crate::friction::{CoulombSolution, GivenFrictionStep, SingleLevel, friction_fixed_point};
 use crate::profile::{ProfileRow, Separation, contact_profile, separation_of};
 use crate::scene::Scene;
 use crate::settings::Settings;
@@ -38,6 +38,46 @@ pub fn solver_entry(name: &str) -> Result<&'static registry::Entry> {
     })
 }
 
+/// Runs `work` on the given-friction step the named solver uses for `scene`:
+/// mesh continuation over the scene's levels if it warm-starts, otherwise
+/// the finest level alone. Returns what `work` returned, the finest level's
+/// discretization, and the work per level (None on a single level: the
+/// caller knows how to count it).
+pub fn with_step<T>(
+    scene: &Scene,
+    settings: &Settings,
+    solver: &str,
+    work: impl FnOnce(&mut dyn GivenFrictionStep, &Settings) -> T,
+) -> Result<(
+    T,
+    Discretization,
+    Option<Vec<LevelCount>>,
+    &'static registry::Entry,
+)> {
+    let entry = solver_entry(solver)?;
+    let mut settings = settings.clone();
+    settings.solver.relaxation.h_finest = scene.finest().h();
+    if let Err(e) = settings.validate() {
+        bail!(e);
+    }
+    let mut inner = (entry.build)(&settings.solver);
+    if entry.continuation && scene.levels.len() > 1 {
+        let levels = scene
+            .levels
+            .iter()
+            .map(|&h| Discretization::new(scene, h))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut step = Continuation::new(levels, inner.as_mut(), settings.schedule);
+        let out = work(&mut step, &settings);
+        Ok((out, step.finest().clone(), Some(step.counts.clone()), entry))
+    } else {
+        let finest = Discretization::new(scene, scene.finest())?;
+        let mut step = SingleLevel::new(finest.problem.clone(), inner.as_mut());
+        let out = work(&mut step, &settings);
+        Ok((out, finest, None, entry))
+    }
+}
+
 /// Solves `scene` with the Coulomb fixed point around the named solver: by
 /// mesh continuation over the scene's levels if the solver warm-starts,
 /// otherwise on the finest level.
@@ -47,36 +87,19 @@ pub fn solve_scene(
     solver: &str,
     observer: &mut dyn Observer,
 ) -> Result<Run> {
-    let entry = solver_entry(solver)?;
-    let mut settings = settings.clone();
-    settings.solver.relaxation.h_finest = scene.finest().h();
-    if let Err(e) = settings.validate() {
-        bail!(e);
-    }
-    let mut inner = (entry.build)(&settings.solver);
-    let (finest, coulomb, levels) = if entry.continuation && scene.levels.len() > 1 {
-        let levels = scene
-            .levels
-            .iter()
-            .map(|&h| Discretization::new(scene, h))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut step = Continuation::new(levels, inner.as_mut(), settings.schedule);
-        let coulomb = friction_fixed_point(&mut step, scene.friction, &settings.coulomb, observer);
-        (step.finest().clone(), coulomb, step.counts.clone())
-    } else {
-        let finest = Discretization::new(scene, scene.finest())?;
-        let mut step = SingleLevel::new(finest.problem.clone(), inner.as_mut());
-        let coulomb = friction_fixed_point(&mut step, scene.friction, &settings.coulomb, observer);
+    let (coulomb, finest, counts, entry) = with_step(scene, settings, solver, |step, s| {
+        friction_fixed_point(step, scene.friction, &s.coulomb, observer)
+    })?;
+    let levels = counts.unwrap_or_else(|| {
         let total = coulomb.total_iterations();
-        let count = LevelCount {
+        vec![LevelCount {
             h: finest.h(),
             visits: coulomb.history.len(),
             uzawa: total.outer,
             sweeps: total.inner,
             seconds: coulomb.history.iter().map(|h| h.seconds).sum(),
-        };
-        (finest, coulomb, vec![count])
-    };
+        }]
+    });
     Ok(report(scene.clone(), entry.name, finest, coulomb, levels))
 }
 
