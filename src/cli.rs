@@ -716,7 +716,7 @@ fn sweep(args: &SweepArgs) -> Result<()> {
     };
     let settings = args.settings.resolve_on(base)?;
     ensure_writable(&args.out)?;
-    let rows = run_sweep(&spec, &settings)?;
+    let (rows, _) = run_sweep(&spec, &settings)?;
     write_sweep(&args.out, &rows)?;
     let failed = rows.iter().filter(|r| !r.converged).count();
     eprintln!(
@@ -728,12 +728,8 @@ fn sweep(args: &SweepArgs) -> Result<()> {
 }
 
 /// Runs a sweep with a progress bar.
-pub fn run_sweep(spec: &SweepSpec, settings: &Settings) -> Result<Vec<crate::sweep::SweepRow>> {
-    Ok(run_sweep_with_references(spec, settings)?.0)
-}
-
 /// Runs a sweep with a progress bar; also returns its references.
-pub fn run_sweep_with_references(
+pub fn run_sweep(
     spec: &SweepSpec,
     settings: &Settings,
 ) -> Result<(

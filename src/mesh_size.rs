@@ -56,11 +56,6 @@ impl MeshSize {
         1.0 / self.divisions() as f64
     }
 
-    /// The next finer mesh, h/2.
-    pub fn refined(self) -> Result<Self, MeshSizeError> {
-        Self::from_level(self.k + 1)
-    }
-
     /// The paper's continuation schedule 1/8, 1/16, ... down to `finest`.
     pub fn schedule_to(finest: MeshSize) -> Vec<MeshSize> {
         let start = 3.min(finest.k);

@@ -1,5 +1,5 @@
 //! Sparse linear algebra shared by the solvers: products, and sparse Cholesky
-//! through faer (symbolic analysis once, numeric factorization per matrix).
+//! through faer.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -102,8 +102,7 @@ fn faer_ref(m: &CscMatrix<f64>) -> SparseColMatRef<'_, usize, f64> {
 }
 
 /// Sparse Cholesky LLᵀ of a symmetric positive definite matrix (faer,
-/// fill-reducing AMD ordering). The symbolic analysis is kept, so a matrix
-/// with the same pattern is refactored without redoing it.
+/// fill-reducing AMD ordering).
 pub struct SparseCholesky {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
@@ -228,12 +227,6 @@ impl SparseCholesky {
         };
         this.factor_current()?;
         Ok(this)
-    }
-
-    /// Numeric refactorization of a matrix with the pattern of the first one.
-    pub fn refactor(&mut self, a: &CsrMatrix<f64>) -> Result<(), LinalgError> {
-        self.lower = triangle_csc(a, true, None);
-        self.factor_current()
     }
 
     fn factor_current(&mut self) -> Result<(), LinalgError> {

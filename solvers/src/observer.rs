@@ -91,21 +91,3 @@ impl Observer for History {
         self.stages.is_empty() || self.stages.contains(&stage)
     }
 }
-
-/// Sends every event to two observers.
-pub struct Tee<'a, A: Observer + ?Sized, B: Observer + ?Sized>(pub &'a mut A, pub &'a mut B);
-
-impl<A: Observer + ?Sized, B: Observer + ?Sized> Observer for Tee<'_, A, B> {
-    fn observe(&mut self, progress: &Progress) {
-        if self.0.wants(progress.stage) {
-            self.0.observe(progress);
-        }
-        if self.1.wants(progress.stage) {
-            self.1.observe(progress);
-        }
-    }
-
-    fn wants(&self, stage: Stage) -> bool {
-        self.0.wants(stage) || self.1.wants(stage)
-    }
-}

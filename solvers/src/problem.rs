@@ -151,11 +151,6 @@ impl GivenFrictionProblem {
         self.operator_id
     }
 
-    /// The friction bounds g_i in contact order.
-    pub fn friction_bound(&self) -> Vec<f64> {
-        self.contacts.iter().map(|c| c.g).collect()
-    }
-
     /// Sets the friction bounds g_i (one per contact node, each finite and ≥ 0):
     /// the step g^{m+1} = 𝓕 p(u^m) of the successive approximations, paper (9).
     pub fn set_friction_bound(&mut self, g: &[f64]) -> Result<(), ProblemError> {
