@@ -682,8 +682,14 @@ fn compare(args: &CompareArgs) -> Result<()> {
     let settings = args.settings.resolve_on(base)?;
     let solvers = solver_list(&args.solvers)?;
     ensure_writable(&args.out)?;
+    // Two reference solves, then per solver two first runs (the oracle's are
+    // the reference solves) and the timed repeats.
+    let firsts = solvers
+        .iter()
+        .filter(|&&s| s != crate::compare::ORACLE)
+        .count();
     let bar = progress_bar(
-        (2 + solvers.len() * 2 * (1 + args.repeats)) as u64,
+        (2 + 2 * firsts + 2 * solvers.len() * args.repeats) as u64,
         "compare",
     );
     let rows = crate::compare::compare(&scene, &settings, &solvers, args.repeats, |s| {

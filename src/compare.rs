@@ -170,7 +170,8 @@ pub const ORACLE: &str = "clarabel";
 /// Runs every solver in `solvers` on the given-friction subproblem (g from
 /// the oracle's Coulomb solution) and on the whole Coulomb problem, and
 /// measures each against the oracle. Times are the minimum over `repeats`
-/// runs after the first one (a warm-up that also gives the accuracy figures).
+/// runs after the first one (a warm-up that also gives the accuracy figures);
+/// the oracle's first runs are the reference solves themselves.
 pub fn compare(
     scene: &Scene,
     settings: &Settings,
@@ -181,15 +182,19 @@ pub fn compare(
     use contactlab_solvers::{History, Residuals, Silent, Stage};
 
     use crate::profile::separation_of;
-    use crate::run::solve_scene;
+    use crate::run::{Run, solve_scene};
 
-    let mut history = History::of(&[
-        Stage::Friction,
-        Stage::Uzawa,
-        Stage::InteriorPoint,
-        Stage::Newton,
-    ]);
-    let oracle = solve_scene(scene, settings, ORACLE, &mut history)?;
+    // Coulomb rows keep their convergence history (for the charts).
+    let coulomb_history = || {
+        History::of(&[
+            Stage::Friction,
+            Stage::Uzawa,
+            Stage::InteriorPoint,
+            Stage::Newton,
+        ])
+    };
+    let mut oracle_history = coulomb_history();
+    let oracle = solve_scene(scene, settings, ORACLE, &mut oracle_history)?;
     if !oracle.coulomb.status.is_converged() {
         bail!(
             "the oracle did not converge on {}: {}",
@@ -197,20 +202,27 @@ pub fn compare(
             oracle.coulomb.detail
         );
     }
-    tick("oracle");
+    tick(ORACLE);
     let g = oracle.coulomb.g.clone();
     let (d, reference, _) = solve_given_friction(scene, settings, ORACLE, &g, &mut Silent)?;
-    tick("oracle");
+    tick(ORACLE);
     let mut rows = Vec::new();
     for &solver in solvers {
         // The subproblem with the oracle's g.
-        let mut hist = History::of(&[Stage::Uzawa, Stage::InteriorPoint, Stage::Newton]);
-        let (_, first, _) = solve_given_friction(scene, settings, solver, &g, &mut hist)?;
-        tick(solver);
-        let mut best = f64::INFINITY;
-        for _ in 0..repeats {
+        let first = if solver == ORACLE {
+            reference.clone()
+        } else {
             let (_, s, _) = solve_given_friction(scene, settings, solver, &g, &mut Silent)?;
-            best = best.min(s.timing.total());
+            tick(solver);
+            s
+        };
+        let mut best: Option<f64> = None;
+        for _ in 0..repeats {
+            let t = solve_given_friction(scene, settings, solver, &g, &mut Silent)?
+                .1
+                .timing
+                .total();
+            best = Some(best.map_or(t, |b| b.min(t)));
             tick(solver);
         }
         let separation = separation_of(&d, &first);
@@ -232,30 +244,26 @@ pub fn compare(
                 &first.pressure,
                 &first.friction_traction,
             ),
-            seconds: if repeats == 0 {
-                first.timing.total()
-            } else {
-                best
-            },
-            history: hist.events,
+            seconds: best.unwrap_or(first.timing.total()),
+            history: Vec::new(),
             solution: first,
         });
         // The whole Coulomb problem.
-        let mut hist = History::of(&[
-            Stage::Friction,
-            Stage::Uzawa,
-            Stage::InteriorPoint,
-            Stage::Newton,
-        ]);
-        let run = solve_scene(scene, settings, solver, &mut hist)?;
-        tick(solver);
-        let mut best = f64::INFINITY;
+        let fresh: Run;
+        let (run, history) = if solver == ORACLE {
+            (&oracle, oracle_history.events.clone())
+        } else {
+            let mut history = coulomb_history();
+            fresh = solve_scene(scene, settings, solver, &mut history)?;
+            tick(solver);
+            (&fresh, history.events)
+        };
+        let mut best: Option<f64> = None;
         for _ in 0..repeats {
-            best = best.min(
-                solve_scene(scene, settings, solver, &mut Silent)?
-                    .coulomb
-                    .seconds,
-            );
+            let t = solve_scene(scene, settings, solver, &mut Silent)?
+                .coulomb
+                .seconds;
+            best = Some(best.map_or(t, |b| b.min(t)));
             tick(solver);
         }
         let total = run.coulomb.total_iterations();
@@ -276,13 +284,9 @@ pub fn compare(
             separated: run.separation.intervals.clone(),
             separated_fraction: run.separation.fraction,
             residuals: run.residuals,
-            seconds: if repeats == 0 {
-                run.coulomb.seconds
-            } else {
-                best
-            },
-            history: hist.events,
-            solution: run.coulomb.solution,
+            seconds: best.unwrap_or(run.coulomb.seconds),
+            history,
+            solution: run.coulomb.solution.clone(),
         });
     }
     Ok(rows)
