@@ -2,11 +2,12 @@
 //! the same matrix H = A + M (problem 1). The sweep is the hot loop of the
 //! paper's method; it walks the CSR rows once, like the product.
 
+use contactlab::bench::SweepFixture;
 use contactlab::discretization::Discretization;
 use contactlab::mesh_size::MeshSize;
 use contactlab::scene::Scene;
+use contactlab::solvers::RelaxationSettings;
 use contactlab::solvers::linalg::spmv_into;
-use contactlab::solvers::relaxation::pointwise::{RelaxationOperator, Smoothing, SweepData};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -19,17 +20,10 @@ fn bench(c: &mut Criterion) {
         )
         .unwrap();
         let p = &d.problem;
-        let op = RelaxationOperator::new(p.a(), p.mass(), 1.0, p.contacts());
         let n = p.n();
-        let l = vec![1.0; p.contacts().len()];
-        let wg: Vec<f64> = p.contacts().iter().map(|c| 0.5 * c.weight).collect();
-        let data = SweepData {
-            b: p.f(),
-            l: &l,
-            wg: &wg,
-            r: 1e12,
-            smoothing: Smoothing::Huber { delta: 1e-10 },
-        };
+        let settings = RelaxationSettings::default();
+        let fixture = SweepFixture::new(p, &settings);
+        let (op, data) = (&fixture.op, fixture.data(p, &settings));
         let mut v = vec![0.0; n];
         for _ in 0..50 {
             op.sweep(&mut v, &data);

@@ -10,7 +10,7 @@ use anyhow::Result;
 use contactlab_solvers::linalg::{SparseCholesky, spmv_into};
 use contactlab_solvers::registry;
 use contactlab_solvers::relaxation::pointwise::{RelaxationOperator, SweepData};
-use contactlab_solvers::{Residuals, Silent};
+use contactlab_solvers::{GivenFrictionProblem, RelaxationSettings, Residuals, Silent};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::Serialize;
 
@@ -57,6 +57,40 @@ impl BenchSpec {
                 .collect(),
             runs: 1,
             budget: 5.0,
+        }
+    }
+}
+
+/// The state one relaxation sweep is timed in, by `contactlab bench` and the
+/// criterion bench alike: H = A + ρM, multipliers l = 1 and friction bounds
+/// g = ½ on every contact node, so that every branch of the sweep runs.
+pub struct SweepFixture {
+    pub op: RelaxationOperator,
+    l: Vec<f64>,
+    wg: Vec<f64>,
+}
+
+impl SweepFixture {
+    pub fn new(p: &GivenFrictionProblem, s: &RelaxationSettings) -> Self {
+        Self {
+            op: RelaxationOperator::new(p.a(), p.mass(), s.proximal, p.contacts()),
+            l: vec![1.0; p.contacts().len()],
+            wg: p.contacts().iter().map(|c| 0.5 * c.weight).collect(),
+        }
+    }
+
+    /// The sweep's data for problem `p` (the one the fixture was built from).
+    pub fn data<'a>(
+        &'a self,
+        p: &'a GivenFrictionProblem,
+        s: &RelaxationSettings,
+    ) -> SweepData<'a> {
+        SweepData {
+            b: p.f(),
+            l: &self.l,
+            wg: &self.wg,
+            r: s.r,
+            smoothing: s.smoothing,
         }
     }
 }
@@ -193,22 +227,11 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             0,
         );
         // One sweep and one SpMV of the same matrix H = A + M.
-        let p = &d.problem;
-        let op = RelaxationOperator::new(
-            p.a(),
-            p.mass(),
-            settings.solver.relaxation.proximal,
-            p.contacts(),
+        let fixture = SweepFixture::new(&d.problem, &settings.solver.relaxation);
+        let (op, data) = (
+            &fixture.op,
+            fixture.data(&d.problem, &settings.solver.relaxation),
         );
-        let l = vec![1.0; p.contacts().len()];
-        let wg: Vec<f64> = p.contacts().iter().map(|c| 0.5 * c.weight).collect();
-        let data = SweepData {
-            b: p.f(),
-            l: &l,
-            wg: &wg,
-            r: settings.solver.relaxation.r,
-            smoothing: settings.solver.relaxation.smoothing,
-        };
         let reps = (2_000_000 / n.max(1)).clamp(5, 2000);
         let mut v = vec![0.0; n];
         let mut y = vec![0.0; n];
