@@ -129,8 +129,7 @@ pub struct SeparationRow {
     pub problem: u32,
     pub solver: String,
     pub friction: f64,
-    /// Intervals as `[a;b] [c;d]` with 3 decimals.
-    pub intervals: String,
+    pub intervals: Vec<[f64; 2]>,
     pub fraction: f64,
 }
 
@@ -203,7 +202,7 @@ pub fn reproduce(
                     problem,
                     solver: solver.to_string(),
                     friction,
-                    intervals: crate::compare::intervals_text(intervals),
+                    intervals: intervals.clone(),
                     fraction,
                 });
             }
@@ -212,13 +211,7 @@ pub fn reproduce(
         let zoom_from = separation_rows
             .iter()
             .filter(|r| r.problem == problem)
-            .filter_map(|r| {
-                r.intervals
-                    .trim_start_matches('[')
-                    .split(';')
-                    .next()
-                    .and_then(|x| x.parse::<f64>().ok())
-            })
+            .filter_map(|r| r.intervals.first().map(|i| i[0]))
             .fold(1.0f64, f64::min)
             - 0.1;
         let pairs: Vec<ProfilePair<'_>> = profiles
@@ -262,7 +255,7 @@ pub fn reproduce(
                     r.problem.to_string(),
                     r.solver.clone(),
                     r.friction.to_string(),
-                    r.intervals.clone(),
+                    crate::compare::intervals_text(&r.intervals),
                     format!("{:.6}", r.fraction),
                 ]
             }),
@@ -570,7 +563,8 @@ fn readme(
                         if r.intervals.is_empty() {
                             "none".to_string()
                         } else {
-                            let pretty = r.intervals.replace(';', ", ");
+                            let pretty =
+                                crate::compare::intervals_text(&r.intervals).replace(';', ", ");
                             format!("{pretty} = {:.1}%", 100.0 * r.fraction)
                         }
                     })
@@ -634,13 +628,7 @@ fn readme(
     let oracle_start = separation
         .iter()
         .find(|r| r.problem == 1 && r.friction > 0.0 && r.solver == crate::compare::ORACLE)
-        .and_then(|r| {
-            r.intervals
-                .trim_start_matches('[')
-                .split(';')
-                .next()
-                .and_then(|x| x.parse::<f64>().ok())
-        });
+        .and_then(|r| r.intervals.first().map(|i| i[0]));
     if let Some(a) = oracle_start {
         let h = spec.h.h();
         let _ = writeln!(
