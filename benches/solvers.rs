@@ -3,15 +3,15 @@
 //! (`contactlab bench` measures the same things quickly up to h = 1/256 and
 //! writes results/performance.csv.)
 
-use contactlab::bench::pinned;
-use contactlab::compare::solve_given_friction;
-use contactlab::discretization::Discretization;
-use contactlab::mesh_size::MeshSize;
-use contactlab::run::solve_scene;
-use contactlab::scene::Scene;
+use contactlab::coulomb::driver::solve_scene;
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::linalg::SparseCholesky;
 use contactlab::solvers::{Silent, registry};
+use contactlab::study::bench::pinned;
+use contactlab::study::compare::solve_given_friction;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 

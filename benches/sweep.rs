@@ -2,12 +2,12 @@
 //! the same matrix H = A + M (problem 1). The sweep is the hot loop of the
 //! paper's method; it walks the CSR rows once, like the product.
 
-use contactlab::bench::SweepFixture;
-use contactlab::discretization::Discretization;
-use contactlab::mesh_size::MeshSize;
-use contactlab::scene::Scene;
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
 use contactlab::solvers::RelaxationSettings;
 use contactlab::solvers::linalg::spmv_into;
+use contactlab::study::bench::SweepFixture;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 

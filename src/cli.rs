@@ -6,18 +6,18 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use crate::bench::BenchSpec;
-use crate::continuation::Schedule;
-use crate::discretization::Discretization;
-use crate::material::PlaneModel;
-use crate::mesh_size::MeshSize;
-use crate::output::{csv_bytes, fixed, json_bytes, write_atomic};
-use crate::profile::PROFILE_COLUMNS;
-use crate::reproduce::ReproduceSpec;
-use crate::scene::Scene;
+use crate::coulomb::continuation::Schedule;
+use crate::io::output::{csv_bytes, fixed, json_bytes, write_atomic};
+use crate::mechanics::contact_zone::PROFILE_COLUMNS;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::material::PlaneModel;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::stability::StabilitySpec;
-use crate::sweep::{Factor, SweepSpec};
+use crate::study::bench::BenchSpec;
+use crate::study::reproduce::ReproduceSpec;
+use crate::study::stability::StabilitySpec;
+use crate::study::sweep::{Factor, SweepSpec};
 use contactlab_solvers::{Observer, Progress, Smoothing, Stage};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
@@ -172,7 +172,7 @@ impl SweepArgs {
     /// The sweep described by these flags.
     pub fn spec(&self) -> Result<SweepSpec> {
         let scenes = match &self.scene {
-            Some(path) => vec![crate::scene_file::load(path)?.0],
+            Some(path) => vec![crate::io::scene_file::load(path)?.0],
             None => self
                 .problems
                 .iter()
@@ -304,7 +304,7 @@ impl SceneArgs {
     /// the defaults), with the scene overrides applied and validated.
     pub fn load(&self) -> Result<(Scene, Settings)> {
         let (mut scene, settings) = match (&self.scene, self.problem) {
-            (Some(path), _) => crate::scene_file::load(path)?,
+            (Some(path), _) => crate::io::scene_file::load(path)?,
             (None, Some(n)) => (Scene::paper_problem(n)?, Settings::default()),
             (None, None) => anyhow::bail!("give --problem N or --scene FILE"),
         };
@@ -571,7 +571,7 @@ impl Observer for LogObserver {
 fn solve(args: &SolveArgs) -> Result<()> {
     let (scene, base) = args.scene.load()?;
     let settings = args.settings.resolve_on(base)?;
-    crate::run::solver_entry(&args.solver)?;
+    crate::coulomb::driver::solver_entry(&args.solver)?;
     if let Some(dir) = &args.out {
         ensure_writable(dir)?;
     }
@@ -581,7 +581,8 @@ fn solve(args: &SolveArgs) -> Result<()> {
         scene.finest(),
         args.solver
     );
-    let run = crate::run::solve_scene(&scene, &settings, &args.solver, &mut LogObserver)?;
+    let run =
+        crate::coulomb::driver::solve_scene(&scene, &settings, &args.solver, &mut LogObserver)?;
     let summary = run.summary(&settings);
     print_summary(&summary);
     if let Some(dir) = &args.out {
@@ -617,7 +618,7 @@ fn table1(args: &Table1Args) -> Result<()> {
         Scene::paper_problem(p)?;
     }
     let plane = args.plane.unwrap_or(PlaneModel::Strain);
-    let rows = crate::table1::table1(
+    let rows = crate::study::table1::table1(
         &args.problems,
         &args.schedules,
         &settings,
@@ -632,8 +633,8 @@ fn table1(args: &Table1Args) -> Result<()> {
         eprintln!("problem {} ({}): {:.1} s", r.problem, r.schedule, r.seconds);
     }
     let path = args.out.join("table1.csv");
-    write_atomic(&path, &crate::table1::table1_csv(&rows)?)?;
-    print!("{}", crate::table1::table1_markdown(&rows));
+    write_atomic(&path, &crate::study::table1::table1_csv(&rows)?)?;
+    print!("{}", crate::study::table1::table1_markdown(&rows));
     eprintln!("wrote {}", path.display());
     Ok(())
 }
@@ -673,7 +674,7 @@ fn solver_list(names: &[String]) -> Result<Vec<&'static str>> {
     }
     names
         .iter()
-        .map(|n| crate::run::solver_entry(n).map(|e| e.name))
+        .map(|n| crate::coulomb::driver::solver_entry(n).map(|e| e.name))
         .collect()
 }
 
@@ -686,18 +687,18 @@ fn compare(args: &CompareArgs) -> Result<()> {
     // the reference solves) and the timed repeats.
     let firsts = solvers
         .iter()
-        .filter(|&&s| s != crate::compare::ORACLE)
+        .filter(|&&s| s != crate::study::compare::ORACLE)
         .count();
     let bar = progress_bar(
         (2 + 2 * firsts + 2 * solvers.len() * args.repeats) as u64,
         "compare",
     );
-    let rows = crate::compare::compare(&scene, &settings, &solvers, args.repeats, |s| {
+    let rows = crate::study::compare::compare(&scene, &settings, &solvers, args.repeats, |s| {
         bar.set_message(s.to_string());
         bar.inc(1);
     })?;
     bar.finish_and_clear();
-    use crate::compare::*;
+    use crate::study::compare::*;
     write_atomic(
         &args.out.join("compare.csv"),
         &csv_bytes(&COMPARE_COLUMNS, compare_records(&rows))?,
@@ -717,7 +718,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
 fn sweep(args: &SweepArgs) -> Result<()> {
     let spec = args.spec()?;
     let base = match &args.scene {
-        Some(path) => crate::scene_file::load(path)?.1,
+        Some(path) => crate::io::scene_file::load(path)?.1,
         None => Settings::default(),
     };
     let settings = args.settings.resolve_on(base)?;
@@ -739,12 +740,12 @@ pub fn run_sweep(
     spec: &SweepSpec,
     settings: &Settings,
 ) -> Result<(
-    Vec<crate::sweep::SweepRow>,
-    Vec<crate::sweep::ReferenceInfo>,
+    Vec<crate::study::sweep::SweepRow>,
+    Vec<crate::study::sweep::ReferenceInfo>,
 )> {
-    let runs = crate::sweep::plan(spec, settings);
+    let runs = crate::study::sweep::plan(spec, settings);
     let bar = progress_bar(runs.len() as u64, "sweep");
-    let rows = crate::sweep::sweep(spec, settings, &|run| {
+    let rows = crate::study::sweep::sweep(spec, settings, &|run| {
         bar.set_message(format!(
             "{} = {} ({})",
             run.factor.as_str(),
@@ -758,8 +759,11 @@ pub fn run_sweep(
 }
 
 /// Writes sweep.csv, sweep_timing.csv and the sweep's charts.
-pub fn write_sweep(out: &std::path::Path, rows: &[crate::sweep::SweepRow]) -> Result<Vec<PathBuf>> {
-    use crate::sweep::*;
+pub fn write_sweep(
+    out: &std::path::Path,
+    rows: &[crate::study::sweep::SweepRow],
+) -> Result<Vec<PathBuf>> {
+    use crate::study::sweep::*;
     write_atomic(
         &out.join("sweep.csv"),
         &csv_bytes(&SWEEP_COLUMNS, sweep_records(rows))?,
@@ -768,7 +772,10 @@ pub fn write_sweep(out: &std::path::Path, rows: &[crate::sweep::SweepRow]) -> Re
         &out.join("sweep_timing.csv"),
         &csv_bytes(&SWEEP_TIMING_COLUMNS, sweep_timing_records(rows))?,
     )?;
-    crate::report::write_all(&out.join("charts"), &crate::report::sweep_charts(rows))
+    crate::study::report::write_all(
+        &out.join("charts"),
+        &crate::study::report::sweep_charts(rows),
+    )
 }
 
 fn reproduce(args: &ReproduceArgs) -> Result<()> {
@@ -779,7 +786,7 @@ fn reproduce(args: &ReproduceArgs) -> Result<()> {
     } else {
         ReproduceSpec::full()
     };
-    crate::reproduce::reproduce(&args.out, &spec, &settings, &|line| {
+    crate::study::reproduce::reproduce(&args.out, &spec, &settings, &|line| {
         eprintln!("reproduce: {line}")
     })?;
     eprintln!(
@@ -815,15 +822,15 @@ pub fn write_stability(
     spec: &StabilitySpec,
     settings: &Settings,
     log: &dyn Fn(&str),
-) -> Result<Vec<crate::stability::StabilityRow>> {
-    use crate::stability::*;
-    let (rows, traces) = crate::stability::stability(spec, settings, log)?;
+) -> Result<Vec<crate::study::stability::StabilityRow>> {
+    use crate::study::stability::*;
+    let (rows, traces) = crate::study::stability::stability(spec, settings, log)?;
     write_atomic(&out.join("stability.csv"), &stability_csv(&rows)?)?;
     write_atomic(
         &out.join("stability_friction.csv"),
         &friction_trace_csv(&traces)?,
     )?;
-    crate::report::write_all(&out.join("charts"), &stability_charts(&rows, &traces))?;
+    crate::study::report::write_all(&out.join("charts"), &stability_charts(&rows, &traces))?;
     Ok(rows)
 }
 
@@ -844,9 +851,10 @@ fn bench(args: &BenchArgs) -> Result<()> {
         }
         spec.budget = b;
     }
-    let (_, goals, _) =
-        crate::bench::write_bench(&args.out, &spec, &settings, &|l| eprintln!("bench: {l}"))?;
-    print!("{}", crate::bench::goals_markdown(&goals));
+    let (_, goals, _) = crate::study::bench::write_bench(&args.out, &spec, &settings, &|l| {
+        eprintln!("bench: {l}")
+    })?;
+    print!("{}", crate::study::bench::goals_markdown(&goals));
     eprintln!(
         "wrote {}/performance.csv, performance_goals.md and charts",
         args.out.display()
@@ -857,13 +865,13 @@ fn bench(args: &BenchArgs) -> Result<()> {
 fn bench_one(args: &BenchOneArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     faer::set_global_parallelism(faer::Par::Seq);
-    let run = crate::run::solve_scene(
+    let run = crate::coulomb::driver::solve_scene(
         &scene,
         &Settings::default(),
         &args.solver,
         &mut contactlab_solvers::Silent,
     )?;
-    let peak = crate::bench::peak_memory_kb();
+    let peak = crate::study::bench::peak_memory_kb();
     println!(
         "{}",
         serde_json::json!({"seconds": run.coulomb.seconds, "status": run.coulomb.status.to_string(), "peak_kb": peak})
@@ -871,7 +879,7 @@ fn bench_one(args: &BenchOneArgs) -> Result<()> {
     Ok(())
 }
 
-fn print_summary(s: &crate::run::Summary) {
+fn print_summary(s: &crate::coulomb::driver::Summary) {
     let intervals: Vec<String> = s
         .separated_intervals
         .iter()

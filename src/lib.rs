@@ -1,32 +1,22 @@
 //! contactlab: a testbed for the semicoercive two-body contact problem with
-//! Coulomb friction of Zhiltsov & Namm (2019). This crate holds the mechanics
-//! (mesh, P1 assembly, scenes, the friction fixed point, the comparison
-//! harness, the CLI); the solvers of the algebraic given-friction subproblem
-//! live in `contactlab-solvers`.
+//! Coulomb friction of Zhiltsov & Namm (2019).
+//!
+//! - [`mechanics`]: the paper's scene, its P1 discretization and the way back
+//!   from the algebraic unknowns to both bodies;
+//! - [`coulomb`]: the Coulomb problem around a given-friction solver: the
+//!   successive approximations of paper (9) and mesh continuation;
+//! - [`study`]: comparisons, sweeps, the stability map, benchmarks, Table 1
+//!   and the report;
+//! - [`io`]: scene files, output files, charts, the manifest;
+//! - [`cli`]: the command line.
+//!
+//! The solvers of the algebraic subproblem live in `contactlab-solvers`.
 
-pub mod assembly;
-pub mod bench;
-pub mod charts;
 pub mod cli;
-pub mod compare;
-pub mod continuation;
-pub mod discretization;
-pub mod dofs;
-pub mod friction;
-pub mod manifest;
-pub mod material;
-pub mod mesh;
-pub mod mesh_size;
-pub mod output;
-pub mod profile;
-pub mod report;
-pub mod reproduce;
-pub mod run;
-pub mod scene;
-pub mod scene_file;
+pub mod coulomb;
+pub mod io;
+pub mod mechanics;
 pub mod settings;
-pub mod stability;
-pub mod sweep;
-pub mod table1;
+pub mod study;
 
 pub use contactlab_solvers as solvers;

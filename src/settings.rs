@@ -4,8 +4,8 @@
 use contactlab_solvers::registry::SolverSettings;
 use serde::{Deserialize, Serialize};
 
-use crate::continuation::Schedule;
-use crate::friction::CoulombSettings;
+use crate::coulomb::continuation::Schedule;
+use crate::coulomb::fixed_point::CoulombSettings;
 
 /// Settings of the Coulomb fixed point and of every registered solver.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

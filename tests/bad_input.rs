@@ -4,8 +4,8 @@
 
 use std::process::Command;
 
-use contactlab::scene::Scene;
-use contactlab::scene_file;
+use contactlab::io::scene_file;
+use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use proptest::prelude::*;
 
@@ -231,7 +231,7 @@ fn a_good_scene_file_overrides_what_it_sets() {
     assert_eq!(scene.friction, 0.25);
     assert_eq!(
         scene.material.plane,
-        contactlab::material::PlaneModel::Stress
+        contactlab::mechanics::material::PlaneModel::Stress
     );
     assert_eq!(settings.solver.relaxation.r, 1e8);
     assert_eq!(
@@ -298,8 +298,8 @@ proptest! {
             let (scene, settings) = file.split();
             let _ = settings.validate();
             if scene.validate().is_ok() {
-                let h = contactlab::mesh_size::MeshSize::from_level(2).unwrap();
-                let _ = contactlab::discretization::Discretization::new(&scene, h);
+                let h = contactlab::mechanics::mesh_size::MeshSize::from_level(2).unwrap();
+                let _ = contactlab::mechanics::discretization::Discretization::new(&scene, h);
             }
         }
     }

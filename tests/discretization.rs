@@ -1,13 +1,13 @@
 //! The paper's scene as one algebraic problem: counts, symmetry, rigid
 //! motions, the one-dimensional kernel, the patch test, loads and masses.
 
-use contactlab::assembly::{self, strain_matrix};
-use contactlab::discretization::{BuildError, Discretization};
-use contactlab::dofs::PhysicalDofs;
-use contactlab::material::{Material, PlaneModel};
-use contactlab::mesh::{Body, Mesh};
-use contactlab::mesh_size::MeshSize;
-use contactlab::scene::{Scene, SceneError, Traction};
+use contactlab::mechanics::assembly::{self, strain_matrix};
+use contactlab::mechanics::discretization::{BuildError, Discretization};
+use contactlab::mechanics::dofs::PhysicalDofs;
+use contactlab::mechanics::material::{Material, PlaneModel};
+use contactlab::mechanics::mesh::{Body, Mesh};
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::{Scene, SceneError, Traction};
 use contactlab::solvers::linalg::{SparseCholesky, kernel_dimension, max_abs, spmv};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 

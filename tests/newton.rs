@@ -1,17 +1,17 @@
 //! The fast solver: agreement with the oracle, no cycling, a status under
 //! every stress condition.
 
-use contactlab::compare::{agreement, solve_given_friction};
-use contactlab::discretization::Discretization;
-use contactlab::mesh_size::MeshSize;
-use contactlab::run::solve_scene;
-use contactlab::scene::{Scene, Traction};
+use contactlab::coulomb::driver::solve_scene;
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
 use contactlab::solvers::newton::{NewtonSettings, semismooth_newton};
 use contactlab::solvers::{
     CondensedNewton, ContactNode, GivenFrictionProblem, GivenFrictionSolver, Residuals, Silent,
     Status,
 };
+use contactlab::study::compare::{agreement, solve_given_friction};
 use faer::Mat;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 

@@ -1,10 +1,10 @@
 //! The conic oracle: KKT by the solver-independent residuals, equilibrium,
 //! the frictionless limit, the contact zones, and closed-form answers.
 
-use contactlab::discretization::Discretization;
-use contactlab::mesh_size::MeshSize;
-use contactlab::run::{Run, solve_scene};
-use contactlab::scene::Scene;
+use contactlab::coulomb::driver::{Run, solve_scene};
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{
     ConicSettings, ConicSolver, ContactNode, GivenFrictionProblem, GivenFrictionSolver, Residuals,

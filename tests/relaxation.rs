@@ -5,13 +5,13 @@
 //! the agreement tests run the same method at ε = 1e-8: they check that it
 //! converges to the oracle's solution, not that the default is that accurate.
 
-use contactlab::compare::{agreement, solve_given_friction};
-use contactlab::continuation::Schedule;
-use contactlab::mesh_size::MeshSize;
-use contactlab::run::{Run, solve_scene};
-use contactlab::scene::Scene;
+use contactlab::coulomb::continuation::Schedule;
+use contactlab::coulomb::driver::{Run, solve_scene};
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{Residuals, Silent, Status};
+use contactlab::study::compare::{agreement, solve_given_friction};
 
 /// Displacements to 1e-6 of the largest one, pressures to 1e-4 of the
 /// largest one (the tolerances).

@@ -4,12 +4,12 @@
 use std::path::Path;
 use std::process::Command;
 
-use contactlab::compare::COMPARE_COLUMNS;
-use contactlab::mesh_size::MeshSize;
-use contactlab::profile::PROFILE_COLUMNS;
-use contactlab::reproduce::FILES;
+use contactlab::mechanics::contact_zone::PROFILE_COLUMNS;
+use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::settings::Settings;
-use contactlab::sweep::{Factor, SWEEP_COLUMNS, SWEEP_TIMING_COLUMNS, SweepSpec, sweep};
+use contactlab::study::compare::COMPARE_COLUMNS;
+use contactlab::study::reproduce::FILES;
+use contactlab::study::sweep::{Factor, SWEEP_COLUMNS, SWEEP_TIMING_COLUMNS, SweepSpec, sweep};
 
 /// The committed reference: `compare.csv` of `reproduce --quick`.
 const REFERENCE: &str = include_str!("reference/quick_compare.csv");
@@ -181,7 +181,7 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     assert!(seen >= 12 + 3 + 1 + 4 + 6 + 2, "only {seen} charts");
     assert_eq!(
         header(&out.join("performance.csv")),
-        contactlab::bench::PERFORMANCE_COLUMNS
+        contactlab::study::bench::PERFORMANCE_COLUMNS
     );
 }
 

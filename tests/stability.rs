@@ -6,7 +6,7 @@ use contactlab::solvers::{
     ContactNode, GivenFrictionProblem, GivenFrictionSolver, ProxUzawa, RelaxationSettings, Silent,
     Status,
 };
-use contactlab::stability::{Class, StabilityRow, StabilitySpec, stability};
+use contactlab::study::stability::{Class, StabilityRow, StabilitySpec, stability};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 fn find<'a>(
@@ -35,7 +35,7 @@ fn each_documented_failure_is_detected_and_reported() {
     // A coarse smoothing converges by its own test but is wrong by the residuals.
     let r = find(&rows, "smoothing", "relaxation", "huber(1e-6)");
     assert_eq!(r.class, Class::Wrong, "{r:?}");
-    assert!(r.kkt > contactlab::stability::WRONG_KKT);
+    assert!(r.kkt > contactlab::study::stability::WRONG_KKT);
     // A large friction coefficient: the fixed point stops contracting on problem 1.
     let r = rows
         .iter()

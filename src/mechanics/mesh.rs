@@ -4,7 +4,7 @@
 //! upper-right), and the contact nodes of Γ_K duplicated, one per body, so that
 //! there are N = n² + n nodes with n = 1/h + 1.
 
-use crate::mesh_size::MeshSize;
+use crate::mechanics::mesh_size::MeshSize;
 
 /// Which body a node or element belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use contactlab_solvers::{Progress, Stage};
 
-use crate::charts::{Chart, Series};
-use crate::compare::{CompareRow, Mode};
-use crate::profile::ProfileRow;
-use crate::sweep::SweepRow;
+use crate::io::charts::{Chart, Series};
+use crate::mechanics::contact_zone::ProfileRow;
+use crate::study::compare::{CompareRow, Mode};
+use crate::study::sweep::SweepRow;
 
 fn chart(
     title: impl Into<String>,

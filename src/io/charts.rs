@@ -9,7 +9,7 @@ use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 
-use crate::output::write_atomic;
+use crate::io::output::write_atomic;
 
 /// One named curve.
 #[derive(Clone, Debug, PartialEq)]

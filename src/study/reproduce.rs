@@ -10,28 +10,30 @@ use anyhow::Result;
 use contactlab_solvers::{Silent, registry};
 use serde::Serialize;
 
-use crate::bench::BenchSpec;
-use crate::compare::{
+use crate::coulomb::continuation::Schedule;
+use crate::coulomb::driver::solve_scene;
+use crate::io::manifest::Manifest;
+use crate::io::output::{csv_bytes, fixed, json_bytes, write_atomic};
+use crate::mechanics::contact_zone::{PROFILE_COLUMNS, ProfileRow, contact_profile};
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::material::PlaneModel;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::study::bench::BenchSpec;
+use crate::study::compare::{
     COMPARE_COLUMNS, COMPARE_TIMING_COLUMNS, CompareRow, Mode, compare, compare_markdown,
     compare_records, timing_records,
 };
-use crate::continuation::Schedule;
-use crate::discretization::Discretization;
-use crate::manifest::Manifest;
-use crate::material::PlaneModel;
-use crate::mesh_size::MeshSize;
-use crate::output::{csv_bytes, fixed, json_bytes, write_atomic};
-use crate::profile::{PROFILE_COLUMNS, ProfileRow, contact_profile};
-use crate::report::{ProfilePair, convergence_chart, profile_charts, sweep_charts, write_all};
-use crate::run::solve_scene;
-use crate::scene::Scene;
-use crate::settings::Settings;
-use crate::stability::StabilitySpec;
-use crate::sweep::{
+use crate::study::report::{
+    ProfilePair, convergence_chart, profile_charts, sweep_charts, write_all,
+};
+use crate::study::stability::StabilitySpec;
+use crate::study::sweep::{
     Factor, SWEEP_COLUMNS, SWEEP_TIMING_COLUMNS, SweepRow, SweepSpec, sweep, sweep_records,
     sweep_timing_records,
 };
-use crate::table1::{Table1Row, table1, table1_csv, table1_markdown};
+use crate::study::table1::{Table1Row, table1, table1_csv, table1_markdown};
 use contactlab_solvers::Smoothing;
 
 /// What `reproduce` runs.
@@ -255,7 +257,7 @@ pub fn reproduce(
                     r.problem.to_string(),
                     r.solver.clone(),
                     r.friction.to_string(),
-                    crate::compare::intervals_text(&r.intervals),
+                    crate::study::compare::intervals_text(&r.intervals),
                     format!("{:.6}", r.fraction),
                 ]
             }),
@@ -275,22 +277,28 @@ pub fn reproduce(
     charts.extend(sweep_charts(&sweep_rows));
 
     log("stability map");
-    let (stability_rows, traces) = crate::stability::stability(&spec.stability, settings, &|l| {
-        log(&format!("stability: {l}"))
-    })?;
+    let (stability_rows, traces) =
+        crate::study::stability::stability(&spec.stability, settings, &|l| {
+            log(&format!("stability: {l}"))
+        })?;
     write_atomic(
         &out.join("stability.csv"),
-        &crate::stability::stability_csv(&stability_rows)?,
+        &crate::study::stability::stability_csv(&stability_rows)?,
     )?;
     write_atomic(
         &out.join("stability_friction.csv"),
-        &crate::stability::friction_trace_csv(&traces)?,
+        &crate::study::stability::friction_trace_csv(&traces)?,
     )?;
-    charts.extend(crate::stability::stability_charts(&stability_rows, &traces));
+    charts.extend(crate::study::stability::stability_charts(
+        &stability_rows,
+        &traces,
+    ));
 
     log("benchmark");
     let (perf_rows, goals, _) =
-        crate::bench::write_bench(out, &spec.bench, settings, &|l| log(&format!("bench: {l}")))?;
+        crate::study::bench::write_bench(out, &spec.bench, settings, &|l| {
+            log(&format!("bench: {l}"))
+        })?;
 
     log("charts");
     let written = write_all(&charts_dir, &charts)?;
@@ -328,7 +336,7 @@ pub fn reproduce(
 }
 
 fn stability_readme(
-    rows: &[crate::stability::StabilityRow],
+    rows: &[crate::study::stability::StabilityRow],
     charts: &[std::path::PathBuf],
     out: &Path,
 ) -> String {
@@ -342,7 +350,7 @@ fn stability_readme(
          default run), converged. All runs are in `stability.csv`; max|Δg| and contraction per friction iteration in \
          `stability_friction.csv`.\n\n",
     );
-    s += &crate::stability::readme_section(rows);
+    s += &crate::study::stability::readme_section(rows);
     s += "\n";
     for name in [
         "stability_friction",
@@ -363,19 +371,22 @@ fn stability_readme(
         }
     }
     s += "\n<details><summary>Every run that did not simply converge</summary>\n\n";
-    s += &crate::stability::summary_markdown(rows);
+    s += &crate::study::stability::summary_markdown(rows);
     s += "\n</details>\n";
     s
 }
 
-fn performance_readme(rows: &[crate::bench::PerfRow], goals: &[crate::bench::Goal]) -> String {
+fn performance_readme(
+    rows: &[crate::study::bench::PerfRow],
+    goals: &[crate::study::bench::Goal],
+) -> String {
     let mut s = String::from(
         "\n## Speed (problem 1, one thread, medians after a warm-up)\n\n\
          Every time is also given as a ratio to one sparse Cholesky factorization and solve of the stiffness matrix \
          with the semicoercive mode removed (one jump pinned), measured in the same run (`performance.csv`; \
          `contactlab bench` reruns it alone). Solvers stop at a stated per-run budget.\n\n",
     );
-    s += &crate::bench::goals_markdown(goals);
+    s += &crate::study::bench::goals_markdown(goals);
     let mut meshes: Vec<&str> = rows.iter().map(|r| r.h.as_str()).collect();
     meshes.dedup();
     s += "\nWhole Coulomb problem, median seconds (× one factorization):\n\n| solver |";
@@ -452,7 +463,7 @@ fn readme(
     t1: &[Table1Row],
     rows: &[CompareRow],
     separation: &[SeparationRow],
-    (sweep_rows, references): (&[SweepRow], &[crate::sweep::ReferenceInfo]),
+    (sweep_rows, references): (&[SweepRow], &[crate::study::sweep::ReferenceInfo]),
     charts: &[std::path::PathBuf],
     out: &Path,
     seconds: f64,
@@ -508,7 +519,7 @@ fn readme(
         rows.iter()
             .find(|o| {
                 o.mode == Mode::Coulomb
-                    && o.solver == crate::compare::ORACLE
+                    && o.solver == crate::study::compare::ORACLE
                     && o.problem == r.problem
             })
             .is_some_and(|o| {
@@ -529,7 +540,7 @@ fn readme(
         worst(|r| r.agreement.pressure_max),
         worst(|r| r.residuals.kkt()),
         rows.iter()
-            .filter(|r| r.solver == crate::compare::ORACLE)
+            .filter(|r| r.solver == crate::study::compare::ORACLE)
             .map(|r| r.residuals.kkt())
             .fold(0.0f64, f64::max),
         if same_zones {
@@ -563,8 +574,8 @@ fn readme(
                         if r.intervals.is_empty() {
                             "none".to_string()
                         } else {
-                            let pretty =
-                                crate::compare::intervals_text(&r.intervals).replace(';', ", ");
+                            let pretty = crate::study::compare::intervals_text(&r.intervals)
+                                .replace(';', ", ");
                             format!("{pretty} = {:.1}%", 100.0 * r.fraction)
                         }
                     })
@@ -581,7 +592,7 @@ fn readme(
     let mut differ = Vec::new();
     for a in separation
         .iter()
-        .filter(|r| r.solver == crate::compare::ORACLE)
+        .filter(|r| r.solver == crate::study::compare::ORACLE)
     {
         for b in separation
             .iter()
@@ -611,7 +622,7 @@ fn readme(
         .fold(0.0f64, f64::max);
     let oracle_kkt = rows
         .iter()
-        .filter(|r| r.solver == crate::compare::ORACLE)
+        .filter(|r| r.solver == crate::study::compare::ORACLE)
         .map(|r| r.residuals.kkt())
         .fold(0.0f64, f64::max);
     let _ = writeln!(
@@ -627,7 +638,7 @@ fn readme(
     );
     let oracle_start = separation
         .iter()
-        .find(|r| r.problem == 1 && r.friction > 0.0 && r.solver == crate::compare::ORACLE)
+        .find(|r| r.problem == 1 && r.friction > 0.0 && r.solver == crate::study::compare::ORACLE)
         .and_then(|r| r.intervals.first().map(|i| i[0]));
     if let Some(a) = oracle_start {
         let h = spec.h.h();
@@ -695,7 +706,8 @@ fn readme(
     }
 
     // Sweep.
-    let tag = crate::report::sweep_tag(&spec.sweep.scenes[0].name, &spec.sweep_h.to_string());
+    let tag =
+        crate::study::report::sweep_tag(&spec.sweep.scenes[0].name, &spec.sweep_h.to_string());
     let _ = writeln!(
         s,
         "\n## Speed against accuracy, and the choice of r and ε (problem 1, h = {})\n",
@@ -715,7 +727,7 @@ fn readme(
     for target in [1e-3, 1e-4, 1e-5, 1e-6] {
         if let (Some(a), Some(b)) = (
             time_at(&wp("relaxation"), target),
-            time_at(&wp(crate::compare::ORACLE), target),
+            time_at(&wp(crate::study::compare::ORACLE), target),
         ) {
             ratios.push(format!("{:.2} at a pressure error of {target:.0e}", a / b));
         }
@@ -746,7 +758,7 @@ fn readme(
     for target in [1e-4, 1e-6, 1e-8] {
         if let (Some(a), Some(b)) = (
             time_at(&wp("newton"), target),
-            time_at(&wp(crate::compare::ORACLE), target),
+            time_at(&wp(crate::study::compare::ORACLE), target),
         ) {
             newton_vs.push(format!("{:.0}× at {target:.0e}", b / a));
         }

@@ -5,12 +5,12 @@ use anyhow::Result;
 use contactlab_solvers::Observer;
 use serde::Serialize;
 
-use crate::continuation::Schedule;
-use crate::material::PlaneModel;
-use crate::mesh_size::MeshSize;
-use crate::output::csv_bytes;
-use crate::run::solve_scene;
-use crate::scene::Scene;
+use crate::coulomb::continuation::Schedule;
+use crate::coulomb::driver::solve_scene;
+use crate::io::output::csv_bytes;
+use crate::mechanics::material::PlaneModel;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 
 /// Table 1 of the paper: problem, MPP, MU, MPR total, MPR at h = 1/32, at 1/64.

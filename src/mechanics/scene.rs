@@ -4,8 +4,8 @@
 use serde::{Deserialize, Deserializer, Serialize};
 use thiserror::Error;
 
-use crate::material::Material;
-use crate::mesh_size::MeshSize;
+use crate::mechanics::material::Material;
+use crate::mechanics::mesh_size::MeshSize;
 
 /// A vertical traction P''_2 (force per unit length, negative pushes down),
 /// constant on the segment `from ≤ x ≤ to` of the top side y = 1.

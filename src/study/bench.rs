@@ -14,16 +14,16 @@ use contactlab_solvers::{GivenFrictionProblem, RelaxationSettings, Residuals, Si
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::Serialize;
 
-use crate::charts::{Chart, Series};
-use crate::compare::solve_given_friction;
-use crate::discretization::Discretization;
-use crate::mesh_size::MeshSize;
-use crate::output::csv_bytes;
-use crate::run::solve_scene;
-use crate::scene::Scene;
+use crate::coulomb::driver::solve_scene;
+use crate::io::charts::{Chart, Series};
+use crate::io::output::csv_bytes;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::stability::fit_slope;
-use crate::table1::PAPER_TABLE_1;
+use crate::study::compare::solve_given_friction;
+use crate::study::stability::fit_slope;
+use crate::study::table1::PAPER_TABLE_1;
 
 /// What to measure.
 #[derive(Clone, Debug, Serialize)]
@@ -470,7 +470,7 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
                 log_x: true,
                 log_y: true,
                 series,
-                legend: crate::charts::Legend::UpperLeft,
+                legend: crate::io::charts::Legend::UpperLeft,
             },
         ));
     }
@@ -626,7 +626,7 @@ pub fn write_bench(
         None => None,
     };
     let goals = goals(&rows, fastest.as_ref().map(|f| f.0).zip(peak));
-    crate::output::write_atomic(&out.join("performance.csv"), &performance_csv(&rows)?)?;
+    crate::io::output::write_atomic(&out.join("performance.csv"), &performance_csv(&rows)?)?;
     let mut md = goals_markdown(&goals);
     if let (Some(kb), Some((h, solver))) = (peak, fastest) {
         md += &format!(
@@ -634,7 +634,7 @@ pub fn write_bench(
             kb as f64 / 1024.0
         );
     }
-    crate::output::write_atomic(&out.join("performance_goals.md"), md.as_bytes())?;
-    crate::report::write_all(&out.join("charts"), &performance_charts(&rows))?;
+    crate::io::output::write_atomic(&out.join("performance_goals.md"), md.as_bytes())?;
+    crate::study::report::write_all(&out.join("charts"), &performance_charts(&rows))?;
     Ok((rows, goals, peak))
 }

@@ -9,7 +9,7 @@
 //! so that v''_k = v'_k − (s_i, t_i)_k. Fixed values are zero, so elimination
 //! simply drops them.
 
-use crate::mesh::{Body, Mesh};
+use crate::mechanics::mesh::{Body, Mesh};
 
 /// How one physical displacement component is expressed in the unknowns.
 #[derive(Clone, Copy, Debug, PartialEq)]

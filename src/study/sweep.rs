@@ -13,13 +13,13 @@ use contactlab_solvers::{Residuals, Silent, Smoothing};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::compare::{Agreement, Mode, ORACLE, agreement, solve_given_friction};
-use crate::continuation::Schedule;
-use crate::discretization::Discretization;
-use crate::mesh_size::MeshSize;
-use crate::run::{Run, solve_scene};
-use crate::scene::Scene;
+use crate::coulomb::continuation::Schedule;
+use crate::coulomb::driver::{Run, solve_scene};
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::compare::{Agreement, Mode, ORACLE, agreement, solve_given_friction};
 use contactlab_solvers::Solution;
 
 /// What a sweep varies.
@@ -335,7 +335,7 @@ pub fn run_one(
             }
             let agree = agreement(&d, &s, &reference.subproblem.1);
             let kkt = Residuals::compute(&d.problem, &s.v, &s.pressure, &s.friction_traction).kkt();
-            let fraction = crate::profile::separation_of(&d, &s).fraction;
+            let fraction = crate::mechanics::contact_zone::separation_of(&d, &s).fraction;
             (
                 s.status,
                 s.status.is_converged(),
@@ -457,7 +457,7 @@ pub const SWEEP_TIMING_COLUMNS: [&str; 5] = ["run", "factor", "solver", "value",
 
 /// Rows as CSV fields.
 pub fn sweep_records(rows: &[SweepRow]) -> Vec<Vec<String>> {
-    use crate::output::fixed;
+    use crate::io::output::fixed;
     rows.iter()
         .enumerate()
         .map(|(i, r)| {

@@ -4,10 +4,10 @@
 
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
-use crate::dofs::DofExpansion;
-use crate::material::Material;
-use crate::mesh::{Body, Mesh};
-use crate::scene::Traction;
+use crate::mechanics::dofs::DofExpansion;
+use crate::mechanics::material::Material;
+use crate::mechanics::mesh::{Body, Mesh};
+use crate::mechanics::scene::Traction;
 
 /// Twice the signed area of a triangle.
 fn twice_area(p: &[[f64; 2]; 3]) -> f64 {

@@ -7,11 +7,11 @@ use contactlab_solvers::registry::SolverSettings;
 use serde::Deserialize;
 use thiserror::Error;
 
-use crate::continuation::Schedule;
-use crate::friction::CoulombSettings;
-use crate::material::Material;
-use crate::mesh_size::MeshSize;
-use crate::scene::{Scene, SceneError, Traction, default_friction, default_levels};
+use crate::coulomb::continuation::Schedule;
+use crate::coulomb::fixed_point::CoulombSettings;
+use crate::mechanics::material::Material;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::{Scene, SceneError, Traction, default_friction, default_levels};
 use crate::settings::Settings;
 
 /// The scene file format: a scene and, optionally, the settings of a run.

@@ -4,7 +4,7 @@
 use contactlab_solvers::Solution;
 use serde::Serialize;
 
-use crate::discretization::Discretization;
+use crate::mechanics::discretization::Discretization;
 
 /// Separation means jump < −tol with tol = SEPARATION_TOL × (largest nodal
 /// displacement of both bodies). The oracle's jumps at closed nodes are below

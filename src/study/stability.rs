@@ -26,14 +26,14 @@ use anyhow::Result;
 use contactlab_solvers::{GivenFrictionSolver, Residuals, Silent, Smoothing, Status};
 use serde::Serialize;
 
-use crate::charts::{Chart, Series};
-use crate::compare::agreement;
-use crate::discretization::Discretization;
-use crate::mesh_size::MeshSize;
-use crate::output::{csv_bytes, fixed};
-use crate::run::{Run, solve_scene, solver_entry};
-use crate::scene::{Scene, Traction};
+use crate::coulomb::driver::{Run, solve_scene, solver_entry};
+use crate::io::charts::{Chart, Series};
+use crate::io::output::{csv_bytes, fixed};
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
+use crate::study::compare::agreement;
 
 /// KKT residual above which a converged run is wrong.
 pub const WRONG_KKT: f64 = 1e-4;
@@ -1016,7 +1016,7 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
             log_x: true,
             log_y: true,
             series,
-            legend: crate::charts::Legend::LowerRight,
+            legend: crate::io::charts::Legend::LowerRight,
         },
     ));
     // Mesh: sweeps on the finest level against 1/h, per method, with the fitted slope.
@@ -1060,7 +1060,7 @@ pub fn stability_charts(rows: &[StabilityRow], traces: &[FrictionTrace]) -> Vec<
             log_x: true,
             log_y: true,
             series,
-            legend: crate::charts::Legend::UpperLeft,
+            legend: crate::io::charts::Legend::UpperLeft,
         },
     ));
     out

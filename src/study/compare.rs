@@ -5,10 +5,10 @@ use anyhow::{Result, bail};
 use contactlab_solvers::{Observer, Solution};
 use serde::Serialize;
 
-use crate::continuation::LevelCount;
-use crate::discretization::Discretization;
-use crate::run::with_step;
-use crate::scene::Scene;
+use crate::coulomb::continuation::LevelCount;
+use crate::coulomb::driver::with_step;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 
 /// Differences of a solution from a reference, each relative to the
@@ -181,8 +181,8 @@ pub fn compare(
 ) -> Result<Vec<CompareRow>> {
     use contactlab_solvers::{History, Residuals, Silent, Stage};
 
-    use crate::profile::separation_of;
-    use crate::run::{Run, solve_scene};
+    use crate::coulomb::driver::{Run, solve_scene};
+    use crate::mechanics::contact_zone::separation_of;
 
     // Coulomb rows keep their convergence history (for the charts).
     let coulomb_history = || {
@@ -334,7 +334,7 @@ pub fn intervals_text(intervals: &[[f64; 2]]) -> String {
 
 /// The accuracy rows as CSV fields.
 pub fn compare_records(rows: &[CompareRow]) -> Vec<Vec<String>> {
-    use crate::output::fixed;
+    use crate::io::output::fixed;
     rows.iter()
         .map(|r| {
             let a = &r.agreement;

@@ -6,11 +6,13 @@ use contactlab_solvers::registry;
 use contactlab_solvers::{Observer, Residuals};
 use serde::Serialize;
 
-use crate::continuation::{Continuation, LevelCount};
-use crate::discretization::Discretization;
-use crate::friction::{CoulombSolution, GivenFrictionStep, SingleLevel, friction_fixed_point};
-use crate::profile::{ProfileRow, Separation, contact_profile, separation_of};
-use crate::scene::Scene;
+use crate::coulomb::continuation::{Continuation, LevelCount};
+use crate::coulomb::fixed_point::{
+    CoulombSolution, GivenFrictionStep, SingleLevel, friction_fixed_point,
+};
+use crate::mechanics::contact_zone::{ProfileRow, Separation, contact_profile, separation_of};
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 
 /// A solved scene.
@@ -162,7 +164,7 @@ pub struct Summary {
     pub seconds: f64,
     pub seconds_setup: f64,
     pub seconds_solve: f64,
-    pub history: Vec<crate::friction::FrictionIteration>,
+    pub history: Vec<crate::coulomb::fixed_point::FrictionIteration>,
     pub levels: Vec<LevelCount>,
     pub settings: Settings,
 }

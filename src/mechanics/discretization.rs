@@ -4,11 +4,11 @@
 use contactlab_solvers::{ContactNode, GivenFrictionProblem, ProblemError};
 use thiserror::Error;
 
-use crate::assembly;
-use crate::dofs::{ContactDofs, DofMap};
-use crate::mesh::{Body, Mesh};
-use crate::mesh_size::MeshSize;
-use crate::scene::{Scene, SceneError};
+use crate::mechanics::assembly;
+use crate::mechanics::dofs::{ContactDofs, DofMap};
+use crate::mechanics::mesh::{Body, Mesh};
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::{Scene, SceneError};
 
 /// Building a discretization failed.
 #[derive(Debug, Error)]

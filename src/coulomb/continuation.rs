@@ -16,9 +16,9 @@ use contactlab_solvers::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::discretization::Discretization;
-use crate::friction::GivenFrictionStep;
-use crate::mesh_size::MeshSize;
+use crate::coulomb::fixed_point::GivenFrictionStep;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
 
 /// Whether coarse levels are revisited in every friction iteration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]

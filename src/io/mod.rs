@@ -1,0 +1,7 @@
+//! Input and output: scene files, output files written whole, charts and the
+//! manifest of a results directory.
+
+pub mod charts;
+pub mod manifest;
+pub mod output;
+pub mod scene_file;
