@@ -23,7 +23,7 @@ fn bench(c: &mut Criterion) {
         let n = p.n();
         let settings = RelaxationSettings::default();
         let fixture = SweepFixture::new(p, &settings);
-        let (op, data) = (&fixture.op, fixture.data(p, &settings));
+        let (op, data) = (&fixture.op, fixture.data(p));
         let mut v = vec![0.0; n];
         for _ in 0..50 {
             op.sweep(&mut v, &data);

@@ -18,7 +18,14 @@ use crate::study::bench::BenchSpec;
 use crate::study::reproduce::ReproduceSpec;
 use crate::study::stability::StabilitySpec;
 use crate::study::sweep::{Factor, SweepSpec};
-use contactlab_solvers::{Observer, Progress, Smoothing, Stage};
+use contactlab_solvers::{Control, Observer, Progress};
+
+mod scene_args;
+mod settings_args;
+
+use crate::coulomb::fixed_point;
+pub use scene_args::SceneArgs;
+pub use settings_args::{SettingsArgs, knob_flag};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
 /// the semicoercive two-body contact problem with Coulomb friction of
@@ -199,7 +206,11 @@ impl SweepArgs {
             spec.smoothing_values = self
                 .smoothing_values
                 .iter()
-                .map(|s| parse_smoothing(s))
+                .map(|s| {
+                    contactlab_solvers::relaxation::pointwise::parse_smoothing(s)
+                        .and_then(|v| serde_json::from_value(v).map_err(|e| e.to_string()))
+                        .map_err(|m| anyhow::anyhow!("--smoothing-values: {m}"))
+                })
                 .collect::<Result<_>>()?;
         }
         if !(self.time_limit.is_finite() && self.time_limit > 0.0) {
@@ -257,221 +268,6 @@ pub struct Table1Args {
     pub plane: Option<PlaneModel>,
     #[command(flatten)]
     pub settings: SettingsArgs,
-}
-
-/// Which scene, on which mesh, with which material: a built-in problem of the
-/// paper or a scene file, with optional overrides.
-#[derive(Debug, Clone, Args)]
-pub struct SceneArgs {
-    /// The paper's problem: 1 (P''_2 = -60 on the left third of the top side),
-    /// 2 (-120 on the left third) or 3 (-60 on the whole top side).
-    #[arg(
-        long,
-        value_name = "N",
-        required_unless_present = "scene",
-        conflicts_with = "scene"
-    )]
-    pub problem: Option<u32>,
-    /// A scene file (TOML) instead of a built-in problem.
-    #[arg(long, value_name = "FILE")]
-    pub scene: Option<PathBuf>,
-    /// Finest mesh size h = 1/2^k in the paper's notation (e.g. 1/64); the
-    /// continuation levels run 1/8, 1/16, ..., h. Default: the scene's levels
-    /// (the paper's 1/8 to 1/64).
-    #[arg(long, value_name = "1/2^k")]
-    pub h: Option<MeshSize>,
-    /// Young's modulus E (default 73e3).
-    #[arg(long, value_name = "E", allow_hyphen_values = true)]
-    pub young: Option<f64>,
-    /// Poisson's ratio ν, in (-1, 0.5) (default 0.34).
-    #[arg(long, value_name = "NU", allow_hyphen_values = true)]
-    pub poisson: Option<f64>,
-    /// Plane strain or plane stress (default strain; the paper does not say).
-    #[arg(long, value_enum)]
-    pub plane: Option<PlaneModel>,
-    /// Coulomb friction coefficient 𝓕 ≥ 0 (default 0.5; 0 is frictionless).
-    #[arg(long, value_name = "F", allow_hyphen_values = true)]
-    pub friction: Option<f64>,
-}
-
-impl SceneArgs {
-    /// The scene with the overrides applied, validated (condition (13) included).
-    pub fn resolve(&self) -> Result<Scene> {
-        Ok(self.load()?.0)
-    }
-
-    /// The scene and the settings it brings (a scene file's sections, else
-    /// the defaults), with the scene overrides applied and validated.
-    pub fn load(&self) -> Result<(Scene, Settings)> {
-        let (mut scene, settings) = match (&self.scene, self.problem) {
-            (Some(path), _) => crate::io::scene_file::load(path)?,
-            (None, Some(n)) => (Scene::paper_problem(n)?, Settings::default()),
-            (None, None) => anyhow::bail!("give --problem N or --scene FILE"),
-        };
-        if let Some(h) = self.h {
-            scene.set_finest(h);
-        }
-        if let Some(e) = self.young {
-            scene.material.young = e;
-        }
-        if let Some(nu) = self.poisson {
-            scene.material.poisson = nu;
-        }
-        if let Some(p) = self.plane {
-            scene.material.plane = p;
-        }
-        if let Some(f) = self.friction {
-            scene.friction = f;
-        }
-        scene.validate()?;
-        Ok((scene, settings))
-    }
-}
-
-/// Where a settings field is set on the command line, for error messages.
-const FLAGS: [(&str, &str); 13] = [
-    ("coulomb.epsilon", "--epsilon"),
-    ("coulomb.max_iterations", "--max-friction-iterations"),
-    ("relaxation.r", "--r"),
-    ("relaxation.epsilon", "--epsilon"),
-    ("relaxation.sweep_factor", "--sweep-factor"),
-    ("relaxation.proximal", "--proximal"),
-    ("relaxation.smoothing.huber.delta", "--smoothing"),
-    ("relaxation.max_uzawa", "--max-uzawa"),
-    ("relaxation.max_sweeps", "--max-sweeps"),
-    ("relaxation.time_limit", "--time-limit"),
-    ("clarabel.tol_", "--clarabel-tol"),
-    ("clarabel.max_iter", "--clarabel-max-iter"),
-    ("clarabel.time_limit", "--time-limit"),
-];
-
-/// Adds the command-line flag to a message that starts with a settings field.
-fn with_flag(message: String) -> String {
-    for (field, flag) in FLAGS {
-        if message.starts_with(field)
-            && let Some((name, rest)) = message.split_once(' ')
-        {
-            return format!("{name} ({flag}) {rest}");
-        }
-    }
-    message
-}
-
-/// Solver and fixed-point settings, as overrides of the defaults (the
-/// paper's values) or of a scene file's settings.
-#[derive(Debug, Clone, Default, Args)]
-pub struct SettingsArgs {
-    /// The paper's ε, for every loop that uses it: the friction fixed point
-    /// stops when max|Δg| ≤ ε, Uzawa when max|Δl| ≤ ε, relaxation sweeps when
-    /// max|Δv| ≤ 1e-4·ε·h_finest (default 1e-4).
-    #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
-    pub epsilon: Option<f64>,
-    /// Cap on friction iterations (default 50).
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
-    pub max_friction_iterations: Option<usize>,
-    /// Clarabel: gap and feasibility tolerance, sets tol_gap_abs, tol_gap_rel
-    /// and tol_feas (default 1e-10).
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
-    pub clarabel_tol: Option<f64>,
-    /// Clarabel: interior-point iteration cap (default 200).
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
-    pub clarabel_max_iter: Option<u32>,
-    /// Clarabel: turn its Ruiz equilibration off.
-    #[arg(long)]
-    pub clarabel_no_equilibrate: bool,
-    /// Clarabel: solve in the raw unknowns instead of σ·v (σ = max A_ii).
-    #[arg(long)]
-    pub clarabel_no_scaling: bool,
-    /// Clarabel: print its own iteration log (to stdout).
-    #[arg(long)]
-    pub clarabel_verbose: bool,
-    /// Relaxation: penalty r of the modified Lagrangian (default 1e12).
-    #[arg(long, value_name = "R", allow_hyphen_values = true)]
-    pub r: Option<f64>,
-    /// Relaxation: proximal weight ρ of (ρ/2)‖v − v^k‖²_L2 (default 1, the
-    /// paper; 0 turns the proximal regularization off).
-    #[arg(long, value_name = "RHO", allow_hyphen_values = true)]
-    pub proximal: Option<f64>,
-    /// Relaxation: treatment of |s| along slip coordinates: `exact` (soft
-    /// thresholding) or a Huber width δ such as `1e-10` (default 1e-10).
-    #[arg(long, value_name = "exact|DELTA")]
-    pub smoothing: Option<String>,
-    /// Relaxation: sweep threshold factor: sweeps stop when
-    /// max|Δv| ≤ factor·ε·h_finest (default 1e-4, the paper).
-    #[arg(long, value_name = "F", allow_hyphen_values = true)]
-    pub sweep_factor: Option<f64>,
-    /// Relaxation: cap on Uzawa iterations per given-friction solve (default 1000).
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
-    pub max_uzawa: Option<usize>,
-    /// Relaxation: cap on sweeps per Uzawa iteration (default 2000000).
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
-    pub max_sweeps: Option<usize>,
-    /// Mesh continuation schedule: revisit the coarse levels in every
-    /// friction iteration, or only in the first (default revisit).
-    #[arg(long, value_enum)]
-    pub schedule: Option<Schedule>,
-}
-
-impl SettingsArgs {
-    /// Applies the given flags on top of `settings`.
-    pub fn apply(&self, settings: &mut Settings) {
-        if let Some(e) = self.epsilon {
-            settings.coulomb.epsilon = e;
-            settings.solver.relaxation.epsilon = e;
-        }
-        let rx = &mut settings.solver.relaxation;
-        if let Some(r) = self.r {
-            rx.r = r;
-        }
-        if let Some(p) = self.proximal {
-            rx.proximal = p;
-        }
-        if let Some(f) = self.sweep_factor {
-            rx.sweep_factor = f;
-        }
-        if let Some(n) = self.max_uzawa {
-            rx.max_uzawa = n;
-        }
-        if let Some(n) = self.max_sweeps {
-            rx.max_sweeps = n;
-        }
-        if let Some(s) = self.schedule {
-            settings.schedule = s;
-        }
-        if let Some(n) = self.max_friction_iterations {
-            settings.coulomb.max_iterations = n;
-        }
-        let c = &mut settings.solver.clarabel;
-        if let Some(t) = self.clarabel_tol {
-            c.tol_gap_abs = t;
-            c.tol_gap_rel = t;
-            c.tol_feas = t;
-        }
-        if let Some(n) = self.clarabel_max_iter {
-            c.max_iter = n;
-        }
-        c.equilibrate &= !self.clarabel_no_equilibrate;
-        c.scale_unknowns &= !self.clarabel_no_scaling;
-        c.verbose |= self.clarabel_verbose;
-    }
-
-    /// Default settings with these flags applied, validated.
-    pub fn resolve(&self) -> Result<Settings> {
-        self.resolve_on(Settings::default())
-    }
-
-    /// `base` (e.g. a scene file's settings) with these flags applied, validated.
-    pub fn resolve_on(&self, base: Settings) -> Result<Settings> {
-        let mut settings = base;
-        self.apply(&mut settings);
-        if let Some(text) = &self.smoothing {
-            settings.solver.relaxation.smoothing = parse_smoothing(text)?;
-        }
-        settings
-            .validate()
-            .map_err(|m| anyhow::Error::msg(with_flag(m)))?;
-        Ok(settings)
-    }
 }
 
 #[derive(Debug, Args)]
@@ -537,34 +333,22 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// `exact` or a Huber width.
-fn parse_smoothing(text: &str) -> Result<Smoothing> {
-    if text.trim().eq_ignore_ascii_case("exact") {
-        return Ok(Smoothing::Exact);
-    }
-    match text.trim().parse::<f64>() {
-        Ok(delta) if delta.is_finite() && delta > 0.0 => Ok(Smoothing::Huber { delta }),
-        _ => anyhow::bail!(
-            "--smoothing = '{text}' is invalid: give `exact` or a positive Huber width such as 1e-10"
-        ),
-    }
-}
-
 /// Logs the friction loop to stderr.
 pub struct LogObserver;
 
 impl Observer for LogObserver {
-    fn observe(&mut self, p: &Progress) {
-        if p.stage == Stage::Friction {
+    fn observe(&mut self, p: &Progress) -> Control {
+        if p.stage == fixed_point::STAGE {
             eprintln!(
                 "friction iteration {:>3}: max|Δg| = {:.3e}  ({:.2} s)",
                 p.iteration, p.residual, p.seconds
             );
         }
+        Control::Continue
     }
 
-    fn wants(&self, stage: Stage) -> bool {
-        stage == Stage::Friction
+    fn wants(&self, stage: &str) -> bool {
+        stage == fixed_point::STAGE
     }
 }
 
@@ -601,10 +385,17 @@ fn solve(args: &SolveArgs) -> Result<()> {
             dir.join("summary.json").display()
         );
     }
-    if !run.coulomb.status.is_converged() {
+    if run.status == contactlab_solvers::Status::Inaccurate {
+        anyhow::bail!(
+            "the answer is inaccurate: {} claims convergence but the certificate {}",
+            run.solver,
+            run.certificate.summary()
+        );
+    }
+    if !run.status.is_converged() {
         anyhow::bail!(
             "the solve did not converge: {} ({})",
-            run.coulomb.status,
+            run.status,
             run.coulomb.detail
         );
     }
@@ -889,7 +680,10 @@ fn print_summary(s: &crate::coulomb::driver::Summary) {
         "{}, h = {}, solver {}, plane {}, friction coefficient {}",
         s.problem, s.h, s.solver, s.plane, s.friction_coefficient
     );
-    println!("status              {} ({})", s.status, s.detail);
+    println!(
+        "status              {} (solver's claim: {}; {})",
+        s.status, s.solver_status, s.detail
+    );
     println!("friction iterations {}", s.friction_iterations);
     println!(
         "separated           {} = {:.2}% of Γ_K (jump < -{:.1e})",
@@ -907,13 +701,7 @@ fn print_summary(s: &crate::coulomb::driver::Summary) {
         s.total_contact_force, s.total_applied_load
     );
     println!("objective           {:.10e}", s.objective);
-    println!(
-        "KKT residual        {:.2e} (stationarity {:.1e}, natural map {:.1e}, complementarity {:.1e})",
-        s.residuals.kkt(),
-        s.residuals.stationarity,
-        s.residuals.natural_map,
-        s.residuals.complementarity
-    );
+    println!("certificate         {}", s.certificate_summary);
     println!(
         "iterations          {} outer, {} inner",
         s.iterations_outer, s.iterations_inner
@@ -956,6 +744,11 @@ fn info(args: &InfoArgs) -> Result<()> {
     );
     println!(
         "dim ker A          {kernel} (measured: Cholesky pivots below {KERNEL_PIVOT_TOL:e}·max diag)"
+    );
+    let sc = p.scales();
+    println!(
+        "scales             load F = {:.6e}, length L = {:.6e}, stiffness K = {:.6e}, pressure P = {:.6e}, displacement U = {:.6e}",
+        sc.force, sc.length, sc.stiffness, sc.pressure, sc.displacement
     );
     Ok(())
 }

@@ -12,6 +12,7 @@
 //!
 //! The solvers of the algebraic subproblem live in `contactlab-solvers`.
 
+pub mod certificate;
 pub mod cli;
 pub mod coulomb;
 pub mod io;

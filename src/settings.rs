@@ -1,36 +1,278 @@
-//! All settings of a computation, with the paper's values as defaults; built
-//! by serde from scene files and overridden by CLI flags.
+//! All settings of a computation: the stopping mode, the continuation
+//! schedule, the certificate's tolerance, and changes to the defaults of the
+//! Coulomb fixed point and of every registered solver, by path
+//! (`coulomb.epsilon`, `relaxation.r`, `clarabel.tol`). The defaults depend on
+//! the stopping mode (relative, or the paper's absolute values), so only the
+//! changes are stored and every setting is resolved when it is used. Paths are
+//! checked against the registry: the harness never names a solver.
 
-use contactlab_solvers::registry::SolverSettings;
+use std::collections::BTreeMap;
+
+use contactlab_solvers::registry::{self, Entry};
+use contactlab_solvers::settings::{Stopping, from_tree, to_tree};
+use contactlab_solvers::{Law, Solver};
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 
+use crate::certificate::DEFAULT_TOLERANCE;
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point::CoulombSettings;
 
-/// Settings of the Coulomb fixed point and of every registered solver.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// The certificate's settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct Settings {
-    pub coulomb: CoulombSettings,
-    /// Mesh continuation schedule for solvers that warm-start.
-    pub schedule: Schedule,
-    pub solver: SolverSettings,
+pub struct CertificateSettings {
+    /// Largest violation of any condition (dimensionless, in the problem's
+    /// scales) that still certifies a solution.
+    pub tolerance: f64,
 }
 
-impl Default for Settings {
+impl Default for CertificateSettings {
     fn default() -> Self {
         Self {
-            coulomb: CoulombSettings::default(),
-            schedule: Schedule::Revisit,
-            solver: SolverSettings::default(),
+            tolerance: DEFAULT_TOLERANCE,
         }
     }
 }
 
+/// Settings of one computation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Settings {
+    pub stopping: Stopping,
+    /// Mesh continuation schedule for solvers that warm-start.
+    pub schedule: Schedule,
+    pub certificate: CertificateSettings,
+    /// Changes to the defaults, by path (one settings field each).
+    overrides: BTreeMap<String, Value>,
+}
+
+/// The prefix of the Coulomb fixed point's settings.
+pub const COULOMB: &str = "coulomb";
+
 impl Settings {
-    /// Checks every field; the message names it and says what is valid.
+    /// The paper's absolute rules and values everywhere.
+    pub fn paper() -> Self {
+        Self {
+            stopping: Stopping::Paper,
+            ..Self::default()
+        }
+    }
+
+    /// Sets `path` (`coulomb.FIELD`, or `SOLVER.KNOB` / `SOLVER.FIELD` of a
+    /// registered solver) to `value`. A knob that stands for several fields
+    /// sets them all. Unknown paths are errors that list what exists.
+    pub fn set(&mut self, path: &str, value: Value) -> Result<(), String> {
+        let (owner, key) = path.split_once('.').ok_or_else(|| {
+            format!(
+                "setting '{path}': write it as OWNER.NAME, e.g. coulomb.epsilon or relaxation.r"
+            )
+        })?;
+        let defaults = self.defaults_of(owner).ok_or_else(|| {
+            format!(
+                "setting '{path}': '{owner}' is neither `coulomb` nor a registered solver ({})",
+                registry::names().join(", ")
+            )
+        })?;
+        let fields: Vec<&str> = match registry::by_name(owner).and_then(|e| e.knob(key)) {
+            Some(knob) => knob.fields.to_vec(),
+            None => vec![key],
+        };
+        let before = self.overrides.clone();
+        for field in fields {
+            if defaults.get(field).is_none() {
+                let known: Vec<String> = defaults
+                    .as_object()
+                    .map(|o| o.keys().cloned().collect())
+                    .unwrap_or_default();
+                return Err(format!(
+                    "setting '{path}': {owner} has no setting '{key}' (its settings: {})",
+                    known.join(", ")
+                ));
+            }
+            self.overrides
+                .insert(format!("{owner}.{field}"), value.clone());
+        }
+        // Check now, so that a wrong type or range is blamed on this setting.
+        let check = if owner == COULOMB {
+            self.coulomb().map(|_| ())
+        } else {
+            let entry = registry::by_name(owner).expect("checked above");
+            self.build(entry).map(|_| ())
+        };
+        if let Err(message) = check {
+            self.overrides = before;
+            return Err(if message.starts_with(path) {
+                message
+            } else {
+                format!(
+                    "{path} = {value} is invalid: {}",
+                    strip_owner(owner, &message)
+                )
+            });
+        }
+        Ok(())
+    }
+
+    /// Sets the paper's one ε "for every loop that uses it": the fixed
+    /// point's, and every registered solver's knob named `epsilon`.
+    pub fn set_epsilon(&mut self, epsilon: f64) -> Result<(), String> {
+        self.set("coulomb.epsilon", Value::from(epsilon))?;
+        for e in registry::SOLVERS {
+            if e.knob("epsilon").is_some() {
+                self.set(&format!("{}.epsilon", e.name), Value::from(epsilon))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The value at `path` after the changes (None: no such setting).
+    pub fn get(&self, path: &str) -> Option<Value> {
+        let (owner, field) = path.split_once('.')?;
+        self.tree(owner)?.get(field).cloned()
+    }
+
+    /// The changes, by path.
+    pub fn overrides(&self) -> &BTreeMap<String, Value> {
+        &self.overrides
+    }
+
+    fn defaults_of(&self, owner: &str) -> Option<Value> {
+        if owner == COULOMB {
+            Some(to_tree(&CoulombSettings::defaults(self.stopping)))
+        } else {
+            registry::by_name(owner).map(|e| (e.defaults)(self.stopping))
+        }
+    }
+
+    /// The settings tree of `owner` with the changes applied.
+    fn tree(&self, owner: &str) -> Option<Value> {
+        let mut tree = self.defaults_of(owner)?;
+        let prefix = format!("{owner}.");
+        for (path, value) in &self.overrides {
+            if let Some(field) = path.strip_prefix(&prefix) {
+                tree[field] = value.clone();
+            }
+        }
+        Some(tree)
+    }
+
+    /// The fixed point's settings.
+    pub fn coulomb(&self) -> Result<CoulombSettings, String> {
+        from_tree(&self.tree(COULOMB).expect("coulomb has defaults")).map_err(|e| named(COULOMB, e))
+    }
+
+    /// A registered solver's settings tree.
+    pub fn solver_tree(&self, entry: &Entry) -> Value {
+        self.tree(entry.name)
+            .expect("registered solvers have defaults")
+    }
+
+    /// Builds a registered solver with these settings.
+    pub fn build(&self, entry: &Entry) -> Result<Box<dyn Solver>, String> {
+        (entry.build)(&self.solver_tree(entry)).map_err(|e| named(entry.name, e))
+    }
+
+    /// Checks every setting: the fixed point's, each solver's, the certificate's.
     pub fn validate(&self) -> Result<(), String> {
-        self.coulomb.validate()?;
-        self.solver.validate()
+        self.coulomb()?;
+        for e in registry::SOLVERS {
+            self.build(e)?;
+        }
+        let t = self.certificate.tolerance;
+        if !(t.is_finite() && t > 0.0) {
+            return Err(format!(
+                "certificate.tolerance = {t} is invalid: it must be a positive number (default {DEFAULT_TOLERANCE:e})"
+            ));
+        }
+        Ok(())
+    }
+
+    /// Every setting, resolved, as one tree (for summaries and manifests).
+    pub fn resolved(&self) -> Value {
+        let mut solvers = serde_json::Map::new();
+        for e in registry::SOLVERS {
+            let mut tree = self.solver_tree(e);
+            if let Some(o) = tree.as_object_mut() {
+                o.insert(
+                    "laws".into(),
+                    Value::from(e.laws.iter().map(|l| l.as_str()).collect::<Vec<_>>()),
+                );
+            }
+            solvers.insert(e.name.into(), tree);
+        }
+        serde_json::json!({
+            "stopping": self.stopping,
+            "schedule": self.schedule,
+            "certificate": self.certificate,
+            "coulomb": self.tree(COULOMB),
+            "solvers": solvers,
+            "changed": self.overrides,
+        })
+    }
+}
+
+/// Whether a solver needs the successive approximations around it to solve
+/// the Coulomb problem.
+pub fn needs_fixed_point(entry: &Entry) -> bool {
+    !entry.solves(Law::Coulomb)
+}
+
+fn strip_owner<'a>(owner: &str, message: &'a str) -> &'a str {
+    message
+        .strip_prefix(owner)
+        .and_then(|m| m.strip_prefix(": "))
+        .unwrap_or(message)
+}
+
+/// Prefixes a settings error with its owner unless it already names a field.
+fn named(owner: &str, message: String) -> String {
+    if message.starts_with(&format!("{owner}.")) {
+        message
+    } else {
+        format!("{owner}: {message}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_are_checked_against_the_registry() {
+        let mut s = Settings::default();
+        assert!(s.set("coulomb.epsilon", Value::from(1e-8)).is_ok());
+        assert_eq!(s.coulomb().unwrap().epsilon, 1e-8);
+        let e = s.set("nosuch.r", Value::from(1.0)).unwrap_err();
+        assert!(e.contains("registered solver"), "{e}");
+        let e = s.set("coulomb.nosuch", Value::from(1.0)).unwrap_err();
+        assert!(e.contains("its settings"), "{e}");
+        assert!(s.set("epsilon", Value::from(1.0)).is_err());
+    }
+
+    #[test]
+    fn a_shorthand_knob_sets_every_field_it_names() {
+        let mut s = Settings::default();
+        for e in registry::SOLVERS {
+            for k in e.knobs.iter().filter(|k| k.fields.len() > 1) {
+                s.set(&format!("{}.{}", e.name, k.name), Value::from(1e-7))
+                    .unwrap();
+                for f in k.fields {
+                    assert_eq!(s.get(&format!("{}.{f}", e.name)), Some(Value::from(1e-7)));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn defaults_follow_the_stopping_mode_and_changes_survive_it() {
+        let mut s = Settings::default();
+        s.set("coulomb.max_iterations", Value::from(7u64)).unwrap();
+        let relative = s.coulomb().unwrap();
+        s.stopping = Stopping::Paper;
+        let paper = s.coulomb().unwrap();
+        assert_eq!(paper.epsilon, 1e-4, "the paper's ε");
+        assert_ne!(relative.epsilon, paper.epsilon);
+        assert_eq!(paper.max_iterations, 7);
+        s.validate().unwrap();
     }
 }

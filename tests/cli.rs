@@ -63,12 +63,16 @@ fn solve_writes_the_documented_profile_and_summary() {
         "total_contact_force",
         "total_applied_load",
         "objective",
-        "residuals",
+        "certificate",
+        "solver_status",
+        "outcome",
         "seconds",
     ] {
         assert!(summary.get(key).is_some(), "summary.json lacks {key}");
     }
     assert_eq!(summary["status"], "converged");
+    assert_eq!(summary["solver_status"], "converged");
+    assert_eq!(summary["certificate"]["law"], "coulomb");
     assert_eq!(summary["h"], "1/8");
     // No temporary files are left behind.
     let names: Vec<String> = std::fs::read_dir(&out)

@@ -1,21 +1,21 @@
-//! The conic oracle: KKT by the solver-independent residuals, equilibrium,
-//! the frictionless limit, the contact zones, and closed-form answers.
+//! The conic oracle: certified by the solver-independent certificate,
+//! equilibrium, the frictionless limit, the contact zones, and closed-form
+//! answers.
 
+use contactlab::certificate::{Condition, certify};
 use contactlab::coulomb::driver::{Run, solve_scene};
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{
-    ConicSettings, ConicSolver, ContactNode, GivenFrictionProblem, GivenFrictionSolver, Residuals,
-    Silent,
+    ConicSettings, ConicSolver, ContactNode, ContactProblem, Law, Silent, Solver, Status,
 };
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
-/// The oracle's accuracy claim in the solver-independent KKT measure at its
-/// default tolerance (1e-10): the relaxation tests compare pressures to 1e-4
-/// and displacements to 1e-6, so the oracle must be well inside those.
-const ORACLE_KKT: f64 = 1e-6;
+/// The oracle's accuracy in the certificate's measure at its default
+/// tolerance (1e-10), on the problem written in its own scales.
+const ORACLE_CERTIFICATE: f64 = 1e-6;
 
 fn solve(problem: u32, k: u32, friction: f64) -> Run {
     let mut scene = Scene::paper_problem(problem).unwrap();
@@ -25,15 +25,16 @@ fn solve(problem: u32, k: u32, friction: f64) -> Run {
 }
 
 #[test]
-fn kkt_residuals_vanish_for_every_problem_with_and_without_friction() {
+fn the_coulomb_law_holds_for_every_problem_with_and_without_friction() {
     for problem in [1, 2, 3] {
         for friction in [0.0, 0.5] {
             let run = solve(problem, 4, friction);
-            assert!(run.coulomb.status.is_converged(), "{}", run.coulomb.detail);
-            let r = run.residuals;
+            assert_eq!(run.status, Status::Converged, "{}", run.coulomb.detail);
+            let c = run.certificate;
+            assert_eq!(c.law, Law::Coulomb);
             assert!(
-                r.kkt() < ORACLE_KKT,
-                "problem {problem}, 𝓕 = {friction}: {r:?}"
+                c.residual() < ORACLE_CERTIFICATE,
+                "problem {problem}, 𝓕 = {friction}: {c:?}"
             );
         }
     }
@@ -114,13 +115,13 @@ fn friction_narrows_the_separation_zone() {
 }
 
 /// A 2-unknown given-friction problem: v = (t, s), A = [[a, b], [b, c]].
-fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> GivenFrictionProblem {
+fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> ContactProblem {
     let mut coo = CooMatrix::new(2, 2);
     for (i, j, v) in [(0, 0, a), (0, 1, b), (1, 0, b), (1, 1, c)] {
         coo.push(i, j, v);
     }
     let id = CsrMatrix::identity(2);
-    GivenFrictionProblem::new(
+    ContactProblem::new(
         CsrMatrix::from(&coo),
         f.to_vec(),
         id,
@@ -129,16 +130,26 @@ fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> GivenFri
             s: 1,
             weight: w,
             g,
+            coefficient: 0.0,
         }],
+        vec![],
     )
     .unwrap()
 }
 
-fn oracle(p: &GivenFrictionProblem) -> (Vec<f64>, f64, f64) {
-    let s = ConicSolver::new(ConicSettings::default()).solve(p, None, &mut Silent);
+fn oracle(p: &ContactProblem) -> (Vec<f64>, f64, f64) {
+    let s =
+        ConicSolver::new(ConicSettings::default()).solve(p, Law::GivenFriction, None, &mut Silent);
     assert!(s.status.is_converged(), "{}", s.detail);
-    let r = Residuals::compute(p, &s.v, &s.pressure, &s.friction_traction);
-    assert!(r.kkt() < 1e-7, "{r:?} v = {:?}", s.v);
+    let r = certify(
+        p,
+        Law::GivenFriction,
+        &s.v,
+        &s.pressure,
+        &s.friction_traction,
+        1e-7,
+    );
+    assert!(r.passed(), "{r:?} v = {:?}", s.v);
     (s.v, s.pressure[0], s.friction_traction[0])
 }
 
@@ -178,21 +189,89 @@ fn closed_form_two_unknown_problems_in_each_regime() {
 }
 
 #[test]
-fn residuals_detect_each_kind_of_violation() {
+fn the_certificate_detects_each_kind_of_violation() {
     let problem = two_unknowns(4.0, 1.0, 3.0, [2.0, 2.5], 0.5, 2.0);
     let s = (2.5 - 1.0) / 3.0;
     let exact = (vec![0.0, s], vec![(2.0 - s) / 0.5], vec![-2.0]);
-    let r = Residuals::compute(&problem, &exact.0, &exact.1, &exact.2);
-    assert!(r.kkt() < 1e-14, "{r:?}");
-    let bad = |v: Vec<f64>, p: f64, q: f64| Residuals::compute(&problem, &v, &[p], &[q]);
-    assert!(bad(vec![0.1, s], exact.1[0], -2.0).primal > 0.01);
-    assert!(bad(vec![0.0, s], -1.0, -2.0).dual > 0.01);
-    assert!(bad(vec![-0.1, s], exact.1[0], -2.0).complementarity > 0.01);
-    assert!(bad(vec![0.0, s], exact.1[0], -2.5).cone > 0.01);
-    assert!(bad(vec![0.0, s], exact.1[0], 2.0).slip > 0.01); // traction with the slip
-    assert!(bad(vec![0.0, s], exact.1[0] * 1.1, -2.0).stationarity > 0.01);
-    assert!(bad(vec![0.0, s], exact.1[0], -1.0).natural_map > 0.01); // slipping below the bound
-    assert!(bad(vec![f64::NAN, s], exact.1[0], -2.0).kkt().is_infinite());
+    let c = certify(
+        &problem,
+        Law::GivenFriction,
+        &exact.0,
+        &exact.1,
+        &exact.2,
+        1e-12,
+    );
+    assert!(c.residual() < 1e-14, "{c:?}");
+    let bad = |v: Vec<f64>, p: f64, q: f64, condition: Condition| {
+        let c = certify(&problem, Law::GivenFriction, &v, &[p], &[q], 1e-6);
+        assert!(!c.passed(), "{condition:?} not detected: {c:?}");
+        assert!(c.get(condition) > 1e-3, "{condition:?}: {c:?}");
+        assert!(c.failing().contains(&condition));
+    };
+    let p = exact.1[0];
+    bad(vec![0.1, s], p, -2.0, Condition::Nonpenetration);
+    bad(vec![0.0, s], -1.0, -2.0, Condition::PressureSign);
+    bad(vec![-0.1, s], p, -2.0, Condition::Complementarity);
+    bad(vec![0.0, s], p, -2.5, Condition::FrictionBound);
+    bad(vec![0.0, s], p, 2.0, Condition::SlipDirection); // traction with the slip
+    bad(vec![0.0, s], p, -1.0, Condition::Stick); // slipping below the bound
+    bad(vec![0.0, s], p * 1.1, -2.0, Condition::Stationarity);
+    let c = certify(
+        &problem,
+        Law::GivenFriction,
+        &[f64::NAN, s],
+        &[p],
+        &[-2.0],
+        1e-6,
+    );
+    assert!(c.residual().is_infinite() && !c.passed());
+    // A claim of convergence that fails becomes `inaccurate`; other claims stand.
+    let c = certify(&problem, Law::GivenFriction, &[0.0, s], &[p], &[-1.0], 1e-6);
+    assert_eq!(c.verdict(Status::Converged), Status::Inaccurate);
+    assert_eq!(c.verdict(Status::MaxIterations), Status::MaxIterations);
+}
+
+#[test]
+fn the_coulomb_certificate_is_taken_at_the_bound_of_the_solutions_own_pressure() {
+    // The closed, slipping solution of the Tresca problem with g = 2 at the
+    // pressure p it produces: it satisfies the Coulomb law for 𝓕 = g/p and
+    // fails it for 𝓕 = 1.25 g/p (there it slips below the bound 𝓕p).
+    let (a, b, c, w, g, ft, fs) = (4.0, 1.0, 3.0, 0.5, 2.0, 2.0, 2.5);
+    let problem = two_unknowns(a, b, c, [ft, fs], w, g);
+    let s = (fs - w * g) / c;
+    let p = (ft - b * s) / w;
+    let (v, q) = (vec![0.0, s], -g);
+    let coulomb = |problem: &ContactProblem| certify(problem, Law::Coulomb, &v, &[p], &[q], 1e-9);
+    let with_coefficient = |f: f64| {
+        let mut contacts = problem.contacts().to_vec();
+        contacts[0].coefficient = f;
+        ContactProblem::new(
+            problem.a().clone(),
+            problem.f().to_vec(),
+            problem.mass().clone(),
+            contacts,
+            vec![],
+        )
+        .unwrap()
+    };
+    assert!(coulomb(&with_coefficient(g / p)).passed());
+    let wrong = coulomb(&with_coefficient(1.25 * g / p));
+    assert!(
+        !wrong.passed() && wrong.failing().contains(&Condition::Stick),
+        "{wrong:?}"
+    );
+    // The given-friction certificate at the problem's own g does not see it.
+    assert!(
+        certify(
+            &with_coefficient(1.25 * g / p),
+            Law::GivenFriction,
+            &v,
+            &[p],
+            &[q],
+            1e-9
+        )
+        .passed()
+    );
 }
 
 #[test]
@@ -204,14 +283,15 @@ fn an_unbounded_problem_is_not_reported_solved() {
     )
     .unwrap();
     let f: Vec<f64> = d.problem.f().iter().map(|x| -x).collect();
-    let p = GivenFrictionProblem::new(
+    let p = ContactProblem::new(
         d.problem.a().clone(),
         f,
         d.problem.mass().clone(),
         d.problem.contacts().to_vec(),
+        d.problem.rigid_modes().to_vec(),
     )
     .unwrap();
-    let s = ConicSolver::default().solve(&p, None, &mut Silent);
+    let s = ConicSolver::default().solve(&p, Law::GivenFriction, None, &mut Silent);
     assert!(
         !s.status.is_converged(),
         "status {:?}: {}",

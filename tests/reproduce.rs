@@ -190,8 +190,9 @@ fn sweep_rows_that_do_not_converge_are_marked_not_dropped() {
     let spec = SweepSpec {
         meshes: vec![MeshSize::from_level(3).unwrap()],
         factors: vec![Factor::R, Factor::Epsilon],
-        r_values: vec![1e-2, 1e12],
-        epsilon_values: vec![1e-4, 1e-15],
+        // Relative values: r in units of K/L, ε of P.
+        r_values: vec![1e-8, 1e7],
+        epsilon_values: vec![1e-6, 1e-15],
         time_limit: 0.5,
         repeats: 0,
         ..SweepSpec::default()
@@ -206,7 +207,7 @@ fn sweep_rows_that_do_not_converge_are_marked_not_dropped() {
             .find(|r| r.factor == factor && r.value == value)
             .unwrap()
     };
-    for (factor, value) in [("r", "1e-2"), ("epsilon", "1e-15")] {
+    for (factor, value) in [("r", "1e-8"), ("epsilon", "1e-15")] {
         let r = row(factor, value);
         assert!(
             !r.converged && r.status != "converged",
@@ -214,7 +215,7 @@ fn sweep_rows_that_do_not_converge_are_marked_not_dropped() {
             r.status
         );
     }
-    for (factor, value) in [("r", "1e12"), ("epsilon", "1e-4")] {
+    for (factor, value) in [("r", "1e7"), ("epsilon", "1e-6")] {
         assert!(row(factor, value).converged);
     }
 }

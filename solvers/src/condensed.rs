@@ -18,7 +18,7 @@ use faer::Mat;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use crate::linalg::{LinalgError, SparseCholesky};
-use crate::problem::GivenFrictionProblem;
+use crate::problem::ContactProblem;
 
 /// The condensed problem and what is needed to go back to all unknowns.
 pub struct Condensed {
@@ -40,7 +40,7 @@ pub struct Condensed {
 
 impl Condensed {
     /// Factors A_II (the unknowns coupled to Γ_K ordered last) and forms S and b̂.
-    pub fn new(problem: &GivenFrictionProblem) -> Result<Self, LinalgError> {
+    pub fn new(problem: &ContactProblem) -> Result<Self, LinalgError> {
         let n = problem.n();
         let contacts = problem.contacts();
         let m2 = 2 * contacts.len();
@@ -136,7 +136,7 @@ impl Condensed {
     }
 
     /// All unknowns v from the contact unknowns y: v_I = A_II⁻¹(f_I − A_IC y).
-    pub fn expand(&self, problem: &GivenFrictionProblem, y: &[f64]) -> Vec<f64> {
+    pub fn expand(&self, problem: &ContactProblem, y: &[f64]) -> Vec<f64> {
         let mut rhs = vec![0.0; self.interior.len()];
         for (k, row) in self.a_ci.iter().enumerate() {
             if y[k] != 0.0 {

@@ -1,4 +1,6 @@
-//! The oracle: the given-friction subproblem as a conic program for Clarabel,
+//! The oracle: the given-friction subproblem as a conic program for Clarabel
+//! (Goulart & Chen, "Clarabel: an interior-point solver for conic programs
+//! with quadratic objectives", 2024),
 //!
 //! ```text
 //! minimize ½ vᵀA v − fᵀv + Σ_i w_i g_i z_i
@@ -9,11 +11,12 @@
 //! The duals are the nodal contact forces: λ_i of the row t_i ≤ 0 and the
 //! tail μ_i of the i-th cone, so p_i = λ_i / w_i and q_i = μ_i / w_i.
 //!
-//! Clarabel's relative tolerances are floored by max(1, ·), and this scene's
-//! objective is of order 1e-3, so unscaled they act as absolute tolerances
-//! and leave the multipliers inaccurate. By default the unknowns are scaled,
-//! x̃ = σ v with σ = max_i A_ii, and the objective is multiplied by σ:
-//! ½ x̃ᵀ(A/σ)x̃ − fᵀx̃ + Σ w_i g_i z̃_i. The duals (the forces) are unchanged.
+//! Clarabel's relative tolerances are floored by max(1, ·), so on data of
+//! any other size they act as absolute ones. By default the problem is
+//! therefore written in its own scales ([`crate::Scales`]): v̂ = v/U and the
+//! objective divided by F·U, i.e. ½ v̂ᵀ(A/K)v̂ − (f/F)ᵀv̂ + Σ (w_i g_i/F) ẑ_i,
+//! whose data are of order one whatever the units; the duals come back as
+//! λ/F.
 
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -24,12 +27,73 @@ use clarabel::solver::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::observer::{Observer, Progress, Stage};
-use crate::problem::GivenFrictionProblem;
+use crate::observer::{Limits, Observer, Progress};
+use crate::problem::ContactProblem;
+use crate::registry::{Accuracy, Entry, Knob, StageInfo};
+use crate::settings::{
+    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{GivenFrictionSolver, Start};
+use crate::solver::{Law, Solver, Start};
+
+/// The registry entry of the conic oracle.
+pub const ENTRY: Entry = Entry {
+    name: "clarabel",
+    about: "conic oracle: interior point (Clarabel) with a second-order cone per contact node",
+    source: "Goulart & Chen (2024), Clarabel; the subproblem is paper (10) as a conic program",
+    laws: &[Law::GivenFriction],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "interior_point",
+        about: "one interior-point iteration; residual max(primal, dual residual, gap)",
+        history: true,
+    }],
+    work_stage: "interior_point",
+    knobs: &[
+        Knob {
+            name: "tol",
+            fields: &["tol_gap_abs", "tol_gap_rel", "tol_feas"],
+            help: "gap and feasibility tolerance (sets tol_gap_abs, tol_gap_rel, tol_feas) [default 1e-10]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "max_iter",
+            fields: &["max_iter"],
+            help: "interior-point iteration cap [default 200]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "equilibrate",
+            fields: &["equilibrate"],
+            help: "Clarabel's Ruiz equilibration of the data (true/false) [default true]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "scale_unknowns",
+            fields: &["scale_unknowns"],
+            help: "write the problem in its own scales, v/U and the objective over F·U (true/false) [default true]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "verbose",
+            fields: &["verbose"],
+            help: "Clarabel's own iteration log, to stdout (true/false) [default false]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |_| to_tree(&ConicSettings::default()),
+    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "tol",
+        values: &[1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
+        reference: 1e-10,
+        exact: true,
+    },
+};
 
 /// Clarabel's settings that matter here; the rest keep Clarabel's defaults.
+/// The same in both stopping modes: its tolerances act on the problem
+/// written in its own scales.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ConicSettings {
@@ -41,11 +105,9 @@ pub struct ConicSettings {
     pub tol_feas: f64,
     /// Interior-point iteration cap.
     pub max_iter: u32,
-    /// Time limit in seconds (infinite by default).
-    pub time_limit: f64,
     /// Clarabel's Ruiz equilibration of the data.
     pub equilibrate: bool,
-    /// Solve for x̃ = σ v (σ = max A_ii) so that the tolerances are relative.
+    /// Solve for v/U with the objective over F·U (the problem's own scales).
     pub scale_unknowns: bool,
     /// Clarabel's own console output.
     pub verbose: bool,
@@ -70,49 +132,42 @@ impl ConicSettings {
             tol_gap_rel: tol,
             tol_feas: tol,
             max_iter: 200,
-            time_limit: f64::INFINITY,
             equilibrate: true,
             scale_unknowns: true,
             verbose: false,
         }
     }
 
-    /// Checks ranges; the message names the field and what is valid.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("tol_gap_abs", self.tol_gap_abs),
-            ("tol_gap_rel", self.tol_gap_rel),
-            ("tol_feas", self.tol_feas),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!(
-                    "clarabel.{name} = {v} is invalid: a tolerance must be a positive number, e.g. 1e-10"
-                ));
-            }
-        }
-        if self.max_iter == 0 {
-            return Err("clarabel.max_iter = 0 is invalid: the iteration cap must be at least 1 (default 200)".into());
-        }
-        if self.time_limit.is_nan() || self.time_limit <= 0.0 {
-            return Err(format!(
-                "clarabel.time_limit = {} is invalid: give a positive number of seconds (default: none)",
-                self.time_limit
-            ));
-        }
-        Ok(())
-    }
-
-    fn clarabel(&self) -> DefaultSettings<f64> {
+    fn clarabel(&self, limits: &Limits) -> DefaultSettings<f64> {
+        let max_iter = limits.work.map_or(self.max_iter, |w| {
+            self.max_iter.min(w.min(u32::MAX as usize) as u32)
+        });
+        let time_limit = limits.deadline.map_or(f64::INFINITY, |d| {
+            d.saturating_duration_since(Instant::now()).as_secs_f64()
+        });
         DefaultSettingsBuilder::default()
             .verbose(self.verbose)
-            .max_iter(self.max_iter)
-            .time_limit(self.time_limit)
+            .max_iter(max_iter)
+            .time_limit(time_limit)
             .tol_gap_abs(self.tol_gap_abs)
             .tol_gap_rel(self.tol_gap_rel)
             .tol_feas(self.tol_feas)
             .equilibrate_enable(self.equilibrate)
             .build()
             .expect("all settings have defaults")
+    }
+}
+
+impl Validate for ConicSettings {
+    fn validate(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("tol_gap_abs", self.tol_gap_abs),
+            ("tol_gap_rel", self.tol_gap_rel),
+            ("tol_feas", self.tol_feas),
+        ] {
+            positive(&format!("clarabel.{name}"), v, "e.g. 1e-10")?;
+        }
+        at_least_one("clarabel.max_iter", self.max_iter as usize, 200)
     }
 }
 
@@ -163,45 +218,46 @@ fn csc_from_triplets(
     CscMatrix::new(nrows, ncols, colptr, rowval, nzval)
 }
 
-impl GivenFrictionSolver for ConicSolver {
-    fn name(&self) -> &'static str {
-        "clarabel"
-    }
-
+impl Solver for ConicSolver {
     fn solve(
         &mut self,
-        problem: &GivenFrictionProblem,
+        problem: &ContactProblem,
+        law: Law,
         _start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if let Err(e) = self.settings.validate() {
-            return Solution::failed(n, m, Status::NotRun, e);
+        if law != Law::GivenFriction {
+            return Solution::failed(
+                n,
+                m,
+                Status::NotRun,
+                "clarabel solves the given-friction subproblem only",
+            );
         }
         let t0 = Instant::now();
-        let sigma = if self.settings.scale_unknowns {
-            let d = problem.a().diagonal_as_csr();
-            d.values()
-                .iter()
-                .fold(0.0f64, |s, x| s.max(x.abs()))
-                .max(f64::MIN_POSITIVE)
+        // v = U v̂; the objective is divided by F·U; forces come back over F.
+        let (force, stiffness) = if self.settings.scale_unknowns {
+            let s = problem.scales();
+            (s.force, s.stiffness)
         } else {
-            1.0
+            (1.0, 1.0)
         };
-        // P: upper triangle of A/σ; the cone variables z_i have no quadratic term.
+        let displacement = force / stiffness;
+        // P: upper triangle of A/K; the cone variables z_i have no quadratic term.
         let (offsets, cols, vals) = problem.a().csr_data();
         let mut p_trip = Vec::with_capacity(vals.len() / 2 + n);
         for j in 0..n {
             for k in offsets[j]..offsets[j + 1] {
                 if cols[k] <= j {
-                    p_trip.push((cols[k], j, vals[k] / sigma));
+                    p_trip.push((cols[k], j, vals[k] / stiffness));
                 }
             }
         }
         let p = csc_from_triplets(n + m, n + m, p_trip);
-        let mut q: Vec<f64> = problem.f().iter().map(|f| -f).collect();
-        q.extend(contacts.iter().map(|c| c.weight * c.g));
+        let mut q: Vec<f64> = problem.f().iter().map(|f| -f / force).collect();
+        q.extend(contacts.iter().map(|c| c.weight * c.g / force));
         // Rows 0..m: t_i + slack = 0 (slack ≥ 0); rows m+2i, m+2i+1: −(z_i, s_i) + slack = 0.
         let mut a_trip = Vec::with_capacity(3 * m);
         for (i, c) in contacts.iter().enumerate() {
@@ -216,8 +272,8 @@ impl GivenFrictionSolver for ConicSolver {
             cones.push(SupportedConeT::NonnegativeConeT(m));
             cones.extend((0..m).map(|_| SupportedConeT::SecondOrderConeT(2)));
         }
-        let mut solver = match DefaultSolver::new(&p, &q, &a, &b, &cones, self.settings.clarabel())
-        {
+        let settings = self.settings.clarabel(&observer.limits());
+        let mut solver = match DefaultSolver::new(&p, &q, &a, &b, &cones, settings) {
             Ok(s) => s,
             Err(e) => {
                 return Solution::failed(
@@ -229,13 +285,13 @@ impl GivenFrictionSolver for ConicSolver {
             }
         };
         let history: Arc<Mutex<Vec<Progress>>> = Arc::default();
-        if observer.wants(Stage::InteriorPoint) {
+        if observer.wants("interior_point") {
             let sink = Arc::clone(&history);
             let started = Instant::now();
             solver.set_termination_callback(move |info: &clarabel::solver::DefaultInfo<f64>| {
                 if let Ok(mut h) = sink.lock() {
                     h.push(Progress {
-                        stage: Stage::InteriorPoint,
+                        stage: "interior_point",
                         iteration: info.iterations as usize,
                         residual: info
                             .res_primal
@@ -253,21 +309,22 @@ impl GivenFrictionSolver for ConicSolver {
         let solve = t1.elapsed().as_secs_f64();
         if let Ok(h) = history.lock() {
             for event in h.iter() {
-                observer.observe(event);
+                // Clarabel has finished: its budget was passed in its settings.
+                let _ = observer.observe(event);
             }
         }
         let sol = &solver.solution;
         let status = map_status(sol.status);
-        let v: Vec<f64> = sol.x[..n].iter().map(|x| x / sigma).collect();
+        let v: Vec<f64> = sol.x[..n].iter().map(|x| x * displacement).collect();
         let pressure = contacts
             .iter()
             .enumerate()
-            .map(|(i, c)| sol.z[i] / c.weight)
+            .map(|(i, c)| sol.z[i] * force / c.weight)
             .collect();
         let friction_traction = contacts
             .iter()
             .enumerate()
-            .map(|(i, c)| sol.z[m + 2 * i + 1] / c.weight)
+            .map(|(i, c)| sol.z[m + 2 * i + 1] * force / c.weight)
             .collect();
         let mut out = Solution {
             v,

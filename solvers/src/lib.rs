@@ -1,7 +1,8 @@
-//! Pure optimization solvers for the algebraic given-friction (Tresca)
-//! contact subproblem of contactlab. They know matrices and index sets, never
-//! meshes: the mechanics crate builds a [`GivenFrictionProblem`] and every
-//! solver here takes it and returns the same [`Solution`] type.
+//! Pure optimization solvers for the algebraic contact problem of
+//! contactlab. They know matrices and index sets, never meshes: the mechanics
+//! crate builds a [`ContactProblem`] and every solver here takes it and
+//! returns the same [`Solution`] type. The [`registry`] holds everything the
+//! harness needs to know about each solver.
 
 pub mod condensed;
 pub mod conic;
@@ -11,16 +12,16 @@ pub mod observer;
 pub mod problem;
 pub mod registry;
 pub mod relaxation;
-pub mod residuals;
+pub mod settings;
 pub mod solution;
 pub mod solver;
 
 pub use conic::{ConicSettings, ConicSolver};
 pub use newton::{CondensedNewton, NewtonSettings};
-pub use observer::{History, Observer, Progress, Silent, Stage};
-pub use problem::{ContactNode, GivenFrictionProblem, ProblemError};
+pub use observer::{Control, History, Limits, Observer, Progress, Silent};
+pub use problem::{ContactNode, ContactProblem, ProblemError, Scales};
 pub use relaxation::pointwise::Smoothing;
 pub use relaxation::{ProxUzawa, RelaxationSettings};
-pub use residuals::Residuals;
+pub use settings::Stopping;
 pub use solution::{Iterations, Solution, Status, Timing};
-pub use solver::{GivenFrictionSolver, Start};
+pub use solver::{Law, Solver, Start};

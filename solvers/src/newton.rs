@@ -26,12 +26,60 @@ use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
 use crate::condensed::Condensed;
-use crate::observer::{Observer, Progress, Stage};
-use crate::problem::GivenFrictionProblem;
+use crate::observer::{Control, Observer, Progress};
+use crate::problem::ContactProblem;
+use crate::registry::{Accuracy, Entry, Knob, StageInfo};
+use crate::settings::{
+    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{GivenFrictionSolver, Start};
+use crate::solver::{Law, Solver, Start};
 
-/// Settings of the condensed semismooth Newton solver.
+/// The registry entry of the condensed semismooth Newton solver.
+pub const ENTRY: Entry = Entry {
+    name: "newton",
+    about: "fast exact solver: condensation onto the contact unknowns (sparse Cholesky once), semismooth Newton with line search",
+    source: "Fischer (1992) and Billups (1995) NCP/box functions; De Luca, Facchinei & Kanzow (1996) globalization on the merit ½‖Φ‖²",
+    laws: &[Law::GivenFriction],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "newton",
+        about: "one Newton step; residual max|Φ| / ‖b̂‖∞ (condensed KKT system)",
+        history: true,
+    }],
+    work_stage: "newton",
+    knobs: &[
+        Knob {
+            name: "tolerance",
+            fields: &["tolerance"],
+            help: "stop when max|Φ| ≤ tolerance·‖b̂‖∞ (relative) [default 1e-12]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "max_iter",
+            fields: &["max_iter"],
+            help: "cap on Newton steps per solve [default 200]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "line_search",
+            fields: &["line_search"],
+            help: "Armijo line search on the merit (true/false; false: plain full steps) [default true]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |_| to_tree(&NewtonSettings::default()),
+    build: |tree| Ok(Box::new(CondensedNewton::new(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "tolerance",
+        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+        reference: 1e-13,
+        exact: true,
+    },
+};
+
+/// Settings of the condensed semismooth Newton solver. The same in both
+/// stopping modes: its test is relative to the condensed load already.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct NewtonSettings {
@@ -53,20 +101,10 @@ impl Default for NewtonSettings {
     }
 }
 
-impl NewtonSettings {
-    pub fn validate(&self) -> Result<(), String> {
-        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return Err(format!(
-                "newton.tolerance = {} is invalid: it must be a positive number (default 1e-12)",
-                self.tolerance
-            ));
-        }
-        if self.max_iter == 0 {
-            return Err(
-                "newton.max_iter = 0 is invalid: allow at least 1 Newton step (default 200)".into(),
-            );
-        }
-        Ok(())
+impl Validate for NewtonSettings {
+    fn validate(&self) -> Result<(), String> {
+        positive("newton.tolerance", self.tolerance, "default 1e-12")?;
+        at_least_one("newton.max_iter", self.max_iter, 200)
     }
 }
 
@@ -356,12 +394,19 @@ pub fn semismooth_newton(
         lam = l1;
         mu = m1;
         merit.push(psi);
-        observer.observe(&Progress {
-            stage: Stage::Newton,
+        let control = observer.observe(&Progress {
+            stage: "newton",
             iteration: step,
             residual: residual(&e),
             seconds: t0.elapsed().as_secs_f64(),
         });
+        if let Control::Stop(status) = control {
+            let detail = format!(
+                "stopped by the harness after {step} Newton steps (residual {:.2e})",
+                residual(&e)
+            );
+            return finish(y, lam, mu, status, detail, step, merit);
+        }
     }
     let r = residual(&e);
     if r <= settings.tolerance {
@@ -431,19 +476,24 @@ impl CondensedNewton {
     }
 }
 
-impl GivenFrictionSolver for CondensedNewton {
-    fn name(&self) -> &'static str {
-        "newton"
-    }
-
+impl Solver for CondensedNewton {
     fn solve(
         &mut self,
-        problem: &GivenFrictionProblem,
+        problem: &ContactProblem,
+        law: Law,
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
+        if law != Law::GivenFriction {
+            return Solution::failed(
+                n,
+                m,
+                Status::NotRun,
+                "newton solves the given-friction subproblem only",
+            );
+        }
         if let Err(e) = self.settings.validate() {
             return Solution::failed(n, m, Status::NotRun, e);
         }

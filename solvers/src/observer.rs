@@ -1,78 +1,86 @@
 //! One small hook through which solvers report progress (iteration, residual,
-//! time). The harness turns it into logs, progress bars and convergence
-//! histories; solvers never print.
+//! time) and through which the harness may stop them. Solvers never print.
+//!
+//! Stages are names the solver declares in its registry entry (`sweep`,
+//! `uzawa`, `newton`, ...), so the harness draws and counts them without a
+//! closed list of solvers.
 
-/// Which loop an event comes from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Stage {
-    /// An interior-point iteration (Clarabel); residual: max(primal, dual residual).
-    InteriorPoint,
-    /// An Uzawa iteration of the modified Lagrangian; residual: max|Δl|.
-    Uzawa,
-    /// A pointwise relaxation sweep; residual: max|Δv|.
-    Sweep,
-    /// A Newton step; residual: the natural-map residual.
-    Newton,
-    /// A step of the Coulomb fixed point; residual: max|g^{m+1} − g^m|.
-    Friction,
-}
+use std::time::Instant;
 
-impl Stage {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Stage::InteriorPoint => "interior_point",
-            Stage::Uzawa => "uzawa",
-            Stage::Sweep => "sweep",
-            Stage::Newton => "newton",
-            Stage::Friction => "friction",
-        }
-    }
-}
+use crate::solution::Status;
 
 /// One progress event.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Progress {
-    pub stage: Stage,
+    /// The loop it comes from, as declared in the solver's registry entry.
+    pub stage: &'static str,
     /// 1-based count within the stage (for the current call).
     pub iteration: usize,
+    /// That loop's own residual (see the stage's description).
     pub residual: f64,
     /// Seconds since the reporting solver started.
     pub seconds: f64,
 }
 
+/// The observer's answer to an event.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Control {
+    Continue,
+    /// Stop now and report this status (the harness's budget was reached:
+    /// `MaxIterations` for a work budget, `TimeLimit` for a deadline).
+    Stop(Status),
+}
+
+/// What the harness allows the rest of a solve: solvers that cannot call
+/// back during their iterations (an external library) read these up front.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Limits {
+    /// Iterations of the solver's work stage still allowed.
+    pub work: Option<usize>,
+    /// Wall-clock deadline.
+    pub deadline: Option<Instant>,
+}
+
 /// Receives progress events.
 pub trait Observer {
-    fn observe(&mut self, progress: &Progress);
+    fn observe(&mut self, progress: &Progress) -> Control;
 
-    /// Whether sweep-level events are wanted (they are many; a solver may
+    /// Whether events of this stage are wanted (some are many; a solver may
     /// skip building them otherwise).
-    fn wants(&self, _stage: Stage) -> bool {
+    fn wants(&self, _stage: &str) -> bool {
         true
+    }
+
+    /// The budget left (none by default).
+    fn limits(&self) -> Limits {
+        Limits::default()
     }
 }
 
-/// Ignores everything.
+/// Ignores everything, never stops.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Silent;
 
 impl Observer for Silent {
-    fn observe(&mut self, _: &Progress) {}
+    fn observe(&mut self, _: &Progress) -> Control {
+        Control::Continue
+    }
 
-    fn wants(&self, _: Stage) -> bool {
+    fn wants(&self, _: &str) -> bool {
         false
     }
 }
 
-/// Keeps every event (a convergence history).
+/// Keeps every event of the chosen stages (a convergence history).
 #[derive(Clone, Debug, Default)]
 pub struct History {
     pub events: Vec<Progress>,
     /// Stages to keep; empty keeps all.
-    pub stages: Vec<Stage>,
+    pub stages: Vec<&'static str>,
 }
 
 impl History {
-    pub fn of(stages: &[Stage]) -> Self {
+    pub fn of(stages: &[&'static str]) -> Self {
         Self {
             events: Vec::new(),
             stages: stages.to_vec(),
@@ -81,13 +89,14 @@ impl History {
 }
 
 impl Observer for History {
-    fn observe(&mut self, progress: &Progress) {
+    fn observe(&mut self, progress: &Progress) -> Control {
         if self.wants(progress.stage) {
             self.events.push(*progress);
         }
+        Control::Continue
     }
 
-    fn wants(&self, stage: Stage) -> bool {
+    fn wants(&self, stage: &str) -> bool {
         self.stages.is_empty() || self.stages.contains(&stage)
     }
 }

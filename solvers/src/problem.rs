@@ -1,7 +1,8 @@
-//! The algebraic given-friction (Tresca) subproblem: the one boundary between
-//! the mechanics and the solvers.
+//! The algebraic contact problem: the one boundary between the mechanics and
+//! the solvers. It holds matrices and index sets, never a mesh.
 //!
-//! Discretized paper (10) after the change of variables of section 5:
+//! Discretized paper (10) after the change of variables of section 5, the
+//! given-friction (Tresca) problem
 //!
 //! ```text
 //! minimize  ½ vᵀA v − fᵀv + Σ_i w_i g_i |s_i|   subject to  t_i ≤ 0,
@@ -9,18 +10,23 @@
 //!
 //! where at contact node i, `t_i = v'_2 − v''_2` is the jump [v] and
 //! `s_i = v'_1 − v''_1` the slip, and `w_i` are the trapezoid weights of Γ_K.
-//! A is symmetric positive semidefinite (the upper body keeps a rigid vertical
-//! translation: the problem is semicoercive). The mass matrix M gives the L2
-//! norm of the displacement field in the same variables, for the proximal term
-//! of paper (15).
+//! The Coulomb problem (paper (8)) is the same with g_i = 𝓕_i p_i, p_i the
+//! contact pressure of the solution itself. A is symmetric positive
+//! semidefinite: the upper body keeps a rigid vertical translation (the
+//! problem is semicoercive), given as [`ContactProblem::rigid_modes`]. The
+//! mass matrix M gives the L2 norm of the displacement field in the same
+//! variables, for the proximal term of paper (15).
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use nalgebra_sparse::CsrMatrix;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::linalg::{max_abs, spmv};
+
 /// The unknowns of one contact node of Γ_K.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactNode {
     /// Index of the jump `t_i = v'_2 − v''_2` in the unknown vector.
     pub t: usize,
@@ -28,8 +34,11 @@ pub struct ContactNode {
     pub s: usize,
     /// Trapezoid weight `w_i` (h inside Γ_K, h/2 at its ends).
     pub weight: f64,
-    /// Given friction bound `g_i ≥ 0` per unit length (𝓕 times a pressure).
+    /// Given friction bound `g_i ≥ 0` per unit length (𝓕 times a pressure)
+    /// of the given-friction subproblem.
     pub g: f64,
+    /// Coulomb friction coefficient 𝓕_i ≥ 0 of the Coulomb problem.
+    pub coefficient: f64,
 }
 
 /// A problem that cannot be built as given.
@@ -55,30 +64,97 @@ pub enum ProblemError {
     BadWeight { node: usize, value: f64 },
     #[error("contact node {node}: friction bound g = {value} must be finite and ≥ 0")]
     BadFrictionBound { node: usize, value: f64 },
+    #[error("contact node {node}: friction coefficient {value} must be finite and ≥ 0")]
+    BadCoefficient { node: usize, value: f64 },
     #[error("{what} holds a non-finite value (NaN or infinity)")]
     NonFinite { what: &'static str },
+    #[error(
+        "rigid mode {index} is not in the kernel of A: ‖A z‖∞ = {residual:.1e} > 1e-9·max A_ii·‖z‖∞"
+    )]
+    NotAKernel { index: usize, residual: f64 },
+    #[error("the problem's {what} scale is {value:e}: {why}")]
+    Scale {
+        what: &'static str,
+        value: f64,
+        why: &'static str,
+    },
+}
+
+/// The problem's own scales, from its data alone. Every stopping test of a
+/// solver in relative mode and every measure of the certificate is stated
+/// in them, so that multiplying the loads by a factor, or the stiffness and
+/// the loads together, changes no iteration count and no verdict.
+///
+/// - force F = Σ_i |f_i| (for a traction load: ∫|P| ds, whatever the mesh);
+/// - length L = Σ_i w_i (the length of Γ_K);
+/// - stiffness K = max_i A_ii;
+/// - pressure P = F/L (force per unit length of Γ_K);
+/// - displacement U = F/K.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scales {
+    pub force: f64,
+    pub length: f64,
+    pub stiffness: f64,
+    pub pressure: f64,
+    pub displacement: f64,
+}
+
+impl Scales {
+    fn of(a: &CsrMatrix<f64>, f: &[f64], contacts: &[ContactNode]) -> Result<Self, ProblemError> {
+        let or_one = |x: f64| if x > 0.0 { x } else { 1.0 };
+        let force = or_one(f.iter().map(|x| x.abs()).sum());
+        let length = or_one(contacts.iter().map(|c| c.weight).sum());
+        let stiffness = or_one(max_abs(a.diagonal_as_csr().values()));
+        let scales = Self {
+            force,
+            length,
+            stiffness,
+            pressure: force / length,
+            displacement: force / stiffness,
+        };
+        for (what, value) in [
+            ("force", scales.force),
+            ("stiffness", scales.stiffness),
+            ("pressure", scales.pressure),
+            ("displacement", scales.displacement),
+        ] {
+            if !(value.is_finite() && value.is_normal()) {
+                return Err(ProblemError::Scale {
+                    what,
+                    value,
+                    why: "it over- or underflows in double precision; \
+                          the loads and the stiffness are too far apart in magnitude",
+                });
+            }
+        }
+        Ok(scales)
+    }
 }
 
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
 
-/// The discrete given-friction subproblem. It holds matrices and index sets,
-/// never a mesh.
+/// The discrete contact problem. It holds matrices and index sets, never a
+/// mesh.
 #[derive(Clone, Debug)]
-pub struct GivenFrictionProblem {
+pub struct ContactProblem {
     a: CsrMatrix<f64>,
     f: Vec<f64>,
     mass: CsrMatrix<f64>,
     contacts: Vec<ContactNode>,
+    rigid_modes: Vec<Vec<f64>>,
+    scales: Scales,
     operator_id: u64,
 }
 
-impl GivenFrictionProblem {
-    /// Checks dimensions, symmetry, index sets and finiteness.
+impl ContactProblem {
+    /// Checks dimensions, symmetry, index sets, finiteness, that each rigid
+    /// mode z satisfies A z = 0, and that the scales are representable.
     pub fn new(
         a: CsrMatrix<f64>,
         f: Vec<f64>,
         mass: CsrMatrix<f64>,
         contacts: Vec<ContactNode>,
+        rigid_modes: Vec<Vec<f64>>,
     ) -> Result<Self, ProblemError> {
         let n = a.nrows();
         check_square_symmetric("A", &a, n)?;
@@ -110,12 +186,35 @@ impl GivenFrictionProblem {
                 });
             }
             check_g(node, c.g)?;
+            if !(c.coefficient.is_finite() && c.coefficient >= 0.0) {
+                return Err(ProblemError::BadCoefficient {
+                    node,
+                    value: c.coefficient,
+                });
+            }
+        }
+        let scales = Scales::of(&a, &f, &contacts)?;
+        for (index, z) in rigid_modes.iter().enumerate() {
+            if z.len() != n {
+                return Err(ProblemError::Dimension {
+                    what: "rigid mode",
+                    expected: n,
+                    got: z.len(),
+                });
+            }
+            let residual = max_abs(&spmv(&a, z));
+            let bound = 1e-9 * scales.stiffness * max_abs(z);
+            if residual.is_nan() || residual > bound {
+                return Err(ProblemError::NotAKernel { index, residual });
+            }
         }
         Ok(Self {
             a,
             f,
             mass,
             contacts,
+            rigid_modes,
+            scales,
             operator_id: NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed),
         })
     }
@@ -145,6 +244,18 @@ impl GivenFrictionProblem {
         &self.contacts
     }
 
+    /// A basis of the kernel of A (the rigid motions the constraints must
+    /// hold): here the upper body's vertical translation, +1 on its vertical
+    /// displacements away from Γ_K and −1 on every jump t_i (paper (11)).
+    pub fn rigid_modes(&self) -> &[Vec<f64>] {
+        &self.rigid_modes
+    }
+
+    /// The problem's own scales.
+    pub fn scales(&self) -> &Scales {
+        &self.scales
+    }
+
     /// Identifies A and M: it changes only when a problem is built, not when
     /// the friction bound changes, so solvers may keep factorizations keyed by it.
     pub fn operator_id(&self) -> u64 {
@@ -170,9 +281,14 @@ impl GivenFrictionProblem {
         Ok(())
     }
 
+    /// The friction bounds g_i.
+    pub fn friction_bound(&self) -> Vec<f64> {
+        self.contacts.iter().map(|c| c.g).collect()
+    }
+
     /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i| of paper (10).
     pub fn objective(&self, v: &[f64]) -> f64 {
-        let av = crate::linalg::spmv(&self.a, v);
+        let av = spmv(&self.a, v);
         let quad: f64 = v.iter().zip(&av).map(|(x, y)| x * y).sum::<f64>() * 0.5;
         let lin: f64 = v.iter().zip(&self.f).map(|(x, y)| x * y).sum();
         let fric: f64 = self

@@ -1,9 +1,11 @@
-//! What every solver returns for a given-friction subproblem.
+//! What every solver returns, for the given-friction subproblem and the
+//! Coulomb problem alike.
 
 use serde::{Deserialize, Serialize};
 
-/// How a solver stopped. Only [`Status::Converged`] means its own stopping
-/// test was met at full accuracy; everything else is reported as it is.
+/// How a solve ended. A solver's own [`Status::Converged`] is only its claim:
+/// the harness certifies every answer against the problem and turns a claim
+/// that fails into [`Status::Inaccurate`]. Everything else is reported as it is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Status {
@@ -19,7 +21,8 @@ pub enum Status {
     InsufficientProgress,
     /// The constraints admit no point (should not happen here: v = 0 is feasible).
     Infeasible,
-    /// The objective is unbounded below: the load violates condition (13).
+    /// The solver reports the objective unbounded below (which condition
+    /// (13) excludes: on a problem that satisfies it, a solver failure).
     Unbounded,
     /// A factorization or another numerical step failed.
     NumericalError,
@@ -27,6 +30,9 @@ pub enum Status {
     NonFinite,
     /// The solver was not run (e.g. a problem it cannot take).
     NotRun,
+    /// Never returned by a solver: its claim of convergence failed the
+    /// harness's certificate (the failing condition is named beside it).
+    Inaccurate,
 }
 
 impl Status {
@@ -47,6 +53,7 @@ impl Status {
             Status::NumericalError => "numerical_error",
             Status::NonFinite => "non_finite",
             Status::NotRun => "not_run",
+            Status::Inaccurate => "inaccurate",
         }
     }
 }

@@ -12,7 +12,7 @@
 //!   ones warm-start on the finest level.
 
 use contactlab_solvers::{
-    GivenFrictionSolver, Iterations, Observer, Solution, Start, Status, Timing,
+    ContactProblem, Iterations, Law, Observer, Solution, Solver, Start, Status, Timing,
 };
 use serde::{Deserialize, Serialize};
 
@@ -21,9 +21,12 @@ use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 
 /// Whether coarse levels are revisited in every friction iteration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Schedule {
+    #[default]
     /// All levels in every friction iteration.
     Revisit,
     /// All levels in the first friction iteration, then the finest only.
@@ -53,7 +56,7 @@ pub struct LevelCount {
 /// The given-friction step by mesh continuation over `levels` (coarse to fine).
 pub struct Continuation<'a> {
     levels: Vec<Discretization>,
-    solver: &'a mut dyn GivenFrictionSolver,
+    solver: &'a mut dyn Solver,
     schedule: Schedule,
     last: Option<Solution>,
     pub counts: Vec<LevelCount>,
@@ -62,7 +65,7 @@ pub struct Continuation<'a> {
 impl<'a> Continuation<'a> {
     pub fn new(
         levels: Vec<Discretization>,
-        solver: &'a mut dyn GivenFrictionSolver,
+        solver: &'a mut dyn Solver,
         schedule: Schedule,
     ) -> Self {
         let counts = levels
@@ -91,8 +94,8 @@ impl<'a> Continuation<'a> {
 }
 
 impl GivenFrictionStep for Continuation<'_> {
-    fn contacts(&self) -> usize {
-        self.finest().problem.contacts().len()
+    fn problem(&self) -> &ContactProblem {
+        &self.finest().problem
     }
 
     fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution {
@@ -126,6 +129,7 @@ impl GivenFrictionStep for Continuation<'_> {
             }
             let mut s = self.solver.solve(
                 &level.problem,
+                Law::GivenFriction,
                 Some(Start {
                     v: &v,
                     pressure: &l,

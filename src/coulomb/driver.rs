@@ -1,14 +1,16 @@
-//! Solving a scene with a registered solver: the Coulomb fixed point around
-//! the given-friction solver, then everything a report needs.
+//! Solving a scene with a registered solver: the successive approximations
+//! around a given-friction solver (or a Coulomb solver on its own), then the
+//! certificate at g = 𝓕p and everything a report needs.
 
 use anyhow::{Context, Result, bail};
-use contactlab_solvers::registry;
-use contactlab_solvers::{Observer, Residuals};
+use contactlab_solvers::registry::{self, Entry};
+use contactlab_solvers::{Law, Observer, Status};
 use serde::Serialize;
 
+use crate::certificate::{Certificate, certify};
 use crate::coulomb::continuation::{Continuation, LevelCount};
 use crate::coulomb::fixed_point::{
-    CoulombSolution, GivenFrictionStep, SingleLevel, friction_fixed_point,
+    CoulombSolution, GivenFrictionStep, Outcome, SingleLevel, friction_fixed_point,
 };
 use crate::mechanics::contact_zone::{ProfileRow, Separation, contact_profile, separation_of};
 use crate::mechanics::discretization::Discretization;
@@ -21,8 +23,13 @@ pub struct Run {
     pub solver: &'static str,
     /// The finest level's discretization, with g set to the last bound used.
     pub discretization: Discretization,
+    /// The solver's answer and its own claim (`coulomb.status`).
     pub coulomb: CoulombSolution,
-    pub residuals: Residuals,
+    /// The certificate of the Coulomb law at g = 𝓕p.
+    pub certificate: Certificate,
+    /// The certified status: the claim, or `inaccurate` if a claim of
+    /// convergence fails the certificate.
+    pub status: Status,
     pub profile: Vec<ProfileRow>,
     pub separation: Separation,
     pub objective: f64,
@@ -31,7 +38,7 @@ pub struct Run {
 }
 
 /// Looks up a registered solver or says which exist.
-pub fn solver_entry(name: &str) -> Result<&'static registry::Entry> {
+pub fn solver_entry(name: &str) -> Result<&'static Entry> {
     registry::by_name(name).with_context(|| {
         format!(
             "unknown solver '{name}': the registered solvers are {}",
@@ -50,47 +57,46 @@ pub fn with_step<T>(
     settings: &Settings,
     solver: &str,
     work: impl FnOnce(&mut dyn GivenFrictionStep, &Settings) -> T,
-) -> Result<(
-    T,
-    Discretization,
-    Option<Vec<LevelCount>>,
-    &'static registry::Entry,
-)> {
+) -> Result<(T, Discretization, Option<Vec<LevelCount>>, &'static Entry)> {
     let entry = solver_entry(solver)?;
-    let mut settings = settings.clone();
-    settings.solver.relaxation.h_finest = scene.finest().h();
     if let Err(e) = settings.validate() {
         bail!(e);
     }
-    let mut inner = (entry.build)(&settings.solver);
-    if entry.continuation && scene.levels.len() > 1 {
+    let mut inner = settings.build(entry).map_err(anyhow::Error::msg)?;
+    if entry.warm_starts && scene.levels.len() > 1 {
         let levels = scene
             .levels
             .iter()
             .map(|&h| Discretization::new(scene, h))
             .collect::<Result<Vec<_>, _>>()?;
         let mut step = Continuation::new(levels, inner.as_mut(), settings.schedule);
-        let out = work(&mut step, &settings);
+        let out = work(&mut step, settings);
         Ok((out, step.finest().clone(), Some(step.counts.clone()), entry))
     } else {
         let finest = Discretization::new(scene, scene.finest())?;
         let mut step = SingleLevel::new(finest.problem.clone(), inner.as_mut());
-        let out = work(&mut step, &settings);
+        let out = work(&mut step, settings);
         Ok((out, finest, None, entry))
     }
 }
 
-/// Solves `scene` with the Coulomb fixed point around the named solver: by
-/// mesh continuation over the scene's levels if the solver warm-starts,
-/// otherwise on the finest level.
+/// Solves the Coulomb problem of `scene` with the named solver: directly if
+/// it solves the Coulomb law, otherwise by the successive approximations
+/// around it (by mesh continuation over the scene's levels if the solver
+/// warm-starts, otherwise on the finest level); then certifies the answer.
 pub fn solve_scene(
     scene: &Scene,
     settings: &Settings,
     solver: &str,
     observer: &mut dyn Observer,
 ) -> Result<Run> {
-    let (coulomb, finest, counts, entry) = with_step(scene, settings, solver, |step, s| {
-        friction_fixed_point(step, scene.friction, &s.coulomb, observer)
+    let entry = solver_entry(solver)?;
+    if entry.solves(Law::Coulomb) {
+        return solve_directly(scene, settings, entry, observer);
+    }
+    let coulomb_settings = settings.coulomb().map_err(anyhow::Error::msg)?;
+    let (coulomb, finest, counts, entry) = with_step(scene, settings, solver, |step, _| {
+        friction_fixed_point(step, &coulomb_settings, observer)
     })?;
     let levels = counts.unwrap_or_else(|| {
         let total = coulomb.total_iterations();
@@ -102,28 +108,85 @@ pub fn solve_scene(
             seconds: coulomb.history.iter().map(|h| h.seconds).sum(),
         }]
     });
-    Ok(report(scene.clone(), entry.name, finest, coulomb, levels))
+    Ok(report(
+        scene.clone(),
+        entry.name,
+        finest,
+        coulomb,
+        levels,
+        settings,
+    ))
 }
 
-/// Residuals, profile and separation of a finished fixed point.
+/// A solver of the Coulomb problem itself, on the finest level.
+fn solve_directly(
+    scene: &Scene,
+    settings: &Settings,
+    entry: &'static Entry,
+    observer: &mut dyn Observer,
+) -> Result<Run> {
+    settings.validate().map_err(anyhow::Error::msg)?;
+    let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
+    let finest = Discretization::new(scene, scene.finest())?;
+    let t = std::time::Instant::now();
+    let solution = solver.solve(&finest.problem, Law::Coulomb, None, observer);
+    let seconds = t.elapsed().as_secs_f64();
+    let g: Vec<f64> = finest
+        .problem
+        .contacts()
+        .iter()
+        .zip(&solution.pressure)
+        .map(|(c, p)| c.coefficient * p.max(0.0))
+        .collect();
+    let levels = vec![LevelCount {
+        h: finest.h(),
+        visits: 1,
+        uzawa: solution.iterations.outer,
+        sweeps: solution.iterations.inner,
+        seconds,
+    }];
+    let coulomb = CoulombSolution {
+        g,
+        history: Vec::new(),
+        status: solution.status,
+        outcome: Outcome::Direct,
+        detail: solution.detail.clone(),
+        seconds,
+        solution,
+    };
+    Ok(report(
+        scene.clone(),
+        entry.name,
+        finest,
+        coulomb,
+        levels,
+        settings,
+    ))
+}
+
+/// Certificate, profile and separation of a finished solve.
 pub fn report(
     scene: Scene,
     solver: &'static str,
     mut discretization: Discretization,
     coulomb: CoulombSolution,
     levels: Vec<LevelCount>,
+    settings: &Settings,
 ) -> Run {
     discretization
         .problem
         .set_friction_bound(&coulomb.g)
         .expect("the fixed point keeps g finite and ≥ 0");
     let s = &coulomb.solution;
-    let residuals = Residuals::compute(
+    let certificate = certify(
         &discretization.problem,
+        Law::Coulomb,
         &s.v,
         &s.pressure,
         &s.friction_traction,
+        settings.certificate.tolerance,
     );
+    let status = certificate.verdict(coulomb.status);
     let profile = contact_profile(&discretization, s);
     let separation = separation_of(&discretization, s);
     let objective = discretization.problem.objective(&s.v);
@@ -132,7 +195,8 @@ pub fn report(
         solver,
         discretization,
         coulomb,
-        residuals,
+        certificate,
+        status,
         profile,
         separation,
         objective,
@@ -149,8 +213,18 @@ pub struct Summary {
     pub plane: String,
     pub friction_coefficient: f64,
     pub friction_iterations: usize,
-    pub status: String,
+    /// The certified status: `converged` only if the solver claimed it and
+    /// the certificate passed.
+    pub status: Status,
+    /// The solver's own claim, beside it.
+    pub solver_status: Status,
+    /// How the fixed point ended (`direct` for a Coulomb solver).
+    pub outcome: Outcome,
     pub detail: String,
+    /// Every condition of the Coulomb law at g = 𝓕p, in the problem's scales.
+    pub certificate: Certificate,
+    /// Which condition fails or is worst, in words.
+    pub certificate_summary: String,
     pub separated_intervals: Vec<[f64; 2]>,
     pub separated_fraction: f64,
     pub separation_tolerance: f64,
@@ -158,7 +232,6 @@ pub struct Summary {
     pub total_contact_force: f64,
     pub total_applied_load: f64,
     pub objective: f64,
-    pub residuals: Residuals,
     pub iterations_outer: usize,
     pub iterations_inner: usize,
     pub seconds: f64,
@@ -166,7 +239,8 @@ pub struct Summary {
     pub seconds_solve: f64,
     pub history: Vec<crate::coulomb::fixed_point::FrictionIteration>,
     pub levels: Vec<LevelCount>,
-    pub settings: Settings,
+    /// Every setting, resolved.
+    pub settings: serde_json::Value,
 }
 
 impl Run {
@@ -187,8 +261,12 @@ impl Run {
             plane: self.scene.material.plane.to_string(),
             friction_coefficient: self.scene.friction,
             friction_iterations: self.coulomb.history.len(),
-            status: self.coulomb.status.to_string(),
+            status: self.status,
+            solver_status: self.coulomb.status,
+            outcome: self.coulomb.outcome,
             detail: self.coulomb.detail.clone(),
+            certificate: self.certificate,
+            certificate_summary: self.certificate.summary(),
             separated_intervals: self.separation.intervals.clone(),
             separated_fraction: self.separation.fraction,
             separation_tolerance: self.separation.tolerance,
@@ -196,7 +274,6 @@ impl Run {
             total_contact_force,
             total_applied_load: self.discretization.total_load,
             objective: self.objective,
-            residuals: self.residuals,
             iterations_outer: iterations.outer,
             iterations_inner: iterations.inner,
             seconds: self.coulomb.seconds,
@@ -204,7 +281,7 @@ impl Run {
             seconds_solve: self.coulomb.seconds - setup,
             history: self.coulomb.history.clone(),
             levels: self.levels.clone(),
-            settings: settings.clone(),
+            settings: settings.resolved(),
         }
     }
 }

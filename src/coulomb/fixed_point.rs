@@ -1,21 +1,28 @@
 //! Coulomb friction by successive approximations (MPP), paper (9):
 //! g⁰ = 0, solve the given-friction problem with g^m, set g^{m+1} = 𝓕 p(u^m),
-//! stop when max_i |g^{m+1}_i − g^m_i| ≤ ε. Whether this converges in theory
-//! is an open question (the paper says so), so every step is recorded.
+//! stop when max_i |g^{m+1}_i − g^m_i| is below the tolerance. Whether this
+//! converges in theory is an open question (the paper says so), so every
+//! step is recorded and the way it ended is an [`Outcome`].
 
 use std::time::Instant;
 
+use contactlab_solvers::settings::{Stopping, Validate, at_least_one};
 use contactlab_solvers::{
-    GivenFrictionProblem, GivenFrictionSolver, Iterations, Observer, Progress, Solution, Stage,
-    Start, Status,
+    ContactProblem, Control, Iterations, Law, Observer, Progress, Solution, Solver, Start, Status,
 };
 use serde::{Deserialize, Serialize};
 
-/// Settings of the fixed point; defaults are the paper's (ε = 1e-4).
+/// The stage name of the fixed point's progress events (residual max|Δg|).
+pub const STAGE: &str = "friction";
+
+/// Settings of the fixed point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct CoulombSettings {
-    /// Stop when max_i |g^{m+1}_i − g^m_i| ≤ epsilon.
+    /// How `epsilon` is read (set from the harness's stopping mode).
+    pub stopping: Stopping,
+    /// Stop when max_i |g^{m+1}_i − g^m_i| ≤ ε·𝓕·P (relative: 𝓕 the largest
+    /// coefficient, P the problem's pressure scale) or ≤ ε (paper).
     pub epsilon: f64,
     /// Cap on given-friction solves.
     pub max_iterations: usize,
@@ -26,36 +33,95 @@ pub struct CoulombSettings {
 
 impl Default for CoulombSettings {
     fn default() -> Self {
-        Self {
-            epsilon: 1e-4,
-            max_iterations: 50,
-            stall_window: 5,
-        }
+        Self::defaults(Stopping::Relative)
     }
 }
 
 impl CoulombSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    /// The paper's ε = 1e-4 (absolute), or its relative counterpart 1e-8:
+    /// the fixed point's stopping error, about ε·P·q/(1 − q) in pressure for
+    /// a contraction factor q, stays well below the certificate's default
+    /// tolerance.
+    pub fn defaults(stopping: Stopping) -> Self {
+        Self {
+            stopping,
+            epsilon: match stopping {
+                Stopping::Paper => 1e-4,
+                Stopping::Relative => 1e-8,
+            },
+            max_iterations: 50,
+            stall_window: 5,
+        }
+    }
+
+    /// The threshold on max|Δg| for `problem`.
+    pub fn tolerance(&self, problem: &ContactProblem) -> f64 {
+        match self.stopping {
+            Stopping::Paper => self.epsilon,
+            Stopping::Relative => {
+                let coefficient = problem
+                    .contacts()
+                    .iter()
+                    .fold(0.0f64, |m, c| m.max(c.coefficient));
+                self.epsilon * coefficient * problem.scales().pressure
+            }
+        }
+    }
+}
+
+impl Validate for CoulombSettings {
+    fn validate(&self) -> Result<(), String> {
         if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
             return Err(format!(
-                "coulomb.epsilon = {} is invalid: the friction tolerance must be a positive number (the paper: 1e-4)",
+                "coulomb.epsilon = {} is invalid: the friction tolerance must be a positive number (default 1e-8; the paper: 1e-4)",
                 self.epsilon
             ));
         }
-        if self.max_iterations == 0 {
-            return Err("coulomb.max_iterations = 0 is invalid: allow at least 1 friction iteration (default 50)".into());
-        }
-        Ok(())
+        at_least_one("coulomb.max_iterations", self.max_iterations, 50)
     }
 }
 
 /// One way of solving the given-friction subproblem for a bound g on the
 /// finest level's contact nodes (one level, or mesh continuation).
 pub trait GivenFrictionStep {
-    /// Number of contact nodes of the finest level.
-    fn contacts(&self) -> usize;
+    /// The finest level's problem (its coefficients and scales).
+    fn problem(&self) -> &ContactProblem;
     /// Solves with friction bound `g`.
     fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution;
+}
+
+/// How the fixed point ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// max|Δg| reached the tolerance.
+    Converged,
+    /// max|Δg| did not fall over the stall window.
+    NotContracting,
+    /// The iteration cap came first.
+    IterationCap,
+    /// A given-friction solve did not converge (its status says how).
+    InnerFailed,
+    /// The new bound was not finite.
+    NonFinite,
+    /// The harness stopped it (a budget).
+    Stopped,
+    /// No fixed point: a solver of the Coulomb problem itself.
+    Direct,
+}
+
+impl Outcome {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Converged => "converged",
+            Outcome::NotContracting => "not_contracting",
+            Outcome::IterationCap => "iteration_cap",
+            Outcome::InnerFailed => "inner_failed",
+            Outcome::NonFinite => "non_finite",
+            Outcome::Stopped => "stopped",
+            Outcome::Direct => "direct",
+        }
+    }
 }
 
 /// One step of the fixed point.
@@ -82,7 +148,10 @@ pub struct CoulombSolution {
     /// The bound the last solution was computed with.
     pub g: Vec<f64>,
     pub history: Vec<FrictionIteration>,
+    /// The solver's claim: converged only if every step converged and the
+    /// fixed point reached its tolerance.
     pub status: Status,
+    pub outcome: Outcome,
     pub detail: String,
     pub seconds: f64,
 }
@@ -99,15 +168,22 @@ impl CoulombSolution {
     }
 }
 
-/// Successive approximations (9) with friction coefficient `coefficient`.
+/// Successive approximations (9): g^{m+1}_i = 𝓕_i p_i(u^m) with the
+/// coefficients of the step's problem.
 pub fn friction_fixed_point(
     step: &mut dyn GivenFrictionStep,
-    coefficient: f64,
     settings: &CoulombSettings,
     observer: &mut dyn Observer,
 ) -> CoulombSolution {
     let start = Instant::now();
-    let mut g = vec![0.0; step.contacts()];
+    let tolerance = settings.tolerance(step.problem());
+    let coefficient: Vec<f64> = step
+        .problem()
+        .contacts()
+        .iter()
+        .map(|c| c.coefficient)
+        .collect();
+    let mut g = vec![0.0; coefficient.len()];
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
     for m in 1..=settings.max_iterations {
@@ -116,7 +192,8 @@ pub fn friction_fixed_point(
         let g_next: Vec<f64> = solution
             .pressure
             .iter()
-            .map(|p| coefficient * p.max(0.0))
+            .zip(&coefficient)
+            .map(|(p, f)| f * p.max(0.0))
             .collect();
         let change = g_next
             .iter()
@@ -132,38 +209,63 @@ pub fn friction_fixed_point(
             seconds: t.elapsed().as_secs_f64(),
             setup_seconds: solution.timing.setup,
         });
-        observer.observe(&Progress {
-            stage: Stage::Friction,
+        let control = observer.observe(&Progress {
+            stage: STAGE,
             iteration: m,
             residual: change,
             seconds: start.elapsed().as_secs_f64(),
         });
-        let finish =
-            |status, detail: String, solution: Solution, g: Vec<f64>, history| CoulombSolution {
+        let finish = |status, outcome, detail: String, solution: Solution, g: Vec<f64>, history| {
+            CoulombSolution {
                 solution,
                 g,
                 history,
                 status,
+                outcome,
                 detail,
                 seconds: start.elapsed().as_secs_f64(),
-            };
+            }
+        };
         if !solution.status.is_converged() {
             let detail = format!(
                 "given-friction step {m} did not converge: {}",
                 solution.detail
             );
-            return finish(solution.status, detail, solution, g, history);
+            return finish(
+                solution.status,
+                Outcome::InnerFailed,
+                detail,
+                solution,
+                g,
+                history,
+            );
         }
         if !change.is_finite() {
             let detail = format!("friction step {m}: the new friction bound is not finite");
-            return finish(Status::NonFinite, detail, solution, g, history);
-        }
-        if change <= settings.epsilon {
-            let detail = format!(
-                "max|Δg| = {change:.3e} ≤ ε = {:e} after {m} friction iterations",
-                settings.epsilon
+            return finish(
+                Status::NonFinite,
+                Outcome::NonFinite,
+                detail,
+                solution,
+                g,
+                history,
             );
-            return finish(Status::Converged, detail, solution, g, history);
+        }
+        if change <= tolerance {
+            let detail =
+                format!("max|Δg| = {change:.3e} ≤ {tolerance:.3e} after {m} friction iterations");
+            return finish(
+                Status::Converged,
+                Outcome::Converged,
+                detail,
+                solution,
+                g,
+                history,
+            );
+        }
+        if let Control::Stop(status) = control {
+            let detail = format!("stopped by the harness after {m} friction iterations");
+            return finish(status, Outcome::Stopped, detail, solution, g, history);
         }
         let w = settings.stall_window;
         if w > 0 && m > w && change >= history[m - 1 - w].change {
@@ -171,14 +273,27 @@ pub fn friction_fixed_point(
                 "the fixed point is not contracting: max|Δg| went from {:.3e} to {change:.3e} over the last {w} friction iterations",
                 history[m - 1 - w].change
             );
-            return finish(Status::InsufficientProgress, detail, solution, g, history);
+            return finish(
+                Status::InsufficientProgress,
+                Outcome::NotContracting,
+                detail,
+                solution,
+                g,
+                history,
+            );
         }
         if m == settings.max_iterations {
             let detail = format!(
-                "friction iteration cap {m} reached with max|Δg| = {change:.3e} > ε = {:e}",
-                settings.epsilon
+                "friction iteration cap {m} reached with max|Δg| = {change:.3e} > {tolerance:.3e}"
             );
-            return finish(Status::MaxIterations, detail, solution, g, history);
+            return finish(
+                Status::MaxIterations,
+                Outcome::IterationCap,
+                detail,
+                solution,
+                g,
+                history,
+            );
         }
         g = g_next;
         last_change = Some(change);
@@ -189,13 +304,13 @@ pub fn friction_fixed_point(
 /// The given-friction step on one mesh with one solver, warm-started from the
 /// previous step where the solver can use it.
 pub struct SingleLevel<'a> {
-    pub problem: GivenFrictionProblem,
-    pub solver: &'a mut dyn GivenFrictionSolver,
+    pub problem: ContactProblem,
+    pub solver: &'a mut dyn Solver,
     last: Option<Solution>,
 }
 
 impl<'a> SingleLevel<'a> {
-    pub fn new(problem: GivenFrictionProblem, solver: &'a mut dyn GivenFrictionSolver) -> Self {
+    pub fn new(problem: ContactProblem, solver: &'a mut dyn Solver) -> Self {
         Self {
             problem,
             solver,
@@ -205,8 +320,8 @@ impl<'a> SingleLevel<'a> {
 }
 
 impl GivenFrictionStep for SingleLevel<'_> {
-    fn contacts(&self) -> usize {
-        self.problem.contacts().len()
+    fn problem(&self) -> &ContactProblem {
+        &self.problem
     }
 
     fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution {
@@ -217,7 +332,9 @@ impl GivenFrictionStep for SingleLevel<'_> {
             v: &s.v,
             pressure: &s.pressure,
         });
-        let solution = self.solver.solve(&self.problem, start, observer);
+        let solution = self
+            .solver
+            .solve(&self.problem, Law::GivenFriction, start, observer);
         self.last = Some(solution.clone());
         solution
     }
@@ -226,18 +343,42 @@ impl GivenFrictionStep for SingleLevel<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use contactlab_solvers::{Silent, Timing};
+    use contactlab_solvers::{ContactNode, Silent, Timing};
+    use nalgebra_sparse::CsrMatrix;
 
     /// A step whose pressure is an affine function of g: p = p0 + k g, so the
-    /// fixed point g = 𝓕 p contracts with factor 𝓕 k.
+    /// fixed point g = 𝓕 p contracts with factor 𝓕 k (𝓕 = ½ at every node).
     struct Affine {
         p0: Vec<f64>,
         k: f64,
+        problem: ContactProblem,
+    }
+
+    fn affine(p0: Vec<f64>, k: f64) -> Affine {
+        let m = p0.len();
+        let contacts = (0..m)
+            .map(|i| ContactNode {
+                t: 2 * i,
+                s: 2 * i + 1,
+                weight: 1.0,
+                g: 0.0,
+                coefficient: 0.5,
+            })
+            .collect();
+        let problem = ContactProblem::new(
+            CsrMatrix::identity(2 * m),
+            vec![1.0; 2 * m],
+            CsrMatrix::identity(2 * m),
+            contacts,
+            vec![],
+        )
+        .unwrap();
+        Affine { p0, k, problem }
     }
 
     impl GivenFrictionStep for Affine {
-        fn contacts(&self) -> usize {
-            self.p0.len()
+        fn problem(&self) -> &ContactProblem {
+            &self.problem
         }
 
         fn solve_step(&mut self, g: &[f64], _: &mut dyn Observer) -> Solution {
@@ -255,16 +396,14 @@ mod tests {
 
     #[test]
     fn contracting_map_converges_with_the_expected_factor() {
-        let mut step = Affine {
-            p0: vec![10.0, 20.0],
-            k: 0.8,
-        };
+        let mut step = affine(vec![10.0, 20.0], 0.8);
         let s = CoulombSettings {
             epsilon: 1e-9,
             max_iterations: 200,
-            ..Default::default()
+            ..CoulombSettings::defaults(Stopping::Paper)
         };
-        let out = friction_fixed_point(&mut step, 0.5, &s, &mut Silent);
+        let out = friction_fixed_point(&mut step, &s, &mut Silent);
+        assert_eq!(out.outcome, Outcome::Converged);
         assert_eq!(out.status, Status::Converged);
         // Fixed point g = 𝓕 (p0 + k g) ⇒ g = 𝓕 p0 / (1 − 𝓕 k).
         for (g, p0) in out.g.iter().zip([10.0, 20.0]) {
@@ -277,17 +416,16 @@ mod tests {
 
     #[test]
     fn expanding_map_stops_at_the_cap_with_that_status() {
-        let mut step = Affine {
-            p0: vec![1.0],
-            k: 3.0,
-        };
+        let mut step = affine(vec![1.0], 3.0);
         let s = CoulombSettings {
             epsilon: 1e-4,
             max_iterations: 7,
             stall_window: 0,
+            stopping: Stopping::Paper,
         };
-        let out = friction_fixed_point(&mut step, 0.5, &s, &mut Silent);
+        let out = friction_fixed_point(&mut step, &s, &mut Silent);
         assert_eq!(out.status, Status::MaxIterations);
+        assert_eq!(out.outcome, Outcome::IterationCap);
         assert_eq!(out.history.len(), 7);
         assert!(out.history.last().unwrap().contraction.unwrap() > 1.0);
         // With stall detection it stops as soon as W steps bring no decrease.
@@ -295,9 +433,11 @@ mod tests {
             epsilon: 1e-4,
             max_iterations: 50,
             stall_window: 3,
+            stopping: Stopping::Paper,
         };
-        let out = friction_fixed_point(&mut step, 0.5, &s, &mut Silent);
+        let out = friction_fixed_point(&mut step, &s, &mut Silent);
         assert_eq!(out.status, Status::InsufficientProgress);
+        assert_eq!(out.outcome, Outcome::NotContracting);
         assert_eq!(out.history.len(), 4, "{}", out.detail);
     }
 }

@@ -19,7 +19,8 @@ pub struct Manifest {
     pub cores: usize,
     /// UTC, ISO 8601.
     pub date: String,
-    pub settings: Settings,
+    /// Every setting, resolved.
+    pub settings: serde_json::Value,
     /// Everything else the run was given (spec of the reduced sweep, meshes, ...).
     pub run: serde_json::Value,
 }
@@ -61,7 +62,7 @@ impl Manifest {
                 .map(|n| n.get())
                 .unwrap_or(1),
             date: utc_now(),
-            settings: settings.clone(),
+            settings: settings.resolved(),
             run,
         }
     }

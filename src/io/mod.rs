@@ -4,4 +4,5 @@
 pub mod charts;
 pub mod manifest;
 pub mod output;
+pub mod run_folder;
 pub mod scene_file;

@@ -1,15 +1,18 @@
-//! Writing results: every file is written to a temporary name and renamed, so
-//! an interrupted run never leaves a half-written file that looks complete.
-//! Accuracy files use a fixed float format, so reruns compare byte for byte.
+//! Writing results: every file is written to a fresh temporary name
+//! (created exclusively, so a symbolic link planted under that name is never
+//! followed) and renamed, so an interrupted run never leaves a half-written
+//! file that looks complete. Accuracy files use a fixed float format, so
+//! reruns compare byte for byte. Standard output and error are written
+//! without panicking when they are closed or full.
 
-use std::io;
+use std::io::{self, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-/// Writes `bytes` to `path` via a temporary file in the same directory and a
-/// rename; creates the directory if needed.
+/// Writes `bytes` to `path` via an exclusively created temporary file in
+/// the same directory and a rename; creates the directory if needed.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = path
         .parent()
@@ -21,9 +24,18 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.partial-{}", std::process::id()));
+    let tmp = (0..100)
+        .map(|k| {
+            dir.join(format!(
+                ".{name}.partial-{}-{:x}",
+                std::process::id(),
+                crate::io::run_folder::unique(k)
+            ))
+        })
+        .find(|t| !t.exists())
+        .with_context(|| format!("cannot find a temporary name for {}", path.display()))?;
     let write = || -> io::Result<()> {
-        std::fs::write(&tmp, bytes)?;
+        write_new(&tmp, bytes)?;
         std::fs::rename(&tmp, path)
     };
     write()
@@ -31,6 +43,35 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
             let _ = std::fs::remove_file(&tmp);
         })
         .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Writes a file that must not exist yet (never through a symbolic link).
+pub fn write_new(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)?;
+    f.write_all(bytes)?;
+    f.sync_data()
+}
+
+/// Writes `text` to standard output. A closed pipe or a full device is an
+/// error that says so (never a panic); files are written before this.
+pub fn print(text: &str) -> Result<()> {
+    let mut out = io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|_| out.flush())
+        .map_err(|e| match e.kind() {
+            io::ErrorKind::BrokenPipe => anyhow::anyhow!(
+                "standard output was closed before the report was printed (the files are written)"
+            ),
+            _ => anyhow::anyhow!("cannot write to standard output: {e} (the files are written)"),
+        })
+}
+
+/// A line on standard error, for logs: dropped if standard error is closed.
+pub fn log(line: impl AsRef<str>) {
+    let _ = writeln!(io::stderr().lock(), "{}", line.as_ref());
 }
 
 /// A float in the fixed format of accuracy files (10 significant digits).

@@ -1,18 +1,22 @@
 //! Scene files (TOML). Unknown keys are errors; every error is one line that
 //! names the file, the place and what is wrong.
 
+use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::Path;
 
-use contactlab_solvers::registry::SolverSettings;
+use contactlab_solvers::Stopping;
 use serde::Deserialize;
 use thiserror::Error;
 
 use crate::coulomb::continuation::Schedule;
-use crate::coulomb::fixed_point::CoulombSettings;
 use crate::mechanics::material::Material;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, SceneError, Traction, default_friction, default_levels};
-use crate::settings::Settings;
+use crate::settings::{CertificateSettings, Settings};
+
+/// Scene files larger than this are refused (a scene is a few hundred bytes).
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 
 /// The scene file format: a scene and, optionally, the settings of a run.
 ///
@@ -21,6 +25,7 @@ use crate::settings::Settings;
 /// friction = 0.5                  # Coulomb coefficient
 /// levels = ["1/8", "1/16", "1/32", "1/64"]
 /// schedule = "revisit"            # optional
+/// stopping = "relative"           # optional: relative (default) or paper
 ///
 /// [material]                      # optional, the paper's values by default
 /// young = 73e3
@@ -32,11 +37,14 @@ use crate::settings::Settings;
 /// to = "1/3"
 /// p2 = -60.0
 ///
-/// [coulomb]                       # optional
-/// epsilon = 1e-4
+/// [coulomb]                       # optional: the fixed point's settings
+/// epsilon = 1e-8
 ///
-/// [solver.relaxation]             # optional, one section per solver
-/// r = 1e12
+/// [certificate]                   # optional
+/// tolerance = 1e-6
+///
+/// [solver.relaxation]             # optional, one section per registered solver
+/// r = 1e7
 /// ```
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -50,19 +58,33 @@ pub struct SceneFile {
     #[serde(default = "default_levels")]
     pub levels: Vec<MeshSize>,
     pub schedule: Option<Schedule>,
-    pub coulomb: Option<CoulombSettings>,
-    pub solver: Option<SolverSettings>,
+    pub stopping: Option<Stopping>,
+    pub certificate: Option<CertificateSettings>,
+    /// The fixed point's settings, by name.
+    #[serde(default)]
+    pub coulomb: BTreeMap<String, toml::Value>,
+    /// Each registered solver's settings, by solver and name.
+    #[serde(default)]
+    pub solver: BTreeMap<String, BTreeMap<String, toml::Value>>,
 }
 
 impl SceneFile {
-    /// The scene and the settings the file gives (defaults where it is silent).
-    pub fn split(self) -> (Scene, Settings) {
-        let defaults = Settings::default();
-        let settings = Settings {
-            coulomb: self.coulomb.unwrap_or(defaults.coulomb),
-            schedule: self.schedule.unwrap_or(defaults.schedule),
-            solver: self.solver.unwrap_or(defaults.solver),
-        };
+    /// The scene and the settings the file gives (defaults where it is
+    /// silent); an unknown setting is an error that names it.
+    pub fn split(self) -> Result<(Scene, Settings), String> {
+        let mut settings = Settings::default();
+        settings.stopping = self.stopping.unwrap_or_default();
+        settings.schedule = self.schedule.unwrap_or_default();
+        settings.certificate = self.certificate.unwrap_or_default();
+        let tree = |v: &toml::Value| serde_json::to_value(v).map_err(|e| e.to_string());
+        for (name, value) in &self.coulomb {
+            settings.set(&format!("coulomb.{name}"), tree(value)?)?;
+        }
+        for (solver, section) in &self.solver {
+            for (name, value) in section {
+                settings.set(&format!("{solver}.{name}"), tree(value)?)?;
+            }
+        }
         let scene = Scene {
             name: self.name,
             material: self.material,
@@ -70,7 +92,7 @@ impl SceneFile {
             loads: self.loads,
             levels: self.levels,
         };
-        (scene, settings)
+        Ok((scene, settings))
     }
 }
 
@@ -95,9 +117,9 @@ pub enum SceneFileError {
 /// Reads, parses and validates a scene file.
 pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
     let shown = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| SceneFileError::Read {
+    let bytes = read_small_file(path).map_err(|reason| SceneFileError::Read {
         path: shown.clone(),
-        reason: e.to_string(),
+        reason,
     })?;
     let text = String::from_utf8(bytes).map_err(|e| SceneFileError::Read {
         path: shown.clone(),
@@ -113,7 +135,11 @@ pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
             column,
             message,
         })?
-        .split();
+        .split()
+        .map_err(|message| SceneFileError::Settings {
+            path: shown.clone(),
+            message,
+        })?;
     scene.validate().map_err(|error| SceneFileError::Invalid {
         path: shown.clone(),
         error,
@@ -125,6 +151,34 @@ pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
             message,
         })?;
     Ok((scene, settings))
+}
+
+/// Reads a regular file of at most [`MAX_SCENE_BYTES`]: a FIFO would block
+/// forever and a device such as /dev/zero would be read until memory runs out.
+pub fn read_small_file(path: &Path) -> Result<Vec<u8>, String> {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let meta = file.metadata().map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err(
+            "it is not a regular file (a directory, FIFO or device); give a .toml file".into(),
+        );
+    }
+    if meta.len() > MAX_SCENE_BYTES {
+        return Err(format!(
+            "it has {} bytes, more than a scene file's limit of {MAX_SCENE_BYTES}",
+            meta.len()
+        ));
+    }
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(format!(
+            "it holds more than a scene file's limit of {MAX_SCENE_BYTES} bytes"
+        ));
+    }
+    Ok(bytes)
 }
 
 /// Parses scene text; on error gives (line, column, one-line message).

@@ -1,7 +1,7 @@
 //! One scene on one mesh, turned into the algebraic given-friction subproblem,
 //! and the way back from its unknowns to both bodies' nodal displacements.
 
-use contactlab_solvers::{ContactNode, GivenFrictionProblem, ProblemError};
+use contactlab_solvers::{ContactNode, ContactProblem, ProblemError};
 use thiserror::Error;
 
 use crate::mechanics::assembly;
@@ -24,8 +24,8 @@ pub enum BuildError {
 pub struct Discretization {
     pub mesh: Mesh,
     pub dofs: DofMap,
-    /// The given-friction subproblem with g = 0.
-    pub problem: GivenFrictionProblem,
+    /// The contact problem (coefficient 𝓕 of the scene, bound g = 0).
+    pub problem: ContactProblem,
     /// Applied nodal forces (per node, x and y), before the change of variables.
     pub forces: Vec<[f64; 2]>,
     /// Σ p2 · (to − from) of the scene's loads (condition (13): negative).
@@ -53,8 +53,9 @@ impl Discretization {
         let m = assembly::mass(&mesh, &dofs);
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
         let f = assembly::load_vector(&dofs, &forces);
-        let contacts = contact_nodes(&mesh, dofs.contacts());
-        let problem = GivenFrictionProblem::new(a, f, m, contacts)?;
+        let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
+        let rigid_mode = kernel_vector(&mesh, &dofs);
+        let problem = ContactProblem::new(a, f, m, contacts, vec![rigid_mode])?;
         Ok(Self {
             mesh,
             dofs,
@@ -73,16 +74,9 @@ impl Discretization {
         self.dofs.contacts().iter().map(|c| c.x).collect()
     }
 
-    /// The rigid vertical translation of the upper body, z'' = (0, 1), in the
-    /// unknowns: +1 on v''_2 away from Γ_K, −1 on every jump t_i (paper (11)).
+    /// The rigid vertical translation of the upper body (paper (11)).
     pub fn kernel_vector(&self) -> Vec<f64> {
-        let u: Vec<[f64; 2]> = (0..self.mesh.num_nodes())
-            .map(|node| match self.mesh.locate(node).0 {
-                Body::Lower => [0.0, 0.0],
-                Body::Upper => [0.0, 1.0],
-            })
-            .collect();
-        self.dofs.from_physical(&u)
+        kernel_vector(&self.mesh, &self.dofs)
     }
 
     /// Nodal displacements of both bodies (per node, x and y).
@@ -157,7 +151,19 @@ impl Discretization {
     }
 }
 
-fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs]) -> Vec<ContactNode> {
+/// The rigid vertical translation of the upper body, z'' = (0, 1), in the
+/// unknowns: +1 on v''_2 away from Γ_K, −1 on every jump t_i (paper (11)).
+fn kernel_vector(mesh: &Mesh, dofs: &DofMap) -> Vec<f64> {
+    let u: Vec<[f64; 2]> = (0..mesh.num_nodes())
+        .map(|node| match mesh.locate(node).0 {
+            Body::Lower => [0.0, 0.0],
+            Body::Upper => [0.0, 1.0],
+        })
+        .collect();
+    dofs.from_physical(&u)
+}
+
+fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs], coefficient: f64) -> Vec<ContactNode> {
     let h = mesh.h();
     let last = contacts.len() - 1;
     contacts
@@ -169,6 +175,7 @@ fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs]) -> Vec<ContactNode> {
             // Trapezoid rule on Γ_K: h inside, h/2 at both ends.
             weight: if i == 0 || i == last { h / 2.0 } else { h },
             g: 0.0,
+            coefficient,
         })
         .collect()
 }

@@ -9,8 +9,9 @@ use std::time::Instant;
 use anyhow::Result;
 use contactlab_solvers::linalg::{SparseCholesky, spmv_into};
 use contactlab_solvers::registry;
+use contactlab_solvers::relaxation::Resolved;
 use contactlab_solvers::relaxation::pointwise::{RelaxationOperator, SweepData};
-use contactlab_solvers::{GivenFrictionProblem, RelaxationSettings, Residuals, Silent};
+use contactlab_solvers::{ContactProblem, RelaxationSettings, Silent};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::Serialize;
 
@@ -66,31 +67,30 @@ impl BenchSpec {
 /// g = ½ on every contact node, so that every branch of the sweep runs.
 pub struct SweepFixture {
     pub op: RelaxationOperator,
+    resolved: Resolved,
     l: Vec<f64>,
     wg: Vec<f64>,
 }
 
 impl SweepFixture {
-    pub fn new(p: &GivenFrictionProblem, s: &RelaxationSettings) -> Self {
+    pub fn new(p: &ContactProblem, s: &RelaxationSettings) -> Self {
+        let resolved = s.resolve(p);
         Self {
-            op: RelaxationOperator::new(p.a(), p.mass(), s.proximal, p.contacts()),
+            op: RelaxationOperator::new(p.a(), p.mass(), resolved.proximal, p.contacts()),
+            resolved,
             l: vec![1.0; p.contacts().len()],
             wg: p.contacts().iter().map(|c| 0.5 * c.weight).collect(),
         }
     }
 
     /// The sweep's data for problem `p` (the one the fixture was built from).
-    pub fn data<'a>(
-        &'a self,
-        p: &'a GivenFrictionProblem,
-        s: &RelaxationSettings,
-    ) -> SweepData<'a> {
+    pub fn data<'a>(&'a self, p: &'a ContactProblem) -> SweepData<'a> {
         SweepData {
             b: p.f(),
             l: &self.l,
             wg: &self.wg,
-            r: s.r,
-            smoothing: s.smoothing,
+            r: self.resolved.r,
+            smoothing: self.resolved.smoothing,
         }
     }
 }
@@ -227,11 +227,8 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             0,
         );
         // One sweep and one SpMV of the same matrix H = A + M.
-        let fixture = SweepFixture::new(&d.problem, &settings.solver.relaxation);
-        let (op, data) = (
-            &fixture.op,
-            fixture.data(&d.problem, &settings.solver.relaxation),
-        );
+        let fixture = SweepFixture::new(&d.problem, &RelaxationSettings::default());
+        let (op, data) = (&fixture.op, fixture.data(&d.problem));
         let reps = (2_000_000 / n.max(1)).clamp(5, 2000);
         let mut v = vec![0.0; n];
         let mut y = vec![0.0; n];
@@ -325,30 +322,32 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
                         let run = solve_scene(&scene, settings, entry.name, &mut Silent)?;
                         let it = run.coulomb.total_iterations();
                         Ok((
-                            run.coulomb.status.to_string(),
+                            run.status.to_string(),
                             format!(
                                 "{} friction iterations, {} outer, {} inner",
                                 run.coulomb.history.len(),
                                 it.outer,
                                 it.inner
                             ),
-                            run.residuals.kkt(),
+                            run.certificate.residual(),
                             it.inner,
                             run.coulomb.seconds,
                         ))
                     } else {
                         let (dd, s, _) =
                             solve_given_friction(&scene, settings, entry.name, &g, &mut Silent)?;
-                        let r = Residuals::compute(
+                        let r = crate::certificate::certify(
                             &dd.problem,
+                            contactlab_solvers::Law::GivenFriction,
                             &s.v,
                             &s.pressure,
                             &s.friction_traction,
+                            settings.certificate.tolerance,
                         );
                         Ok((
-                            s.status.to_string(),
+                            r.verdict(s.status).to_string(),
                             format!("{} outer, {} inner", s.iterations.outer, s.iterations.inner),
-                            r.kkt(),
+                            r.residual(),
                             s.iterations.inner,
                             s.timing.total(),
                         ))

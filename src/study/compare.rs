@@ -152,7 +152,9 @@ pub struct CompareRow {
     pub agreement: Agreement,
     pub separated: Vec<[f64; 2]>,
     pub separated_fraction: f64,
-    pub residuals: contactlab_solvers::Residuals,
+    /// The certificate (given-friction law at g for the subproblem rows,
+    /// the Coulomb law at g = 𝓕p for the Coulomb rows).
+    pub certificate: crate::certificate::Certificate,
     /// Minimum wall-clock seconds of the solver's work over the timed runs.
     pub seconds: f64,
     /// Convergence history of the first run (for charts).
@@ -179,20 +181,19 @@ pub fn compare(
     repeats: usize,
     mut tick: impl FnMut(&str),
 ) -> Result<Vec<CompareRow>> {
-    use contactlab_solvers::{History, Residuals, Silent, Stage};
+    use contactlab_solvers::{History, Law, Silent, registry};
+
+    use crate::certificate::certify;
 
     use crate::coulomb::driver::{Run, solve_scene};
     use crate::mechanics::contact_zone::separation_of;
 
     // Coulomb rows keep their convergence history (for the charts).
-    let coulomb_history = || {
-        History::of(&[
-            Stage::Friction,
-            Stage::Uzawa,
-            Stage::InteriorPoint,
-            Stage::Newton,
-        ])
-    };
+    let mut stages = vec![crate::coulomb::fixed_point::STAGE];
+    for e in registry::SOLVERS {
+        stages.extend(e.stages.iter().filter(|s| s.history).map(|s| s.name));
+    }
+    let coulomb_history = || History::of(&stages);
     let mut oracle_history = coulomb_history();
     let oracle = solve_scene(scene, settings, ORACLE, &mut oracle_history)?;
     if !oracle.coulomb.status.is_converged() {
@@ -238,11 +239,13 @@ pub fn compare(
             agreement: agreement(&d, &first, &reference),
             separated: separation.intervals,
             separated_fraction: separation.fraction,
-            residuals: Residuals::compute(
+            certificate: certify(
                 &d.problem,
+                Law::GivenFriction,
                 &first.v,
                 &first.pressure,
                 &first.friction_traction,
+                settings.certificate.tolerance,
             ),
             seconds: best.unwrap_or(first.timing.total()),
             history: Vec::new(),
@@ -283,7 +286,7 @@ pub fn compare(
             ),
             separated: run.separation.intervals.clone(),
             separated_fraction: run.separation.fraction,
-            residuals: run.residuals,
+            certificate: run.certificate,
             seconds: best.unwrap_or(run.coulomb.seconds),
             history,
             solution: run.coulomb.solution.clone(),
@@ -293,7 +296,7 @@ pub fn compare(
 }
 
 /// Columns of `compare.csv` (accuracy; deterministic).
-pub const COMPARE_COLUMNS: [&str; 24] = [
+pub const COMPARE_COLUMNS: [&str; 26] = [
     "problem",
     "h",
     "mode",
@@ -311,13 +314,15 @@ pub const COMPARE_COLUMNS: [&str; 24] = [
     "objective_gap",
     "separated",
     "separated_fraction",
-    "kkt",
-    "primal",
-    "dual",
+    "certificate",
+    "nonpenetration",
+    "pressure_sign",
     "complementarity",
-    "cone",
-    "slip",
+    "friction_bound",
+    "stick",
+    "slip_direction",
     "stationarity",
+    "force_balance",
 ];
 
 /// Columns of `compare_timing.csv`.
@@ -338,7 +343,7 @@ pub fn compare_records(rows: &[CompareRow]) -> Vec<Vec<String>> {
     rows.iter()
         .map(|r| {
             let a = &r.agreement;
-            let q = &r.residuals;
+            let q = &r.certificate;
             vec![
                 r.problem.clone(),
                 r.h.clone(),
@@ -357,13 +362,15 @@ pub fn compare_records(rows: &[CompareRow]) -> Vec<Vec<String>> {
                 fixed(a.objective_gap),
                 intervals_text(&r.separated),
                 format!("{:.6}", r.separated_fraction),
-                fixed(q.kkt()),
-                fixed(q.primal),
-                fixed(q.dual),
+                fixed(q.residual()),
+                fixed(q.nonpenetration),
+                fixed(q.pressure_sign),
                 fixed(q.complementarity),
-                fixed(q.cone),
-                fixed(q.slip),
+                fixed(q.friction_bound),
+                fixed(q.stick),
+                fixed(q.slip_direction),
                 fixed(q.stationarity),
+                fixed(q.force_balance),
             ]
         })
         .collect()
@@ -387,7 +394,7 @@ pub fn timing_records(rows: &[CompareRow]) -> Vec<Vec<String>> {
 /// A Markdown table of the comparison.
 pub fn compare_markdown(rows: &[CompareRow]) -> String {
     let mut out = String::from(
-        "| problem | h | mode | solver | status | Δu max | Δp max | Δq max | separated | KKT residual | iterations | time (s) |\n\
+        "| problem | h | mode | solver | status | Δu max | Δp max | Δq max | separated | certificate | iterations | time (s) |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
@@ -418,7 +425,7 @@ pub fn compare_markdown(rows: &[CompareRow]) -> String {
             r.agreement.traction_max,
             sep,
             100.0 * r.separated_fraction,
-            r.residuals.kkt(),
+            r.certificate.residual(),
             iterations,
             r.seconds
         );

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use contactlab_solvers::{Progress, Stage};
+use contactlab_solvers::{Progress, registry};
 
 use crate::io::charts::{Chart, Series};
 use crate::mechanics::contact_zone::ProfileRow;
@@ -389,7 +389,7 @@ pub fn profile_charts(
 pub fn convergence_chart(problem: u32, h: &str, rows: &[&CompareRow]) -> (String, Chart) {
     let mut series = Vec::new();
     for r in rows.iter().filter(|r| r.mode == Mode::Coulomb) {
-        let mut by_stage = |stage: Stage, what: &str| {
+        let mut by_stage = |stage: &str, what: &str| {
             let pts: Vec<(f64, f64)> = r
                 .history
                 .iter()
@@ -401,10 +401,12 @@ pub fn convergence_chart(problem: u32, h: &str, rows: &[&CompareRow]) -> (String
                 series.push(Series::line(format!("{}: {what}", r.solver), pts).with_markers());
             }
         };
-        by_stage(Stage::Friction, "friction max|Δg|");
-        by_stage(Stage::Uzawa, "Uzawa max|Δl|");
-        by_stage(Stage::InteriorPoint, "interior-point residual");
-        by_stage(Stage::Newton, "Newton residual");
+        by_stage(crate::coulomb::fixed_point::STAGE, "friction max|Δg|");
+        for e in registry::SOLVERS {
+            for s in e.stages.iter().filter(|s| s.history) {
+                by_stage(s.name, s.name);
+            }
+        }
     }
     (
         format!("convergence_p{problem}"),

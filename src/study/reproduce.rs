@@ -538,10 +538,10 @@ fn readme(
          the sweep below shows the error falling in proportion to ε.\n",
         worst(|r| r.agreement.displacement_max),
         worst(|r| r.agreement.pressure_max),
-        worst(|r| r.residuals.kkt()),
+        worst(|r| r.certificate.residual()),
         rows.iter()
             .filter(|r| r.solver == crate::study::compare::ORACLE)
-            .map(|r| r.residuals.kkt())
+            .map(|r| r.certificate.residual())
             .fold(0.0f64, f64::max),
         if same_zones {
             "the same (ends within 1e-3)"
@@ -623,7 +623,7 @@ fn readme(
     let oracle_kkt = rows
         .iter()
         .filter(|r| r.solver == crate::study::compare::ORACLE)
-        .map(|r| r.residuals.kkt())
+        .map(|r| r.certificate.residual())
         .fold(0.0f64, f64::max);
     let _ = writeln!(
         s,

@@ -23,7 +23,11 @@
 use std::time::Instant;
 
 use anyhow::Result;
-use contactlab_solvers::{GivenFrictionSolver, Residuals, Silent, Smoothing, Status};
+use contactlab_solvers::{Law, Silent, Smoothing, Status};
+use serde_json::Value;
+
+use crate::certificate::certify;
+use crate::coulomb::budget::Budget;
 use serde::Serialize;
 
 use crate::coulomb::driver::{Run, solve_scene, solver_entry};
@@ -136,13 +140,13 @@ impl StabilitySpec {
             meshes: vec![k(4), k(5), k(6), k(7), k(8)],
             mesh_time_limit: 20.0,
             time_limit: 10.0,
-            r_values: [-2, 0, 2, 4, 6, 8, 10, 12, 14, 16]
+            r_values: [-8, -6, -4, -2, 0, 2, 4, 6, 8, 10]
                 .iter()
                 .map(|&e| 10f64.powi(e))
                 .collect(),
             epsilon_values: (2..=10).map(|e| 10f64.powi(-e)).collect(),
             smoothing_values: std::iter::once(Smoothing::Exact)
-                .chain([4, 6, 8, 10, 12, 14].iter().map(|&e| Smoothing::Huber {
+                .chain([2, 4, 6, 8, 10, 12].iter().map(|&e| Smoothing::Huber {
                     delta: 10f64.powi(-e),
                 }))
                 .collect(),
@@ -163,9 +167,9 @@ impl StabilitySpec {
             meshes: vec![k(3), k(4)],
             mesh_time_limit: 10.0,
             time_limit: 0.5,
-            r_values: vec![1e-2, 1e12],
-            epsilon_values: vec![1e-4, 1e-15],
-            smoothing_values: vec![Smoothing::Exact, Smoothing::Huber { delta: 1e-6 }],
+            r_values: vec![1e-8, 1e7],
+            epsilon_values: vec![1e-6, 1e-15],
+            smoothing_values: vec![Smoothing::Exact, Smoothing::Huber { delta: 1e-2 }],
             friction_values: vec![0.0, 0.5, 16.0],
             friction_solvers: vec!["newton", "clarabel"],
             bisection_steps: 2,
@@ -221,7 +225,7 @@ impl Outcome {
             inner: total.inner,
             contraction: history.last().and_then(|h| h.contraction),
             trend,
-            kkt: run.residuals.kkt(),
+            kkt: run.certificate.residual(),
             pressure_error,
             seconds,
         }
@@ -323,9 +327,20 @@ fn row(
     }
 }
 
-fn timed(scene: &Scene, settings: &Settings, solver: &str) -> Result<(Run, f64)> {
+fn timed(
+    scene: &Scene,
+    settings: &Settings,
+    solver: &str,
+    seconds: Option<f64>,
+) -> Result<(Run, f64)> {
     let t = Instant::now();
-    let run = solve_scene(scene, settings, solver, &mut Silent)?;
+    let entry = solver_entry(solver)?;
+    let run = solve_scene(
+        scene,
+        settings,
+        solver,
+        &mut Budget::new(entry, None, seconds, &mut Silent),
+    )?;
     Ok((run, t.elapsed().as_secs_f64()))
 }
 
@@ -335,11 +350,12 @@ fn problem(n: u32, h: MeshSize) -> Result<Scene> {
     Ok(s)
 }
 
-fn budgeted(base: &Settings, seconds: f64) -> Settings {
-    let mut s = base.clone();
-    s.solver.relaxation.time_limit = seconds;
-    s.solver.clarabel.time_limit = seconds;
-    s
+fn budgeted(base: &Settings, _seconds: f64) -> Settings {
+    base.clone()
+}
+
+fn set(s: &mut Settings, path: &str, value: Value) {
+    s.set(path, value).expect("a registered setting");
 }
 
 /// Runs the whole map. `log` receives one line per group.
@@ -352,7 +368,7 @@ pub fn stability(
     let settings = budgeted(base, spec.time_limit);
     let p1 = problem(1, spec.h)?;
     let oracle = solve_scene(&p1, base, "clarabel", &mut Silent)?;
-    let (default_relax, t) = timed(&p1, &settings, "relaxation")?;
+    let (default_relax, t) = timed(&p1, &settings, "relaxation", Some(spec.time_limit))?;
     let default_work = work(&Outcome::from_run(&default_relax, Some(&oracle), t));
     let relax = |group: &'static str,
                  condition: String,
@@ -361,7 +377,7 @@ pub fn stability(
                  rows: &mut Vec<StabilityRow>,
                  method: &str|
      -> Result<()> {
-        let (run, t) = timed(&p1, s, "relaxation")?;
+        let (run, t) = timed(&p1, s, "relaxation", Some(spec.time_limit))?;
         let o = Outcome::from_run(&run, Some(&oracle), t);
         let c = classify(&o, Some(default_work), None);
         rows.push(row(group, method, &p1, condition, value, &o, c));
@@ -369,11 +385,11 @@ pub fn stability(
     };
 
     log("relaxation with and without the proximal term");
-    for r in [1e12, 1e4] {
+    for r in [1e7, 1e-1] {
         for rho in [1.0, 0.0] {
             let mut s = settings.clone();
-            s.solver.relaxation.r = r;
-            s.solver.relaxation.proximal = rho;
+            set(&mut s, "relaxation.r", Value::from(r));
+            set(&mut s, "relaxation.proximal", Value::from(rho));
             relax(
                 "proximal",
                 format!("r = {r:e}, ρ = {rho}"),
@@ -387,13 +403,17 @@ pub fn stability(
     log("penalty r");
     for &r in &spec.r_values {
         let mut s = settings.clone();
-        s.solver.relaxation.r = r;
+        set(&mut s, "relaxation.r", Value::from(r));
         relax("r", format!("r = {r:e}"), r, &s, &mut rows, "relaxation")?;
     }
     log("smoothing of |s|");
     for &sm in &spec.smoothing_values {
         let mut s = settings.clone();
-        s.solver.relaxation.smoothing = sm;
+        set(
+            &mut s,
+            "relaxation.smoothing",
+            serde_json::to_value(sm).expect("a tree"),
+        );
         let value = match sm {
             Smoothing::Exact => f64::NAN,
             Smoothing::Huber { delta } => delta,
@@ -403,8 +423,7 @@ pub fn stability(
     log("tolerance ε");
     for &e in &spec.epsilon_values {
         let mut s = settings.clone();
-        s.solver.relaxation.epsilon = e;
-        s.coulomb.epsilon = e;
+        s.set_epsilon(e).expect("registered settings");
         relax(
             "epsilon",
             format!("ε = {e:e}"),
@@ -444,7 +463,7 @@ fn friction_group(
     traces: &mut Vec<FrictionTrace>,
 ) -> Result<()> {
     let mut s = base.clone();
-    s.coulomb.max_iterations = 200;
+    set(&mut s, "coulomb.max_iterations", Value::from(200u64));
     for &inner in &spec.friction_solvers {
         let method = format!("fixed point ({inner} inside)");
         for n in [1, 2, 3] {
@@ -457,7 +476,7 @@ fn friction_group(
              -> Result<bool> {
                 let mut sc = scene.clone();
                 sc.friction = f;
-                let (run, t) = timed(&sc, &s, inner)?;
+                let (run, t) = timed(&sc, &s, inner, None)?;
                 let o = Outcome::from_run(&run, None, t);
                 if (f - 0.5).abs() < 1e-12 {
                     default_iterations = Some(o.friction_iterations);
@@ -540,7 +559,7 @@ fn load_group(
             .ok()
             .filter(|r| r.coulomb.status.is_converged());
         for solver in contactlab_solvers::registry::names() {
-            let (run, t) = timed(&scene, settings, solver)?;
+            let (run, t) = timed(&scene, settings, solver, Some(spec.time_limit))?;
             let o = Outcome::from_run(&run, reference.as_ref().filter(|_| solver != "clarabel"), t);
             let c = classify(&o, None, None);
             rows.push(row(
@@ -586,13 +605,23 @@ fn load_group(
             ));
             // Bypassing the check: one given-friction solve (g = 0) on the assembled problem.
             let d = Discretization::new_unchecked(&scene, spec.h)?;
-            let mut s = settings.clone();
-            s.solver.relaxation.h_finest = spec.h.h();
-            let mut solver_box: Box<dyn GivenFrictionSolver> =
-                (solver_entry(solver)?.build)(&s.solver);
+            let entry = solver_entry(solver)?;
+            let mut solver_box = settings.build(entry).map_err(anyhow::Error::msg)?;
             let t = Instant::now();
-            let sol = solver_box.solve(&d.problem, None, &mut Silent);
-            let r = Residuals::compute(&d.problem, &sol.v, &sol.pressure, &sol.friction_traction);
+            let sol = solver_box.solve(
+                &d.problem,
+                Law::GivenFriction,
+                None,
+                &mut Budget::new(entry, None, Some(spec.time_limit), &mut Silent),
+            );
+            let r = certify(
+                &d.problem,
+                Law::GivenFriction,
+                &sol.v,
+                &sol.pressure,
+                &sol.friction_traction,
+                settings.certificate.tolerance,
+            );
             let o = Outcome {
                 status: sol.status,
                 detail: sol.detail.clone(),
@@ -601,7 +630,7 @@ fn load_group(
                 inner: sol.iterations.inner,
                 contraction: None,
                 trend: None,
-                kkt: r.kkt(),
+                kkt: r.residual(),
                 pressure_error: f64::NAN,
                 seconds: t.elapsed().as_secs_f64(),
             };
@@ -639,7 +668,7 @@ fn mesh_group(
         let mut scene = problem(1, h)?;
         scene.friction = 0.0;
         log(&format!("  h = {h}"));
-        let oracle = timed(&scene, &settings, "clarabel")?;
+        let oracle = timed(&scene, &settings, "clarabel", Some(spec.mesh_time_limit))?;
         // The reference: the oracle, or the exact solver where the oracle did
         // not finish within its budget.
         let exact = solve_scene(&scene, base, "newton", &mut Silent)?;
@@ -665,7 +694,7 @@ fn mesh_group(
             .into_iter()
             .filter(|s| !["clarabel", "relaxation"].contains(s))
         {
-            let (run, t) = timed(&scene, &settings, solver)?;
+            let (run, t) = timed(&scene, &settings, solver, Some(spec.mesh_time_limit))?;
             let o = Outcome::from_run(&run, Some(reference), t);
             let c = classify(&o, None, None);
             rows.push(row(
@@ -678,7 +707,7 @@ fn mesh_group(
                 c,
             ));
         }
-        let (run, t) = timed(&scene, &settings, "relaxation")?;
+        let (run, t) = timed(&scene, &settings, "relaxation", Some(spec.mesh_time_limit))?;
         let o = Outcome::from_run(&run, Some(reference), t);
         let finest_sweeps = run.levels.last().map(|l| l.sweeps).unwrap_or(0);
         let c = classify(&o, None, None);
@@ -709,11 +738,9 @@ fn clarabel_group(
         for equilibrate in [true, false] {
             for &tol in &spec.clarabel_tolerances {
                 let mut s = budgeted(base, spec.time_limit);
-                s.solver.clarabel.tol_gap_abs = tol;
-                s.solver.clarabel.tol_gap_rel = tol;
-                s.solver.clarabel.tol_feas = tol;
-                s.solver.clarabel.equilibrate = equilibrate;
-                let (run, t) = timed(&scene, &s, "clarabel")?;
+                set(&mut s, "clarabel.tol", Value::from(tol));
+                set(&mut s, "clarabel.equilibrate", Value::from(equilibrate));
+                let (run, t) = timed(&scene, &s, "clarabel", Some(spec.time_limit))?;
                 let o = Outcome::from_run(&run, Some(&reference), t);
                 let c = classify(&o, Some(default_ipm), None);
                 let method = if equilibrate {
@@ -734,8 +761,8 @@ fn clarabel_group(
         }
         // Without our scaling of the unknowns.
         let mut s = budgeted(base, spec.time_limit);
-        s.solver.clarabel.scale_unknowns = false;
-        let (run, t) = timed(&scene, &s, "clarabel")?;
+        set(&mut s, "clarabel.scale_unknowns", Value::from(false));
+        let (run, t) = timed(&scene, &s, "clarabel", Some(spec.time_limit))?;
         let o = Outcome::from_run(&run, Some(&reference), t);
         let c = classify(&o, Some(default_ipm), None);
         rows.push(row(

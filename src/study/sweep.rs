@@ -9,9 +9,10 @@
 
 use anyhow::Result;
 use contactlab_solvers::registry;
-use contactlab_solvers::{Residuals, Silent, Smoothing};
+use contactlab_solvers::{Silent, Smoothing};
 use rayon::prelude::*;
 use serde::Serialize;
+use serde_json::Value;
 
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::driver::{Run, solve_scene};
@@ -147,9 +148,8 @@ pub struct SweepRow {
 /// Expands a spec into runs.
 pub fn plan(spec: &SweepSpec, base: &Settings) -> Vec<PlannedRun> {
     let mut runs = Vec::new();
-    let mut base = base.clone();
-    base.solver.relaxation.time_limit = spec.time_limit;
-    base.solver.clarabel.time_limit = spec.time_limit;
+    let set =
+        |s: &mut Settings, path: &str, v: Value| s.set(path, v).expect("a registered setting");
     for (index, scene) in spec.scenes.iter().enumerate() {
         for &h in &spec.meshes {
             let mut push = |factor, mode, solver, value: String, settings: Settings| {
@@ -169,22 +169,25 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Vec<PlannedRun> {
                     Factor::R => {
                         for &r in &spec.r_values {
                             let mut s = base.clone();
-                            s.solver.relaxation.r = r;
+                            set(&mut s, "relaxation.r", Value::from(r));
                             push(factor, Mode::Coulomb, "relaxation", format!("{r:e}"), s);
                         }
                     }
                     Factor::Epsilon => {
                         for &e in &spec.epsilon_values {
                             let mut s = base.clone();
-                            s.solver.relaxation.epsilon = e;
-                            s.coulomb.epsilon = e;
+                            s.set_epsilon(e).expect("registered settings");
                             push(factor, Mode::Coulomb, "relaxation", format!("{e:e}"), s);
                         }
                     }
                     Factor::Smoothing => {
                         for &sm in &spec.smoothing_values {
                             let mut s = base.clone();
-                            s.solver.relaxation.smoothing = sm;
+                            set(
+                                &mut s,
+                                "relaxation.smoothing",
+                                serde_json::to_value(sm).expect("a tree"),
+                            );
                             push(factor, Mode::Coulomb, "relaxation", sm.label(), s);
                         }
                     }
@@ -201,12 +204,14 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Vec<PlannedRun> {
                                 continue;
                             };
                             for &t in entry
-                                .tolerances
+                                .accuracy
+                                .values
                                 .iter()
                                 .step_by(spec.tolerance_stride.max(1))
                             {
                                 let mut s = base.clone();
-                                (entry.set_tolerance)(&mut s.solver, t);
+                                let path = format!("{}.{}", entry.name, entry.accuracy.knob);
+                                set(&mut s, &path, Value::from(t));
                                 push(factor, Mode::GivenFriction, entry.name, format!("{t:e}"), s);
                             }
                         }
@@ -243,13 +248,16 @@ pub fn reference(scene: &Scene, h: MeshSize, base: &Settings) -> Result<Referenc
     let mut scene = scene.clone();
     scene.set_finest(h);
     let mut s = base.clone();
-    s.coulomb.epsilon = REFERENCE_COULOMB_EPSILON;
-    s.solver.newton.tolerance = 1e-12;
+    s.set("coulomb.epsilon", Value::from(REFERENCE_COULOMB_EPSILON))
+        .expect("a setting");
+    s.set("newton.tolerance", Value::from(1e-12))
+        .expect("a setting");
     let exact = solve_scene(&scene, &s, "newton", &mut Silent)?;
     let (solver, coulomb) = if exact.coulomb.status.is_converged() {
         ("newton", exact)
     } else {
-        s.coulomb.epsilon = 1e-6;
+        s.set("coulomb.epsilon", Value::from(1e-6))
+            .expect("a setting");
         (ORACLE, solve_scene(&scene, &s, ORACLE, &mut Silent)?)
     };
     if !coulomb.coulomb.status.is_converged() {
@@ -279,8 +287,10 @@ pub fn run_one(
     reference: &Reference,
     timed: bool,
     repeats: usize,
+    time_limit: f64,
 ) -> Result<SweepRow> {
-    let rx = &run.settings.solver.relaxation;
+    let entry = crate::coulomb::driver::solver_entry(run.solver)?;
+    let budget = || crate::coulomb::budget::Budget::silent(entry, None, Some(time_limit));
     let (
         status,
         converged,
@@ -293,7 +303,7 @@ pub fn run_one(
         seconds,
     ) = match run.mode {
         Mode::Coulomb => {
-            let out = solve_scene(&reference.scene, &run.settings, run.solver, &mut Silent)?;
+            let out = solve_scene(&reference.scene, &run.settings, run.solver, &mut budget())?;
             let total = out.coulomb.total_iterations();
             let agree = agreement(
                 &reference.coulomb.discretization,
@@ -301,13 +311,13 @@ pub fn run_one(
                 &reference.coulomb.coulomb.solution,
             );
             (
-                out.coulomb.status,
-                out.coulomb.status.is_converged(),
+                out.status,
+                out.status.is_converged(),
                 out.coulomb.history.len(),
                 total.outer,
                 total.inner,
                 agree,
-                out.residuals.kkt(),
+                out.certificate.residual(),
                 out.separation.fraction,
                 out.coulomb.seconds,
             )
@@ -318,7 +328,7 @@ pub fn run_one(
                 &run.settings,
                 run.solver,
                 &reference.g,
-                &mut Silent,
+                &mut budget(),
             )?;
             let mut seconds = s.timing.total();
             if timed {
@@ -334,11 +344,20 @@ pub fn run_one(
                 }
             }
             let agree = agreement(&d, &s, &reference.subproblem.1);
-            let kkt = Residuals::compute(&d.problem, &s.v, &s.pressure, &s.friction_traction).kkt();
+            let certificate = crate::certificate::certify(
+                &d.problem,
+                contactlab_solvers::Law::GivenFriction,
+                &s.v,
+                &s.pressure,
+                &s.friction_traction,
+                run.settings.certificate.tolerance,
+            );
+            let kkt = certificate.residual();
+            let status = certificate.verdict(s.status);
             let fraction = crate::mechanics::contact_zone::separation_of(&d, &s).fraction;
             (
-                s.status,
-                s.status.is_converged(),
+                status,
+                status.is_converged(),
                 0,
                 s.iterations.outer,
                 s.iterations.inner,
@@ -356,9 +375,14 @@ pub fn run_one(
         mode: run.mode.as_str(),
         solver: run.solver.to_string(),
         value: run.value.clone(),
-        r: rx.r,
-        epsilon: rx.epsilon,
-        smoothing: rx.smoothing.label(),
+        r: setting_number(&run.settings, "relaxation.r"),
+        epsilon: setting_number(&run.settings, "relaxation.epsilon"),
+        smoothing: run
+            .settings
+            .get("relaxation.smoothing")
+            .and_then(|v| serde_json::from_value::<Smoothing>(v).ok())
+            .map(|s| s.label())
+            .unwrap_or_default(),
         schedule: run.settings.schedule.to_string(),
         status: status.to_string(),
         converged,
@@ -370,6 +394,13 @@ pub fn run_one(
         separated_fraction,
         seconds: timed.then_some(seconds),
     })
+}
+
+fn setting_number(settings: &Settings, path: &str) -> f64 {
+    settings
+        .get(path)
+        .and_then(|v| v.as_f64())
+        .unwrap_or(f64::NAN)
 }
 
 /// Which reference a sweep measured against, per scene and mesh.
@@ -403,7 +434,13 @@ pub fn sweep(
             .1
     };
     let one = |run: &PlannedRun| {
-        let row = run_one(run, find(run), !spec.parallel, spec.repeats);
+        let row = run_one(
+            run,
+            find(run),
+            !spec.parallel,
+            spec.repeats,
+            spec.time_limit,
+        );
         tick(run);
         row
     };

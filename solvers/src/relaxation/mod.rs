@@ -10,8 +10,12 @@
 //! relaxation, then updates l^{k+1} = (l^k + r t^{k+1})⁺ (14). The L2 term makes
 //! every step strictly convex although A is singular.
 //!
-//! Stopping rules are the paper's: relaxation until max|Δv| ≤ 1e-4·ε·h_finest,
-//! Uzawa until max|Δl| ≤ ε. A cap reached is a status, never a silent stop.
+//! Stopping rules have the paper's form: relaxation until max|Δv| is below a
+//! sweep threshold, Uzawa until max|Δl| ≤ ε. With [`Stopping::Paper`] every
+//! value is the paper's, in absolute units; with [`Stopping::Relative`] (the
+//! default) every value is read in the problem's own scales (see
+//! [`RelaxationSettings::resolve`]). A cap reached is a status, never a
+//! silent stop.
 
 pub mod pointwise;
 
@@ -19,29 +23,107 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::observer::{Observer, Progress, Stage};
-use crate::problem::GivenFrictionProblem;
+use crate::observer::{Control, Observer, Progress};
+use crate::problem::ContactProblem;
+use crate::registry::{Accuracy, Entry, Knob, StageInfo};
+use crate::settings::{
+    Stopping, Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{GivenFrictionSolver, Start};
+use crate::solver::{Law, Solver, Start};
 use pointwise::{RelaxationOperator, Smoothing, SweepData};
 
-/// Settings of the prox-Uzawa relaxation solver; defaults are the paper's.
+/// The registry entry of the paper's method.
+pub const ENTRY: Entry = Entry {
+    name: "relaxation",
+    about: "the paper's method: prox-Uzawa on the modified Lagrangian, pointwise relaxation inside",
+    source: "Zhiltsov & Namm (2019), sections 3-5: modified Lagrangian (Theorem 2), Uzawa (14), proximal regularization (15)-(16), Algorithm 1",
+    laws: &[Law::GivenFriction],
+    warm_starts: true,
+    stages: &[
+        StageInfo {
+            name: "uzawa",
+            about: "one Uzawa iteration (14); residual max|Δl|",
+            history: true,
+        },
+        StageInfo {
+            name: "sweep",
+            about: "one pointwise relaxation sweep; residual max|Δv|",
+            history: false,
+        },
+    ],
+    work_stage: "sweep",
+    knobs: &[
+        Knob {
+            name: "r",
+            fields: &["r"],
+            help: "penalty r of the modified Lagrangian; relative: in units of K/L [default 1e7; paper: 1e12]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "epsilon",
+            fields: &["epsilon"],
+            help: "Uzawa stops when max|Δl| ≤ ε (relative: ε·P) [default 1e-6; paper: 1e-4]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "sweep_factor",
+            fields: &["sweep_factor"],
+            help: "sweeps stop when max|Δv| ≤ factor·ε·U·h/L (relative) or ≤ factor·ε/64 (paper) [default 1; paper: 1e-4]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "proximal",
+            fields: &["proximal"],
+            help: "weight ρ of (ρ/2)‖v − v^k‖²_L2, 0 turns it off; relative: in units of K/L² [default 1e-5; paper: 1]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "smoothing",
+            fields: &["smoothing"],
+            help: "|s| along slip coordinates: `exact` (soft thresholding) or a Huber width δ; relative: in units of U [default 1e-7; paper: 1e-10]",
+            parse: pointwise::parse_smoothing,
+        },
+        Knob {
+            name: "max_uzawa",
+            fields: &["max_uzawa"],
+            help: "cap on Uzawa iterations per solve [default 1000]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "max_sweeps",
+            fields: &["max_sweeps"],
+            help: "cap on sweeps per Uzawa iteration [default 2000000]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |stopping| to_tree(&RelaxationSettings::defaults(stopping)),
+    build: |tree| Ok(Box::new(ProxUzawa::new(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "epsilon",
+        values: &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
+        reference: 1e-10,
+        exact: false,
+    },
+};
+
+/// The paper's finest mesh, 1/64: its sweep threshold is 1e-4·ε·(1/64)
+/// (section 5), a length written into the rule.
+pub const PAPER_SWEEP_LENGTH: f64 = 1.0 / 64.0;
+
+/// Settings of the prox-Uzawa relaxation solver.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RelaxationSettings {
-    /// Penalty r of the modified Lagrangian (paper: 1e12).
+    /// How the values below are read (set from the harness's stopping mode).
+    pub stopping: Stopping,
+    /// Penalty r of the modified Lagrangian.
     pub r: f64,
-    /// The paper's ε: Uzawa stops when max|Δl| ≤ ε (paper: 1e-4).
+    /// Uzawa stops when max|Δl| ≤ ε (the paper's ε).
     pub epsilon: f64,
-    /// Relaxation stops when max|Δv| ≤ sweep_factor · ε · h_finest
-    /// (paper: 1e-4 · ε · 1/64).
+    /// Factor of the sweep threshold on max|Δv|.
     pub sweep_factor: f64,
-    /// The finest mesh size of the run (the length in the sweep threshold).
-    /// Set by the harness from the scene's levels.
-    #[serde(skip)]
-    pub h_finest: f64,
-    /// Weight ρ of the proximal term (ρ/2)‖v − v^k‖²_{L2} (paper: 1; 0 turns
-    /// the regularization off).
+    /// Weight ρ of the proximal term (ρ/2)‖v − v^k‖²_{L2} (0 turns it off).
     pub proximal: f64,
     /// Treatment of |s| along slip coordinates.
     pub smoothing: Smoothing,
@@ -49,78 +131,144 @@ pub struct RelaxationSettings {
     pub max_uzawa: usize,
     /// Cap on relaxation sweeps per Uzawa iteration.
     pub max_sweeps: usize,
-    /// Wall-clock budget per call in seconds (default: none).
-    pub time_limit: f64,
 }
 
-/// Default Huber width: below what the paper's sweep threshold resolves at
-/// h = 1/64 (1e-4 · 1e-4 / 64 ≈ 1.6e-10), so the smoothing does not show.
+/// The paper's Huber width (our choice: the paper smooths |s| without saying
+/// how): below what its sweep threshold resolves at h = 1/64
+/// (1e-4 · 1e-4 / 64 ≈ 1.6e-10), so the smoothing does not show.
 pub const DEFAULT_HUBER_DELTA: f64 = 1e-10;
 
 impl Default for RelaxationSettings {
     fn default() -> Self {
-        Self {
-            r: 1e12,
-            epsilon: 1e-4,
-            sweep_factor: 1e-4,
-            h_finest: 1.0 / 64.0,
-            proximal: 1.0,
-            smoothing: Smoothing::Huber {
-                delta: DEFAULT_HUBER_DELTA,
+        Self::defaults(Stopping::Relative)
+    }
+}
+
+/// Absolute values of the settings for one problem.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolved {
+    pub r: f64,
+    /// Threshold on max|Δl|.
+    pub uzawa_tolerance: f64,
+    /// Threshold on max|Δv|.
+    pub sweep_tolerance: f64,
+    pub proximal: f64,
+    pub smoothing: Smoothing,
+}
+
+impl RelaxationSettings {
+    /// The defaults of a stopping mode: the paper's values (section 5), or
+    /// relative ones. On the paper's problem 1 (K = 2.79e5, L = 1, P = 20,
+    /// U = 7.16e-5) the paper's values are r ≈ 3.6e6 K/L, ρ ≈ 3.6e-6 K/L²,
+    /// δ ≈ 1.4e-6 U, ε = 5e-6 P and a sweep factor of about 28; the relative
+    /// defaults keep r and ρ at those decades and tighten ε, the sweeps and δ
+    /// until the answers pass the certificate at its default tolerance 1e-5
+    /// (measured at h = 1/64: largest violation 9e-7, the force balance).
+    pub fn defaults(stopping: Stopping) -> Self {
+        match stopping {
+            Stopping::Paper => Self {
+                stopping,
+                r: 1e12,
+                epsilon: 1e-4,
+                sweep_factor: 1e-4,
+                proximal: 1.0,
+                smoothing: Smoothing::Huber {
+                    delta: DEFAULT_HUBER_DELTA,
+                },
+                max_uzawa: 1000,
+                max_sweeps: 2_000_000,
             },
-            max_uzawa: 1000,
-            max_sweeps: 2_000_000,
-            time_limit: f64::INFINITY,
+            Stopping::Relative => Self {
+                stopping,
+                r: 1e7,
+                epsilon: 1e-6,
+                sweep_factor: 1.0,
+                proximal: 1e-5,
+                smoothing: Smoothing::Huber { delta: 1e-7 },
+                max_uzawa: 1000,
+                max_sweeps: 2_000_000,
+            },
+        }
+    }
+
+    /// The paper's defaults.
+    pub fn paper() -> Self {
+        Self::defaults(Stopping::Paper)
+    }
+
+    /// The absolute values for `problem`. Relative mode reads every value in
+    /// the problem's scales (K stiffness, L length of Γ_K, P = F/L pressure,
+    /// U = F/K displacement; see [`crate::Scales`]):
+    ///
+    /// - r in K/L (a penalty is a pressure per displacement);
+    /// - ρ in K/L² (ρM has the units of A, M those of an area);
+    /// - the Huber width δ in U;
+    /// - Uzawa: max|Δl| ≤ ε·P;
+    /// - sweeps: max|Δv| ≤ sweep_factor·ε·U·w/L with w the largest weight
+    ///   (h on a uniform mesh): along a jump the Uzawa update makes l the
+    ///   nodal force over w, so a displacement error δv moves l by about
+    ///   K·δv/w, and this threshold keeps that below sweep_factor·ε·P.
+    ///
+    /// Paper mode takes them as they are, with the sweep threshold
+    /// sweep_factor·ε·(1/64) of section 5.
+    pub fn resolve(&self, problem: &ContactProblem) -> Resolved {
+        match self.stopping {
+            Stopping::Paper => Resolved {
+                r: self.r,
+                uzawa_tolerance: self.epsilon,
+                sweep_tolerance: self.sweep_factor * self.epsilon * PAPER_SWEEP_LENGTH,
+                proximal: self.proximal,
+                smoothing: self.smoothing,
+            },
+            Stopping::Relative => {
+                let s = problem.scales();
+                let w = problem
+                    .contacts()
+                    .iter()
+                    .fold(0.0f64, |m, c| m.max(c.weight));
+                Resolved {
+                    r: self.r * s.stiffness / s.length,
+                    uzawa_tolerance: self.epsilon * s.pressure,
+                    sweep_tolerance: self.sweep_factor * self.epsilon * s.displacement * w
+                        / s.length,
+                    proximal: self.proximal * s.stiffness / (s.length * s.length),
+                    smoothing: match self.smoothing {
+                        Smoothing::Exact => Smoothing::Exact,
+                        Smoothing::Huber { delta } => Smoothing::Huber {
+                            delta: delta * s.displacement,
+                        },
+                    },
+                }
+            }
         }
     }
 }
 
-impl RelaxationSettings {
-    /// The relaxation threshold on max|Δv|.
-    pub fn sweep_tolerance(&self) -> f64 {
-        self.sweep_factor * self.epsilon * self.h_finest
-    }
-
-    /// Checks ranges; the message names the field and what is valid.
-    pub fn validate(&self) -> Result<(), String> {
-        let positive = |name: &str, v: f64, hint: &str| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!(
-                    "relaxation.{name} = {v} is invalid: it must be a positive number ({hint})"
-                ))
-            }
+impl Validate for RelaxationSettings {
+    fn validate(&self) -> Result<(), String> {
+        let hint = |paper: &str, relative: &str| match self.stopping {
+            Stopping::Paper => format!("the paper: {paper}"),
+            Stopping::Relative => format!("default {relative}"),
         };
-        positive("r", self.r, "the paper: 1e12")?;
-        positive("epsilon", self.epsilon, "the paper: 1e-4")?;
-        positive("sweep_factor", self.sweep_factor, "the paper: 1e-4")?;
-        positive("h_finest", self.h_finest, "the finest mesh size")?;
+        positive("relaxation.r", self.r, &hint("1e12", "1e7"))?;
+        positive("relaxation.epsilon", self.epsilon, &hint("1e-4", "1e-6"))?;
+        positive(
+            "relaxation.sweep_factor",
+            self.sweep_factor,
+            &hint("1e-4", "1"),
+        )?;
         if !(self.proximal.is_finite() && self.proximal >= 0.0) {
             return Err(format!(
-                "relaxation.proximal = {} is invalid: the proximal weight must be ≥ 0 (the paper: 1; 0 is off)",
-                self.proximal
+                "relaxation.proximal = {} is invalid: the proximal weight must be ≥ 0 ({}; 0 is off)",
+                self.proximal,
+                hint("1", "1e-5")
             ));
         }
         if let Smoothing::Huber { delta } = self.smoothing {
-            positive("smoothing.huber.delta", delta, "e.g. 1e-10")?;
+            positive("relaxation.smoothing", delta, "a Huber width, or `exact`")?;
         }
-        if self.max_uzawa == 0 {
-            return Err("relaxation.max_uzawa = 0 is invalid: allow at least 1 Uzawa iteration (default 1000)".into());
-        }
-        if self.time_limit.is_nan() || self.time_limit <= 0.0 {
-            return Err(format!(
-                "relaxation.time_limit = {} is invalid: give a positive number of seconds (default: none)",
-                self.time_limit
-            ));
-        }
-        if self.max_sweeps == 0 {
-            return Err(
-                "relaxation.max_sweeps = 0 is invalid: allow at least 1 sweep (default 2000000)"
-                    .into(),
-            );
-        }
-        Ok(())
+        at_least_one("relaxation.max_uzawa", self.max_uzawa, 1000)?;
+        at_least_one("relaxation.max_sweeps", self.max_sweeps, 2_000_000)
     }
 }
 
@@ -140,25 +288,26 @@ impl ProxUzawa {
         }
     }
 
-    fn operator(&mut self, problem: &GivenFrictionProblem) -> &RelaxationOperator {
-        let key = (problem.operator_id(), self.settings.proximal);
+    fn operator(&mut self, problem: &ContactProblem, rho: f64) -> &RelaxationOperator {
+        let key = (problem.operator_id(), rho);
         let stale = self
             .cache
             .as_ref()
-            .is_none_or(|(id, rho, _)| (*id, *rho) != key);
+            .is_none_or(|(id, r, _)| (*id, *r) != key);
         if stale {
-            let op =
-                RelaxationOperator::new(problem.a(), problem.mass(), key.1, problem.contacts());
+            let op = RelaxationOperator::new(problem.a(), problem.mass(), rho, problem.contacts());
             self.cache = Some((key.0, key.1, op));
         }
         &self.cache.as_ref().expect("just filled").2
     }
 }
 
-/// Runs `prox_uzawa` (Algorithm 1, lines 4-7) on one problem.
+/// Runs `prox_uzawa` (Algorithm 1, lines 4-7) on one problem with absolute
+/// values `resolved` and caps from `settings`.
 pub fn prox_uzawa(
     op: &RelaxationOperator,
-    problem: &GivenFrictionProblem,
+    problem: &ContactProblem,
+    resolved: &Resolved,
     settings: &RelaxationSettings,
     start: Option<Start<'_>>,
     observer: &mut dyn Observer,
@@ -176,11 +325,11 @@ pub fn prox_uzawa(
         _ => vec![0.0; m],
     };
     let wg: Vec<f64> = contacts.iter().map(|c| c.weight * c.g).collect();
-    let rho = settings.proximal;
+    let rho = resolved.proximal;
     let mut b = problem.f().to_vec();
     let mut mv = vec![0.0; n];
-    let sweep_tol = settings.sweep_tolerance();
-    let want_sweeps = observer.wants(Stage::Sweep);
+    let sweep_tol = resolved.sweep_tolerance;
+    let want_sweeps = observer.wants("sweep");
     let (mut sweeps, mut uzawa) = (0usize, 0usize);
     let mut status = Status::MaxIterations;
     let mut detail = format!("Uzawa iteration cap {} reached", settings.max_uzawa);
@@ -197,20 +346,27 @@ pub fn prox_uzawa(
             b: &b,
             l: &l,
             wg: &wg,
-            r: settings.r,
-            smoothing: settings.smoothing,
+            r: resolved.r,
+            smoothing: resolved.smoothing,
         };
         let mut converged_inner = false;
         for q in 1..=settings.max_sweeps {
             let change = op.sweep(&mut v, &data);
             sweeps += 1;
             if want_sweeps {
-                observer.observe(&Progress {
-                    stage: Stage::Sweep,
+                let control = observer.observe(&Progress {
+                    stage: "sweep",
                     iteration: q,
                     residual: change,
                     seconds: t0.elapsed().as_secs_f64(),
                 });
+                if let Control::Stop(s) = control {
+                    status = s;
+                    detail = format!(
+                        "stopped by the harness in Uzawa iteration {k} after {sweeps} sweeps (max|Δv| = {change:.3e})"
+                    );
+                    break 'uzawa;
+                }
             }
             if !change.is_finite() {
                 status = Status::NonFinite;
@@ -220,14 +376,6 @@ pub fn prox_uzawa(
             if change <= sweep_tol {
                 converged_inner = true;
                 break;
-            }
-            if q % 256 == 0 && t0.elapsed().as_secs_f64() > settings.time_limit {
-                status = Status::TimeLimit;
-                detail = format!(
-                    "time limit {} s reached in Uzawa iteration {k} after {sweeps} sweeps (max|Δv| = {change:.3e})",
-                    settings.time_limit
-                );
-                break 'uzawa;
             }
         }
         if !converged_inner {
@@ -241,12 +389,12 @@ pub fn prox_uzawa(
         // l^{k+1} = (l^k + r t^{k+1})⁺, paper (14).
         let mut dl = 0.0f64;
         for (li, c) in l.iter_mut().zip(contacts) {
-            let new = (*li + settings.r * v[c.t]).max(0.0);
+            let new = (*li + resolved.r * v[c.t]).max(0.0);
             dl = dl.max((new - *li).abs());
             *li = new;
         }
-        observer.observe(&Progress {
-            stage: Stage::Uzawa,
+        let control = observer.observe(&Progress {
+            stage: "uzawa",
             iteration: k,
             residual: dl,
             seconds: t0.elapsed().as_secs_f64(),
@@ -256,12 +404,17 @@ pub fn prox_uzawa(
             detail = format!("non-finite multiplier in Uzawa iteration {k}");
             break;
         }
-        if dl <= settings.epsilon {
+        if dl <= resolved.uzawa_tolerance {
             status = Status::Converged;
             detail = format!(
-                "max|Δl| = {dl:.3e} ≤ ε = {:e} after {k} Uzawa iterations, {sweeps} sweeps",
-                settings.epsilon
+                "max|Δl| = {dl:.3e} ≤ {:.3e} after {k} Uzawa iterations, {sweeps} sweeps",
+                resolved.uzawa_tolerance
             );
+            break;
+        }
+        if let Control::Stop(s) = control {
+            status = s;
+            detail = format!("stopped by the harness after {k} Uzawa iterations, {sweeps} sweeps");
             break;
         }
     }
@@ -271,7 +424,7 @@ pub fn prox_uzawa(
         .iter()
         .map(|c| {
             let g = c.g;
-            match settings.smoothing {
+            match resolved.smoothing {
                 Smoothing::Huber { delta } => -g * (v[c.s] / delta).clamp(-1.0, 1.0),
                 Smoothing::Exact => (op.gradient_at(&v, &b, c.s) / c.weight).clamp(-g, g),
             }
@@ -298,26 +451,32 @@ pub fn prox_uzawa(
     out
 }
 
-impl GivenFrictionSolver for ProxUzawa {
-    fn name(&self) -> &'static str {
-        "relaxation"
-    }
-
+impl Solver for ProxUzawa {
     fn solve(
         &mut self,
-        problem: &GivenFrictionProblem,
+        problem: &ContactProblem,
+        law: Law,
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, m) = (problem.n(), problem.contacts().len());
+        if law != Law::GivenFriction {
+            return Solution::failed(
+                n,
+                m,
+                Status::NotRun,
+                "relaxation solves the given-friction subproblem only",
+            );
+        }
         if let Err(e) = self.settings.validate() {
             return Solution::failed(n, m, Status::NotRun, e);
         }
         let t0 = Instant::now();
         let settings = self.settings.clone();
-        let op = self.operator(problem);
+        let resolved = settings.resolve(problem);
+        let op = self.operator(problem, resolved.proximal);
         let setup = t0.elapsed().as_secs_f64();
-        let mut out = prox_uzawa(op, problem, &settings, start, observer);
+        let mut out = prox_uzawa(op, problem, &resolved, &settings, start, observer);
         out.timing.setup = setup;
         out
     }

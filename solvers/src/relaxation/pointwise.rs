@@ -13,9 +13,10 @@
 use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 
-/// How the non-smooth friction term w g |s| is treated along a slip coordinate.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase", deny_unknown_fields)]
+/// How the non-smooth friction term w g |s| is treated along a slip
+/// coordinate. In settings it is the word `exact` or a Huber width (a number;
+/// the older form `{ huber = { delta = x } }` is read too).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Smoothing {
     /// |s| itself: the exact one-dimensional minimizer is soft thresholding.
     Exact,
@@ -24,6 +25,57 @@ pub enum Smoothing {
     /// δ/2 of |s|, and its one-dimensional minimizer is in closed form. The
     /// paper smooths |s| but does not say how; this is our choice.
     Huber { delta: f64 },
+}
+
+impl Serialize for Smoothing {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Smoothing::Exact => s.serialize_str("exact"),
+            Smoothing::Huber { delta } => s.serialize_f64(*delta),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Smoothing {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Width {
+            delta: f64,
+        }
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Repr {
+            Width(f64),
+            Word(String),
+            Table { huber: Width },
+        }
+        match Repr::deserialize(d).map_err(|_| {
+            serde::de::Error::custom(
+                "smoothing must be `exact` or a positive Huber width such as 1e-10",
+            )
+        })? {
+            Repr::Width(delta)
+            | Repr::Table {
+                huber: Width { delta },
+            } => Ok(Smoothing::Huber { delta }),
+            Repr::Word(w) if w.eq_ignore_ascii_case("exact") => Ok(Smoothing::Exact),
+            Repr::Word(w) => Err(serde::de::Error::custom(format!(
+                "smoothing = '{w}' is invalid: give `exact` or a positive Huber width such as 1e-10"
+            ))),
+        }
+    }
+}
+
+/// A command-line smoothing: `exact` or a positive Huber width.
+pub fn parse_smoothing(text: &str) -> Result<serde_json::Value, String> {
+    let t = text.trim();
+    if t.eq_ignore_ascii_case("exact") {
+        return Ok("exact".into());
+    }
+    crate::settings::parse_positive(t).map_err(|_| {
+        format!("'{text}' is neither `exact` nor a positive Huber width such as 1e-10")
+    })
 }
 
 impl Smoothing {

@@ -1,0 +1,224 @@
+//! An output folder that always holds one whole run: a run writes into a
+//! fresh staging folder beside the target and, when everything is written,
+//! swaps it into place (an atomic exchange of the two directories where the
+//! system has one, under a lock so that concurrent runs take turns). An
+//! interrupted run leaves the previous run untouched; two runs at once leave
+//! the one that finished last, never a mix.
+//!
+//! A folder that exists, is not empty and was not written by contactlab is
+//! refused: it is replaced whole, so it must be ours.
+
+use std::fs::{File, OpenOptions};
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+
+use crate::io::output::write_new;
+
+/// The file that marks a folder as a contactlab run (it is replaced whole).
+pub const MARKER: &str = ".contactlab-run";
+
+/// A run being written.
+pub struct RunFolder {
+    target: PathBuf,
+    staging: PathBuf,
+    committed: bool,
+}
+
+impl RunFolder {
+    /// Starts a run into `target`: checks that it may be replaced and
+    /// creates the staging folder beside it (so that an unwritable place
+    /// fails at once, before any computation).
+    pub fn create(target: &Path) -> Result<Self> {
+        let shown = target.display();
+        let name = target
+            .file_name()
+            .with_context(|| format!("--out {shown}: give a folder name, not a root or `..`"))?
+            .to_string_lossy()
+            .into_owned();
+        let parent = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent).with_context(|| {
+            format!("--out {shown}: cannot create its parent folder; choose a writable place")
+        })?;
+        check_replaceable(target)?;
+        remove_stale_staging(&parent, &name);
+        let staging = (0..100)
+            .map(|k| {
+                parent.join(format!(
+                    ".{name}.staging-{}-{}",
+                    std::process::id(),
+                    unique(k)
+                ))
+            })
+            .find(|p| std::fs::create_dir(p).is_ok())
+            .with_context(|| {
+                format!(
+                    "--out {shown}: the output folder cannot be written; choose a writable place"
+                )
+            })?;
+        let folder = Self {
+            target: target.to_path_buf(),
+            staging,
+            committed: false,
+        };
+        write_new(&folder.staging.join(MARKER), b"written by contactlab\n")
+            .with_context(|| format!("--out {shown}: the output folder cannot be written"))?;
+        Ok(folder)
+    }
+
+    /// Where the run's files go until it is committed.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// The folder the run will be in.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Puts the finished run in place of whatever the target held.
+    pub fn commit(mut self) -> Result<PathBuf> {
+        let lock = lock_file(&self.target)?;
+        lock.lock()
+            .with_context(|| format!("cannot lock {}", self.target.display()))?;
+        check_replaceable(&self.target)?;
+        if self.target.exists() {
+            match exchange(&self.staging, &self.target) {
+                Ok(()) => {}
+                Err(_) => {
+                    // No atomic exchange here: move the old run aside first.
+                    let old = self.staging.with_extension("old");
+                    std::fs::rename(&self.target, &old)
+                        .with_context(|| format!("cannot replace {}", self.target.display()))?;
+                    std::fs::rename(&self.staging, &self.target).with_context(|| {
+                        format!("cannot move the run to {}", self.target.display())
+                    })?;
+                    let _ = std::fs::remove_dir_all(&old);
+                    self.committed = true;
+                    return Ok(self.target.clone());
+                }
+            }
+            // The staging path now holds the previous run.
+            let _ = std::fs::remove_dir_all(&self.staging);
+        } else {
+            std::fs::rename(&self.staging, &self.target)
+                .with_context(|| format!("cannot move the run to {}", self.target.display()))?;
+        }
+        self.committed = true;
+        Ok(self.target.clone())
+    }
+}
+
+impl Drop for RunFolder {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+        }
+    }
+}
+
+/// A target may be replaced if it does not exist, is an empty folder, or
+/// holds a contactlab run (its marker, or the manifest of older runs).
+fn check_replaceable(target: &Path) -> Result<()> {
+    let shown = target.display();
+    let meta = match std::fs::symlink_metadata(target) {
+        Err(_) => return Ok(()),
+        Ok(m) => m,
+    };
+    if !meta.is_dir() {
+        bail!("--out {shown} exists and is not a folder; choose a new folder name");
+    }
+    let mut entries = std::fs::read_dir(target)
+        .with_context(|| format!("--out {shown}: cannot read the existing folder"))?;
+    let empty = entries.next().is_none();
+    let ours = target.join(MARKER).is_file() || target.join("manifest.json").is_file();
+    if empty || ours {
+        Ok(())
+    } else {
+        bail!(
+            "--out {shown} is a folder that contactlab did not write (each run replaces its output folder whole); choose a new or empty folder"
+        )
+    }
+}
+
+/// The lock file beside `target`, opened without following a symbolic link.
+fn lock_file(target: &Path) -> Result<File> {
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let path = target.with_file_name(format!(".{name}.lock"));
+    let mut options = OpenOptions::new();
+    options.create(true).truncate(false).write(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NOFOLLOW);
+    }
+    options
+        .open(&path)
+        .with_context(|| format!("cannot open the lock file {}", path.display()))
+}
+
+/// Swaps two directories atomically (Linux `renameat2` with
+/// `RENAME_EXCHANGE`); an error where the system or file system has none.
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use std::ffi::CString;
+        use std::os::unix::ffi::OsStrExt;
+        let ca = CString::new(a.as_os_str().as_bytes())?;
+        let cb = CString::new(b.as_os_str().as_bytes())?;
+        // SAFETY: both paths are valid NUL-terminated strings that outlive the call.
+        let rc = unsafe {
+            libc::renameat2(
+                libc::AT_FDCWD,
+                ca.as_ptr(),
+                libc::AT_FDCWD,
+                cb.as_ptr(),
+                libc::RENAME_EXCHANGE,
+            )
+        };
+        if rc == 0 {
+            Ok(())
+        } else {
+            Err(std::io::Error::last_os_error())
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = (a, b);
+        Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
+    }
+}
+
+/// Removes staging folders of runs whose process is gone (Linux: no /proc/PID).
+fn remove_stale_staging(parent: &Path, name: &str) {
+    let prefix = format!(".{name}.staging-");
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix(&prefix) else {
+            continue;
+        };
+        let pid = rest.split('-').next().unwrap_or("");
+        let alive = Path::new("/proc").join(pid).exists();
+        if !alive && Path::new("/proc/self").exists() {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
+}
+
+/// A number that differs between calls and between processes.
+pub fn unique(salt: u64) -> u64 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0);
+    nanos ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
