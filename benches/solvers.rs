@@ -3,6 +3,7 @@
 //! (`contactlab bench` measures the same things quickly up to h = 1/256 and
 //! writes results/performance.csv.)
 
+use contactlab::coulomb::driver::solve_given_friction;
 use contactlab::coulomb::driver::solve_scene;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
@@ -11,7 +12,6 @@ use contactlab::settings::Settings;
 use contactlab::solvers::linalg::SparseCholesky;
 use contactlab::solvers::{Silent, registry};
 use contactlab::study::bench::pinned;
-use contactlab::study::compare::solve_given_friction;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -58,7 +58,7 @@ fn bench(c: &mut Criterion) {
             .unwrap()
             .coulomb
             .g;
-        for entry in registry::SOLVERS {
+        for entry in registry::solvers() {
             group.bench_with_input(
                 BenchmarkId::new(format!("given_friction/{}", entry.name), &label),
                 &(),

@@ -23,11 +23,14 @@
 //! ([`contactlab_solvers::Scales`]: displacement U, pressure P, load F), so
 //! the verdict does not change with the units: jumps and slips over U,
 //! pressures and tractions over P, nodal force residuals over P·w_max (the
-//! force a node carries at the mean pressure), the balance over F.
+//! force a node carries at the mean pressure), the balance over the load
+//! the contact must carry (|zᵀf| for a rigid mode z: relative to the net
+//! load, not the gross one, so that a nearly balanced load, condition (13)
+//! barely holding, is still held to the load it leaves).
 //! Complementarity-type conditions are measured in natural-map form
 //! (the smaller of the two quantities that may not both be nonzero).
 
-use contactlab_solvers::{ContactProblem, Law, Status};
+use contactlab_solvers::{ContactProblem, Law, Solution, Status};
 use serde::{Deserialize, Serialize};
 
 /// Default tolerance: every condition's violation at most this. At 1e-5 the
@@ -56,7 +59,9 @@ pub enum Condition {
     SlipDirection,
     /// ‖A v − f + Σλ e_t − Σμ e_s‖∞ / (P·w_max).
     Stationarity,
-    /// max over rigid modes z (‖z‖∞ = 1) of |zᵀ(f − Σλ e_t + Σμ e_s)| / F.
+    /// max over rigid modes z of |zᵀ(f − Σλ e_t + Σμ e_s)| / |zᵀf|: the
+    /// part of the load along the rigid mode that the contact forces leave
+    /// unbalanced, relative to that load (F where it is zero).
     ForceBalance,
 }
 
@@ -184,6 +189,23 @@ impl Certificate {
     }
 }
 
+/// Checks a solver's answer against `problem` under `law`.
+pub fn certify_solution(
+    problem: &ContactProblem,
+    law: Law,
+    s: &Solution,
+    tolerance: f64,
+) -> Certificate {
+    certify(
+        problem,
+        law,
+        &s.v,
+        &s.pressure,
+        &s.friction_traction,
+        tolerance,
+    )
+}
+
 /// Checks (v, p, q) against `problem` under `law` (for the given-friction
 /// law, at the problem's bounds g). Sizes that do not fit the problem, and
 /// any non-finite value, give infinite violations.
@@ -266,16 +288,21 @@ pub fn certify(
         .fold(0.0f64, |a, (ri, ci)| a.max((ri + ci).abs()))
         / (pr * w_max.max(f64::MIN_POSITIVE));
     for z in problem.rigid_modes() {
-        let norm = z.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        if norm > 0.0 {
-            // zᵀ(f − contact forces): the load the contact forces leave unbalanced.
-            let unbalanced: f64 = z
-                .iter()
-                .zip(problem.f())
-                .zip(&contact_force)
-                .map(|((zk, fk), ck)| zk * (fk - ck))
-                .sum();
-            out.force_balance = out.force_balance.max(unbalanced.abs() / (norm * force));
+        // zᵀ(f − contact forces): the load the contact forces leave unbalanced.
+        let load: f64 = z.iter().zip(problem.f()).map(|(zk, fk)| zk * fk).sum();
+        let unbalanced: f64 = z
+            .iter()
+            .zip(problem.f())
+            .zip(&contact_force)
+            .map(|((zk, fk), ck)| zk * (fk - ck))
+            .sum();
+        let scale = if load != 0.0 {
+            load.abs()
+        } else {
+            force * z.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+        };
+        if scale > 0.0 {
+            out.force_balance = out.force_balance.max(unbalanced.abs() / scale);
         }
     }
     out

@@ -5,15 +5,18 @@
 //!   from the algebraic unknowns to both bodies;
 //! - [`coulomb`]: the Coulomb problem around a given-friction solver: the
 //!   successive approximations of paper (9) and mesh continuation;
-//! - [`study`]: comparisons, sweeps, the stability map, benchmarks, Table 1
+//! - [`certificate`]: the independent check of every answer;
+//! - [`study`]: the study engine (trials, one runner, earned references) and
+//!   the studies: comparison, sweeps, the stability map, benchmark, Table 1
 //!   and the report;
 //! - [`io`]: scene files, output files, charts, the manifest;
-//! - [`cli`]: the command line.
+//! - [`cli`] and [`commands`]: the command line.
 //!
 //! The solvers of the algebraic subproblem live in `contactlab-solvers`.
 
 pub mod certificate;
 pub mod cli;
+pub mod commands;
 pub mod coulomb;
 pub mod io;
 pub mod mechanics;

@@ -8,9 +8,9 @@
 
 use std::collections::BTreeMap;
 
+use contactlab_solvers::Solver;
 use contactlab_solvers::registry::{self, Entry};
 use contactlab_solvers::settings::{Stopping, from_tree, to_tree};
-use contactlab_solvers::{Law, Solver};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -64,7 +64,8 @@ impl Settings {
     pub fn set(&mut self, path: &str, value: Value) -> Result<(), String> {
         let (owner, key) = path.split_once('.').ok_or_else(|| {
             format!(
-                "setting '{path}': write it as OWNER.NAME, e.g. coulomb.epsilon or relaxation.r"
+                "setting '{path}': write it as OWNER.NAME, e.g. coulomb.epsilon or {}",
+                example_path()
             )
         })?;
         let defaults = self.defaults_of(owner).ok_or_else(|| {
@@ -113,11 +114,64 @@ impl Settings {
         Ok(())
     }
 
+    /// Sets `path` from text as the command line writes it: a solver's knob
+    /// parses its own values (`exact`, `1e-10`), anything else is a number,
+    /// `true`/`false` or a word.
+    pub fn set_text(&mut self, path: &str, text: &str) -> Result<(), String> {
+        match path {
+            "schedule" => {
+                self.schedule = match text.trim() {
+                    "revisit" => Schedule::Revisit,
+                    "finest-only" => Schedule::FinestOnly,
+                    _ => {
+                        return Err(format!(
+                            "schedule = '{text}' is invalid: give revisit or finest-only"
+                        ));
+                    }
+                };
+                return Ok(());
+            }
+            "stopping" => {
+                self.stopping = match text.trim() {
+                    "relative" => Stopping::Relative,
+                    "paper" => Stopping::Paper,
+                    _ => {
+                        return Err(format!(
+                            "stopping = '{text}' is invalid: give relative or paper"
+                        ));
+                    }
+                };
+                return Ok(());
+            }
+            "certificate.tolerance" => {
+                self.certificate.tolerance = match text.trim().parse::<f64>() {
+                    Ok(t) if t.is_finite() && t > 0.0 => t,
+                    _ => {
+                        return Err(format!(
+                            "certificate.tolerance = '{text}' is invalid: give a positive number"
+                        ));
+                    }
+                };
+                return Ok(());
+            }
+            _ => {}
+        }
+        let knob = path
+            .split_once('.')
+            .and_then(|(owner, key)| registry::by_name(owner).and_then(|e| e.knob(key)));
+        let value = match knob {
+            Some(k) => (k.parse)(text),
+            None => contactlab_solvers::settings::parse_scalar(text),
+        }
+        .map_err(|m| format!("{path} = '{text}' is invalid: {m}"))?;
+        self.set(path, value)
+    }
+
     /// Sets the paper's one ε "for every loop that uses it": the fixed
     /// point's, and every registered solver's knob named `epsilon`.
     pub fn set_epsilon(&mut self, epsilon: f64) -> Result<(), String> {
         self.set("coulomb.epsilon", Value::from(epsilon))?;
-        for e in registry::SOLVERS {
+        for e in registry::solvers() {
             if e.knob("epsilon").is_some() {
                 self.set(&format!("{}.epsilon", e.name), Value::from(epsilon))?;
             }
@@ -175,7 +229,7 @@ impl Settings {
     /// Checks every setting: the fixed point's, each solver's, the certificate's.
     pub fn validate(&self) -> Result<(), String> {
         self.coulomb()?;
-        for e in registry::SOLVERS {
+        for e in registry::solvers() {
             self.build(e)?;
         }
         let t = self.certificate.tolerance;
@@ -190,7 +244,7 @@ impl Settings {
     /// Every setting, resolved, as one tree (for summaries and manifests).
     pub fn resolved(&self) -> Value {
         let mut solvers = serde_json::Map::new();
-        for e in registry::SOLVERS {
+        for e in registry::solvers() {
             let mut tree = self.solver_tree(e);
             if let Some(o) = tree.as_object_mut() {
                 o.insert(
@@ -211,10 +265,13 @@ impl Settings {
     }
 }
 
-/// Whether a solver needs the successive approximations around it to solve
-/// the Coulomb problem.
-pub fn needs_fixed_point(entry: &Entry) -> bool {
-    !entry.solves(Law::Coulomb)
+/// A solver setting's path for examples in messages: the first knob of the
+/// first registered solver.
+pub fn example_path() -> String {
+    registry::solvers()
+        .iter()
+        .find_map(|e| e.knobs.first().map(|k| format!("{}.{}", e.name, k.name)))
+        .unwrap_or_else(|| "coulomb.epsilon".into())
 }
 
 fn strip_owner<'a>(owner: &str, message: &'a str) -> &'a str {
@@ -252,7 +309,7 @@ mod tests {
     #[test]
     fn a_shorthand_knob_sets_every_field_it_names() {
         let mut s = Settings::default();
-        for e in registry::SOLVERS {
+        for e in registry::solvers() {
             for k in e.knobs.iter().filter(|k| k.fields.len() > 1) {
                 s.set(&format!("{}.{}", e.name, k.name), Value::from(1e-7))
                     .unwrap();

@@ -49,16 +49,22 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             "unknown problem 4",
         ),
         (
-            Input::Args(&["sweep", "--problems", "7"]),
+            Input::Args(&[
+                "sweep",
+                "--problems",
+                "7",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
             "unknown problem 7",
         ),
         (
             Input::Args(&["solve", "--problem", "1", "--solver", "simplex"]),
-            "unknown solver 'simplex'",
+            "invalid value 'simplex' for '--solver",
         ),
         (
             Input::Args(&["compare", "--problem", "1", "--solvers", "simplex"]),
-            "unknown solver 'simplex'",
+            "possible values: clarabel",
         ),
         (
             Input::Args(&["info", "--problem", "1", "--h", "1/60"]),
@@ -145,8 +151,14 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             "--relaxation-proximal",
         ),
         (
-            Input::Args(&["sweep", "--r-values", "1e4,-1"]),
-            "--r-values",
+            Input::Args(&[
+                "sweep",
+                "--vary",
+                "relaxation.r=1e4,-1",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
+            "relaxation.r",
         ),
         (
             Input::Args(&[

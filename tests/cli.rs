@@ -29,10 +29,17 @@ fn solve_writes_the_documented_profile_and_summary() {
     let mut lines = profile.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "x,u1_lower,u2_lower,u1_upper,u2_upper,jump,slip,pressure,friction_traction"
+        "x,u1_lower,u2_lower,u1_upper,u2_upper,jump,slip,pressure,friction_traction,status"
     );
     let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .map(|l| {
+            let fields: Vec<&str> = l.split(',').collect();
+            assert_eq!(
+                fields[9], "converged",
+                "the run's certified status on every row"
+            );
+            fields[..9].iter().map(|v| v.parse().unwrap()).collect()
+        })
         .collect();
     assert_eq!(rows.len(), 9, "one row per contact node at h = 1/8");
     for w in rows.windows(2) {
@@ -74,12 +81,22 @@ fn solve_writes_the_documented_profile_and_summary() {
     assert_eq!(summary["solver_status"], "converged");
     assert_eq!(summary["certificate"]["law"], "coulomb");
     assert_eq!(summary["h"], "1/8");
-    // No temporary files are left behind.
-    let names: Vec<String> = std::fs::read_dir(&out)
+    // No temporary files are left behind: the two files and the run's marker.
+    let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(names.len(), 2, "{names:?}");
+    names.sort();
+    assert_eq!(names, [".contactlab-run", "profile.csv", "summary.json"]);
+    let siblings: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("staging"))
+        .collect();
+    assert!(
+        siblings.is_empty(),
+        "staging folders left behind: {siblings:?}"
+    );
 }
 
 #[test]

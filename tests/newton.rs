@@ -2,6 +2,7 @@
 //! every stress condition.
 
 use contactlab::certificate::certify;
+use contactlab::coulomb::driver::solve_given_friction;
 use contactlab::coulomb::driver::solve_scene;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
@@ -11,7 +12,7 @@ use contactlab::solvers::newton::{NewtonSettings, semismooth_newton};
 use contactlab::solvers::{
     CondensedNewton, ContactNode, ContactProblem, Law, Silent, Solver, Status,
 };
-use contactlab::study::compare::{agreement, solve_given_friction};
+use contactlab::study::agreement::agreement;
 use faer::Mat;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde_json::Value;

@@ -8,12 +8,13 @@
 
 use contactlab::certificate::certify;
 use contactlab::coulomb::continuation::Schedule;
+use contactlab::coulomb::driver::solve_given_friction;
 use contactlab::coulomb::driver::{Run, solve_scene};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{Law, Silent, Smoothing, Status};
-use contactlab::study::compare::{agreement, solve_given_friction};
+use contactlab::study::agreement::agreement;
 use serde_json::Value;
 
 /// Displacements to 1e-6 of the largest one, pressures to 1e-4 of the

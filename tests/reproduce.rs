@@ -1,15 +1,20 @@
 //! `reproduce --quick`: every file, the documented headers, accuracy figures
-//! against a committed reference, valid charts; sweeps keep failed runs.
+//! against a committed reference, certified statuses, valid charts; trials
+//! that do not converge are kept and marked.
 
 use std::path::Path;
 use std::process::Command;
 
+use contactlab::io::csv::header_of;
 use contactlab::mechanics::contact_zone::PROFILE_COLUMNS;
 use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::study::compare::COMPARE_COLUMNS;
+use contactlab::solvers::{Law, Status, registry};
+use contactlab::study::reference::References;
 use contactlab::study::reproduce::FILES;
-use contactlab::study::sweep::{Factor, SWEEP_COLUMNS, SWEEP_TIMING_COLUMNS, SweepSpec, sweep};
+use contactlab::study::runner::{Keep, measure_all};
+use contactlab::study::trial::{Trial, TrialSpec};
 
 /// The committed reference: `compare.csv` of `reproduce --quick`.
 const REFERENCE: &str = include_str!("reference/quick_compare.csv");
@@ -22,14 +27,14 @@ fn float_close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-3 * a.abs().max(b.abs()) || (a - b).abs() <= 1e-10
 }
 
-fn header(path: &Path) -> Vec<String> {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    text.lines()
-        .next()
-        .unwrap_or_default()
-        .split(',')
-        .map(String::from)
-        .collect()
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut r = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let header = r.headers().unwrap().iter().map(String::from).collect();
+    let rows = r
+        .records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect();
+    (header, rows)
 }
 
 fn svg_texts(path: &Path) -> Vec<String> {
@@ -41,6 +46,18 @@ fn svg_texts(path: &Path) -> Vec<String> {
         .filter(|n| n.tag_name().name() == "text")
         .filter_map(|n| n.text().map(|t| t.to_string()))
         .collect()
+}
+
+fn trial_header() -> Vec<String> {
+    let spec = TrialSpec::new(
+        "x",
+        "x",
+        &Scene::paper_problem(1).unwrap(),
+        registry::solvers()[0],
+        Law::Coulomb,
+        &Settings::default(),
+    );
+    header_of(&Trial::not_run(&spec, Status::NotRun, String::new())).unwrap()
 }
 
 #[test]
@@ -56,20 +73,21 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         assert!(out.join(f).is_file(), "missing {f}");
     }
     for p in [1, 2, 3] {
-        for solver in contactlab::solvers::registry::names() {
+        for solver in registry::names() {
             for kind in ["friction", "frictionless"] {
                 let path = out.join(format!("profiles/p{p}_{solver}_{kind}.csv"));
-                assert_eq!(header(&path), PROFILE_COLUMNS, "{}", path.display());
+                assert_eq!(read_csv(&path).0, PROFILE_COLUMNS, "{}", path.display());
             }
         }
     }
-    assert_eq!(header(&out.join("compare.csv")), COMPARE_COLUMNS);
-    assert_eq!(header(&out.join("sweep.csv")), SWEEP_COLUMNS);
-    assert_eq!(header(&out.join("sweep_timing.csv")), SWEEP_TIMING_COLUMNS);
-    assert_eq!(
-        header(&out.join("table1.csv"))[..5],
-        ["problem", "schedule", "status", "mpp", "mu"]
-    );
+    for f in [
+        "compare.csv",
+        "sweep.csv",
+        "stability.csv",
+        "table1_trials.csv",
+    ] {
+        assert_eq!(read_csv(&out.join(f)).0, trial_header(), "{f}");
+    }
     let manifest: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
     for key in [
@@ -83,58 +101,61 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     ] {
         assert!(manifest.get(key).is_some(), "manifest lacks {key}");
     }
+    // Every solver's answers at the relative defaults are certified.
+    let (header, rows) = read_csv(&out.join("compare.csv"));
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    for r in rows.iter().filter(|r| r[col("study")] == "compare") {
+        assert_eq!(r[col("status")], "converged", "{r:?}");
+        assert_eq!(r[col("failing")], "", "{r:?}");
+        assert!(
+            !r[col("reference")].is_empty(),
+            "a reference was earned: {r:?}"
+        );
+    }
     // Accuracy figures against the committed reference, row by row.
-    let got = std::fs::read_to_string(out.join("compare.csv")).unwrap();
-    let rows = |text: &str| -> Vec<Vec<String>> {
-        text.lines()
-            .skip(1)
-            .map(|l| l.split(',').map(String::from).collect())
-            .collect()
-    };
-    let (reference, got) = (rows(REFERENCE), rows(&got));
+    let reference: Vec<Vec<String>> = csv::Reader::from_reader(REFERENCE.as_bytes())
+        .records()
+        .map(|x| x.unwrap().iter().map(String::from).collect())
+        .collect();
     assert!(!reference.is_empty());
+    let key = |r: &Vec<String>| {
+        ["study", "scene", "law", "solver"]
+            .map(|c| r[col(c)].clone())
+            .to_vec()
+    };
     for want in &reference {
-        let key = &want[..4];
-        let have = got
+        let have = rows
             .iter()
-            .find(|g| &g[..4] == key)
-            .unwrap_or_else(|| panic!("no row for {key:?}"));
-        for (i, column) in COMPARE_COLUMNS.iter().enumerate() {
+            .find(|g| key(g) == key(want))
+            .unwrap_or_else(|| panic!("no row for {:?}", key(want)));
+        for (i, column) in header.iter().enumerate() {
             let (a, b) = (&have[i], &want[i]);
+            if column == "detail" {
+                continue;
+            }
             match (a.parse::<f64>(), b.parse::<f64>()) {
-                _ if column.ends_with("iterations") => {
+                _ if column.ends_with("iterations") || column == "work" => {
                     let (a, b): (f64, f64) = (a.parse().unwrap(), b.parse().unwrap());
                     assert!(
                         (a - b).abs() <= 0.02 * b.max(1.0),
-                        "{key:?} {column}: {a} vs reference {b}"
+                        "{:?} {column}: {a} vs reference {b}",
+                        key(want)
                     );
                 }
                 (Ok(x), Ok(y)) => {
-                    assert!(float_close(x, y), "{key:?} {column}: {x} vs reference {y}")
-                }
-                _ if *column == "separated" => {
-                    // Interval ends within 1e-3.
-                    let nums = |s: &str| -> Vec<f64> {
-                        s.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == 'e'))
-                            .filter_map(|t| t.parse().ok())
-                            .collect()
-                    };
-                    let (x, y) = (nums(a), nums(b));
-                    assert_eq!(x.len(), y.len(), "{key:?} separated: {a} vs {b}");
                     assert!(
-                        x.iter().zip(&y).all(|(p, q)| (p - q).abs() < 1e-3),
-                        "{key:?} separated: {a} vs {b}"
-                    );
+                        float_close(x, y),
+                        "{:?} {column}: {x} vs reference {y}",
+                        key(want)
+                    )
                 }
-                _ => assert_eq!(a, b, "{key:?} {column}"),
+                _ => assert_eq!(a, b, "{:?} {column}", key(want)),
             }
         }
     }
-    // Charts: valid SVG, title, axis labels, one series per solver.
-    let charts = out.join("charts");
-    let solvers = contactlab::solvers::registry::names();
+    // Charts: valid SVG, title, axis labels, one series per solver where drawn per solver.
     let mut seen = 0;
-    for entry in std::fs::read_dir(&charts).unwrap() {
+    for entry in std::fs::read_dir(out.join("charts")).unwrap() {
         let path = entry.unwrap().path();
         let texts = svg_texts(&path);
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
@@ -172,50 +193,68 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             "{name}: title or axis label missing in {texts:?}"
         );
         if per_solver {
-            for s in &solvers {
+            for s in registry::names() {
                 assert!(has(s), "{name}: no series for {s}");
             }
         }
         seen += 1;
     }
-    assert!(seen >= 12 + 3 + 1 + 4 + 6 + 2, "only {seen} charts");
-    assert_eq!(
-        header(&out.join("performance.csv")),
-        contactlab::study::bench::PERFORMANCE_COLUMNS
+    assert!(seen >= 12 + 3 + 1 + 2 + 3, "only {seen} charts");
+    let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
+    assert!(readme.contains("## Does the paper's solver agree with the reference?"));
+    assert!(
+        !readme.contains("{{") && !readme.contains("{%"),
+        "unrendered template"
     );
 }
 
 #[test]
-fn sweep_rows_that_do_not_converge_are_marked_not_dropped() {
-    let spec = SweepSpec {
-        meshes: vec![MeshSize::from_level(3).unwrap()],
-        factors: vec![Factor::R, Factor::Epsilon],
-        // Relative values: r in units of K/L, ε of P.
-        r_values: vec![1e-8, 1e7],
-        epsilon_values: vec![1e-6, 1e-15],
-        time_limit: 0.5,
-        repeats: 0,
-        ..SweepSpec::default()
-    };
-    let (rows, references) = sweep(&spec, &Settings::default(), &|_| {}).unwrap();
-    // The reference is the exact solver, and the oracle agrees with it to its own accuracy.
-    assert_eq!(references[0].solver, "newton");
-    assert!(references[0].oracle_pressure_error < 1e-6, "{references:?}");
-    assert_eq!(rows.len(), 4, "one row per planned run");
-    let row = |factor: &str, value: &str| {
-        rows.iter()
-            .find(|r| r.factor == factor && r.value == value)
+fn trials_that_do_not_converge_are_marked_not_dropped() {
+    let mut scene = Scene::paper_problem(1).unwrap();
+    scene.set_finest(MeshSize::from_level(3).unwrap());
+    let relaxation = registry::with_role(registry::Role::PapersMethod).unwrap();
+    let settings = Settings::default();
+    let trial = |path: &str, value: &str| {
+        TrialSpec::new("sweep", path, &scene, relaxation, Law::Coulomb, &settings)
+            .with_work(Some(20_000))
+            .varying(path, value)
             .unwrap()
     };
-    for (factor, value) in [("r", "1e-8"), ("epsilon", "1e-15")] {
-        let r = row(factor, value);
+    // Relative values: r in units of K/L, ε of P.
+    let specs = vec![
+        trial("relaxation.r", "1e-8"),
+        trial("relaxation.r", "1e7"),
+        trial("relaxation.epsilon", "1e-15"),
+        trial("relaxation.epsilon", "1e-6"),
+    ];
+    let mut references = References::default();
+    let measured = measure_all(&specs, &mut references, Keep::default(), &|_| {}).unwrap();
+    assert_eq!(measured.len(), 4, "one row per planned trial");
+    let reference = references.all().next().unwrap();
+    // The reference is the most accurate exact solver, and the oracle is a
+    // candidate like any other.
+    assert_eq!(reference.solver, "newton");
+    assert!(
+        references
+            .candidates()
+            .iter()
+            .any(|c| c.solver == "clarabel")
+    );
+    let row = |knob: &str, value: &str| {
+        &measured
+            .iter()
+            .find(|m| m.trial.knob == knob && m.trial.value == value)
+            .unwrap()
+            .trial
+    };
+    for (knob, value) in [("relaxation.r", "1e-8"), ("relaxation.epsilon", "1e-15")] {
+        let r = row(knob, value);
         assert!(
-            !r.converged && r.status != "converged",
-            "{factor} = {value}: {}",
-            r.status
+            !r.certified() && r.status == Status::MaxIterations,
+            "{knob} = {value}: {r:?}"
         );
     }
-    for (factor, value) in [("r", "1e7"), ("epsilon", "1e-6")] {
-        assert!(row(factor, value).converged);
+    for (knob, value) in [("relaxation.r", "1e7"), ("relaxation.epsilon", "1e-6")] {
+        assert!(row(knob, value).certified(), "{knob} = {value}");
     }
 }

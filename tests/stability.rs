@@ -1,92 +1,123 @@
 //! The stability map detects each documented failure and reports it with a
-//! non-converged status (these tests check detection, not success).
+//! non-converged status (these tests check detection, not success), and its
+//! accuracy file is the same on a second run (work caps, not the clock).
 
+use contactlab::io::csv::to_csv;
 use contactlab::settings::Settings;
 use contactlab::solvers::{
     ContactNode, ContactProblem, Law, ProxUzawa, RelaxationSettings, Silent, Solver, Status,
 };
-use contactlab::study::stability::{Class, StabilityRow, StabilitySpec, stability};
+use contactlab::study::reference::References;
+use contactlab::study::stability::classify::Class;
+use contactlab::study::stability::{Map, StabilitySpec, run};
+use contactlab::study::trial::Trial;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
-fn find<'a>(
-    rows: &'a [StabilityRow],
-    group: &str,
-    method: &str,
-    condition: &str,
-) -> &'a StabilityRow {
-    rows.iter()
-        .find(|r| r.group == group && r.method == method && r.condition.starts_with(condition))
-        .unwrap_or_else(|| panic!("no run {group} / {method} / {condition}"))
+fn quick_map() -> Map {
+    run(
+        &StabilitySpec::quick(),
+        &Settings::default(),
+        &mut References::default(),
+        &|_| {},
+        &|_| {},
+    )
+    .unwrap()
+}
+
+fn find<'a>(trials: &'a [Trial], group: &str, solver: &str, knob: &str, value: &str) -> &'a Trial {
+    trials
+        .iter()
+        .find(|t| t.group == group && t.solver == solver && t.knob == knob && t.value == value)
+        .unwrap_or_else(|| panic!("no trial {group} / {solver} / {knob} = {value}"))
+}
+
+fn class(t: &Trial) -> Class {
+    Class::parse(&t.class).unwrap_or_else(|| panic!("no class: {t:?}"))
 }
 
 #[test]
 fn each_documented_failure_is_detected_and_reported() {
-    let (rows, traces) = stability(&StabilitySpec::quick(), &Settings::default(), &|_| {}).unwrap();
-    let not_converged = |r: &StabilityRow| r.status != "converged";
-    // r far too small: the relaxation stops at its budget.
-    let r = find(&rows, "r", "relaxation", "r = 1e-8");
-    assert_eq!(r.class, Class::Stalled, "{r:?}");
-    assert!(not_converged(r));
-    // An unreachable ε: stopped by the budget.
-    let r = find(&rows, "epsilon", "relaxation", "ε = 1e-15");
-    assert_eq!(r.class, Class::Stalled, "{r:?}");
-    assert!(not_converged(r));
-    // A coarse smoothing converges by its own test but is wrong by the residuals.
-    let r = find(&rows, "smoothing", "relaxation", "huber(1e-2)");
-    assert_eq!(r.class, Class::Wrong, "{r:?}");
-    assert!(r.kkt > contactlab::study::stability::WRONG_KKT);
-    // A large friction coefficient: the fixed point stops contracting on problem 1.
-    let r = rows
-        .iter()
-        .find(|r| r.group == "friction" && r.problem == "problem 1" && r.value == 16.0)
-        .unwrap();
-    assert!(matches!(r.class, Class::Diverged | Class::Stalled), "{r:?}");
-    assert!(not_converged(r));
-    let trace = traces
-        .iter()
-        .find(|t| t.problem.starts_with("problem 1") && t.friction == 16.0)
-        .unwrap();
-    assert!(
-        !trace.converged && trace.contractions.iter().flatten().any(|&q| q >= 1.0),
-        "{trace:?}"
-    );
-    // Condition (13) violated: refused; without the check Clarabel reports an
-    // unbounded problem and the relaxation runs into its budget.
-    for solver in ["clarabel", "relaxation"] {
-        assert_eq!(
-            find(&rows, "load", solver, "total vertical load +2e0").class,
-            Class::Refused
-        );
+    let map = quick_map();
+    let t = &map.trials;
+    // Every solver at its defaults is certified on problem 1.
+    for d in t.iter().filter(|t| t.group == "default") {
+        assert_eq!(class(d), Class::Converged, "{d:?}");
+        assert!(d.certified());
     }
-    let r = find(
-        &rows,
-        "load",
-        "clarabel (check (13) bypassed)",
-        "total vertical load +2e0",
+    // A far too small penalty, and an unreachable ε: stopped by the work cap.
+    for (knob, value) in [("relaxation.r", "1e-8"), ("relaxation.epsilon", "1e-15")] {
+        let r = find(t, "stress", "relaxation", knob, value);
+        assert_eq!(class(r), Class::Stalled, "{r:?}");
+        assert_eq!(r.status, Status::MaxIterations, "{r:?}");
+    }
+    // A coarse smoothing converges by its own test but fails the certificate.
+    let r = find(t, "stress", "relaxation", "relaxation.smoothing", "1e-2");
+    assert_eq!(class(r), Class::Wrong, "{r:?}");
+    assert_eq!(
+        (r.solver_status, r.status),
+        (Status::Converged, Status::Inaccurate)
     );
-    assert_eq!(r.status, "unbounded", "{r:?}");
-    let r = find(
-        &rows,
-        "load",
-        "relaxation (check (13) bypassed)",
-        "total vertical load +2e0",
-    );
-    assert!(not_converged(r) && r.class == Class::Stalled, "{r:?}");
-    // Clarabel: a loose tolerance is wrong, an extreme one ends at reduced accuracy.
-    let r = rows
+    assert!(r.failing.contains("stick"), "{r:?}");
+    // So does Clarabel at a loose tolerance.
+    let r = find(t, "stress", "clarabel", "clarabel.tol", "1e-4");
+    assert_eq!(class(r), Class::Wrong, "{r:?}");
+    // A large friction coefficient: the fixed point stops contracting on problem 1.
+    let r = t
         .iter()
         .find(|r| {
-            r.group == "clarabel" && r.method == "clarabel" && r.condition == "tolerance 1e-4"
+            r.group == "friction"
+                && r.scene == "problem 1"
+                && r.value == "16"
+                && r.solver == "newton"
         })
         .unwrap();
-    assert_eq!(r.class, Class::Wrong, "{r:?}");
-    let tight: Vec<&StabilityRow> = rows
+    assert!(
+        matches!(class(r), Class::Diverged | Class::Stalled),
+        "{r:?}"
+    );
+    assert!(!r.certified());
+    assert!(
+        map.steps
+            .iter()
+            .filter(|s| s.scene == "problem 1"
+                && s.friction_coefficient == 16.0
+                && s.solver == "newton")
+            .any(|s| s.contraction.is_some_and(|q| q >= 1.0)),
+        "the fixed point at 𝓕 = 16 should show a contraction factor ≥ 1"
+    );
+    // Condition (13) violated: refused by our check for every solver; with
+    // the check bypassed, Clarabel says unbounded (a correct refusal) and
+    // the others stop at their caps.
+    for r in t.iter().filter(|r| r.group == "refused") {
+        assert_eq!(class(r), Class::Refused, "{r:?}");
+        assert_eq!(r.status, Status::NotRun);
+    }
+    let r = t
         .iter()
-        .filter(|r| {
-            r.group == "clarabel" && r.condition == "tolerance 1e-14" && r.class == Class::Stalled
-        })
-        .collect();
-    assert!(!tight.is_empty() && tight.iter().all(|r| r.status == "reduced_accuracy"));
+        .find(|r| r.group == "refused_check_bypassed" && r.solver == "clarabel")
+        .unwrap();
+    assert_eq!(
+        (r.status, class(r)),
+        (Status::Unbounded, Class::Refused),
+        "{r:?}"
+    );
+    for r in t
+        .iter()
+        .filter(|r| r.group == "refused_check_bypassed" && r.solver != "clarabel")
+    {
+        assert!(!r.certified() && class(r) == Class::Stalled, "{r:?}");
+    }
+}
+
+#[test]
+fn the_map_is_the_same_on_a_second_run() {
+    let a = quick_map();
+    let b = quick_map();
+    assert_eq!(
+        to_csv(&a.trials, &[]).unwrap(),
+        to_csv(&b.trials, &[]).unwrap(),
+        "stability.csv must not depend on the machine's speed"
+    );
 }
 
 #[test]

@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::observer::{Limits, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, StageInfo};
+use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -89,6 +89,27 @@ pub const ENTRY: Entry = Entry {
         reference: 1e-10,
         exact: true,
     },
+    role: Role::Oracle,
+    sweeps: &[],
+    stress: &[
+        Variation {
+            knob: "tol",
+            values: &["1e-4", "1e-6", "1e-8", "1e-10", "1e-12", "1e-14"],
+            quick: &["1e-4", "1e-10", "1e-14"],
+        },
+        Variation {
+            knob: "equilibrate",
+            values: &["false"],
+            quick: &["false"],
+        },
+        Variation {
+            knob: "scale_unknowns",
+            values: &["false"],
+            quick: &["false"],
+        },
+    ],
+    study_work: 2000,
+    kernel: None,
 };
 
 /// Clarabel's settings that matter here; the rest keep Clarabel's defaults.

@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use crate::condensed::Condensed;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, StageInfo};
+use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -76,6 +76,15 @@ pub const ENTRY: Entry = Entry {
         reference: 1e-13,
         exact: true,
     },
+    role: Role::Other,
+    sweeps: &[],
+    stress: &[Variation {
+        knob: "line_search",
+        values: &["false"],
+        quick: &["false"],
+    }],
+    study_work: 5000,
+    kernel: None,
 };
 
 /// Settings of the condensed semismooth Newton solver. The same in both

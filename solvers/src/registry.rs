@@ -4,10 +4,43 @@
 //! The harness reads only this; adding a solver is its own file (which
 //! defines an [`Entry`]) plus one line in [`SOLVERS`].
 
+use std::sync::RwLock;
+
+use nalgebra_sparse::CsrMatrix;
 use serde_json::Value;
 
+use crate::problem::ContactProblem;
 use crate::settings::Stopping;
 use crate::solver::{Law, Solver};
+
+/// What a solver is to this testbed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// The paper's method: Table 1 counts its iterations.
+    PapersMethod,
+    /// The independent conic oracle the paper's method is verified against.
+    Oracle,
+    /// Any other solver.
+    Other,
+}
+
+/// Values of one knob that a study runs through, one at a time around the
+/// defaults (as the command line would write them).
+#[derive(Clone, Copy, Debug)]
+pub struct Variation {
+    pub knob: &'static str,
+    pub values: &'static [&'static str],
+    /// A shorter list for quick runs (tests).
+    pub quick: &'static [&'static str],
+}
+
+/// One iteration of a solver's inner loop, ready to be timed against one
+/// product with `matrix` (the operator it iterates with).
+pub struct InnerKernel {
+    pub name: &'static str,
+    pub matrix: CsrMatrix<f64>,
+    pub step: Box<dyn FnMut()>,
+}
 
 /// A progress stage a solver reports (see [`crate::Progress`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,6 +103,17 @@ pub struct Entry {
     /// errors that name the field).
     pub build: fn(&Value) -> Result<Box<dyn Solver>, String>,
     pub accuracy: Accuracy,
+    pub role: Role,
+    /// One-factor sweeps of the Coulomb problem (parameter studies).
+    pub sweeps: &'static [Variation],
+    /// Stress conditions of the stability map.
+    pub stress: &'static [Variation],
+    /// Work (events of its work stage, over a whole Coulomb solve) after
+    /// which a study stops it: a count, so that a study's results do not
+    /// depend on the machine's speed.
+    pub study_work: usize,
+    /// Its inner iteration for the speed benchmark (None: it has none).
+    pub kernel: Option<fn(&ContactProblem) -> InnerKernel>,
 }
 
 impl Entry {
@@ -94,14 +138,48 @@ pub const SOLVERS: &[&Entry] = &[
     &crate::newton::ENTRY,
 ];
 
+/// Solvers registered at run time (by a program that embeds contactlab, or
+/// a test), after the built-in ones.
+static REGISTERED: RwLock<Vec<&'static Entry>> = RwLock::new(Vec::new());
+
+/// Registers a solver at run time; every command and study sees it from
+/// then on. Names must be unique.
+pub fn register(entry: &'static Entry) -> Result<(), String> {
+    if by_name(entry.name).is_some() {
+        return Err(format!(
+            "a solver named '{}' is registered already",
+            entry.name
+        ));
+    }
+    REGISTERED
+        .write()
+        .map_err(|_| "the registry lock is poisoned".to_string())?
+        .push(entry);
+    Ok(())
+}
+
+/// Every registered solver: the built-in ones, then those registered at run time.
+pub fn solvers() -> Vec<&'static Entry> {
+    let mut all: Vec<&'static Entry> = SOLVERS.to_vec();
+    if let Ok(extra) = REGISTERED.read() {
+        all.extend(extra.iter().copied());
+    }
+    all
+}
+
+/// The solver with a role (the paper's method, the oracle), if registered.
+pub fn with_role(role: Role) -> Option<&'static Entry> {
+    solvers().into_iter().find(|e| e.role == role)
+}
+
 /// Looks a solver up by name.
 pub fn by_name(name: &str) -> Option<&'static Entry> {
-    SOLVERS.iter().copied().find(|e| e.name == name)
+    solvers().into_iter().find(|e| e.name == name)
 }
 
 /// The registered names, for messages.
 pub fn names() -> Vec<&'static str> {
-    SOLVERS.iter().map(|e| e.name).collect()
+    solvers().iter().map(|e| e.name).collect()
 }
 
 #[cfg(test)]
@@ -131,5 +209,9 @@ mod tests {
         names.sort();
         names.dedup();
         assert_eq!(names.len(), SOLVERS.len(), "names are unique");
+        for role in [Role::PapersMethod, Role::Oracle] {
+            let n = SOLVERS.iter().filter(|e| e.role == role).count();
+            assert!(n <= 1, "at most one solver has role {role:?}");
+        }
     }
 }

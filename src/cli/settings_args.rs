@@ -6,7 +6,6 @@ use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use contactlab_solvers::Stopping;
 use contactlab_solvers::registry::{self, Knob};
-use contactlab_solvers::settings::parse_scalar;
 use serde_json::Value;
 
 use crate::coulomb::continuation::Schedule;
@@ -67,7 +66,7 @@ impl clap::Args for SettingsArgs {
                     .value_name("EPS")
                     .allow_hyphen_values(true)
                     .value_parser(number::<f64>(EPSILON, "give a positive number"))
-                    .help("The paper's ε for every loop that uses one: the friction fixed point (coulomb.epsilon) and every solver setting named epsilon [default: 1e-8 / 1e-6 relative; paper 1e-4]"),
+                    .help("The paper's ε for every loop that uses one: the friction fixed point (coulomb.epsilon) and every solver setting named epsilon [default: 1e-7 / 1e-6 relative; paper 1e-4]"),
             )
             .arg(
                 Arg::new(MAX_FRICTION)
@@ -100,9 +99,12 @@ impl clap::Args for SettingsArgs {
                     .value_name("PATH=VALUE")
                     .action(ArgAction::Append)
                     .allow_hyphen_values(true)
-                    .help("Any setting by path, e.g. --set coulomb.stall_window=8 or --set relaxation.r=1e8 (repeatable)"),
+                    .help(format!(
+                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable)",
+                        crate::settings::example_path()
+                    )),
             );
-        for e in registry::SOLVERS {
+        for e in registry::solvers() {
             for k in e.knobs {
                 cmd = cmd.arg(
                     Arg::new(knob_id(e.name, k))
@@ -139,7 +141,7 @@ impl clap::FromArgMatches for SettingsArgs {
             certificate_tolerance: m.try_get_one::<f64>(CERTIFY_TOL).ok().flatten().copied(),
             assignments: Vec::new(),
         };
-        for e in registry::SOLVERS {
+        for e in registry::solvers() {
             for k in e.knobs {
                 if let Some(value) = text(&knob_id(e.name, k)) {
                     out.assignments.push((
@@ -200,17 +202,12 @@ impl SettingsArgs {
         }
         for (path, text, flag) in &self.assignments {
             if flag == "--set" && !text_has_value(path, text) {
-                bail!("--set '{path}': write it as PATH=VALUE, e.g. --set relaxation.r=1e8");
+                bail!(
+                    "--set '{path}': write it as PATH=VALUE, e.g. --set {}=VALUE",
+                    crate::settings::example_path()
+                );
             }
-            let knob = path
-                .split_once('.')
-                .and_then(|(owner, key)| registry::by_name(owner).and_then(|e| e.knob(key)));
-            let value = match knob {
-                Some(k) => (k.parse)(text),
-                None => parse_scalar(text),
-            }
-            .map_err(|m| anyhow::anyhow!("{path} ({flag}) = '{text}' is invalid: {m}"))?;
-            settings.set(path, value).map_err(|m| {
+            settings.set_text(path, text).map_err(|m| {
                 let m = with_flag(m);
                 if m.contains(flag.as_str()) {
                     anyhow::anyhow!(m)

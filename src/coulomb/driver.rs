@@ -4,10 +4,10 @@
 
 use anyhow::{Context, Result, bail};
 use contactlab_solvers::registry::{self, Entry};
-use contactlab_solvers::{Law, Observer, Status};
+use contactlab_solvers::{Law, Observer, Solution, Status};
 use serde::Serialize;
 
-use crate::certificate::{Certificate, certify};
+use crate::certificate::{Certificate, certify_solution};
 use crate::coulomb::continuation::{Continuation, LevelCount};
 use crate::coulomb::fixed_point::{
     CoulombSolution, GivenFrictionStep, Outcome, SingleLevel, friction_fixed_point,
@@ -178,16 +178,24 @@ pub fn report(
         .set_friction_bound(&coulomb.g)
         .expect("the fixed point keeps g finite and ≥ 0");
     let s = &coulomb.solution;
-    let certificate = certify(
+    let certificate = certify_solution(
         &discretization.problem,
         Law::Coulomb,
-        &s.v,
-        &s.pressure,
-        &s.friction_traction,
+        s,
         settings.certificate.tolerance,
     );
     let status = certificate.verdict(coulomb.status);
-    let profile = contact_profile(&discretization, s);
+    let mut coulomb = coulomb;
+    if matches!(status, Status::Unbounded | Status::Infeasible) {
+        // The scene passed our check of condition (13): a solution exists.
+        coulomb.detail = format!(
+            "{} — but condition (13) holds (total vertical load {:e} < 0), so a solution exists: \
+             this is a failure of the solver, not a property of the problem",
+            coulomb.detail, discretization.total_load
+        );
+    }
+    let s = &coulomb.solution;
+    let profile = contact_profile(&discretization, s, status);
     let separation = separation_of(&discretization, s);
     let objective = discretization.problem.objective(&s.v);
     Run {
@@ -202,6 +210,33 @@ pub fn report(
         objective,
         levels,
     }
+}
+
+/// One given-friction subproblem (bound `g` on the finest level's contact
+/// nodes) solved by a registered solver, the way it solves inside the
+/// Coulomb fixed point: by continuation over the scene's levels if it
+/// warm-starts, otherwise on the finest level.
+pub fn solve_given_friction(
+    scene: &Scene,
+    settings: &Settings,
+    solver: &str,
+    g: &[f64],
+    observer: &mut dyn Observer,
+) -> Result<(Discretization, Solution, Vec<LevelCount>)> {
+    let (solution, mut finest, counts, _) = with_step(scene, settings, solver, |step, _| {
+        step.solve_step(g, observer)
+    })?;
+    let counts = counts.unwrap_or_else(|| {
+        vec![LevelCount {
+            h: finest.h(),
+            visits: 1,
+            uzawa: solution.iterations.outer,
+            sweeps: solution.iterations.inner,
+            seconds: solution.timing.total(),
+        }]
+    });
+    finest.problem.set_friction_bound(g)?;
+    Ok((finest, solution, counts))
 }
 
 /// `summary.json`.

@@ -38,16 +38,18 @@ impl Default for CoulombSettings {
 }
 
 impl CoulombSettings {
-    /// The paper's ε = 1e-4 (absolute), or its relative counterpart 1e-8:
-    /// the fixed point's stopping error, about ε·P·q/(1 − q) in pressure for
-    /// a contraction factor q, stays well below the certificate's default
-    /// tolerance.
+    /// The paper's ε = 1e-4 (absolute), or its relative counterpart 1e-7:
+    /// the fixed point's stopping error, about ε·𝓕P·q/(1 − q) for a
+    /// contraction factor q, stays ten times below the certificate's default
+    /// tolerance 1e-5 for q ≤ 0.9, while a tighter ε (1e-8 was measured)
+    /// falls under the noise of the inner solvers' own answers (Clarabel's
+    /// fixed point then stalls near max|Δg| = 1e-7·P at 𝓕 = 2).
     pub fn defaults(stopping: Stopping) -> Self {
         Self {
             stopping,
             epsilon: match stopping {
                 Stopping::Paper => 1e-4,
-                Stopping::Relative => 1e-8,
+                Stopping::Relative => 1e-7,
             },
             max_iterations: 50,
             stall_window: 5,
@@ -73,7 +75,7 @@ impl Validate for CoulombSettings {
     fn validate(&self) -> Result<(), String> {
         if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
             return Err(format!(
-                "coulomb.epsilon = {} is invalid: the friction tolerance must be a positive number (default 1e-8; the paper: 1e-4)",
+                "coulomb.epsilon = {} is invalid: the friction tolerance must be a positive number (default 1e-7; the paper: 1e-4)",
                 self.epsilon
             ));
         }

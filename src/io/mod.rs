@@ -2,6 +2,7 @@
 //! manifest of a results directory.
 
 pub mod charts;
+pub mod csv;
 pub mod manifest;
 pub mod output;
 pub mod run_folder;

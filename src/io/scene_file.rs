@@ -156,12 +156,25 @@ pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
 /// Reads a regular file of at most [`MAX_SCENE_BYTES`]: a FIFO would block
 /// forever and a device such as /dev/zero would be read until memory runs out.
 pub fn read_small_file(path: &Path) -> Result<Vec<u8>, String> {
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let not_regular = "it is not a regular file (a directory, FIFO or device); give a .toml file";
+    // Ask before opening: opening a FIFO for reading blocks until a writer comes.
+    if !std::fs::metadata(path)
+        .map_err(|e| e.to_string())?
+        .is_file()
+    {
+        return Err(not_regular.into());
+    }
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NONBLOCK);
+    }
+    let file = options.open(path).map_err(|e| e.to_string())?;
     let meta = file.metadata().map_err(|e| e.to_string())?;
     if !meta.is_file() {
-        return Err(
-            "it is not a regular file (a directory, FIFO or device); give a .toml file".into(),
-        );
+        return Err(not_regular.into());
     }
     if meta.len() > MAX_SCENE_BYTES {
         return Err(format!(

@@ -1,9 +1,10 @@
 //! The contact zone Γ_K of a solution: per-node profile and the separated
 //! part of Γ_K.
 
-use contactlab_solvers::Solution;
+use contactlab_solvers::{Solution, Status};
 use serde::Serialize;
 
+use crate::io::csv::fixed;
 use crate::mechanics::discretization::Discretization;
 
 /// Separation means jump < −tol with tol = SEPARATION_TOL × (largest nodal
@@ -11,26 +12,40 @@ use crate::mechanics::discretization::Discretization;
 /// 1e-9 of that, the relaxation's (r = 1e12) far below.
 pub const SEPARATION_TOL: f64 = 1e-6;
 
-/// One row of `profile.csv`, one contact node.
+/// One row of `profile.csv`, one contact node. Lengths in the scene's
+/// units, forces per unit length of Γ_K.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ProfileRow {
+    /// Position along Γ_K.
+    #[serde(serialize_with = "fixed")]
     pub x: f64,
+    /// Displacements of the lower body's and the upper body's node there.
+    #[serde(serialize_with = "fixed")]
     pub u1_lower: f64,
+    #[serde(serialize_with = "fixed")]
     pub u2_lower: f64,
+    #[serde(serialize_with = "fixed")]
     pub u1_upper: f64,
+    #[serde(serialize_with = "fixed")]
     pub u2_upper: f64,
-    /// t = u2_lower − u2_upper ≤ 0: the jump [u].
+    /// t = u2_lower − u2_upper ≤ 0: the jump [u] (negative: separated).
+    #[serde(serialize_with = "fixed")]
     pub jump: f64,
     /// s = u1_lower − u1_upper: the slip.
+    #[serde(serialize_with = "fixed")]
     pub slip: f64,
-    /// p ≥ 0: contact pressure per unit length (the multiplier l).
+    /// p ≥ 0: contact pressure (the multiplier l = −σ_n).
+    #[serde(serialize_with = "fixed")]
     pub pressure: f64,
-    /// x-traction on the lower body per unit length; opposes the slip.
+    /// x-traction on the lower body; |q| ≤ g, opposing the slip.
+    #[serde(serialize_with = "fixed")]
     pub friction_traction: f64,
+    /// The certified status of the run the profile comes from.
+    pub status: Status,
 }
 
 /// Column names of `profile.csv`, in order.
-pub const PROFILE_COLUMNS: [&str; 9] = [
+pub const PROFILE_COLUMNS: [&str; 10] = [
     "x",
     "u1_lower",
     "u2_lower",
@@ -40,26 +55,11 @@ pub const PROFILE_COLUMNS: [&str; 9] = [
     "slip",
     "pressure",
     "friction_traction",
+    "status",
 ];
 
-impl ProfileRow {
-    pub fn values(&self) -> [f64; 9] {
-        [
-            self.x,
-            self.u1_lower,
-            self.u2_lower,
-            self.u1_upper,
-            self.u2_upper,
-            self.jump,
-            self.slip,
-            self.pressure,
-            self.friction_traction,
-        ]
-    }
-}
-
-/// The profile along Γ_K in increasing x.
-pub fn contact_profile(d: &Discretization, solution: &Solution) -> Vec<ProfileRow> {
+/// The profile along Γ_K in increasing x, marked with the run's status.
+pub fn contact_profile(d: &Discretization, solution: &Solution, status: Status) -> Vec<ProfileRow> {
     let u = d.displacements(&solution.v);
     d.dofs
         .contacts()
@@ -75,6 +75,7 @@ pub fn contact_profile(d: &Discretization, solution: &Solution) -> Vec<ProfileRo
             slip: solution.v[c.s],
             pressure: solution.pressure[i],
             friction_traction: solution.friction_traction[i],
+            status,
         })
         .collect()
 }

@@ -15,8 +15,17 @@ use crate::mechanics::scene::{Scene, SceneError};
 pub enum BuildError {
     #[error(transparent)]
     Scene(#[from] SceneError),
+    #[error(
+        "material.young (--young) and loads[].p2 are too far apart in magnitude for double precision: {0}; choose units in which both are nearer 1"
+    )]
+    Scales(ProblemError),
+    #[error(
+        "material.young (--young) = {} makes the stiffness overflow: choose units in which E is smaller",
+        crate::mechanics::scene::Shown::shown(young)
+    )]
+    Overflow { young: f64 },
     #[error("assembled problem is inconsistent: {0}")]
-    Problem(#[from] ProblemError),
+    Problem(ProblemError),
 }
 
 /// The paper's scene on one mesh.
@@ -55,7 +64,14 @@ impl Discretization {
         let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
-        let problem = ContactProblem::new(a, f, m, contacts, vec![rigid_mode])?;
+        let problem =
+            ContactProblem::new(a, f, m, contacts, vec![rigid_mode]).map_err(|e| match e {
+                ProblemError::Scale { .. } => BuildError::Scales(e),
+                ProblemError::NonFinite { what: "A" } => BuildError::Overflow {
+                    young: scene.material.young,
+                },
+                other => BuildError::Problem(other),
+            })?;
         Ok(Self {
             mesh,
             dofs,

@@ -51,20 +51,50 @@ pub enum SceneError {
         expected: String,
     },
     #[error(
-        "the loads violate the paper's condition (13): their total vertical force on the upper body is {total}, \
+        "the loads violate the paper's condition (13): their total vertical force on the upper body is {}, \
          but it must be strictly negative (pushing the upper body onto the lower one), \
-         otherwise the semicoercive problem has no solution (Theorem 1); make the sum of p2·(to − from) negative"
+         otherwise the semicoercive problem has no solution (Theorem 1); make the sum of p2·(to − from) negative",
+        total.shown()
     )]
     NoSolution { total: f64 },
     #[error("unknown problem {0}: the built-in problems are 1, 2 and 3 (or give a scene file)")]
     UnknownProblem(u32),
 }
 
-fn invalid(field: &str, value: impl ToString, expected: &str) -> SceneError {
+fn invalid(field: &str, value: impl Shown, expected: &str) -> SceneError {
     SceneError::Invalid {
         field: field.to_string(),
-        value: value.to_string(),
+        value: value.shown(),
         expected: expected.to_string(),
+    }
+}
+
+/// A value as an error message shows it: numbers far from 1 in scientific
+/// notation, not as hundreds of digits.
+pub trait Shown {
+    fn shown(&self) -> String;
+}
+
+impl Shown for f64 {
+    fn shown(&self) -> String {
+        let a = self.abs();
+        if *self == 0.0 || !self.is_finite() || (1e-4..1e6).contains(&a) {
+            format!("{self}")
+        } else {
+            format!("{self:e}")
+        }
+    }
+}
+
+impl Shown for &str {
+    fn shown(&self) -> String {
+        self.to_string()
+    }
+}
+
+impl Shown for String {
+    fn shown(&self) -> String {
+        self.clone()
     }
 }
 
@@ -106,11 +136,11 @@ impl Scene {
     /// Checks every field, then condition (13).
     pub fn validate(&self) -> Result<(), SceneError> {
         let m = &self.material;
-        if !(m.young.is_finite() && m.young > 0.0) {
+        if !(m.young.is_normal() && m.young > 0.0) {
             return Err(invalid(
                 "material.young (--young)",
                 m.young,
-                "Young's modulus must be a positive number (the paper: 73e3)",
+                "Young's modulus must be a positive normal number, at least 2.2e-308 (the paper: 73e3)",
             ));
         }
         if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
@@ -120,7 +150,9 @@ impl Scene {
                 "Poisson's ratio must lie in (-1, 0.5) (the paper: 0.34)",
             ));
         }
-        if !(self.friction.is_finite() && self.friction >= 0.0) {
+        if !(self.friction.is_finite() && self.friction >= 0.0)
+            || (self.friction != 0.0 && !self.friction.is_normal())
+        {
             return Err(invalid(
                 "friction (--friction)",
                 self.friction,
@@ -148,11 +180,11 @@ impl Scene {
                     &format!("a segment must have from < to, here from = {}", l.from),
                 ));
             }
-            if !l.p2.is_finite() {
+            if !l.p2.is_finite() || (l.p2 != 0.0 && !l.p2.is_normal()) {
                 return Err(invalid(
                     &field("p2"),
                     l.p2,
-                    "the traction must be a finite number",
+                    "the traction must be a finite number, zero or at least 2.2e-308 in size",
                 ));
             }
         }
@@ -173,6 +205,13 @@ impl Scene {
             }
         }
         let total = self.total_vertical_load();
+        if !total.is_finite() {
+            return Err(invalid(
+                "loads",
+                total,
+                "the total vertical force of the tractions overflows; give tractions whose sum is a finite number",
+            ));
+        }
         if total >= 0.0 {
             return Err(SceneError::NoSolution { total });
         }

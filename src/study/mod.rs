@@ -1,10 +1,16 @@
-//! Studies of the solvers: the comparison, parameter sweeps, the stability
-//! map, the benchmark, the paper's Table 1, and the report of `reproduce`.
+//! The study engine and the studies: every experiment is a plan of trials
+//! ([`trial`]), measured by one runner ([`runner`]) against an earned
+//! reference ([`reference`]); tables, charts and the report are views of the
+//! trials.
 
+pub mod agreement;
 pub mod bench;
 pub mod compare;
+pub mod reference;
 pub mod report;
 pub mod reproduce;
+pub mod runner;
 pub mod stability;
 pub mod sweep;
 pub mod table1;
+pub mod trial;

@@ -1,15 +1,17 @@
-//! Charts drawn from the harness's rows: work-precision, r and ε sweeps,
-//! contact-zone profiles (the paper's figures 2-5), convergence histories.
+//! Charts drawn from trials: contact-zone profiles (the paper's figures 2-5),
+//! convergence histories, the work-precision diagram and one-factor sweeps.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
-use contactlab_solvers::{Progress, registry};
+use contactlab_solvers::registry;
 
-use crate::io::charts::{Chart, Series};
+use crate::coulomb::fixed_point::STAGE;
+use crate::io::charts::{Chart, Legend, Series};
 use crate::mechanics::contact_zone::ProfileRow;
-use crate::study::compare::{CompareRow, Mode};
-use crate::study::sweep::SweepRow;
+use crate::study::runner::Measured;
+use crate::study::sweep::{SCHEDULE, WORK_PRECISION};
+use crate::study::trial::{Trial, TrialTiming};
 
 fn chart(
     title: impl Into<String>,
@@ -26,7 +28,7 @@ fn chart(
         log_x,
         log_y,
         series,
-        legend: Default::default(),
+        legend: Legend::default(),
     }
 }
 
@@ -42,12 +44,8 @@ pub fn write_all(dir: &Path, charts: &[(String, Chart)]) -> Result<Vec<PathBuf>>
         .collect()
 }
 
-fn parse_value(v: &str) -> f64 {
-    v.parse().unwrap_or(f64::NAN)
-}
-
 /// Errors below this are drawn at it in the work-precision diagram: the
-/// reference's own resolution (its residuals are ~1e-13).
+/// reference's own resolution.
 pub const WP_FLOOR: f64 = 1e-12;
 
 /// The file-name tag of one scene and mesh in sweep charts: `problem_1_h32`.
@@ -65,49 +63,55 @@ pub fn sweep_tag(scene: &str, h: &str) -> String {
     format!("{slug}_h{}", h.replace("1/", ""))
 }
 
-/// Charts of a sweep: work-precision, and iterations and errors against r and ε.
-pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
+/// Charts of a sweep: the work-precision diagram, and for each numeric
+/// variation its iterations and its errors against the value.
+pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
     let mut out = Vec::new();
-    let groups: Vec<(String, String)> = {
-        let mut g: Vec<(String, String)> = rows
+    let mut groups: Vec<(String, String)> = trials
+        .iter()
+        .map(|(t, _)| (t.scene.clone(), t.h.clone()))
+        .collect();
+    groups.sort();
+    groups.dedup();
+    for (scene, h) in groups {
+        let tag = sweep_tag(&scene, &h);
+        let here: Vec<&(&Trial, &TrialTiming)> = trials
             .iter()
-            .map(|r| (r.problem.clone(), r.h.clone()))
+            .filter(|(t, _)| t.scene == scene && t.h == h)
             .collect();
-        g.dedup();
-        g.sort();
-        g.dedup();
-        g
-    };
-    for (problem, h) in groups {
-        let tag = sweep_tag(&problem, &h);
-        let rows: Vec<&SweepRow> = rows
-            .iter()
-            .filter(|r| r.problem == problem && r.h == h)
-            .collect();
-        let of = |f: &'static str| rows.iter().copied().filter(move |r| r.factor == f);
-        // Work-precision: one curve per solver, one point per tolerance.
-        let mut solvers: Vec<&str> = of("tolerance").map(|r| r.solver.as_str()).collect();
-        solvers.dedup();
-        let wp: Vec<Series> = solvers
-            .iter()
-            .map(|&s| {
-                // Errors below the reference's resolution are drawn at it.
-                let mut pts: Vec<(f64, f64)> = of("tolerance")
-                    .filter(|r| r.solver == s && r.converged)
-                    .filter_map(|r| {
-                        r.seconds
-                            .map(|t| (r.agreement.pressure_max.max(WP_FLOOR), t))
+        let mut wp: Vec<Series> = Vec::new();
+        for e in registry::solvers() {
+            let points = |certified: bool| -> Vec<(f64, f64)> {
+                let mut pts: Vec<(f64, f64)> = here
+                    .iter()
+                    .filter(|(t, _)| {
+                        t.group == WORK_PRECISION
+                            && t.solver == e.name
+                            && t.certified() == certified
+                            && (certified || t.solver_status.is_converged())
+                    })
+                    .filter_map(|(t, tm)| {
+                        t.pressure_error.map(|p| (p.max(WP_FLOOR), tm.seconds_min))
                     })
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                Series::line(s, pts).with_markers()
-            })
-            .collect();
-        if wp.iter().any(|s| !s.points.is_empty()) {
+                pts
+            };
+            let (good, failed) = (points(true), points(false));
+            if !good.is_empty() {
+                wp.push(Series::line(e.name, good).with_markers());
+            }
+            if !failed.is_empty() {
+                wp.push(
+                    Series::line(format!("{}: claimed, not certified", e.name), failed).scatter(),
+                );
+            }
+        }
+        if !wp.is_empty() {
             out.push((
                 format!("work_precision_{tag}"),
                 chart(
-                    format!("Work-precision, given-friction subproblem, {problem}, h = {h}"),
+                    format!("Work-precision, given-friction subproblem, {scene}, h = {h}"),
                     "max pressure error vs reference (relative; 1e-12: at or below its resolution)",
                     "solver time [s]",
                     true,
@@ -116,136 +120,107 @@ pub fn sweep_charts(rows: &[SweepRow]) -> Vec<(String, Chart)> {
                 ),
             ));
         }
-        for factor in ["r", "epsilon"] {
-            let runs: Vec<&SweepRow> = of(factor).collect();
-            if runs.is_empty() {
-                continue;
-            }
-            let name = if factor == "r" {
-                "penalty r"
-            } else {
-                "ε (the paper's tolerance)"
-            };
-            let pick = |f: &dyn Fn(&SweepRow) -> f64, converged: bool| -> Vec<(f64, f64)> {
-                runs.iter()
-                    .filter(|r| r.converged == converged)
-                    .map(|r| (parse_value(&r.value), f(r)))
-                    .collect()
-            };
-            let mut iters = vec![
-                Series::line("relaxation sweeps (MPR)", pick(&|r| r.inner as f64, true))
-                    .with_markers(),
-                Series::line("Uzawa iterations (MU)", pick(&|r| r.outer as f64, true))
-                    .with_markers(),
-                Series::line(
-                    "friction iterations (MPP)",
-                    pick(&|r| r.friction_iterations as f64, true),
-                )
-                .with_markers(),
-            ];
-            let failed = pick(&|r| r.inner as f64, false);
-            if !failed.is_empty() {
-                iters.push(Series::line("sweeps of runs that did not converge", failed).scatter());
-            }
-            out.push((
-                format!("sweep_{factor}_iterations_{tag}"),
-                chart(
-                    format!("Iterations against {name}, relaxation, {problem}, h = {h}"),
-                    name,
-                    "iterations (count)",
-                    true,
-                    true,
-                    iters,
-                ),
-            ));
-            let mut errors = vec![
-                Series::line(
-                    "max displacement error",
-                    pick(&|r| r.agreement.displacement_max, true),
-                )
-                .with_markers(),
-                Series::line(
-                    "max pressure error",
-                    pick(&|r| r.agreement.pressure_max, true),
-                )
-                .with_markers(),
-                Series::line("KKT residual", pick(&|r| r.kkt, true))
-                    .with_markers()
-                    .dashed(),
-            ];
-            let failed = pick(&|r| r.agreement.pressure_max, false);
-            if !failed.is_empty() {
-                errors.push(
-                    Series::line("pressure error of runs that did not converge", failed).scatter(),
-                );
-            }
-            out.push((
-                format!("sweep_{factor}_error_{tag}"),
-                chart(
-                    format!("Error against {name}, relaxation vs reference, {problem}, h = {h}"),
-                    name,
-                    "relative error / residual (dimensionless)",
-                    true,
-                    true,
-                    errors,
-                ),
-            ));
-        }
-        let smooth: Vec<&SweepRow> = of("smoothing").collect();
-        if !smooth.is_empty() {
-            let huber: Vec<(f64, f64)> = smooth
+        let mut variations: Vec<String> = here
+            .iter()
+            .map(|(t, _)| t.group.clone())
+            .filter(|g| g != WORK_PRECISION && g != SCHEDULE)
+            .collect();
+        variations.dedup();
+        variations.sort();
+        variations.dedup();
+        for group in variations {
+            let runs: Vec<&Trial> = here
                 .iter()
-                .filter(|r| r.converged && r.smoothing.starts_with("huber"))
-                .map(|r| {
-                    (
-                        parse_value(
-                            r.smoothing
-                                .trim_start_matches("huber(")
-                                .trim_end_matches(')'),
-                        ),
-                        r.agreement.pressure_max,
-                    )
-                })
+                .filter(|(t, _)| t.group == group)
+                .map(|(t, _)| *t)
                 .collect();
-            let mut series =
-                vec![Series::line("Huber smoothing of width δ", huber.clone()).with_markers()];
-            if let Some(exact) = smooth
-                .iter()
-                .find(|r| r.converged && r.smoothing == "exact")
-            {
-                let xs: Vec<f64> = huber.iter().map(|p| p.0).collect();
-                let (lo, hi) = xs
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                        (a.min(x), b.max(x))
-                    });
-                if lo.is_finite() {
-                    series.push(
-                        Series::line(
-                            "exact soft thresholding",
-                            vec![
-                                (lo, exact.agreement.pressure_max),
-                                (hi, exact.agreement.pressure_max),
-                            ],
-                        )
-                        .dashed(),
-                    );
-                }
-            }
-            out.push((
-                format!("sweep_smoothing_{tag}"),
-                chart(
-                    format!("Smoothing of |s|: pressure error vs reference, {problem}, h = {h}"),
-                    "Huber width δ [length]",
-                    "max pressure error (relative)",
-                    true,
-                    true,
-                    series,
-                ),
-            ));
+            out.extend(variation_charts(&group, &scene, &h, &tag, &runs));
         }
     }
     out
+}
+
+/// Iterations and errors against one knob's value; values that are not
+/// numbers (`exact`) are drawn as dashed levels.
+fn variation_charts(
+    group: &str,
+    scene: &str,
+    h: &str,
+    tag: &str,
+    runs: &[&Trial],
+) -> Vec<(String, Chart)> {
+    let numeric = |t: &Trial| t.value.parse::<f64>().ok().filter(|v| *v > 0.0);
+    if runs.iter().filter(|t| numeric(t).is_some()).count() < 2 {
+        return Vec::new();
+    }
+    let lo = runs
+        .iter()
+        .filter_map(|t| numeric(t))
+        .fold(f64::INFINITY, f64::min);
+    let hi = runs
+        .iter()
+        .filter_map(|t| numeric(t))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let metric = |name: &str, f: &dyn Fn(&Trial) -> Option<f64>| -> Vec<Series> {
+        let mut v = Vec::new();
+        let pts: Vec<(f64, f64)> = runs
+            .iter()
+            .filter(|t| t.certified())
+            .filter_map(|t| Some((numeric(t)?, f(t)?)))
+            .collect();
+        v.push(Series::line(name, pts).with_markers());
+        let failed: Vec<(f64, f64)> = runs
+            .iter()
+            .filter(|t| !t.certified())
+            .filter_map(|t| Some((numeric(t)?, f(t)?)))
+            .collect();
+        if !failed.is_empty() {
+            v.push(Series::line(format!("{name}, not certified"), failed).scatter());
+        }
+        for t in runs.iter().filter(|t| numeric(t).is_none()) {
+            if let Some(y) = f(t) {
+                v.push(
+                    Series::line(format!("{name} at {}", t.value), vec![(lo, y), (hi, y)]).dashed(),
+                );
+            }
+        }
+        v
+    };
+    let count = |f: fn(&Trial) -> usize| move |t: &Trial| Some(f(t).max(1) as f64);
+    let mut iterations = metric("inner iterations", &count(|t| t.inner_iterations));
+    iterations.extend(metric("outer iterations", &count(|t| t.outer_iterations)));
+    iterations.extend(metric(
+        "friction iterations",
+        &count(|t| t.friction_iterations),
+    ));
+    let mut errors = metric("max displacement error", &|t| t.displacement_error);
+    errors.extend(metric("max pressure error", &|t| t.pressure_error));
+    errors.extend(metric("certificate", &|t| Some(t.certificate)));
+    let slug = group.replace('.', "_");
+    vec![
+        (
+            format!("sweep_{slug}_iterations_{tag}"),
+            chart(
+                format!("Iterations against {group}, {scene}, h = {h}"),
+                group,
+                "iterations (count)",
+                true,
+                true,
+                iterations,
+            ),
+        ),
+        (
+            format!("sweep_{slug}_error_{tag}"),
+            chart(
+                format!("Error against {group}, vs reference, {scene}, h = {h}"),
+                group,
+                "relative error / certificate (dimensionless)",
+                true,
+                true,
+                errors,
+            ),
+        ),
+    ]
 }
 
 /// The profile of one solver with and without friction.
@@ -384,27 +359,34 @@ pub fn profile_charts(
     ]
 }
 
-/// Residual against iteration for each method, the Coulomb loop included,
-/// from the comparison's Coulomb rows of one problem.
-pub fn convergence_chart(problem: u32, h: &str, rows: &[&CompareRow]) -> (String, Chart) {
+/// Residual against iteration for each solver's Coulomb solve, the fixed
+/// point included, from a comparison's measured trials of one problem.
+pub fn convergence_chart(problem: u32, h: &str, measured: &[Measured]) -> (String, Chart) {
     let mut series = Vec::new();
-    for r in rows.iter().filter(|r| r.mode == Mode::Coulomb) {
-        let mut by_stage = |stage: &str, what: &str| {
-            let pts: Vec<(f64, f64)> = r
+    for m in measured
+        .iter()
+        .filter(|m| m.trial.law == contactlab_solvers::Law::Coulomb)
+    {
+        let mut stages = vec![(STAGE, "friction max|Δg|".to_string())];
+        if let Some(e) = registry::by_name(&m.trial.solver) {
+            stages.extend(
+                e.stages
+                    .iter()
+                    .filter(|s| s.history)
+                    .map(|s| (s.name, s.name.to_string())),
+            );
+        }
+        for (stage, what) in stages {
+            let pts: Vec<(f64, f64)> = m
                 .history
                 .iter()
-                .filter(|p: &&Progress| p.stage == stage)
+                .filter(|p| p.stage == stage)
                 .enumerate()
                 .map(|(i, p)| ((i + 1) as f64, p.residual))
                 .collect();
             if !pts.is_empty() {
-                series.push(Series::line(format!("{}: {what}", r.solver), pts).with_markers());
-            }
-        };
-        by_stage(crate::coulomb::fixed_point::STAGE, "friction max|Δg|");
-        for e in registry::SOLVERS {
-            for s in e.stages.iter().filter(|s| s.history) {
-                by_stage(s.name, s.name);
+                series
+                    .push(Series::line(format!("{}: {what}", m.trial.solver), pts).with_markers());
             }
         }
     }

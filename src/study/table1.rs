@@ -1,17 +1,25 @@
-//! The paper's Table 1: iteration counts of the relaxation solver with mesh
-//! continuation, ours beside the paper's.
+//! The paper's Table 1: iteration counts of its method (the registry's
+//! [`Role::PapersMethod`]) with mesh continuation, ours beside the paper's.
+//! Its trials run with whatever settings they are given; the `table1`
+//! command and `reproduce` give the paper's absolute stopping rules.
 
-use anyhow::Result;
-use contactlab_solvers::Observer;
+use anyhow::{Context, Result};
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::{self, Role};
 use serde::Serialize;
 
 use crate::coulomb::continuation::Schedule;
-use crate::coulomb::driver::solve_scene;
-use crate::io::output::csv_bytes;
+use crate::io::csv::fixed;
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::reference::References;
+use crate::study::runner::{Keep, Measured, measure_all};
+use crate::study::trial::{Trial, TrialSpec};
+
+/// The study's name in trial records.
+pub const STUDY: &str = "table1";
 
 /// Table 1 of the paper: problem, MPP, MU, MPR total, MPR at h = 1/32, at 1/64.
 pub const PAPER_TABLE_1: [(u32, usize, usize, usize, usize, usize); 3] = [
@@ -25,7 +33,9 @@ pub const PAPER_TABLE_1: [(u32, usize, usize, usize, usize, usize); 3] = [
 pub struct Table1Row {
     pub problem: u32,
     pub schedule: Schedule,
+    /// Certified status, and the solver's claim.
     pub status: String,
+    pub solver_status: String,
     /// Friction iterations (MPP).
     pub mpp: usize,
     /// Uzawa iterations over all levels and friction iterations (MU).
@@ -34,28 +44,28 @@ pub struct Table1Row {
     pub mpr: usize,
     pub mpr_1_32: usize,
     pub mpr_1_64: usize,
+    #[serde(serialize_with = "fixed")]
     pub separated_fraction: f64,
+    #[serde(serialize_with = "fixed")]
+    pub certificate: f64,
     pub paper_mpp: usize,
     pub paper_mu: usize,
     pub paper_mpr: usize,
     pub paper_mpr_1_32: usize,
     pub paper_mpr_1_64: usize,
-    /// Wall-clock seconds (not written to table1.csv, which is deterministic).
-    #[serde(skip)]
-    pub seconds: f64,
 }
 
-/// Runs the relaxation solver with the paper's settings (adjusted by
-/// `settings`) on `problems` for each schedule.
-pub fn table1(
+/// The trials: the paper's method on each problem for each schedule.
+pub fn plan(
     problems: &[u32],
     schedules: &[Schedule],
     settings: &Settings,
     finest: MeshSize,
     plane: PlaneModel,
-    mut observer_for: impl FnMut(u32, Schedule) -> Box<dyn Observer>,
-) -> Result<Vec<Table1Row>> {
-    let mut rows = Vec::new();
+) -> Result<Vec<TrialSpec>> {
+    let entry = registry::with_role(Role::PapersMethod)
+        .context("no registered solver has the role of the paper's method")?;
+    let mut out = Vec::new();
     for &schedule in schedules {
         for &problem in problems {
             let mut scene = Scene::paper_problem(problem)?;
@@ -63,96 +73,80 @@ pub fn table1(
             scene.material.plane = plane;
             let mut s = settings.clone();
             s.schedule = schedule;
-            let mut observer = observer_for(problem, schedule);
-            let run = solve_scene(&scene, &s, "relaxation", observer.as_mut())?;
-            let at = |h: &str| {
-                run.levels
-                    .iter()
-                    .find(|l| l.h.to_string() == h)
-                    .map(|l| l.sweeps)
-                    .unwrap_or(0)
-            };
-            let paper = PAPER_TABLE_1
-                .iter()
-                .find(|p| p.0 == problem)
-                .copied()
-                .unwrap_or((problem, 0, 0, 0, 0, 0));
-            let total = run.coulomb.total_iterations();
-            rows.push(Table1Row {
-                problem,
-                schedule,
-                status: run.coulomb.status.to_string(),
-                mpp: run.coulomb.history.len(),
-                mu: total.outer,
-                mpr: total.inner,
-                mpr_1_32: at("1/32"),
-                mpr_1_64: at("1/64"),
-                separated_fraction: run.separation.fraction,
-                paper_mpp: paper.1,
-                paper_mu: paper.2,
-                paper_mpr: paper.3,
-                paper_mpr_1_32: paper.4,
-                paper_mpr_1_64: paper.5,
-                seconds: run.coulomb.seconds,
-            });
+            out.push(
+                TrialSpec::new(STUDY, schedule.to_string(), &scene, entry, Law::Coulomb, &s)
+                    .with_work(Some(entry.study_work * 20)),
+            );
         }
     }
-    Ok(rows)
+    Ok(out)
 }
 
-/// `table1.csv`: one row per problem and schedule.
-pub fn table1_csv(rows: &[Table1Row]) -> Result<Vec<u8>> {
-    let header = [
-        "problem",
-        "schedule",
-        "status",
-        "mpp",
-        "mu",
-        "mpr",
-        "mpr_1_32",
-        "mpr_1_64",
-        "separated_fraction",
-        "paper_mpp",
-        "paper_mu",
-        "paper_mpr",
-        "paper_mpr_1_32",
-        "paper_mpr_1_64",
-    ];
-    csv_bytes(
-        &header,
-        rows.iter().map(|r| {
-            vec![
-                r.problem.to_string(),
-                r.schedule.to_string(),
-                r.status.clone(),
-                r.mpp.to_string(),
-                r.mu.to_string(),
-                r.mpr.to_string(),
-                r.mpr_1_32.to_string(),
-                r.mpr_1_64.to_string(),
-                format!("{:.6}", r.separated_fraction),
-                r.paper_mpp.to_string(),
-                r.paper_mu.to_string(),
-                r.paper_mpr.to_string(),
-                r.paper_mpr_1_32.to_string(),
-                r.paper_mpr_1_64.to_string(),
-            ]
-        }),
-    )
+/// Runs the trials (no reference: Table 1 is counts) and builds the rows.
+pub fn run(
+    specs: &[TrialSpec],
+    problems: &[u32],
+    tick: &dyn Fn(&TrialSpec),
+) -> Result<(Vec<Measured>, Vec<Table1Row>)> {
+    let mut none = References::none();
+    let measured = measure_all(specs, &mut none, Keep::default(), tick)?;
+    let rows = measured
+        .iter()
+        .zip(specs)
+        .zip(problems.iter().cycle())
+        .map(|((m, spec), &problem)| row(m, spec.settings.schedule, problem))
+        .collect();
+    Ok((measured, rows))
+}
+
+fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {
+    let at = |h: &str| {
+        m.levels
+            .iter()
+            .find(|l| l.h.to_string() == h)
+            .map(|l| l.sweeps)
+            .unwrap_or(0)
+    };
+    let paper = PAPER_TABLE_1
+        .iter()
+        .find(|p| p.0 == problem)
+        .copied()
+        .unwrap_or((problem, 0, 0, 0, 0, 0));
+    let t: &Trial = &m.trial;
+    Table1Row {
+        problem,
+        schedule,
+        status: t.status.to_string(),
+        solver_status: t.solver_status.to_string(),
+        mpp: t.friction_iterations,
+        mu: t.outer_iterations,
+        mpr: t.inner_iterations,
+        mpr_1_32: at("1/32"),
+        mpr_1_64: at("1/64"),
+        separated_fraction: t.separated_fraction,
+        certificate: t.certificate,
+        paper_mpp: paper.1,
+        paper_mu: paper.2,
+        paper_mpr: paper.3,
+        paper_mpr_1_32: paper.4,
+        paper_mpr_1_64: paper.5,
+    }
 }
 
 /// The table in Markdown, ours / paper in each cell.
-pub fn table1_markdown(rows: &[Table1Row]) -> String {
+pub fn markdown(rows: &[Table1Row]) -> String {
     let mut out = String::from(
-        "| problem | schedule | status | MPP | MU | MPR total | MPR at 1/32 | MPR at 1/64 |\n\
-         |---|---|---|---|---|---|---|---|\n",
+        "| problem | schedule | status (claim) | certificate | MPP | MU | MPR total | MPR at 1/32 | MPR at 1/64 |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         out += &format!(
-            "| {} | {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |\n",
+            "| {} | {} | {} ({}) | {:.1e} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |\n",
             r.problem,
             r.schedule,
             r.status,
+            r.solver_status,
+            r.certificate,
             r.mpp,
             r.paper_mpp,
             r.mu,
@@ -165,5 +159,7 @@ pub fn table1_markdown(rows: &[Table1Row]) -> String {
             r.paper_mpr_1_64
         );
     }
-    out + "\nEach cell: ours / the paper's (Table 1). MPP: friction iterations; MU: Uzawa iterations; MPR: relaxation sweeps.\n"
+    out + "\nEach count: ours / the paper's (Table 1). MPP: friction iterations; MU: Uzawa iterations; MPR: relaxation \
+           sweeps. Status: certified (the solver's claim in parentheses); certificate: the largest violation of the \
+           Coulomb law's conditions in the problem's scales.\n"
 }

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, StageInfo};
+use crate::registry::{Accuracy, Entry, InnerKernel, Knob, Role, StageInfo, Variation};
 use crate::settings::{
     Stopping, Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -105,7 +105,86 @@ pub const ENTRY: Entry = Entry {
         reference: 1e-10,
         exact: false,
     },
+    role: Role::PapersMethod,
+    sweeps: &[
+        Variation {
+            knob: "r",
+            values: &[
+                "1e-3", "1e-2", "1e-1", "1", "1e1", "1e3", "1e5", "1e7", "1e9", "1e11",
+            ],
+            quick: &["1e-1", "1e3", "1e7"],
+        },
+        Variation {
+            knob: "epsilon",
+            values: &["1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8"],
+            quick: &["1e-2", "1e-4", "1e-6"],
+        },
+        Variation {
+            knob: "smoothing",
+            values: &["exact", "1e-3", "1e-5", "1e-7", "1e-9"],
+            quick: &["exact", "1e-3"],
+        },
+    ],
+    stress: &[
+        Variation {
+            knob: "r",
+            values: &[
+                "1e-8", "1e-6", "1e-4", "1e-2", "1", "1e2", "1e4", "1e6", "1e8", "1e10",
+            ],
+            quick: &["1e-8", "1e7"],
+        },
+        Variation {
+            knob: "epsilon",
+            values: &[
+                "1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8", "1e-9", "1e-10",
+            ],
+            quick: &["1e-6", "1e-15"],
+        },
+        Variation {
+            knob: "smoothing",
+            values: &["exact", "1e-2", "1e-4", "1e-6", "1e-8", "1e-10"],
+            quick: &["exact", "1e-2"],
+        },
+        Variation {
+            knob: "proximal",
+            values: &["0", "1e-5"],
+            quick: &["0"],
+        },
+    ],
+    study_work: 2_000_000,
+    kernel: Some(sweep_kernel),
 };
+
+/// One relaxation sweep at the default relative settings, with multipliers
+/// l = 1 and bounds g = ½ at every contact node so that every branch runs.
+pub fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
+    let resolved = RelaxationSettings::default().resolve(problem);
+    let op = RelaxationOperator::new(
+        problem.a(),
+        problem.mass(),
+        resolved.proximal,
+        problem.contacts(),
+    );
+    let matrix = op.h.clone();
+    let l = vec![1.0; problem.contacts().len()];
+    let wg: Vec<f64> = problem.contacts().iter().map(|c| 0.5 * c.weight).collect();
+    let b = problem.f().to_vec();
+    let mut v = vec![0.0; problem.n()];
+    InnerKernel {
+        name: "sweep",
+        matrix,
+        step: Box::new(move || {
+            let data = SweepData {
+                b: &b,
+                l: &l,
+                wg: &wg,
+                r: resolved.r,
+                smoothing: resolved.smoothing,
+            };
+            std::hint::black_box(op.sweep(&mut v, &data));
+        }),
+    }
+}
 
 /// The paper's finest mesh, 1/64: its sweep threshold is 1e-4·ε·(1/64)
 /// (section 5), a length written into the rule.

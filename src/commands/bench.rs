@@ -1,0 +1,57 @@
+//! `contactlab bench`: speed, and the hidden `bench-one` that measures the
+//! peak memory of one solve in a fresh process.
+
+use anyhow::{Result, bail};
+
+use crate::cli::{BenchArgs, BenchOneArgs};
+use crate::coulomb::driver::solve_scene;
+use crate::io::output::{log, print};
+use crate::io::run_folder::RunFolder;
+use crate::study::bench::BenchSpec;
+use crate::study::bench::goals::{goals_markdown, peak_memory_kb, write_bench};
+use crate::study::report::write_all;
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let settings = args.settings.resolve()?;
+    let mut spec = if args.quick {
+        BenchSpec::quick()
+    } else {
+        BenchSpec::standard()
+    };
+    if let Some(r) = args.runs {
+        spec.runs = r as usize;
+    }
+    if let Some(b) = args.budget {
+        if !(b.is_finite() && b > 0.0) {
+            bail!("--budget = {b} is invalid: give a positive number of seconds");
+        }
+        spec.budget = b;
+    }
+    let folder = RunFolder::create(&args.out)?;
+    let out = write_bench(folder.path(), &spec, &settings, &|l| {
+        log(format!("bench: {l}"))
+    })?;
+    write_all(&folder.path().join("charts"), &out.charts)?;
+    let target = folder.commit()?;
+    print(&format!(
+        "{}\nwrote {}/performance.csv, performance_goals.md and charts\n",
+        goals_markdown(&out.goals),
+        target.display()
+    ))
+}
+
+pub fn run_one(args: &BenchOneArgs) -> Result<()> {
+    let scene = args.scene.resolve()?;
+    faer::set_global_parallelism(faer::Par::Seq);
+    let run = solve_scene(
+        &scene,
+        &crate::settings::Settings::default(),
+        &args.solver,
+        &mut contactlab_solvers::Silent,
+    )?;
+    let peak = peak_memory_kb();
+    print(&format!(
+        "{}\n",
+        serde_json::json!({"seconds": run.coulomb.seconds, "status": run.status, "peak_kb": peak})
+    ))
+}

@@ -1,0 +1,109 @@
+//! `contactlab solve`: one scene's Coulomb problem with one solver,
+//! certified. The output folder (if any) is written whole before anything is
+//! printed; an answer that is not certified is a non-zero exit.
+
+use anyhow::{Context, Result, bail};
+use contactlab_solvers::Status;
+use contactlab_solvers::registry::{self, Role};
+
+use crate::cli::SolveArgs;
+use crate::commands::LogObserver;
+use crate::coulomb::driver::{Summary, solve_scene};
+use crate::io::csv::to_csv;
+use crate::io::output::{json_bytes, log, print, write_atomic};
+use crate::io::run_folder::RunFolder;
+use crate::mechanics::contact_zone::PROFILE_COLUMNS;
+
+pub fn run(args: &SolveArgs) -> Result<()> {
+    let (scene, base) = args.scene.load()?;
+    let settings = args.settings.resolve_on(base)?;
+    let solver = match &args.solver {
+        Some(name) => crate::coulomb::driver::solver_entry(name)?,
+        None => registry::with_role(Role::Oracle).context("no oracle is registered")?,
+    };
+    let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
+    log(format!(
+        "solving {} at h = {} with {}",
+        scene.name,
+        scene.finest(),
+        solver.name
+    ));
+    let run = solve_scene(&scene, &settings, solver.name, &mut LogObserver)?;
+    let summary = run.summary(&settings);
+    let mut report = summary_text(&summary);
+    if let Some(folder) = folder {
+        let dir = folder.path().to_path_buf();
+        write_atomic(
+            &dir.join("profile.csv"),
+            &to_csv(&run.profile, &PROFILE_COLUMNS)?,
+        )?;
+        write_atomic(&dir.join("summary.json"), &json_bytes(&summary)?)?;
+        let target = folder.commit()?;
+        report += &format!(
+            "wrote {} and {}\n",
+            target.join("profile.csv").display(),
+            target.join("summary.json").display()
+        );
+    }
+    print(&report)?;
+    if run.status == Status::Inaccurate {
+        bail!(
+            "the answer is inaccurate: {} claims convergence but the certificate {}",
+            run.solver,
+            run.certificate.summary()
+        );
+    }
+    if !run.status.is_converged() {
+        bail!(
+            "the solve did not converge: {} ({})",
+            run.status,
+            run.coulomb.detail
+        );
+    }
+    Ok(())
+}
+
+fn summary_text(s: &Summary) -> String {
+    let intervals: Vec<String> = s
+        .separated_intervals
+        .iter()
+        .map(|[a, b]| format!("[{a:.4}, {b:.4}]"))
+        .collect();
+    format!(
+        "{}, h = {}, solver {}, plane {}, friction coefficient {}\n\
+         status              {} (solver's claim: {}; {})\n\
+         certificate         {}\n\
+         friction iterations {}\n\
+         separated           {} = {:.2}% of Γ_K (jump < -{:.1e})\n\
+         max pressure        {:.6}\n\
+         contact force       {:.10} (applied load {})\n\
+         objective           {:.10e}\n\
+         iterations          {} outer, {} inner\n\
+         time                {:.3} s (set-up {:.3} s)\n",
+        s.problem,
+        s.h,
+        s.solver,
+        s.plane,
+        s.friction_coefficient,
+        s.status,
+        s.solver_status,
+        s.detail,
+        s.certificate_summary,
+        s.friction_iterations,
+        if intervals.is_empty() {
+            "none".to_string()
+        } else {
+            intervals.join(" ∪ ")
+        },
+        100.0 * s.separated_fraction,
+        s.separation_tolerance,
+        s.max_pressure,
+        s.total_contact_force,
+        s.total_applied_load,
+        s.objective,
+        s.iterations_outer,
+        s.iterations_inner,
+        s.seconds,
+        s.seconds_setup
+    )
+}

@@ -1,0 +1,60 @@
+//! `contactlab stability`: the stability map.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use crate::cli::StabilityArgs;
+use crate::io::csv::to_csv;
+use crate::io::output::{log, print, write_atomic};
+use crate::io::run_folder::RunFolder;
+use crate::settings::Settings;
+use crate::study::reference::References;
+use crate::study::report::write_all;
+use crate::study::stability::{self, Map, StabilitySpec, views};
+
+pub fn run(args: &StabilityArgs) -> Result<()> {
+    let settings = args.settings.resolve()?;
+    let spec = if args.quick {
+        StabilitySpec::quick()
+    } else {
+        StabilitySpec::standard()
+    };
+    let folder = RunFolder::create(&args.out)?;
+    let map = run_map(&spec, &settings)?;
+    write_files(folder.path(), &map)?;
+    let target = folder.commit()?;
+    let mut counts = std::collections::BTreeMap::new();
+    for t in &map.trials {
+        *counts.entry(t.class.as_str()).or_insert(0) += 1;
+    }
+    print(&format!(
+        "wrote {}/stability.csv ({} trials: {counts:?}), stability_friction.csv and charts\n",
+        target.display(),
+        map.trials.len()
+    ))
+}
+
+/// Runs the map with logs on stderr.
+pub fn run_map(spec: &StabilitySpec, settings: &Settings) -> Result<Map> {
+    let mut references = References::default();
+    let count = std::cell::Cell::new(0usize);
+    stability::run(
+        spec,
+        settings,
+        &mut references,
+        &|l| log(format!("stability: {l}")),
+        &|_| count.set(count.get() + 1),
+    )
+}
+
+/// stability.csv, stability_friction.csv and the charts.
+pub fn write_files(dir: &Path, map: &Map) -> Result<()> {
+    write_atomic(&dir.join("stability.csv"), &to_csv(&map.trials, &[])?)?;
+    write_atomic(
+        &dir.join("stability_friction.csv"),
+        &to_csv(&map.steps, &[])?,
+    )?;
+    write_all(&dir.join("charts"), &views::charts(&map.trials, &map.steps))?;
+    Ok(())
+}

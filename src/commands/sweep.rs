@@ -1,0 +1,116 @@
+//! `contactlab sweep`: one-factor sweeps and the work-precision diagram.
+
+use std::path::Path;
+
+use anyhow::{Result, bail};
+use contactlab_solvers::Law;
+
+use crate::cli::SweepArgs;
+use crate::commands::{progress_bar, solver_list, ticker};
+use crate::io::csv::to_csv;
+use crate::io::output::{log, print, write_atomic};
+use crate::io::run_folder::RunFolder;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::study::reference::References;
+use crate::study::report::{sweep_charts, write_all};
+use crate::study::runner::{Keep, Measured, measure_all, write_trials};
+use crate::study::sweep::{self, STUDY, SweepSpec, work_cap};
+use crate::study::trial::{Trial, TrialSpec, TrialTiming};
+
+pub fn run(args: &SweepArgs) -> Result<()> {
+    let (scenes, base) = match &args.scene {
+        Some(path) => {
+            let (scene, settings) = crate::io::scene_file::load(path)?;
+            (vec![scene], settings)
+        }
+        None => (
+            args.problems
+                .iter()
+                .map(|&p| Scene::paper_problem(p))
+                .collect::<Result<_, _>>()?,
+            Settings::default(),
+        ),
+    };
+    let settings = args.settings.resolve_on(base)?;
+    let spec = SweepSpec {
+        scenes,
+        meshes: args.meshes.clone(),
+        solvers: solver_list(&args.solvers)?,
+        variations: args.vary.is_empty(),
+        work_precision: !args.no_work_precision,
+        quick: args.quick,
+        repeats: args.repeats as usize,
+        work_scale: 1.0,
+    };
+    let mut specs = sweep::plan(&spec, &settings)?;
+    specs.extend(varied(args, &spec, &settings)?);
+    let folder = RunFolder::create(&args.out)?;
+    let bar = progress_bar(specs.len() as u64, "sweep");
+    let mut references = References::default();
+    let measured = measure_all(&specs, &mut references, Keep::default(), &ticker(&bar))?;
+    bar.finish_and_clear();
+    write_files(folder.path(), &measured, &references)?;
+    let target = folder.commit()?;
+    let failed = measured.iter().filter(|m| !m.trial.certified()).count();
+    log(format!("{} trials, {failed} not certified", measured.len()));
+    print(&format!(
+        "wrote {}/sweep.csv, sweep_timing.csv, references.csv and charts\n",
+        target.display()
+    ))
+}
+
+/// The trials of `--vary PATH=V1,V2,...`.
+fn varied(args: &SweepArgs, spec: &SweepSpec, settings: &Settings) -> Result<Vec<TrialSpec>> {
+    let mut out = Vec::new();
+    for v in &args.vary {
+        let Some((path, values)) = v.split_once('=') else {
+            bail!(
+                "--vary '{v}': write it as PATH=V1,V2,..., e.g. --vary {}=V1,V2",
+                crate::settings::example_path()
+            );
+        };
+        let owner = path.split('.').next().unwrap_or("");
+        let solvers: Vec<_> = spec
+            .solvers
+            .iter()
+            .copied()
+            .filter(|e| e.name == owner || owner == "coulomb" || !path.contains('.'))
+            .collect();
+        if solvers.is_empty() {
+            bail!("--vary '{v}': '{owner}' is not among the solvers swept");
+        }
+        for scene in &spec.scenes {
+            for &h in &spec.meshes {
+                let mut scene = scene.clone();
+                scene.set_finest(h);
+                for &entry in &solvers {
+                    for value in values.split(',') {
+                        out.push(
+                            TrialSpec::new(STUDY, path, &scene, entry, Law::Coulomb, settings)
+                                .with_work(work_cap(entry, spec.work_scale))
+                                .varying(path, value.trim())?,
+                        );
+                    }
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// sweep.csv, sweep_timing.csv, references.csv and the charts.
+pub fn write_files(dir: &Path, measured: &[Measured], references: &References) -> Result<()> {
+    write_trials(dir, "sweep", measured)?;
+    write_atomic(
+        &dir.join("references.csv"),
+        &to_csv(&references.candidates(), &[])?,
+    )?;
+    write_all(&dir.join("charts"), &sweep_charts(&pairs(measured)))?;
+    Ok(())
+}
+
+/// Each trial with its times, for the charts.
+pub fn pairs(measured: &[Measured]) -> Vec<(&Trial, &TrialTiming)> {
+    measured.iter().map(|m| (&m.trial, &m.timing)).collect()
+}

@@ -1,0 +1,263 @@
+//! Views of the benchmark: the performance goals checked against the rows
+//! of one run, charts of time against size, the peak memory of the fastest
+//! solver measured in a fresh process, and the files.
+
+use std::path::Path;
+
+use anyhow::Result;
+use contactlab_solvers::registry::{self, Role};
+use serde::Serialize;
+
+use crate::io::charts::{Chart, Legend, Series};
+use crate::io::csv::to_csv;
+use crate::io::output::write_atomic;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::settings::Settings;
+use crate::study::bench::{BenchSpec, PerfRow, bench};
+
+/// One goal, measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct Goal {
+    pub goal: String,
+    pub measured: String,
+    pub pass: Option<bool>,
+}
+
+/// The fastest certified solver of the Coulomb problem at `h`.
+fn fastest<'a>(rows: &'a [PerfRow], h: &str) -> Option<&'a PerfRow> {
+    rows.iter()
+        .filter(|r| {
+            r.what == "coulomb"
+                && r.h == h
+                && r.median_seconds.is_finite()
+                && r.status == "converged"
+        })
+        .min_by(|a, b| a.median_seconds.total_cmp(&b.median_seconds))
+}
+
+/// The goals, checked against the rows of one run (and the peak memory in
+/// KiB of the fastest solver on the given mesh).
+pub fn goals(rows: &[PerfRow], peak: Option<(MeshSize, u64)>) -> Vec<Goal> {
+    let mut out = Vec::new();
+    let oracle = registry::with_role(Role::Oracle).map(|e| e.name);
+    for (h, limit) in [("1/64", 10.0), ("1/256", 20.0)] {
+        let Some(f) = fastest(rows, h) else {
+            out.push(Goal {
+                goal: format!("whole Coulomb problem at h = {h}, certified"),
+                measured: "not measured in this run".into(),
+                pass: None,
+            });
+            continue;
+        };
+        out.push(Goal {
+            goal: format!(
+                "whole Coulomb problem at h = {h}, fastest certified solver: at most {limit} × one factorization"
+            ),
+            measured: format!(
+                "{}: {:.4} s = {:.1} × factorization",
+                f.solver, f.median_seconds, f.ratio_to_factorization
+            ),
+            pass: Some(f.ratio_to_factorization <= limit),
+        });
+        if let Some(c) = rows.iter().find(|r| {
+            r.what == "coulomb"
+                && Some(r.solver.as_str()) == oracle
+                && r.h == h
+                && r.median_seconds.is_finite()
+        }) {
+            let ratio = c.median_seconds / f.median_seconds;
+            out.push(Goal {
+                goal: format!(
+                    "at h = {h}, at least 10 × faster than the oracle at an equal or smaller certificate"
+                ),
+                measured: format!(
+                    "{ratio:.1} × faster; certificate {:.1e} vs the oracle's {:.1e} ({})",
+                    f.certificate, c.certificate, c.status
+                ),
+                pass: Some(ratio >= 10.0 && f.certificate <= c.certificate),
+            });
+        }
+    }
+    if let Some((h, kb)) = peak {
+        out.push(Goal {
+            goal: format!("peak memory of the fastest solver at h = {h} under 2 GiB"),
+            measured: format!("{:.0} MiB", kb as f64 / 1024.0),
+            pass: Some((kb as f64) < 2.0 * 1024.0 * 1024.0),
+        });
+    }
+    if let Some(paper) = registry::with_role(Role::PapersMethod) {
+        let find = |what: &str| {
+            rows.iter()
+                .find(|r| r.what == what && r.solver == paper.name && r.h == "1/64")
+        };
+        if let (Some(k), Some(p)) = (find("kernel"), find("spmv")) {
+            let ratio = k.median_seconds / p.median_seconds;
+            out.push(Goal {
+                goal: format!(
+                    "the paper's method: one inner iteration ({}) at most 2 × one sparse matrix-vector product (h = 1/64)",
+                    k.note.split(':').next().unwrap_or("kernel")
+                ),
+                measured: format!("{ratio:.2} ×"),
+                pass: Some(ratio <= 2.0),
+            });
+        }
+    }
+    out
+}
+
+pub fn goals_markdown(goals: &[Goal]) -> String {
+    let mut s = String::from("| goal | measured | result |\n|---|---|---|\n");
+    for g in goals {
+        let result = match g.pass {
+            Some(true) => "pass",
+            Some(false) => "falls short",
+            None => "not measured",
+        };
+        s += &format!("| {} | {} | {result} |\n", g.goal, g.measured);
+    }
+    s
+}
+
+/// Time against unknowns (log-log), one series per solver with its fitted
+/// slope, and one factorization for scale.
+pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
+    let mut out = Vec::new();
+    for what in ["coulomb", "given_friction"] {
+        let mut series = Vec::new();
+        let factor: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.what == "factorization")
+            .map(|r| (r.unknowns as f64, r.median_seconds))
+            .collect();
+        for e in registry::solvers() {
+            let pts: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.solver == e.name && r.what == what && r.median_seconds.is_finite())
+                .map(|r| (r.unknowns as f64, r.median_seconds))
+                .collect();
+            if !pts.is_empty() {
+                let slope = fit_slope(&pts)
+                    .map(|s| format!("{s:.2}"))
+                    .unwrap_or_else(|| "n/a".into());
+                series
+                    .push(Series::line(format!("{} (slope {slope})", e.name), pts).with_markers());
+            }
+        }
+        let slope = fit_slope(&factor)
+            .map(|s| format!("{s:.2}"))
+            .unwrap_or_else(|| "n/a".into());
+        series.push(
+            Series::line(format!("one factorization + solve (slope {slope})"), factor).dashed(),
+        );
+        let title = if what == "coulomb" {
+            "Whole Coulomb problem: time against unknowns (problem 1)"
+        } else {
+            "Given-friction subproblem: time against unknowns (problem 1)"
+        };
+        out.push((
+            format!("performance_{what}"),
+            Chart {
+                title: title.into(),
+                x_label: "unknowns".into(),
+                y_label: "median time [s], one thread".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                legend: Legend::UpperLeft,
+            },
+        ));
+    }
+    out
+}
+
+/// Least-squares slope of log y against log x.
+pub fn fit_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// Peak resident memory of this process so far, in KiB (Linux).
+pub fn peak_memory_kb() -> Option<u64> {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()?
+        .lines()
+        .find(|l| l.starts_with("VmHWM:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()
+}
+
+/// What one benchmark run wrote.
+pub struct BenchOutput {
+    pub rows: Vec<PerfRow>,
+    pub goals: Vec<Goal>,
+    pub peak_kb: Option<u64>,
+    pub charts: Vec<(String, Chart)>,
+}
+
+/// Runs the benchmark, measures the fastest solver's peak memory on the
+/// finest mesh in a fresh process, and writes `performance.csv` and
+/// `performance_goals.md` into `out` (the charts are returned).
+pub fn write_bench(
+    out: &Path,
+    spec: &BenchSpec,
+    settings: &Settings,
+    log: &dyn Fn(&str),
+) -> Result<BenchOutput> {
+    let rows = bench(spec, settings, log)?;
+    let finest = spec.meshes.last().copied();
+    let fastest =
+        finest.and_then(|h| fastest(&rows, &h.to_string()).map(|r| (h, r.solver.clone())));
+    let peak_kb = match &fastest {
+        Some((h, solver)) => {
+            log(&format!(
+                "peak memory of {solver} at h = {h} (fresh process)"
+            ));
+            let o = std::process::Command::new(std::env::current_exe()?)
+                .args([
+                    "bench-one",
+                    "--problem",
+                    &spec.problem.to_string(),
+                    "--h",
+                    &h.to_string(),
+                    "--solver",
+                    solver,
+                ])
+                .output()?;
+            let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
+            v.get("peak_kb").and_then(|x| x.as_u64())
+        }
+        None => None,
+    };
+    let goals = goals(&rows, fastest.as_ref().map(|f| f.0).zip(peak_kb));
+    write_atomic(&out.join("performance.csv"), &to_csv(&rows, &[])?)?;
+    let mut md = goals_markdown(&goals);
+    if let (Some(kb), Some((h, solver))) = (peak_kb, fastest) {
+        md += &format!(
+            "\nPeak resident memory of `{solver}` on the whole Coulomb problem at h = {h}, in a fresh process: {:.0} MiB.\n",
+            kb as f64 / 1024.0
+        );
+    }
+    write_atomic(&out.join("performance_goals.md"), md.as_bytes())?;
+    Ok(BenchOutput {
+        charts: performance_charts(&rows),
+        rows,
+        goals,
+        peak_kb,
+    })
+}

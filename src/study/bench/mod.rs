@@ -1,0 +1,293 @@
+//! `contactlab bench`: speed, as medians of repeated runs after a warm-up on
+//! one thread, every figure also as a ratio to one sparse Cholesky
+//! factorization and solve of the stiffness matrix (semicoercive mode
+//! removed) measured in the same run: nothing that solves this elasticity
+//! problem to full accuracy can be much cheaper than that. Solvers are the
+//! study engine's trials (certified, with a wall-clock budget: this is a
+//! timing study, its file is a timing file); each solver's inner kernel
+//! (from its registry entry) is timed against one product with its operator.
+
+pub mod goals;
+
+use std::time::Instant;
+
+use anyhow::Result;
+use contactlab_solvers::linalg::{SparseCholesky, spmv_into};
+use contactlab_solvers::{Law, registry};
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use serde::Serialize;
+
+use crate::io::csv::fixed;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::study::reference::References;
+use crate::study::runner::{Keep, measure, median};
+use crate::study::trial::TrialSpec;
+
+/// The study's name in trial records.
+pub const STUDY: &str = "bench";
+
+/// What to measure.
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchSpec {
+    pub problem: u32,
+    pub meshes: Vec<MeshSize>,
+    /// Timed runs after the warm-up (the median is reported).
+    pub runs: usize,
+    /// Seconds: a solver slower than this on one mesh (or predicted to be
+    /// on the next) is not run on finer meshes; also each run's deadline.
+    pub budget: f64,
+}
+
+impl BenchSpec {
+    pub fn standard() -> Self {
+        Self {
+            problem: 1,
+            meshes: (3..=8)
+                .map(|k| MeshSize::from_level(k).expect("in range"))
+                .collect(),
+            runs: 3,
+            budget: 15.0,
+        }
+    }
+
+    pub fn quick() -> Self {
+        Self {
+            problem: 1,
+            meshes: (3..=4)
+                .map(|k| MeshSize::from_level(k).expect("in range"))
+                .collect(),
+            runs: 1,
+            budget: 5.0,
+        }
+    }
+}
+
+/// One measurement (a row of the timing file `performance.csv`).
+#[derive(Clone, Debug, Serialize)]
+pub struct PerfRow {
+    /// `factorization`, `assembly`, `kernel` (a solver's inner iteration),
+    /// `spmv`, `given_friction` or `coulomb`.
+    pub what: String,
+    pub solver: String,
+    pub h: String,
+    pub unknowns: usize,
+    pub runs: usize,
+    #[serde(serialize_with = "fixed")]
+    pub median_seconds: f64,
+    #[serde(serialize_with = "fixed")]
+    pub min_seconds: f64,
+    /// median / the factorization's median on the same mesh.
+    #[serde(serialize_with = "fixed")]
+    pub ratio_to_factorization: f64,
+    /// Certified status (`done` for the measurements without one, `skipped`).
+    pub status: String,
+    #[serde(serialize_with = "fixed")]
+    pub certificate: f64,
+    #[serde(serialize_with = "fixed")]
+    pub pressure_error: f64,
+    pub work: usize,
+    pub note: String,
+}
+
+/// Times `f` once as a warm-up and `runs` more times; returns (first result, times).
+fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(T, Vec<f64>)> {
+    let t = Instant::now();
+    let first = f()?;
+    let warm = t.elapsed().as_secs_f64();
+    let mut times = Vec::with_capacity(runs);
+    for _ in 0..runs {
+        let t = Instant::now();
+        f()?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    if times.is_empty() {
+        times.push(warm);
+    }
+    Ok((first, times))
+}
+
+/// A with one jump pinned by a spring: the stiffness with the semicoercive
+/// mode removed, same size and pattern.
+pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
+    let a = d.problem.a();
+    let t = d.problem.contacts()[0].t;
+    let k = d.problem.scales().stiffness;
+    let mut coo = CooMatrix::new(a.nrows(), a.ncols());
+    for (i, j, &v) in a.triplet_iter() {
+        coo.push(i, j, v);
+    }
+    coo.push(t, t, k);
+    CsrMatrix::from(&coo)
+}
+
+/// Rows of one mesh's measurements, with the factorization as the unit.
+struct MeshRows<'a> {
+    rows: &'a mut Vec<PerfRow>,
+    h: MeshSize,
+    unknowns: usize,
+    factorization: f64,
+}
+
+impl MeshRows<'_> {
+    fn push(&mut self, what: &str, solver: &str, times: &[f64], status: &str, note: String) {
+        let m = median(times);
+        self.rows.push(PerfRow {
+            what: what.into(),
+            solver: solver.into(),
+            h: self.h.to_string(),
+            unknowns: self.unknowns,
+            runs: times.len(),
+            median_seconds: m,
+            min_seconds: times.iter().copied().fold(f64::INFINITY, f64::min),
+            ratio_to_factorization: m / self.factorization,
+            status: status.into(),
+            certificate: f64::NAN,
+            pressure_error: f64::NAN,
+            work: 0,
+            note,
+        });
+    }
+}
+
+/// A solver's median seconds on the meshes so far, or why it was stopped.
+type Past = (Vec<f64>, Option<String>);
+
+/// Runs every measurement; `log` gets a line per mesh and solver.
+pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<Vec<PerfRow>> {
+    faer::set_global_parallelism(faer::Par::Seq);
+    let mut rows = Vec::new();
+    let mut references = References::default();
+    references.candidate_seconds = spec.budget.max(1.0) * 2.0;
+    // Per (law, solver): median seconds on the meshes so far, or why it stopped.
+    let mut history: std::collections::HashMap<(Law, &str), Past> = Default::default();
+    for &h in &spec.meshes {
+        let mut scene = Scene::paper_problem(spec.problem)?;
+        scene.set_finest(h);
+        let (d, assembly) = timed(spec.runs, || Ok(Discretization::new(&scene, h)?))?;
+        let a = pinned(&d);
+        let (_, factor) = timed(spec.runs, || {
+            let c = SparseCholesky::new(&a)?;
+            let mut b = d.problem.f().to_vec();
+            c.solve_vec(&mut b);
+            Ok(b[0])
+        })?;
+        let mut mesh = MeshRows {
+            rows: &mut rows,
+            h,
+            unknowns: d.problem.n(),
+            factorization: median(&factor),
+        };
+        let note = "symbolic + numeric + one solve".to_string();
+        mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
+        mesh.push("assembly", "-", &assembly, "done", String::new());
+        for entry in registry::solvers() {
+            let Some(prepare) = entry.kernel else {
+                continue;
+            };
+            let (kernel, product) = kernel_against_spmv(prepare(&d.problem), spec.runs)?;
+            let ratio = median(&kernel.1) / median(&product);
+            mesh.push(
+                "kernel",
+                entry.name,
+                &kernel.1,
+                "done",
+                format!("{}: {ratio:.2} × one SpMV", kernel.0),
+            );
+            mesh.push(
+                "spmv",
+                entry.name,
+                &product,
+                "done",
+                "of the kernel's operator".into(),
+            );
+        }
+        log(&format!(
+            "h = {h}: factorization {:.4} s",
+            mesh.factorization
+        ));
+        for entry in registry::solvers() {
+            for law in [Law::GivenFriction, Law::Coulomb] {
+                if law == Law::GivenFriction && !entry.solves(law) {
+                    continue;
+                }
+                let key = (law, entry.name);
+                let (past, stopped) = history.entry(key).or_default().clone();
+                let why = stopped.or_else(|| match past[..] {
+                    [.., a, b] if b * (b / a).max(4.0) > spec.budget => Some(format!(
+                        "predicted {:.0} s > budget {} s",
+                        b * (b / a).max(4.0),
+                        spec.budget
+                    )),
+                    _ => None,
+                });
+                if let Some(why) = why {
+                    history.insert(key, (past, Some(why.clone())));
+                    mesh.push(law.as_str(), entry.name, &[f64::NAN], "skipped", why);
+                    continue;
+                }
+                log(&format!("h = {h}: {} {}", entry.name, law.as_str()));
+                let t = TrialSpec::new(STUDY, law.as_str(), &scene, entry, law, settings)
+                    .with_seconds(Some(spec.budget))
+                    .with_repeats(spec.runs);
+                let reference = references.get(&scene, settings)?;
+                let m = measure(&t, reference, Keep::default())?;
+                let seconds = m.timing.seconds_median;
+                let mut past = past;
+                past.push(seconds);
+                let stop = (seconds > spec.budget)
+                    .then(|| format!("one run took {seconds:.1} s > budget {} s", spec.budget));
+                history.insert(key, (past, stop));
+                let tr = &m.trial;
+                let note = format!(
+                    "{} friction iterations, {} outer, {} inner",
+                    tr.friction_iterations, tr.outer_iterations, tr.inner_iterations
+                );
+                let times = vec![m.timing.seconds_median];
+                mesh.push(law.as_str(), entry.name, &times, tr.status.as_str(), note);
+                let row = mesh.rows.last_mut().expect("just pushed");
+                row.runs = m.timing.runs;
+                row.min_seconds = m.timing.seconds_min;
+                row.certificate = tr.certificate;
+                row.pressure_error = tr.pressure_error.unwrap_or(f64::NAN);
+                row.work = tr.work;
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// Times a kernel step and one product with its operator, interleaved so
+/// that whatever else the machine does affects both alike; the first pair
+/// is a warm-up. Returns ((name, seconds per step), seconds per product).
+#[allow(clippy::type_complexity)]
+fn kernel_against_spmv(
+    mut k: contactlab_solvers::registry::InnerKernel,
+    runs: usize,
+) -> Result<((&'static str, Vec<f64>), Vec<f64>)> {
+    let n = k.matrix.nrows();
+    let reps = (2_000_000 / n.max(1)).clamp(5, 2000);
+    let x = vec![1.0; n];
+    let mut y = vec![0.0; n];
+    let (mut step, mut product) = (Vec::new(), Vec::new());
+    for round in 0..=runs.max(5) {
+        let t = Instant::now();
+        for _ in 0..reps {
+            (k.step)();
+        }
+        let ts = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        for _ in 0..reps {
+            spmv_into(&k.matrix, &x, &mut y);
+        }
+        std::hint::black_box(&y);
+        let tp = t.elapsed().as_secs_f64();
+        if round > 0 {
+            step.push(ts / reps as f64);
+            product.push(tp / reps as f64);
+        }
+    }
+    Ok(((k.name, step), product))
+}

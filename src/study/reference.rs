@@ -1,0 +1,234 @@
+//! The reference a study measures differences against is earned, not
+//! assumed: every registered solver that can give an exact answer (its
+//! registry entry says so) solves the problem at its tightest settings, the
+//! answers are certified, and the one with the smallest certificate measure
+//! is the reference. The oracle is then a row like any other.
+//!
+//! A reference of the Coulomb problem gives the operating point g = 𝓕p of
+//! the given-friction trials; the given-friction reference is earned the same
+//! way on the subproblem at that g.
+
+use anyhow::Result;
+use contactlab_solvers::registry::{self, Entry};
+use contactlab_solvers::{Law, Solution, Status};
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::certificate::{Certificate, certify_solution};
+use crate::coulomb::budget::Budget;
+use crate::coulomb::driver::{Run, solve_given_friction, solve_scene};
+use crate::io::csv::fixed;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+
+/// The fixed point's relative tolerance for reference solves.
+pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-11;
+
+/// Wall-clock seconds a candidate may take (a safety net: at fine meshes the
+/// interior-point oracle is far slower than the Newton solver, and a
+/// candidate that runs out of time simply does not compete).
+pub const CANDIDATE_SECONDS: f64 = 120.0;
+
+/// One candidate's answer.
+#[derive(Clone, Debug, Serialize)]
+pub struct Candidate {
+    pub scene: String,
+    pub h: String,
+    pub law: Law,
+    pub solver: String,
+    pub status: Status,
+    #[serde(serialize_with = "fixed")]
+    pub certificate: f64,
+    /// Whether it became the reference.
+    pub chosen: bool,
+}
+
+/// The reference answer of the subproblem at the reference's g.
+pub struct GivenFrictionReference {
+    pub solver: &'static str,
+    pub discretization: Discretization,
+    pub solution: Solution,
+    pub certificate: Certificate,
+}
+
+/// The references of one scene on one mesh.
+pub struct Reference {
+    pub scene: Scene,
+    /// The Coulomb problem's reference and who earned it.
+    pub solver: &'static str,
+    pub coulomb: Run,
+    /// g = 𝓕p of the Coulomb reference: the given-friction trials' bound.
+    pub g: Vec<f64>,
+    pub given_friction: Option<GivenFrictionReference>,
+    pub candidates: Vec<Candidate>,
+}
+
+/// Settings of a reference solve with `entry`: relative stopping, the
+/// fixed point at [`REFERENCE_COULOMB_EPSILON`], the solver at its
+/// reference accuracy.
+pub fn reference_settings(entry: &Entry, base: &Settings) -> Result<Settings> {
+    let mut s = Settings::default();
+    s.certificate = base.certificate;
+    s.schedule = base.schedule;
+    s.set("coulomb.epsilon", Value::from(REFERENCE_COULOMB_EPSILON))
+        .map_err(anyhow::Error::msg)?;
+    s.set("coulomb.max_iterations", Value::from(200u64))
+        .map_err(anyhow::Error::msg)?;
+    s.set(
+        &format!("{}.{}", entry.name, entry.accuracy.knob),
+        Value::from(entry.accuracy.reference),
+    )
+    .map_err(anyhow::Error::msg)?;
+    Ok(s)
+}
+
+/// Earns the references of `scene` (on its finest level). `None` when no
+/// exact solver's answer passes the certificate (then trials carry no
+/// differences, only their certificates).
+pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Reference>> {
+    let exact: Vec<&'static Entry> = registry::solvers()
+        .into_iter()
+        .filter(|e| e.accuracy.exact)
+        .collect();
+    let mut candidates = Vec::new();
+    let mut best: Option<(&'static Entry, Run)> = None;
+    for &entry in &exact {
+        let settings = reference_settings(entry, base)?;
+        let mut budget = Budget::silent(entry, None, Some(seconds));
+        let run = solve_scene(scene, &settings, entry.name, &mut budget)?;
+        candidates.push(Candidate {
+            scene: scene.name.clone(),
+            h: scene.finest().to_string(),
+            law: Law::Coulomb,
+            solver: entry.name.into(),
+            status: run.status,
+            certificate: run.certificate.residual(),
+            chosen: false,
+        });
+        let better = best
+            .as_ref()
+            .is_none_or(|(_, b)| run.certificate.residual() < b.certificate.residual());
+        if run.status == Status::Converged && better {
+            best = Some((entry, run));
+        }
+    }
+    let Some((entry, coulomb)) = best else {
+        return Ok(None);
+    };
+    mark_chosen(&mut candidates, Law::Coulomb, entry.name);
+    let g = coulomb.coulomb.g.clone();
+    let mut gf_best: Option<GivenFrictionReference> = None;
+    for &e in &exact {
+        let settings = reference_settings(e, base)?;
+        let mut budget = Budget::silent(e, None, Some(seconds));
+        let (d, solution, _) = solve_given_friction(scene, &settings, e.name, &g, &mut budget)?;
+        let certificate = certify_solution(
+            &d.problem,
+            Law::GivenFriction,
+            &solution,
+            base.certificate.tolerance,
+        );
+        let status = certificate.verdict(solution.status);
+        candidates.push(Candidate {
+            scene: scene.name.clone(),
+            h: scene.finest().to_string(),
+            law: Law::GivenFriction,
+            solver: e.name.into(),
+            status,
+            certificate: certificate.residual(),
+            chosen: false,
+        });
+        let better = gf_best
+            .as_ref()
+            .is_none_or(|b| certificate.residual() < b.certificate.residual());
+        if status == Status::Converged && better {
+            gf_best = Some(GivenFrictionReference {
+                solver: e.name,
+                discretization: d,
+                solution,
+                certificate,
+            });
+        }
+    }
+    if let Some(b) = &gf_best {
+        mark_chosen(&mut candidates, Law::GivenFriction, b.solver);
+    }
+    Ok(Some(Reference {
+        scene: scene.clone(),
+        solver: entry.name,
+        coulomb,
+        g,
+        given_friction: gf_best,
+        candidates,
+    }))
+}
+
+fn mark_chosen(candidates: &mut [Candidate], law: Law, solver: &str) {
+    for c in candidates.iter_mut() {
+        if c.law == law && c.solver == solver {
+            c.chosen = true;
+        }
+    }
+}
+
+/// References keyed by the whole scene (its material, friction, loads and
+/// levels, not only its name), earned once per study.
+pub struct References {
+    earned: Vec<(String, Option<Reference>)>,
+    /// False for studies that measure counts, not differences (Table 1).
+    enabled: bool,
+    /// Wall-clock seconds a candidate may take.
+    pub candidate_seconds: f64,
+}
+
+impl Default for References {
+    fn default() -> Self {
+        Self {
+            earned: Vec::new(),
+            enabled: true,
+            candidate_seconds: CANDIDATE_SECONDS,
+        }
+    }
+}
+
+impl References {
+    /// References that are never earned: trials carry no differences.
+    pub fn none() -> Self {
+        Self {
+            enabled: false,
+            ..Self::default()
+        }
+    }
+
+    /// The reference of `scene` on its finest level, earned on first use.
+    pub fn get(&mut self, scene: &Scene, base: &Settings) -> Result<Option<&Reference>> {
+        if !self.enabled {
+            return Ok(None);
+        }
+        let key = serde_json::to_string(scene)?;
+        let index = match self.earned.iter().position(|(k, _)| *k == key) {
+            Some(i) => i,
+            None => {
+                let r = earn(scene, base, self.candidate_seconds)?;
+                self.earned.push((key, r));
+                self.earned.len() - 1
+            }
+        };
+        Ok(self.earned[index].1.as_ref())
+    }
+
+    /// Every candidate of every reference earned, for `references.csv`.
+    pub fn candidates(&self) -> Vec<Candidate> {
+        self.earned
+            .iter()
+            .filter_map(|(_, r)| r.as_ref())
+            .flat_map(|r| r.candidates.clone())
+            .collect()
+    }
+
+    /// The references earned, in order.
+    pub fn all(&self) -> impl Iterator<Item = &Reference> {
+        self.earned.iter().filter_map(|(_, r)| r.as_ref())
+    }
+}

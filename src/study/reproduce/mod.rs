@@ -1,0 +1,370 @@
+//! `contactlab reproduce`: every study on the paper's problems into one
+//! output folder: Table 1 at the paper's settings, the comparison of every
+//! solver (and the paper's method at the paper's settings) against the
+//! earned reference, the contact-zone profiles, a sweep, the stability map,
+//! the benchmark, the charts, a manifest and a README that is a view of
+//! the trials ([`readme`]).
+
+pub mod readme;
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::{self, Role};
+use serde::Serialize;
+
+use crate::coulomb::continuation::Schedule;
+use crate::io::charts::Chart;
+use crate::io::csv::{fixed, to_csv};
+use crate::io::output::write_atomic;
+use crate::mechanics::contact_zone::{PROFILE_COLUMNS, contact_profile};
+use crate::mechanics::material::PlaneModel;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::study::bench::BenchSpec;
+use crate::study::bench::goals::{BenchOutput, write_bench};
+use crate::study::compare;
+use crate::study::reference::References;
+use crate::study::report::{ProfilePair, convergence_chart, profile_charts, sweep_charts};
+use crate::study::runner::{Keep, Measured, measure, measure_all, write_trials};
+use crate::study::stability::{self, Map, StabilitySpec};
+use crate::study::sweep::{self, SweepSpec};
+use crate::study::table1::{self, Table1Row};
+use crate::study::trial::{Trial, TrialSpec};
+
+/// The group of the paper's method at the paper's settings in compare.csv.
+pub const PAPER_SETTINGS: &str = "paper_settings";
+
+/// What `reproduce` runs.
+#[derive(Clone, Serialize)]
+pub struct ReproduceSpec {
+    pub quick: bool,
+    /// Finest mesh of the problems (continuation from 1/8).
+    pub h: MeshSize,
+    pub problems: Vec<u32>,
+    /// Timed runs per comparison trial, after the first.
+    pub repeats: usize,
+    #[serde(skip)]
+    pub sweep: SweepSpec,
+    pub sweep_h: MeshSize,
+    pub stability: StabilitySpec,
+    pub bench: BenchSpec,
+}
+
+impl ReproduceSpec {
+    /// The full run.
+    pub fn full() -> Self {
+        let sweep_h = MeshSize::from_level(5).expect("in range");
+        Self {
+            quick: false,
+            h: MeshSize::from_level(6).expect("in range"),
+            problems: vec![1, 2, 3],
+            repeats: 2,
+            sweep: SweepSpec {
+                meshes: vec![sweep_h],
+                ..SweepSpec::default()
+            },
+            sweep_h,
+            stability: StabilitySpec::standard(),
+            bench: BenchSpec::standard(),
+        }
+    }
+
+    /// A small run for tests (seconds).
+    pub fn quick() -> Self {
+        let h = MeshSize::from_level(4).expect("in range");
+        Self {
+            quick: true,
+            h,
+            problems: vec![1, 2, 3],
+            repeats: 0,
+            sweep: SweepSpec {
+                meshes: vec![h],
+                quick: true,
+                repeats: 0,
+                work_scale: 0.2,
+                ..SweepSpec::default()
+            },
+            sweep_h: h,
+            stability: StabilitySpec::quick(),
+            bench: BenchSpec::quick(),
+        }
+    }
+}
+
+/// Files every reproduce run writes (relative to the output folder),
+/// besides the per-problem profiles and the charts.
+pub const FILES: [&str; 16] = [
+    "README.md",
+    "manifest.json",
+    "table1.csv",
+    "table1_trials.csv",
+    "compare.csv",
+    "compare_timing.csv",
+    "references.csv",
+    "separation.csv",
+    "sweep.csv",
+    "sweep_timing.csv",
+    "sweep_references.csv",
+    "stability.csv",
+    "stability_friction.csv",
+    "stability_references.csv",
+    "performance.csv",
+    "performance_goals.md",
+];
+
+/// One problem's separation with one solver.
+#[derive(Clone, Debug, Serialize)]
+pub struct SeparationRow {
+    pub problem: u32,
+    pub solver: String,
+    #[serde(serialize_with = "fixed")]
+    pub friction_coefficient: f64,
+    pub status: String,
+    pub separated: String,
+    #[serde(serialize_with = "fixed")]
+    pub separated_fraction: f64,
+}
+
+/// Everything a run measured.
+pub struct Outputs {
+    pub table1: Vec<Table1Row>,
+    /// Per problem: its comparison trials, then the paper's method at the
+    /// paper's settings.
+    pub compare: Vec<(u32, Vec<Measured>)>,
+    pub separation: Vec<SeparationRow>,
+    /// Separated fraction of problem 1 in plane stress (the reference's).
+    pub plane_stress_fraction: Option<f64>,
+    pub sweep: Vec<Measured>,
+    pub stability: Map,
+    pub bench: BenchOutput,
+    pub references: References,
+    pub charts: Vec<(String, Chart)>,
+}
+
+fn scene(problem: u32, h: MeshSize) -> Result<Scene> {
+    let mut s = Scene::paper_problem(problem)?;
+    s.set_finest(h);
+    Ok(s)
+}
+
+/// Runs everything, writing the data files into `out` (charts, manifest and
+/// README are the caller's). `log` receives one line per stage.
+pub fn run(
+    out: &Path,
+    spec: &ReproduceSpec,
+    settings: &Settings,
+    log: &dyn Fn(&str),
+) -> Result<Outputs> {
+    let none = &|_: &TrialSpec| {};
+    let mut charts = Vec::new();
+    log(&format!(
+        "Table 1 at h = {} (the paper's settings, both schedules)",
+        spec.h
+    ));
+    let mut paper = Settings::paper();
+    paper.certificate = settings.certificate;
+    let t1_specs = table1::plan(
+        &[1, 2, 3],
+        &[Schedule::Revisit, Schedule::FinestOnly],
+        &paper,
+        spec.h,
+        PlaneModel::Strain,
+    )?;
+    let (t1_measured, t1) = table1::run(&t1_specs, &[1, 2, 3], none)?;
+    write_atomic(&out.join("table1.csv"), &to_csv(&t1, &[])?)?;
+    let t1_trials: Vec<Trial> = t1_measured.iter().map(|m| m.trial.clone()).collect();
+    write_atomic(&out.join("table1_trials.csv"), &to_csv(&t1_trials, &[])?)?;
+
+    let solvers = registry::solvers();
+    let paper_method =
+        registry::with_role(Role::PapersMethod).context("no paper's method registered")?;
+    let mut references = References::default();
+    let mut compared = Vec::new();
+    let mut separation = Vec::new();
+    for &problem in &spec.problems {
+        log(&format!(
+            "problem {problem}: every solver at h = {}",
+            spec.h
+        ));
+        let sc = scene(problem, spec.h)?;
+        let mut measured =
+            compare::run(&sc, settings, &solvers, spec.repeats, &mut references, none)?;
+        let at_paper = TrialSpec::new(
+            PAPER_SETTINGS,
+            PAPER_SETTINGS,
+            &sc,
+            paper_method,
+            Law::Coulomb,
+            &paper,
+        )
+        .with_repeats(spec.repeats);
+        let reference = references.get(&sc, settings)?;
+        measured.push(measure(&at_paper, reference, Keep::default())?);
+        // Profiles with and without friction.
+        let mut frictionless = sc.clone();
+        frictionless.friction = 0.0;
+        frictionless.name = format!("{}, frictionless", sc.name);
+        let specs: Vec<TrialSpec> = solvers
+            .iter()
+            .map(|&e| {
+                TrialSpec::new(
+                    "profiles",
+                    "frictionless",
+                    &frictionless,
+                    e,
+                    Law::Coulomb,
+                    settings,
+                )
+            })
+            .collect();
+        let without = measure_all(
+            &specs,
+            &mut References::none(),
+            Keep {
+                history: false,
+                solution: true,
+            },
+            none,
+        )?;
+        let mut profiles = Vec::new();
+        for (&e, w) in solvers.iter().zip(&without) {
+            let with = measured
+                .iter()
+                .find(|m| {
+                    m.trial.solver == e.name
+                        && m.trial.law == Law::Coulomb
+                        && m.trial.study == compare::STUDY
+                })
+                .context("a Coulomb trial per solver")?;
+            let profile = |m: &Measured| {
+                m.solution
+                    .as_ref()
+                    .map(|(d, s)| contact_profile(d, s, m.trial.status))
+                    .unwrap_or_default()
+            };
+            let (pw, pwo) = (profile(with), profile(w));
+            for (kind, rows) in [("friction", &pw), ("frictionless", &pwo)] {
+                let path = out.join(format!("profiles/p{problem}_{}_{kind}.csv", e.name));
+                write_atomic(&path, &to_csv(rows, &PROFILE_COLUMNS)?)?;
+            }
+            for (m, f) in [(with, sc.friction), (w, 0.0)] {
+                separation.push(SeparationRow {
+                    problem,
+                    solver: e.name.into(),
+                    friction_coefficient: f,
+                    status: m.trial.status.to_string(),
+                    separated: m.trial.separated.clone(),
+                    separated_fraction: m.trial.separated_fraction,
+                });
+            }
+            profiles.push((e.name, pw, pwo));
+        }
+        let zoom_from = separation
+            .iter()
+            .filter(|r| r.problem == problem)
+            .filter_map(|r| first_start(&r.separated))
+            .fold(1.0f64, f64::min)
+            - 0.1;
+        let pairs: Vec<ProfilePair<'_>> = profiles
+            .iter()
+            .map(|(s, w, wo)| ProfilePair {
+                solver: s,
+                friction: w,
+                frictionless: wo,
+            })
+            .collect();
+        charts.extend(profile_charts(
+            problem,
+            &spec.h.to_string(),
+            &pairs,
+            zoom_from.clamp(0.0, 0.9),
+        ));
+        charts.push(convergence_chart(
+            problem,
+            &spec.h.to_string(),
+            &measured
+                .iter()
+                .filter(|m| m.trial.study == compare::STUDY)
+                .map(clone_for_chart)
+                .collect::<Vec<_>>(),
+        ));
+        compared.push((problem, measured));
+    }
+    let all: Vec<Measured> = compared
+        .iter()
+        .flat_map(|(_, m)| m.iter().map(clone_for_chart))
+        .collect();
+    crate::commands::compare::write_files(out, &all, &references)?;
+    write_atomic(&out.join("separation.csv"), &to_csv(&separation, &[])?)?;
+    let mut stress = scene(1, spec.h)?;
+    stress.material.plane = PlaneModel::Stress;
+    stress.name = "problem 1, plane stress".into();
+    let plane_stress_fraction = references
+        .get(&stress, settings)?
+        .map(|r| r.coulomb.separation.fraction);
+
+    log(&format!("sweep at h = {}", spec.sweep_h));
+    let mut sweep_refs = References::default();
+    let swept = sweep::run(&spec.sweep, settings, &mut sweep_refs, none)?;
+    write_trials(out, "sweep", &swept)?;
+    write_atomic(
+        &out.join("sweep_references.csv"),
+        &to_csv(&sweep_refs.candidates(), &[])?,
+    )?;
+    charts.extend(sweep_charts(&crate::commands::sweep::pairs(&swept)));
+
+    log("stability map");
+    let mut stab_refs = References::default();
+    let map = stability::run(
+        &spec.stability,
+        settings,
+        &mut stab_refs,
+        &|l| log(&format!("stability: {l}")),
+        none,
+    )?;
+    write_atomic(&out.join("stability.csv"), &to_csv(&map.trials, &[])?)?;
+    write_atomic(
+        &out.join("stability_friction.csv"),
+        &to_csv(&map.steps, &[])?,
+    )?;
+    write_atomic(
+        &out.join("stability_references.csv"),
+        &to_csv(&stab_refs.candidates(), &[])?,
+    )?;
+    charts.extend(stability::views::charts(&map.trials, &map.steps));
+
+    log("benchmark");
+    let bench = write_bench(out, &spec.bench, settings, &|l| log(&format!("bench: {l}")))?;
+    charts.extend(bench.charts.clone());
+    Ok(Outputs {
+        table1: t1,
+        compare: compared,
+        separation,
+        plane_stress_fraction,
+        sweep: swept,
+        stability: map,
+        bench,
+        references,
+        charts,
+    })
+}
+
+/// A measured trial without its solution (charts need trials and histories).
+fn clone_for_chart(m: &Measured) -> Measured {
+    Measured {
+        trial: m.trial.clone(),
+        timing: m.timing.clone(),
+        friction: m.friction.clone(),
+        levels: m.levels.clone(),
+        history: m.history.clone(),
+        solution: None,
+    }
+}
+
+/// The start of the first interval of `[a;b] [c;d]`.
+fn first_start(text: &str) -> Option<f64> {
+    text.trim_start_matches('[').split(';').next()?.parse().ok()
+}

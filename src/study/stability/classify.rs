@@ -1,0 +1,172 @@
+//! The classes of the stability map, decided from a trial's certified
+//! status, its outcome, its agreement with the reference and its work.
+//!
+//! - refused: the problem has no solution (condition (13) fails) and this
+//!   is said: by our check before any solve, or by a solver that reports the
+//!   problem unbounded or infeasible;
+//! - diverged: a NaN or infinity, a numerical breakdown, a fixed point whose
+//!   max|Δg| grows (contraction factor > 1), or a solver that reports a
+//!   problem unbounded or infeasible although condition (13) holds;
+//! - stalled: stopped by a work cap, at reduced accuracy, or by a fixed
+//!   point that stopped contracting without growing;
+//! - wrong: converged by its own test, but the certificate fails
+//!   (status `inaccurate`) or the pressure differs from the reference's by
+//!   more than [`WRONG_PRESSURE`] of its largest value;
+//! - slow: certified and right, but its work exceeds [`SLOW_FACTOR`] times
+//!   that of the same solver at its default settings on the same problem
+//!   (or, in the friction scan, its friction iterations those at 𝓕 = ½);
+//! - converged: everything else.
+
+use contactlab_solvers::Status;
+use serde::{Deserialize, Serialize};
+
+use crate::study::trial::{Trial, TrialOutcome};
+
+/// Pressure difference from the reference above which a certified answer is
+/// still wrong: about what moves the separation zone by a node at h = 1/64.
+pub const WRONG_PRESSURE: f64 = 1e-3;
+/// Work beyond this many times the default run's is slow.
+pub const SLOW_FACTOR: f64 = 10.0;
+
+/// The classes of the map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Class {
+    Converged,
+    Slow,
+    Stalled,
+    Diverged,
+    Wrong,
+    Refused,
+}
+
+impl Class {
+    pub const ALL: [Class; 6] = [
+        Class::Converged,
+        Class::Slow,
+        Class::Stalled,
+        Class::Diverged,
+        Class::Wrong,
+        Class::Refused,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Class::Converged => "converged",
+            Class::Slow => "slow",
+            Class::Stalled => "stalled",
+            Class::Diverged => "diverged",
+            Class::Wrong => "wrong",
+            Class::Refused => "refused",
+        }
+    }
+
+    pub fn parse(text: &str) -> Option<Class> {
+        Class::ALL.into_iter().find(|c| c.as_str() == text)
+    }
+}
+
+/// What classification needs beside the trial.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Context {
+    /// Whether the problem has a solution (condition (13) holds).
+    pub solvable: bool,
+    /// The same solver's work at its default settings on the same problem.
+    pub default_work: Option<usize>,
+    /// The same solver's friction iterations at 𝓕 = ½ (friction scan).
+    pub default_friction_iterations: Option<usize>,
+    /// Geometric mean of the fixed point's last contraction factors.
+    pub trend: Option<f64>,
+}
+
+/// The class of a trial and the reason, in words.
+pub fn classify(t: &Trial, cx: &Context) -> (Class, String) {
+    let claim = t.solver_status;
+    let says_no_solution = matches!(claim, Status::Unbounded | Status::Infeasible);
+    if !cx.solvable {
+        if t.status == Status::NotRun {
+            return (Class::Refused, t.detail.clone());
+        }
+        if says_no_solution {
+            return (
+                Class::Refused,
+                format!(
+                    "the solver reports the problem {claim} (there is no solution): {}",
+                    t.detail
+                ),
+            );
+        }
+    } else if says_no_solution {
+        return (
+            Class::Diverged,
+            format!(
+                "the solver reports the problem {claim} although condition (13) holds (a solution exists): {}",
+                t.detail
+            ),
+        );
+    }
+    match t.status {
+        Status::NonFinite | Status::NumericalError => (Class::Diverged, t.detail.clone()),
+        _ if t.outcome == TrialOutcome::NotContracting => match cx.trend {
+            Some(q) if q > 1.0 => (
+                Class::Diverged,
+                format!("{} (contraction factor {q:.2} > 1)", t.detail),
+            ),
+            _ => (Class::Stalled, t.detail.clone()),
+        },
+        Status::Inaccurate => (
+            Class::Wrong,
+            format!(
+                "converged by its own test but the certificate fails ({} > {:e})",
+                t.failing.replace(';', ", "),
+                t.certificate_tolerance
+            ),
+        ),
+        Status::Converged => {
+            if let Some(e) = t.pressure_error.filter(|e| *e > WRONG_PRESSURE) {
+                return (
+                    Class::Wrong,
+                    format!(
+                        "certified, but its pressure differs from the reference ({}) by {e:.1e} > {WRONG_PRESSURE:e}",
+                        t.reference
+                    ),
+                );
+            }
+            if let Some(d) = cx
+                .default_work
+                .filter(|&d| t.work as f64 > SLOW_FACTOR * d as f64)
+            {
+                return (
+                    Class::Slow,
+                    format!("work {} > {SLOW_FACTOR} × {d} of the default run", t.work),
+                );
+            }
+            if let Some(d) = cx
+                .default_friction_iterations
+                .filter(|&d| t.friction_iterations as f64 > SLOW_FACTOR * d as f64)
+            {
+                return (
+                    Class::Slow,
+                    format!(
+                        "{} friction iterations > {SLOW_FACTOR} × {d} at 𝓕 = ½",
+                        t.friction_iterations
+                    ),
+                );
+            }
+            (Class::Converged, t.detail.clone())
+        }
+        s => (Class::Stalled, format!("{s}: {}", t.detail)),
+    }
+}
+
+/// The geometric mean of the last (up to four) contraction factors.
+pub fn trend(contractions: &[Option<f64>]) -> Option<f64> {
+    let last: Vec<f64> = contractions
+        .iter()
+        .rev()
+        .take(4)
+        .filter_map(|q| *q)
+        .filter(|q| *q > 0.0)
+        .collect();
+    (!last.is_empty()).then(|| (last.iter().map(|q| q.ln()).sum::<f64>() / last.len() as f64).exp())
+}

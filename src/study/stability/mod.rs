@@ -1,0 +1,291 @@
+//! The stability map: each solver across stress conditions, every trial
+//! classified ([`classify`]) with the reason. Every trial is stopped by a
+//! work cap (a count, from the registry), never by the clock, so the map is
+//! the same on every machine. Groups:
+//!
+//! - `default` and `stress`: each solver at its defaults and across the
+//!   stress conditions its registry entry lists, on problem 1;
+//! - `friction`: the friction coefficient 𝓕, with bisection for the largest
+//!   𝓕 whose Coulomb solve is certified, on problems 1-3;
+//! - `load`: total vertical loads approaching 0 (condition (13) barely holds);
+//! - `refused`: loads that violate condition (13): refused by our check,
+//!   and (check bypassed) what each solver does with such a problem.
+
+pub mod classify;
+pub mod views;
+
+use anyhow::Result;
+use contactlab_solvers::registry;
+use contactlab_solvers::{Law, Status};
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::io::csv::{fixed, fixed_opt};
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::{Scene, Traction};
+use crate::settings::Settings;
+use crate::study::reference::References;
+use crate::study::runner::{Keep, Measured, measure};
+use crate::study::sweep::work_cap;
+use crate::study::trial::{Trial, TrialSpec};
+use classify::{Class, Context, classify, trend};
+
+/// The study's name in trial records.
+pub const STUDY: &str = "stability";
+
+/// What the map runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct StabilitySpec {
+    /// Mesh of the default, stress, load and refused groups.
+    pub h: MeshSize,
+    /// Mesh of the friction scan.
+    pub h_friction: MeshSize,
+    /// The registry's short value lists.
+    pub quick: bool,
+    /// Multiplies each solver's study work cap.
+    pub work_scale: f64,
+    pub friction_values: Vec<f64>,
+    /// Bisection steps for the largest certified friction coefficient.
+    pub bisection_steps: usize,
+    /// |total vertical load| values approaching 0 (problem 1 is 20).
+    pub load_totals: Vec<f64>,
+    /// Upward totals that violate condition (13) (0: no load at all).
+    pub violating_totals: Vec<f64>,
+}
+
+impl StabilitySpec {
+    /// The map `reproduce` runs.
+    pub fn standard() -> Self {
+        let k = |k| MeshSize::from_level(k).expect("in range");
+        Self {
+            h: k(4),
+            h_friction: k(4),
+            quick: false,
+            work_scale: 1.0,
+            friction_values: vec![0.0, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0],
+            bisection_steps: 5,
+            load_totals: vec![20.0, 2.0, 0.2, 2e-2, 2e-3, 2e-4, 2e-6],
+            violating_totals: vec![0.0, 2.0],
+        }
+    }
+
+    /// A small map for tests (seconds).
+    pub fn quick() -> Self {
+        let k = |k| MeshSize::from_level(k).expect("in range");
+        Self {
+            h: k(3),
+            h_friction: k(4),
+            quick: true,
+            work_scale: 0.2,
+            friction_values: vec![0.0, 0.5, 16.0],
+            bisection_steps: 2,
+            load_totals: vec![20.0, 2e-4],
+            violating_totals: vec![2.0],
+        }
+    }
+}
+
+/// One step of a fixed point in the friction scan.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrictionStep {
+    pub scene: String,
+    pub solver: String,
+    #[serde(serialize_with = "fixed")]
+    pub friction_coefficient: f64,
+    pub iteration: usize,
+    #[serde(serialize_with = "fixed")]
+    pub change: f64,
+    #[serde(serialize_with = "fixed_opt")]
+    pub contraction: Option<f64>,
+    pub certified: bool,
+}
+
+/// The map: classified trials and the friction scan's steps.
+pub struct Map {
+    pub trials: Vec<Trial>,
+    pub steps: Vec<FrictionStep>,
+}
+
+fn problem(n: u32, h: MeshSize) -> Result<Scene> {
+    let mut s = Scene::paper_problem(n)?;
+    s.set_finest(h);
+    Ok(s)
+}
+
+/// Problem 1 plus an upward traction on [2/3, 1] so that the total
+/// vertical load is −`total` (a negative `total` lifts the body).
+pub fn lifted_problem(total: f64, h: MeshSize) -> Result<Scene> {
+    let mut s = problem(1, h)?;
+    let up = 3.0 * (20.0 - total);
+    if up != 0.0 {
+        s.loads.push(Traction {
+            from: 2.0 / 3.0,
+            to: 1.0,
+            p2: up,
+        });
+    }
+    s.name = format!("problem 1, total load {:e}", -total);
+    Ok(s)
+}
+
+/// Runs the whole map; `log` hears of each group, `tick` of each trial.
+pub fn run(
+    spec: &StabilitySpec,
+    base: &Settings,
+    references: &mut References,
+    log: &dyn Fn(&str),
+    tick: &dyn Fn(&TrialSpec),
+) -> Result<Map> {
+    let mut map = Map {
+        trials: Vec::new(),
+        steps: Vec::new(),
+    };
+    let mut one = |map: &mut Map, spec: TrialSpec, cx: Context| -> Result<Measured> {
+        let reference = if spec.check_solvable {
+            references.get(&spec.scene, &spec.settings)?
+        } else {
+            None
+        };
+        let m = measure(&spec, reference, Keep::default())?;
+        let contractions: Vec<Option<f64>> = m.friction.iter().map(|f| f.contraction).collect();
+        let cx = Context {
+            trend: trend(&contractions),
+            ..cx
+        };
+        let mut t = m.trial.clone();
+        let (class, reason) = classify(&t, &cx);
+        t.class = class.as_str().into();
+        t.reason = reason;
+        map.trials.push(t);
+        tick(&spec);
+        Ok(m)
+    };
+    log("each solver at its defaults and under its stress conditions");
+    let p1 = problem(1, spec.h)?;
+    for entry in registry::solvers() {
+        let cap = work_cap(entry, spec.work_scale);
+        let trial = |group: &str| {
+            TrialSpec::new(STUDY, group, &p1, entry, Law::Coulomb, base).with_work(cap)
+        };
+        let solvable = Context {
+            solvable: true,
+            ..Context::default()
+        };
+        let default = one(&mut map, trial("default"), solvable)?;
+        let default_work = Some(default.trial.work).filter(|_| default.trial.certified());
+        for v in entry.stress {
+            let path = format!("{}.{}", entry.name, v.knob);
+            for value in if spec.quick { v.quick } else { v.values } {
+                let cx = Context {
+                    default_work,
+                    ..solvable
+                };
+                one(&mut map, trial("stress").varying(&path, value)?, cx)?;
+            }
+        }
+    }
+    log("the friction coefficient");
+    friction_group(spec, base, &mut map, &mut one)?;
+    log("loads approaching condition (13)");
+    for &total in &spec.load_totals {
+        let scene = lifted_problem(total, spec.h)?;
+        for entry in registry::solvers() {
+            let t = TrialSpec::new(STUDY, "load", &scene, entry, Law::Coulomb, base)
+                .with_work(work_cap(entry, spec.work_scale));
+            let cx = Context {
+                solvable: true,
+                ..Context::default()
+            };
+            one(&mut map, t, cx)?;
+        }
+    }
+    log("loads that violate condition (13)");
+    for &total in &spec.violating_totals {
+        let scene = lifted_problem(-total, spec.h)?;
+        let refusal = scene
+            .validate()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        for entry in registry::solvers() {
+            let t = TrialSpec::new(STUDY, "refused", &scene, entry, Law::GivenFriction, base)
+                .with_work(work_cap(entry, spec.work_scale));
+            let mut refused = Trial::not_run(&t, Status::NotRun, refusal.clone());
+            refused.class = Class::Refused.as_str().into();
+            refused.reason = format!("our check of condition (13): {refusal}");
+            map.trials.push(refused);
+            let mut bypass = t.unchecked();
+            bypass.group = "refused_check_bypassed".into();
+            one(&mut map, bypass, Context::default())?;
+        }
+    }
+    Ok(map)
+}
+
+/// The friction scan: every solver on problems 1-3 for each coefficient,
+/// then bisection between the largest certified one and the next.
+fn friction_group(
+    spec: &StabilitySpec,
+    base: &Settings,
+    map: &mut Map,
+    one: &mut dyn FnMut(&mut Map, TrialSpec, Context) -> Result<Measured>,
+) -> Result<()> {
+    let mut settings = base.clone();
+    settings
+        .set("coulomb.max_iterations", Value::from(200u64))
+        .map_err(anyhow::Error::msg)?;
+    for entry in registry::solvers() {
+        for n in [1, 2, 3] {
+            let mut default_iterations = None;
+            let mut attempt = |map: &mut Map, f: f64, group: &str| -> Result<bool> {
+                let mut scene = problem(n, spec.h_friction)?;
+                scene.friction = f;
+                let mut t = TrialSpec::new(STUDY, group, &scene, entry, Law::Coulomb, &settings)
+                    .with_work(work_cap(entry, spec.work_scale));
+                t.knob = Some(("friction".into(), format!("{f}")));
+                let cx = Context {
+                    solvable: true,
+                    default_friction_iterations: default_iterations,
+                    ..Context::default()
+                };
+                let m = one(map, t, cx)?;
+                if (f - 0.5).abs() < 1e-12 {
+                    default_iterations = Some(m.trial.friction_iterations.max(1));
+                }
+                let certified = m.trial.certified();
+                map.steps.extend(m.friction.iter().map(|s| FrictionStep {
+                    scene: scene.name.clone(),
+                    solver: entry.name.into(),
+                    friction_coefficient: f,
+                    iteration: s.iteration,
+                    change: s.change,
+                    contraction: s.contraction,
+                    certified,
+                }));
+                Ok(certified)
+            };
+            let (mut last_ok, mut first_bad) = (None, None);
+            for &f in &spec.friction_values {
+                let ok = attempt(map, f, "friction")?;
+                if first_bad.is_none() {
+                    if ok {
+                        last_ok = Some(f);
+                    } else {
+                        first_bad = Some(f);
+                    }
+                }
+            }
+            if let (Some(mut lo), Some(mut hi)) = (last_ok, first_bad) {
+                for _ in 0..spec.bisection_steps {
+                    let mid = 0.5 * (lo + hi);
+                    if attempt(map, mid, "friction_bisection")? {
+                        lo = mid
+                    } else {
+                        hi = mid
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}

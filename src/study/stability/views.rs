@@ -1,0 +1,428 @@
+//! Views of the stability map: counts per group and class, the trials that
+//! did not simply converge, findings computed from the trials (where each
+//! solver's settings stop working, the largest certified friction
+//! coefficient), and charts.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use crate::io::charts::{Chart, Legend, Series};
+use crate::study::stability::FrictionStep;
+use crate::study::stability::classify::{Class, SLOW_FACTOR, WRONG_PRESSURE};
+use crate::study::trial::Trial;
+
+fn class_of(t: &Trial) -> Class {
+    Class::parse(&t.class).unwrap_or(Class::Converged)
+}
+
+/// Counts per group and class, then every trial that did not simply
+/// converge with its reason.
+pub fn summary_markdown(trials: &[Trial]) -> String {
+    let mut groups: Vec<&str> = trials.iter().map(|r| r.group.as_str()).collect();
+    groups.dedup();
+    let mut s = String::from("| group | ");
+    s += &Class::ALL.map(|c| c.as_str()).join(" | ");
+    s += " |\n|---|";
+    s += &"---|".repeat(Class::ALL.len());
+    s += "\n";
+    let mut seen = Vec::new();
+    for g in groups {
+        if seen.contains(&g) {
+            continue;
+        }
+        seen.push(g);
+        s += &format!("| {g} |");
+        for c in Class::ALL {
+            let n = trials
+                .iter()
+                .filter(|r| r.group == g && class_of(r) == c)
+                .count();
+            s += &format!(" {n} |");
+        }
+        s += "\n";
+    }
+    s += "\n| group | solver | problem | h | setting | class | reason |\n|---|---|---|---|---|---|---|\n";
+    for r in trials.iter().filter(|r| class_of(r) != Class::Converged) {
+        let reason: String = r.reason.chars().take(220).collect();
+        s += &format!(
+            "| {} | {} | {} | {} | {} | **{}** | {} |\n",
+            r.group,
+            r.solver,
+            r.scene,
+            r.h,
+            setting(r),
+            r.class,
+            reason.replace('|', "/")
+        );
+    }
+    s
+}
+
+fn setting(r: &Trial) -> String {
+    if r.knob.is_empty() {
+        "defaults".into()
+    } else {
+        format!("{} = {}", r.knob, r.value)
+    }
+}
+
+/// Per solver and stress knob: the values in each class, in the order run.
+pub fn stress_findings(trials: &[Trial]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for t in trials.iter().filter(|t| t.group == "stress") {
+        let k = (t.solver.clone(), t.knob.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (solver, knob) in keys {
+        let mut by: BTreeMap<usize, (Class, Vec<String>)> = BTreeMap::new();
+        for t in trials
+            .iter()
+            .filter(|t| t.group == "stress" && t.solver == solver && t.knob == knob)
+        {
+            let c = class_of(t);
+            let i = Class::ALL.iter().position(|x| *x == c).unwrap_or(0);
+            by.entry(i)
+                .or_insert((c, Vec::new()))
+                .1
+                .push(t.value.clone());
+        }
+        let parts: Vec<String> = by
+            .values()
+            .map(|(c, v)| format!("{} at {}", c.as_str(), v.join(", ")))
+            .collect();
+        out.push(format!("`{knob}`: {}", parts.join("; ")));
+    }
+    out
+}
+
+/// Where the friction scan stops being certified, for one problem and solver.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrictionLimit {
+    pub scene: String,
+    pub solver: String,
+    /// Every coefficient tried up to this one is certified.
+    pub certified_up_to: f64,
+    pub first_failure: Option<f64>,
+    /// Larger coefficients certified after a failure.
+    pub certified_again: Vec<f64>,
+}
+
+/// Per problem and solver: the largest friction coefficient up to which
+/// every coefficient tried is certified, the first one that is not (if
+/// any), and the larger coefficients certified again (the scan is not
+/// monotone when an inner solver's noise, not the method, ends a run).
+pub fn friction_limits(trials: &[Trial]) -> Vec<FrictionLimit> {
+    let friction: Vec<&Trial> = trials
+        .iter()
+        .filter(|t| t.group.starts_with("friction"))
+        .collect();
+    let mut keys: Vec<(String, String)> = friction
+        .iter()
+        .map(|t| (t.scene.clone(), t.solver.clone()))
+        .collect();
+    keys.sort();
+    keys.dedup();
+    keys.into_iter()
+        .map(|(p, s)| {
+            let mut runs: Vec<(f64, bool)> = friction
+                .iter()
+                .filter(|t| t.scene == p && t.solver == s)
+                .map(|t| (t.value.parse().unwrap_or(f64::NAN), t.certified()))
+                .collect();
+            runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let first_bad = runs.iter().find(|r| !r.1).map(|r| r.0);
+            let ok = runs
+                .iter()
+                .filter(|r| r.1 && first_bad.is_none_or(|b| r.0 < b))
+                .map(|r| r.0)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let again: Vec<f64> = runs
+                .iter()
+                .filter(|r| r.1 && first_bad.is_some_and(|b| r.0 > b))
+                .map(|r| r.0)
+                .collect();
+            FrictionLimit {
+                scene: p,
+                solver: s,
+                certified_up_to: ok,
+                first_failure: first_bad,
+                certified_again: again,
+            }
+        })
+        .collect()
+}
+
+/// The README's section on the map: the thresholds, then what the trials
+/// show, each line computed from them.
+pub fn readme_section(trials: &[Trial]) -> String {
+    let mut s = String::new();
+    let tol = trials
+        .first()
+        .map(|t| t.certificate_tolerance)
+        .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
+    let _ = writeln!(
+        s,
+        "Classes (`src/study/stability/classify.rs`): **refused**, the problem has no solution and this is said (our \
+         check of condition (13), or a solver reporting it unbounded or infeasible); **diverged**, a NaN, a numerical \
+         breakdown, a fixed point whose max|Δg| grows, or a solver that reports a solvable problem unbounded; \
+         **stalled**, stopped by a work cap, at reduced accuracy, or a fixed point that stopped contracting; **wrong**, \
+         converged by its own test but failing the certificate (tolerance {tol:e}) or with a pressure off the reference's \
+         by more than {WRONG_PRESSURE:e}; **slow**, right but more than {SLOW_FACTOR}× the work of the same solver at its \
+         defaults; **converged**. Every trial stops at a work cap (a count), so the map is the same on every machine.\n"
+    );
+    let mut solvers: Vec<&str> = trials.iter().map(|t| t.solver.as_str()).collect();
+    solvers.dedup();
+    let mut seen = Vec::new();
+    for solver in solvers {
+        if seen.contains(&solver) {
+            continue;
+        }
+        seen.push(solver);
+        let own: Vec<Trial> = trials
+            .iter()
+            .filter(|t| t.solver == solver)
+            .cloned()
+            .collect();
+        let lines = stress_findings(&own);
+        if let Some(d) = own.iter().find(|t| t.group == "default") {
+            let _ = writeln!(
+                s,
+                "- **{solver}** at its defaults: {} ({} work, certificate {:.1e}). {}",
+                d.class,
+                d.work,
+                d.certificate,
+                lines.join("; ")
+            );
+        }
+    }
+    for FrictionLimit {
+        scene: p,
+        solver,
+        certified_up_to: ok,
+        first_failure: bad,
+        certified_again: again,
+    } in friction_limits(trials)
+    {
+        let _ = writeln!(
+            s,
+            "- **Friction coefficient**, {p}, {solver}: certified for every 𝓕 tried up to {}{}{}.",
+            if ok.is_finite() {
+                format!("{ok}")
+            } else {
+                "none".into()
+            },
+            match bad {
+                Some(b) => format!("; not at 𝓕 = {b}"),
+                None => " (no failure among the coefficients tried)".into(),
+            },
+            if again.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; certified again at {} (not monotone: see the reasons below)",
+                    again
+                        .iter()
+                        .map(|f| f.to_string())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }
+        );
+    }
+    let load: Vec<&Trial> = trials
+        .iter()
+        .filter(|t| t.group == "load" && class_of(t) != Class::Converged)
+        .collect();
+    let listed: Vec<String> = load
+        .iter()
+        .map(|t| {
+            let failing = if t.failing.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", t.failing.replace(';', ", "))
+            };
+            format!("{} with {} ({}{failing})", t.scene, t.solver, t.class)
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "- **Total load approaching zero** (an upward traction cancelling most of problem 1's load): {}.{}",
+        if listed.is_empty() {
+            "every solver is certified at every load tried".to_string()
+        } else {
+            listed.join("; ")
+        },
+        if load.iter().any(|t| t.failing.starts_with("force_balance")) {
+            " The force balance is held to the net load the contact carries, while relative stopping rules are scaled \
+             by the gross load Σ|f|: as the net load falls, a solver stopped at the same relative change resolves it \
+             less and less."
+        } else {
+            ""
+        }
+    );
+    let bypassed: Vec<String> = trials
+        .iter()
+        .filter(|t| t.group == "refused_check_bypassed")
+        .map(|t| format!("{} on {}: {} ({})", t.solver, t.scene, t.status, t.class))
+        .collect();
+    if !bypassed.is_empty() {
+        let _ = writeln!(
+            s,
+            "- **Condition (13) violated**: refused with a one-line error before any solve. With the check bypassed (one \
+             given-friction solve): {}.",
+            bypassed.join("; ")
+        );
+    }
+    s
+}
+
+/// Charts: work against each stress knob's value by class, the fixed
+/// point's contraction against 𝓕, and the certificate against the load.
+pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> {
+    let mut out = Vec::new();
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for t in trials.iter().filter(|t| t.group == "stress") {
+        let k = (t.solver.clone(), t.knob.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    for (solver, knob) in keys {
+        let runs: Vec<&Trial> = trials
+            .iter()
+            .filter(|t| t.group == "stress" && t.solver == solver && t.knob == knob)
+            .collect();
+        let numeric: Vec<(f64, &Trial)> = runs
+            .iter()
+            .filter_map(|t| {
+                t.value
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| *v > 0.0)
+                    .map(|v| (v, *t))
+            })
+            .collect();
+        if numeric.len() < 2 {
+            continue;
+        }
+        let series = Class::ALL
+            .iter()
+            .filter_map(|&c| {
+                let pts: Vec<(f64, f64)> = numeric
+                    .iter()
+                    .filter(|(_, t)| class_of(t) == c)
+                    .map(|(v, t)| (*v, t.work.max(1) as f64))
+                    .collect();
+                (!pts.is_empty()).then(|| Series::line(c.as_str(), pts).scatter())
+            })
+            .collect();
+        out.push((
+            format!("stability_{}", knob.replace('.', "_")),
+            Chart {
+                title: format!("Stability: {solver} against {knob}, problem 1"),
+                x_label: knob.clone(),
+                y_label: "work (events of its work stage)".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                legend: Legend::default(),
+            },
+        ));
+    }
+    // Contraction of each fixed point against 𝓕.
+    let mut keys: Vec<(String, String)> = steps
+        .iter()
+        .map(|s| (s.scene.clone(), s.solver.clone()))
+        .collect();
+    keys.sort();
+    keys.dedup();
+    let mut series: Vec<Series> = Vec::new();
+    for (scene, solver) in keys {
+        let mut fs: Vec<f64> = steps
+            .iter()
+            .filter(|s| s.scene == scene && s.solver == solver && s.friction_coefficient > 0.0)
+            .map(|s| s.friction_coefficient)
+            .collect();
+        fs.sort_by(f64::total_cmp);
+        fs.dedup();
+        let pts: Vec<(f64, f64)> = fs
+            .iter()
+            .filter_map(|&f| {
+                let q: Vec<Option<f64>> = steps
+                    .iter()
+                    .filter(|s| {
+                        s.scene == scene && s.solver == solver && s.friction_coefficient == f
+                    })
+                    .map(|s| s.contraction)
+                    .collect();
+                (q.len() >= 5)
+                    .then(|| crate::study::stability::classify::trend(&q))
+                    .flatten()
+                    .map(|t| (f, t))
+            })
+            .collect();
+        if !pts.is_empty() {
+            series.push(Series::line(format!("{scene}, {solver}"), pts).with_markers());
+        }
+    }
+    if !series.is_empty() {
+        let xs: Vec<f64> = series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0))
+            .collect();
+        let (lo, hi) = xs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        series.push(Series::line("contraction factor 1", vec![(lo, 1.0), (hi, 1.0)]).dashed());
+        out.push((
+            "stability_friction".into(),
+            Chart {
+                title: "Coulomb fixed point: contraction factor against 𝓕".into(),
+                x_label: "friction coefficient 𝓕".into(),
+                y_label: "contraction of max|Δg| (last steps, geometric mean)".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                legend: Legend::LowerRight,
+            },
+        ));
+    }
+    let load: Vec<&Trial> = trials.iter().filter(|t| t.group == "load").collect();
+    if !load.is_empty() {
+        let mut solvers: Vec<&str> = load.iter().map(|t| t.solver.as_str()).collect();
+        solvers.sort();
+        solvers.dedup();
+        let series = solvers
+            .iter()
+            .map(|&s| {
+                let pts: Vec<(f64, f64)> = load
+                    .iter()
+                    .filter(|t| t.solver == s)
+                    .filter_map(|t| {
+                        let total = t.scene.rsplit(' ').next()?.parse::<f64>().ok()?;
+                        Some((-total, t.certificate.max(1e-16)))
+                    })
+                    .collect();
+                Series::line(s, pts).with_markers()
+            })
+            .collect();
+        out.push((
+            "stability_load".into(),
+            Chart {
+                title: "Stability: total vertical load approaching 0 (condition (13))".into(),
+                x_label: "|total vertical load| [force]".into(),
+                y_label: "certificate (largest violation)".into(),
+                log_x: true,
+                log_y: true,
+                series,
+                legend: Legend::default(),
+            },
+        ));
+    }
+    out
+}

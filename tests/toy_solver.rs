@@ -1,0 +1,313 @@
+//! Adding a solver is one file and one registration: a toy accelerated
+//! proximal-gradient solver (FISTA, Beck & Teboulle 2009, on the primal
+//! given-friction problem), defined here and registered at run time, flows
+//! through the settings, the command line's flags, the comparison, the
+//! sweeps, the work-precision chart and the stability map without any other
+//! file knowing its name.
+
+use clap::CommandFactory;
+use contactlab::cli::Cli;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
+use contactlab::settings::Settings;
+use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use contactlab::solvers::settings::{
+    Validate, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
+use contactlab::solvers::{
+    ContactProblem, Control, Iterations, Law, Observer, Progress, Solution, Solver, Start, Status,
+    Timing,
+};
+use contactlab::study::reference::References;
+use contactlab::study::report::sweep_charts;
+use contactlab::study::stability::{StabilitySpec, run as stability};
+use contactlab::study::sweep::{self, SweepSpec};
+use contactlab::study::{compare, trial::Trial};
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct ToySettings {
+    /// Stop when max|Δv| ≤ tolerance · U.
+    tolerance: f64,
+    max_iter: usize,
+}
+
+impl Default for ToySettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-10,
+            max_iter: 200_000,
+        }
+    }
+}
+
+impl Validate for ToySettings {
+    fn validate(&self) -> Result<(), String> {
+        positive("toy.tolerance", self.tolerance, "default 1e-10")
+    }
+}
+
+struct Toy(ToySettings);
+
+impl Solver for Toy {
+    fn solve(
+        &mut self,
+        p: &ContactProblem,
+        law: Law,
+        _start: Option<Start<'_>>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let (n, m) = (p.n(), p.contacts().len());
+        if law != Law::GivenFriction {
+            return Solution::failed(
+                n,
+                m,
+                Status::NotRun,
+                "the toy solves the given-friction subproblem",
+            );
+        }
+        let (offsets, cols, vals) = p.a().csr_data();
+        let grad = |v: &[f64]| -> Vec<f64> {
+            (0..n)
+                .map(|i| {
+                    (offsets[i]..offsets[i + 1])
+                        .map(|k| vals[k] * v[cols[k]])
+                        .sum::<f64>()
+                        - p.f()[i]
+                })
+                .collect()
+        };
+        // Step 1/L with L a Gershgorin bound on the largest eigenvalue of A.
+        let l = (0..n)
+            .map(|i| {
+                (offsets[i]..offsets[i + 1])
+                    .map(|k| vals[k].abs())
+                    .sum::<f64>()
+            })
+            .fold(0.0f64, f64::max);
+        let alpha = 1.0 / l;
+        let prox = |v: &mut [f64]| {
+            for c in p.contacts() {
+                v[c.t] = v[c.t].min(0.0);
+                let k = alpha * c.weight * c.g;
+                v[c.s] = v[c.s].signum() * (v[c.s].abs() - k).max(0.0);
+            }
+        };
+        let tol = self.0.tolerance * p.scales().displacement;
+        let (mut v, mut prev) = (vec![0.0; n], vec![0.0; n]);
+        let mut status = Status::MaxIterations;
+        let mut steps = 0;
+        for k in 1..=self.0.max_iter {
+            steps = k;
+            let beta = (k as f64 - 1.0) / (k as f64 + 2.0);
+            let y: Vec<f64> = v
+                .iter()
+                .zip(&prev)
+                .map(|(a, b)| a + beta * (a - b))
+                .collect();
+            let g = grad(&y);
+            let mut next: Vec<f64> = y.iter().zip(&g).map(|(a, b)| a - alpha * b).collect();
+            prox(&mut next);
+            let change = next
+                .iter()
+                .zip(&v)
+                .fold(0.0f64, |a, (x, z)| a.max((x - z).abs()));
+            prev = std::mem::replace(&mut v, next);
+            let control = observer.observe(&Progress {
+                stage: "gradient",
+                iteration: k,
+                residual: change,
+                seconds: 0.0,
+            });
+            if change <= tol {
+                status = Status::Converged;
+                break;
+            }
+            if let Control::Stop(s) = control {
+                status = s;
+                break;
+            }
+        }
+        let r = grad(&v);
+        let pressure = p
+            .contacts()
+            .iter()
+            .map(|c| (-r[c.t]).max(0.0) / c.weight)
+            .collect();
+        let friction_traction = p
+            .contacts()
+            .iter()
+            .map(|c| (r[c.s] / c.weight).clamp(-c.g, c.g))
+            .collect();
+        Solution {
+            v,
+            pressure,
+            friction_traction,
+            status,
+            detail: format!("toy FISTA: {steps} steps"),
+            iterations: Iterations {
+                outer: steps,
+                inner: 0,
+            },
+            timing: Timing::default(),
+        }
+    }
+}
+
+static TOY: Entry = Entry {
+    name: "toy",
+    about: "a toy accelerated proximal gradient on the primal problem (a test's)",
+    source: "Beck & Teboulle (2009), FISTA",
+    laws: &[Law::GivenFriction],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "gradient",
+        about: "one proximal gradient step; residual max|Δv|",
+        history: true,
+    }],
+    work_stage: "gradient",
+    knobs: &[
+        Knob {
+            name: "tolerance",
+            fields: &["tolerance"],
+            help: "stop when max|Δv| ≤ tolerance·U [default 1e-10]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "max_iter",
+            fields: &["max_iter"],
+            help: "step cap [default 200000]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |_| to_tree(&ToySettings::default()),
+    build: |tree| Ok(Box::new(Toy(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "tolerance",
+        values: &[1e-6, 1e-8, 1e-10],
+        reference: 1e-12,
+        exact: false,
+    },
+    role: Role::Other,
+    sweeps: &[Variation {
+        knob: "tolerance",
+        values: &["1e-6", "1e-10"],
+        quick: &["1e-6", "1e-10"],
+    }],
+    stress: &[Variation {
+        knob: "max_iter",
+        values: &["10"],
+        quick: &["10"],
+    }],
+    study_work: 2_000_000,
+    kernel: None,
+};
+
+fn register() {
+    // Tests share the process: register once.
+    if registry::by_name("toy").is_none() {
+        registry::register(&TOY).unwrap();
+    }
+}
+
+fn scene() -> Scene {
+    let mut s = Scene::paper_problem(1).unwrap();
+    s.set_finest(MeshSize::from_level(3).unwrap());
+    s
+}
+
+#[test]
+fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
+    register();
+    assert!(registry::register(&TOY).is_err(), "names are unique");
+    // Settings by path, and a scene file's section.
+    let mut settings = Settings::default();
+    settings.set_text("toy.tolerance", "1e-11").unwrap();
+    assert!(settings.set_text("toy.nosuch", "1").is_err());
+    let (_, from_file) = contactlab::io::scene_file::parse(
+        "name = \"x\"\n[[loads]]\nfrom = 0.0\nto = 0.5\np2 = -1.0\n[solver.toy]\ntolerance = 1e-9\n",
+    )
+    .unwrap()
+    .split()
+    .unwrap();
+    assert_eq!(
+        from_file.get("toy.tolerance"),
+        Some(serde_json::Value::from(1e-9))
+    );
+    // The command line's flags come from the registry.
+    let cli = Cli::command();
+    let solve = cli.find_subcommand("solve").unwrap();
+    assert!(
+        solve
+            .get_arguments()
+            .any(|a| a.get_long() == Some("toy-tolerance"))
+    );
+    // The comparison: the toy's subproblem and Coulomb trials, certified,
+    // against the earned reference.
+    let settings = Settings::default();
+    let mut references = References::default();
+    let measured = compare::run(
+        &scene(),
+        &settings,
+        &registry::solvers(),
+        0,
+        &mut references,
+        &|_| {},
+    )
+    .unwrap();
+    let toy: Vec<&Trial> = measured
+        .iter()
+        .map(|m| &m.trial)
+        .filter(|t| t.solver == "toy")
+        .collect();
+    assert_eq!(toy.len(), 2, "{toy:?}");
+    for t in &toy {
+        assert!(t.certified(), "{t:?}");
+        assert!(t.pressure_error.unwrap() < 1e-4, "{t:?}");
+        assert_ne!(t.reference, "toy", "not exact: never the reference");
+    }
+    // Sweeps and the work-precision chart.
+    let spec = SweepSpec {
+        scenes: vec![Scene::paper_problem(1).unwrap()],
+        meshes: vec![MeshSize::from_level(3).unwrap()],
+        solvers: vec![registry::by_name("toy").unwrap()],
+        quick: true,
+        repeats: 0,
+        ..SweepSpec::default()
+    };
+    let swept = sweep::run(&spec, &settings, &mut References::default(), &|_| {}).unwrap();
+    assert!(swept.iter().any(|m| m.trial.knob == "toy.tolerance"));
+    let pairs: Vec<_> = swept.iter().map(|m| (&m.trial, &m.timing)).collect();
+    let charts = sweep_charts(&pairs);
+    let wp = charts
+        .iter()
+        .find(|(n, _)| n.starts_with("work_precision"))
+        .expect("a work-precision chart");
+    assert!(wp.1.series.iter().any(|s| s.name == "toy"));
+    // The stability map: its defaults and its stress condition.
+    let mut quick = StabilitySpec::quick();
+    quick.friction_values = vec![0.5];
+    quick.load_totals = vec![];
+    quick.violating_totals = vec![];
+    let map = stability(
+        &quick,
+        &settings,
+        &mut References::default(),
+        &|_| {},
+        &|_| {},
+    )
+    .unwrap();
+    let default = map
+        .trials
+        .iter()
+        .find(|t| t.solver == "toy" && t.group == "default")
+        .unwrap();
+    assert_eq!(default.class, "converged", "{default:?}");
+    let capped = map
+        .trials
+        .iter()
+        .find(|t| t.solver == "toy" && t.knob == "toy.max_iter")
+        .unwrap();
+    assert_eq!(capped.class, "stalled", "{capped:?}");
+}
