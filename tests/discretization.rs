@@ -343,6 +343,7 @@ fn upward_or_zero_total_load_is_rejected_with_the_typed_error() {
             from: 0.0,
             to: 1.0 / 3.0,
             p2,
+            p1: 0.0,
         }];
         match Discretization::new(&scene, h(3)) {
             Err(BuildError::Scene(SceneError::NoSolution { total })) => assert!(total >= 0.0),

@@ -195,6 +195,7 @@ fn terminates_with_a_status_under_the_stress_conditions() {
         from: 2.0 / 3.0,
         to: 1.0,
         p2: 3.0 * (20.0 - 2e-6),
+        p1: 0.0,
     });
     let run = solve_scene(&near, &Settings::default(), "newton", &mut Silent).unwrap();
     assert!(run.coulomb.status.is_converged(), "{}", run.coulomb.detail);
@@ -213,6 +214,7 @@ fn terminates_with_a_status_under_the_stress_conditions() {
         from: 2.0 / 3.0,
         to: 1.0,
         p2: 3.0 * 22.0,
+        p1: 0.0,
     });
     let d = Discretization::new_unchecked(&up, MeshSize::from_level(4).unwrap()).unwrap();
     let sol = CondensedNewton::default().solve(&d.problem, Law::GivenFriction, None, &mut Silent);

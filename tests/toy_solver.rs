@@ -151,6 +151,7 @@ impl Solver for Toy {
                 inner: 0,
             },
             timing: Timing::default(),
+            diagnostics: Vec::new(),
         }
     }
 }
@@ -202,6 +203,8 @@ static TOY: Entry = Entry {
     }],
     study_work: 2_000_000,
     kernel: None,
+    restarts: &[],
+    diagnose: &[],
 };
 
 fn register() {

@@ -19,6 +19,7 @@ use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use crate::linalg::{LinalgError, SparseCholesky};
 use crate::problem::ContactProblem;
+use crate::solution::{Iterations, Solution, Status, Timing};
 
 /// The condensed problem and what is needed to go back to all unknowns.
 pub struct Condensed {
@@ -156,4 +157,87 @@ impl Condensed {
         }
         v
     }
+}
+
+/// Something built from a problem's operator (its condensation, a factor),
+/// kept across calls on the same operator: the friction iterations and the
+/// repeated runs of a study call a solver many times with one A.
+pub struct Kept<K: PartialEq, T> {
+    entry: Option<(K, T)>,
+}
+
+impl<K: PartialEq, T> Default for Kept<K, T> {
+    fn default() -> Self {
+        Self { entry: None }
+    }
+}
+
+impl<K: PartialEq, T> Kept<K, T> {
+    /// The value kept for `key`, built by `build` if the key changed.
+    pub fn get_or_build(
+        &mut self,
+        key: K,
+        build: impl FnOnce() -> Result<T, String>,
+    ) -> Result<&T, String> {
+        if self.entry.as_ref().is_none_or(|(k, _)| *k != key) {
+            self.entry = None;
+            self.entry = Some((key, build()?));
+        }
+        Ok(&self.entry.as_ref().expect("just filled").1)
+    }
+}
+
+/// How a solve on the condensed problem ended, for [`Condensed::solution`].
+pub struct Ending {
+    pub status: Status,
+    pub detail: String,
+    pub steps: usize,
+    pub timing: Timing,
+}
+
+impl Condensed {
+    /// The solution from the contact unknowns y and the nodal contact forces
+    /// r = (λ_i, ν_i) with ν_i = −μ_i (pressures λ_i/w_i, friction tractions
+    /// μ_i/w_i); [`Status::NonFinite`] if any number is not finite.
+    pub fn solution(
+        &self,
+        problem: &ContactProblem,
+        y: &[f64],
+        r: &[f64],
+        end: Ending,
+    ) -> Solution {
+        let contacts = problem.contacts();
+        let mut out = Solution {
+            v: self.expand(problem, y),
+            pressure: contacts
+                .iter()
+                .enumerate()
+                .map(|(i, c)| r[2 * i] / c.weight)
+                .collect(),
+            friction_traction: contacts
+                .iter()
+                .enumerate()
+                .map(|(i, c)| -r[2 * i + 1] / c.weight)
+                .collect(),
+            status: end.status,
+            detail: end.detail,
+            iterations: Iterations {
+                outer: end.steps,
+                inner: 0,
+            },
+            timing: end.timing,
+            diagnostics: Vec::new(),
+        };
+        if !out.is_finite() {
+            out.status = Status::NonFinite;
+        }
+        out
+    }
+}
+
+/// Condenses `problem`, with the error said in terms of the mechanics.
+pub fn condense(problem: &ContactProblem) -> Result<Condensed, String> {
+    Condensed::new(problem).map_err(|e| {
+        format!("condensation needs the part of A away from the contact unknowns to be positive definite: {e}")
+    })
 }

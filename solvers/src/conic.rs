@@ -80,6 +80,18 @@ pub const ENTRY: Entry = Entry {
             help: "Clarabel's own iteration log, to stdout (true/false) [default false]",
             parse: parse_scalar,
         },
+        Knob {
+            name: "formulation",
+            fields: &["formulation"],
+            help: "the friction cone as `soc` (second-order cones) or `qp` (two half-planes) [default: soc; clarabel-qp: qp]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "linear_solver",
+            fields: &["linear_solver"],
+            help: "Clarabel's sparse LDLᵀ: `qdldl` or `faer` (one thread) [default: qdldl; clarabel-faer: faer]",
+            parse: parse_scalar,
+        },
     ],
     defaults: |_| to_tree(&ConicSettings::default()),
     build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
@@ -110,7 +122,104 @@ pub const ENTRY: Entry = Entry {
     ],
     study_work: 2000,
     kernel: None,
+    restarts: &[],
+    diagnose: &[],
 };
+
+/// The registry entry of the oracle in its second formulation: in two
+/// dimensions the cone |s_i| ≤ z_i is the two half-planes s_i − z_i ≤ 0 and
+/// −s_i − z_i ≤ 0, so the subproblem is a quadratic program with
+/// nonnegative cones only.
+pub const ENTRY_QP: Entry = Entry {
+    name: "clarabel-qp",
+    about: "the conic oracle as a QP: the friction cone of each node as two half-planes (nonnegative cones only)",
+    source: "Goulart & Chen (2024), Clarabel; paper (10) with |s| ≤ z written as s − z ≤ 0, −s − z ≤ 0",
+    laws: &[Law::GivenFriction],
+    warm_starts: false,
+    stages: ENTRY.stages,
+    work_stage: "interior_point",
+    knobs: ENTRY.knobs,
+    defaults: |_| {
+        to_tree(&ConicSettings {
+            formulation: Formulation::Qp,
+            ..ConicSettings::default()
+        })
+    },
+    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
+    accuracy: ENTRY.accuracy,
+    role: Role::Other,
+    sweeps: &[],
+    stress: &[Variation {
+        knob: "tol",
+        values: &["1e-4", "1e-6", "1e-8", "1e-12", "1e-14"],
+        quick: &["1e-14"],
+    }],
+    study_work: 2000,
+    kernel: None,
+    restarts: &[],
+    diagnose: &[],
+};
+
+/// The registry entry of the oracle with Clarabel's other linear solver:
+/// the same second-order cone program, its KKT systems factored by faer's
+/// supernodal LDLᵀ (Clarabel's `faer-sparse` feature) instead of QDLDL, on
+/// one thread like every timed solver here.
+pub const ENTRY_FAER: Entry = Entry {
+    name: "clarabel-faer",
+    about: "the conic oracle (second-order cones) with faer's sparse LDLᵀ instead of QDLDL inside Clarabel",
+    source: "Goulart & Chen (2024), Clarabel, direct_solve_method = \"faer\"; paper (10) as a conic program",
+    laws: &[Law::GivenFriction],
+    warm_starts: false,
+    stages: ENTRY.stages,
+    work_stage: "interior_point",
+    knobs: ENTRY.knobs,
+    defaults: |_| {
+        to_tree(&ConicSettings {
+            linear_solver: LinearSolver::Faer,
+            ..ConicSettings::default()
+        })
+    },
+    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
+    accuracy: ENTRY.accuracy,
+    role: Role::Other,
+    sweeps: &[],
+    stress: &[],
+    study_work: 2000,
+    kernel: None,
+    restarts: &[],
+    diagnose: &[],
+};
+
+/// Clarabel's linear solver for its KKT systems.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolver {
+    /// QDLDL, Clarabel's default.
+    #[default]
+    Qdldl,
+    /// faer's sparse LDLᵀ, sequential.
+    Faer,
+}
+
+impl LinearSolver {
+    fn name(self) -> &'static str {
+        match self {
+            Self::Qdldl => "qdldl",
+            Self::Faer => "faer",
+        }
+    }
+}
+
+/// How the friction cone |s_i| ≤ z_i is given to Clarabel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Formulation {
+    /// One second-order cone per node.
+    #[default]
+    Soc,
+    /// Two half-planes per node (nonnegative cones only).
+    Qp,
+}
 
 /// Clarabel's settings that matter here; the rest keep Clarabel's defaults.
 /// The same in both stopping modes: its tolerances act on the problem
@@ -132,6 +241,10 @@ pub struct ConicSettings {
     pub scale_unknowns: bool,
     /// Clarabel's own console output.
     pub verbose: bool,
+    /// The friction cone as second-order cones or as half-planes.
+    pub formulation: Formulation,
+    /// The linear solver of its KKT systems.
+    pub linear_solver: LinearSolver,
 }
 
 impl Default for ConicSettings {
@@ -156,6 +269,8 @@ impl ConicSettings {
             equilibrate: true,
             scale_unknowns: true,
             verbose: false,
+            formulation: Formulation::Soc,
+            linear_solver: LinearSolver::Qdldl,
         }
     }
 
@@ -174,6 +289,8 @@ impl ConicSettings {
             .tol_gap_rel(self.tol_gap_rel)
             .tol_feas(self.tol_feas)
             .equilibrate_enable(self.equilibrate)
+            .direct_solve_method(self.linear_solver.name().to_string())
+            .max_threads(1)
             .build()
             .expect("all settings have defaults")
     }
@@ -249,13 +366,8 @@ impl Solver for ConicSolver {
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if law != Law::GivenFriction {
-            return Solution::failed(
-                n,
-                m,
-                Status::NotRun,
-                "clarabel solves the given-friction subproblem only",
-            );
+        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, Ok(())) {
+            return refused;
         }
         let t0 = Instant::now();
         // v = U v̂; the objective is divided by F·U; forces come back over F.
@@ -279,19 +391,33 @@ impl Solver for ConicSolver {
         let p = csc_from_triplets(n + m, n + m, p_trip);
         let mut q: Vec<f64> = problem.f().iter().map(|f| -f / force).collect();
         q.extend(contacts.iter().map(|c| c.weight * c.g / force));
-        // Rows 0..m: t_i + slack = 0 (slack ≥ 0); rows m+2i, m+2i+1: −(z_i, s_i) + slack = 0.
-        let mut a_trip = Vec::with_capacity(3 * m);
+        // Rows 0..m: t_i + slack = 0 (slack ≥ 0). SOC: rows m+2i, m+2i+1:
+        // −(z_i, s_i) + slack = 0 in SOC(2). QP: s_i − z_i + slack = 0 and
+        // −s_i − z_i + slack = 0, slacks ≥ 0.
+        let qp = self.settings.formulation == Formulation::Qp;
+        let mut a_trip = Vec::with_capacity(5 * m);
         for (i, c) in contacts.iter().enumerate() {
             a_trip.push((i, c.t, 1.0));
-            a_trip.push((m + 2 * i, n + i, -1.0));
-            a_trip.push((m + 2 * i + 1, c.s, -1.0));
+            if qp {
+                a_trip.push((m + 2 * i, c.s, 1.0));
+                a_trip.push((m + 2 * i, n + i, -1.0));
+                a_trip.push((m + 2 * i + 1, c.s, -1.0));
+                a_trip.push((m + 2 * i + 1, n + i, -1.0));
+            } else {
+                a_trip.push((m + 2 * i, n + i, -1.0));
+                a_trip.push((m + 2 * i + 1, c.s, -1.0));
+            }
         }
         let a = csc_from_triplets(3 * m, n + m, a_trip);
         let b = vec![0.0; 3 * m];
         let mut cones = Vec::with_capacity(m + 1);
         if m > 0 {
-            cones.push(SupportedConeT::NonnegativeConeT(m));
-            cones.extend((0..m).map(|_| SupportedConeT::SecondOrderConeT(2)));
+            if qp {
+                cones.push(SupportedConeT::NonnegativeConeT(3 * m));
+            } else {
+                cones.push(SupportedConeT::NonnegativeConeT(m));
+                cones.extend((0..m).map(|_| SupportedConeT::SecondOrderConeT(2)));
+            }
         }
         let settings = self.settings.clarabel(&observer.limits());
         let mut solver = match DefaultSolver::new(&p, &q, &a, &b, &cones, settings) {
@@ -342,10 +468,19 @@ impl Solver for ConicSolver {
             .enumerate()
             .map(|(i, c)| sol.z[i] * force / c.weight)
             .collect();
+        // SOC: the tail of the cone's dual; QP: the difference of the two
+        // half-planes' duals (stationarity in s: (Av − f)_s + γ_a − γ_b = 0).
         let friction_traction = contacts
             .iter()
             .enumerate()
-            .map(|(i, c)| sol.z[m + 2 * i + 1] * force / c.weight)
+            .map(|(i, c)| {
+                let mu = if qp {
+                    sol.z[m + 2 * i + 1] - sol.z[m + 2 * i]
+                } else {
+                    sol.z[m + 2 * i + 1]
+                };
+                mu * force / c.weight
+            })
             .collect();
         let mut out = Solution {
             v,
@@ -361,6 +496,7 @@ impl Solver for ConicSolver {
                 inner: 0,
             },
             timing: Timing { setup, solve },
+            diagnostics: Vec::new(),
         };
         if !out.is_finite() && out.status.is_converged() {
             out.status = Status::NonFinite;

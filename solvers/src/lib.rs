@@ -4,10 +4,15 @@
 //! returns the same [`Solution`] type. The [`registry`] holds everything the
 //! harness needs to know about each solver.
 
+pub mod admm;
+pub mod apgd;
 pub mod condensed;
 pub mod conic;
+pub mod dual;
 pub mod linalg;
 pub mod newton;
+pub mod newton_coulomb;
+pub mod nsgs;
 pub mod observer;
 pub mod problem;
 pub mod registry;

@@ -25,7 +25,7 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::Condensed;
+use crate::condensed::{Condensed, Kept, condense};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
@@ -85,6 +85,8 @@ pub const ENTRY: Entry = Entry {
     }],
     study_work: 5000,
     kernel: None,
+    restarts: &[],
+    diagnose: &[],
 };
 
 /// Settings of the condensed semismooth Newton solver. The same in both
@@ -119,7 +121,7 @@ impl Validate for NewtonSettings {
 
 /// φ(a, b) = a + b − √(a² + b²) and an element (∂a, ∂b) of its generalized gradient.
 #[inline]
-fn fb(a: f64, b: f64) -> (f64, f64, f64) {
+pub fn fb(a: f64, b: f64) -> (f64, f64, f64) {
     let r = a.hypot(b);
     if r == 0.0 {
         let d = 1.0 - std::f64::consts::FRAC_1_SQRT_2;
@@ -133,10 +135,19 @@ fn fb(a: f64, b: f64) -> (f64, f64, f64) {
 /// partial derivatives (∂μ, ∂F).
 #[inline]
 fn billups(mu: f64, f: f64, g: f64) -> (f64, f64, f64) {
+    let (v, dmu, df, _) = billups_with_bound(mu, f, g);
+    (v, dmu, df)
+}
+
+/// The Billups function of the box [−G, G] and its partial derivatives
+/// (∂μ, ∂F, ∂G): for the Coulomb problem, where G = 𝓕λ is an unknown.
+#[inline]
+pub fn billups_with_bound(mu: f64, f: f64, g: f64) -> (f64, f64, f64, f64) {
     let (inner, ia, ib) = fb(g - mu, -f);
     let (outer, oa, ob) = fb(mu + g, -inner);
-    // ∂inner/∂μ = −ia, ∂inner/∂F = −ib; outer's second argument is −inner.
-    (outer, oa + ob * ia, ob * ib)
+    // ∂inner/∂μ = −ia, ∂inner/∂F = −ib, ∂inner/∂G = ia; outer's second
+    // argument is −inner.
+    (outer, oa + ob * ia, ob * ib, oa - ob * ia)
 }
 
 /// The state of the Newton iteration: unknowns, residuals and derivatives.
@@ -473,14 +484,14 @@ fn finish(
 #[derive(Default)]
 pub struct CondensedNewton {
     pub settings: NewtonSettings,
-    cache: Option<(u64, Condensed)>,
+    cache: Kept<u64, Condensed>,
 }
 
 impl CondensedNewton {
     pub fn new(settings: NewtonSettings) -> Self {
         Self {
             settings,
-            cache: None,
+            cache: Kept::default(),
         }
     }
 }
@@ -495,40 +506,20 @@ impl Solver for CondensedNewton {
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if law != Law::GivenFriction {
-            return Solution::failed(
-                n,
-                m,
-                Status::NotRun,
-                "newton solves the given-friction subproblem only",
-            );
-        }
-        if let Err(e) = self.settings.validate() {
-            return Solution::failed(n, m, Status::NotRun, e);
+        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        {
+            return refused;
         }
         let t0 = Instant::now();
-        if self
+        let condensed = match self
             .cache
-            .as_ref()
-            .is_none_or(|(id, _)| *id != problem.operator_id())
+            .get_or_build(problem.operator_id(), || condense(problem))
         {
-            match Condensed::new(problem) {
-                Ok(c) => self.cache = Some((problem.operator_id(), c)),
-                Err(e) => {
-                    return Solution::failed(
-                        n,
-                        m,
-                        Status::NumericalError,
-                        format!(
-                            "condensation needs the part of A away from the contact unknowns to be positive definite: {e}"
-                        ),
-                    );
-                }
-            }
-        }
+            Ok(c) => c,
+            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+        };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let condensed = &self.cache.as_ref().expect("just filled").1;
         let g: Vec<f64> = contacts.iter().map(|c| c.weight * c.g).collect();
         // Start: the given iterate, or all contacts closed and sticking (y = 0)
         // with the forces that hold that state.
@@ -583,6 +574,7 @@ impl Solver for CondensedNewton {
                 setup,
                 solve: t1.elapsed().as_secs_f64(),
             },
+            diagnostics: Vec::new(),
         };
         if !solution.is_finite() {
             solution.status = Status::NonFinite;

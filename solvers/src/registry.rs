@@ -114,6 +114,12 @@ pub struct Entry {
     pub study_work: usize,
     /// Its inner iteration for the speed benchmark (None: it has none).
     pub kernel: Option<fn(&ContactProblem) -> InnerKernel>,
+    /// Other starting points, each a set of settings (path within the
+    /// solver, value): a study runs them all to see whether the solver
+    /// finds one solution or several.
+    pub restarts: &'static [&'static [(&'static str, &'static str)]],
+    /// Settings that make it report diagnostics (e.g. a condition number).
+    pub diagnose: &'static [(&'static str, &'static str)],
 }
 
 impl Entry {
@@ -136,6 +142,12 @@ pub const SOLVERS: &[&Entry] = &[
     &crate::conic::ENTRY,
     &crate::relaxation::ENTRY,
     &crate::newton::ENTRY,
+    &crate::conic::ENTRY_QP,
+    &crate::conic::ENTRY_FAER,
+    &crate::nsgs::ENTRY,
+    &crate::apgd::ENTRY,
+    &crate::admm::ENTRY,
+    &crate::newton_coulomb::ENTRY,
 ];
 
 /// Solvers registered at run time (by a program that embeds contactlab, or

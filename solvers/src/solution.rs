@@ -1,6 +1,8 @@
 //! What every solver returns, for the given-friction subproblem and the
 //! Coulomb problem alike.
 
+use crate::problem::ContactProblem;
+use crate::solver::Law;
 use serde::{Deserialize, Serialize};
 
 /// How a solve ended. A solver's own [`Status::Converged`] is only its claim:
@@ -104,6 +106,9 @@ pub struct Solution {
     pub detail: String,
     pub iterations: Iterations,
     pub timing: Timing,
+    /// Numbers a solver can tell about its answer beyond the above (e.g.
+    /// the condition number of its final Newton matrix), by name.
+    pub diagnostics: Vec<(&'static str, f64)>,
 }
 
 impl Solution {
@@ -117,7 +122,34 @@ impl Solution {
             detail: detail.into(),
             iterations: Iterations::default(),
             timing: Timing::default(),
+            diagnostics: Vec::new(),
         }
+    }
+
+    /// The checks a solve starts with: `law` is one of the solver's `laws`
+    /// and its settings passed validation (`valid`). The refusal, with
+    /// status [`Status::NotRun`], if not.
+    pub fn refusal(
+        problem: &ContactProblem,
+        laws: &[Law],
+        law: Law,
+        valid: Result<(), String>,
+    ) -> Option<Self> {
+        let (n, m) = (problem.n(), problem.contacts().len());
+        if !laws.contains(&law) {
+            let names: Vec<&str> = laws.iter().map(|l| l.as_str()).collect();
+            return Some(Self::failed(
+                n,
+                m,
+                Status::NotRun,
+                format!(
+                    "this solver solves {} only, not {}",
+                    names.join(" and "),
+                    law.as_str()
+                ),
+            ));
+        }
+        valid.err().map(|e| Self::failed(n, m, Status::NotRun, e))
     }
 
     /// True when every number in the solution is finite.

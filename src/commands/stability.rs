@@ -48,13 +48,23 @@ pub fn run_map(spec: &StabilitySpec, settings: &Settings) -> Result<Map> {
     )
 }
 
-/// stability.csv, stability_friction.csv and the charts.
-pub fn write_files(dir: &Path, map: &Map) -> Result<()> {
+/// The map's files: stability.csv, stability_friction.csv,
+/// stability_uniqueness.csv (the charts are the caller's).
+pub fn write_tables(dir: &Path, map: &Map) -> Result<()> {
     write_atomic(&dir.join("stability.csv"), &to_csv(&map.trials, &[])?)?;
     write_atomic(
         &dir.join("stability_friction.csv"),
         &to_csv(&map.steps, &[])?,
     )?;
+    write_atomic(
+        &dir.join("stability_uniqueness.csv"),
+        &to_csv(&map.uniqueness, &[])?,
+    )
+}
+
+/// The map's files and charts.
+pub fn write_files(dir: &Path, map: &Map) -> Result<()> {
+    write_tables(dir, map)?;
     write_all(&dir.join("charts"), &views::charts(&map.trials, &map.steps))?;
     Ok(())
 }

@@ -392,6 +392,7 @@ mod tests {
                 detail: String::new(),
                 iterations: Iterations { outer: 1, inner: 0 },
                 timing: Timing::default(),
+                diagnostics: Vec::new(),
             }
         }
     }

@@ -110,7 +110,7 @@ pub fn mass(mesh: &Mesh, dofs: &impl DofExpansion) -> CsrMatrix<f64> {
     assemble(mesh, dofs, None, element_mass)
 }
 
-/// Physical nodal forces (per node, x and y) of vertical tractions P''_2 on
+/// Physical nodal forces (per node, x and y) of tractions (P''_1, P''_2) on
 /// the top side y = 1 of the upper body. Each traction is constant on its
 /// segment, so ∫ P φ_i over the part of an edge it covers is exact: the length
 /// of that part times φ_i at its midpoint. Segment ends need not be nodes.
@@ -128,8 +128,10 @@ pub fn top_traction_forces(mesh: &Mesh, loads: &[Traction]) -> Vec<[f64; 2]> {
             let mid = 0.5 * (lo + hi);
             let len = hi - lo;
             let phi_b = (mid - xa) / h;
-            forces[mesh.node(Body::Upper, e, top)][1] += load.p2 * len * (1.0 - phi_b);
-            forces[mesh.node(Body::Upper, e + 1, top)][1] += load.p2 * len * phi_b;
+            for (k, p) in [(0, load.p1), (1, load.p2)] {
+                forces[mesh.node(Body::Upper, e, top)][k] += p * len * (1.0 - phi_b);
+                forces[mesh.node(Body::Upper, e + 1, top)][k] += p * len * phi_b;
+            }
         }
     }
     forces

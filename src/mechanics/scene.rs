@@ -7,8 +7,10 @@ use thiserror::Error;
 use crate::mechanics::material::Material;
 use crate::mechanics::mesh_size::MeshSize;
 
-/// A vertical traction P''_2 (force per unit length, negative pushes down),
-/// constant on the segment `from ≤ x ≤ to` of the top side y = 1.
+/// A traction on the segment `from ≤ x ≤ to` of the top side y = 1 (force
+/// per unit length, constant on the segment): vertical P''_2 (negative
+/// pushes down) and, optionally, tangential P''_1 (positive pushes towards
+/// x = 1; the roller on x = 1 holds the upper body sideways).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Traction {
@@ -17,6 +19,8 @@ pub struct Traction {
     #[serde(deserialize_with = "fraction")]
     pub to: f64,
     pub p2: f64,
+    #[serde(default)]
+    pub p1: f64,
 }
 
 /// The scene of one computation.
@@ -112,7 +116,12 @@ impl Scene {
             name: format!("problem {number}"),
             material: Material::default(),
             friction: default_friction(),
-            loads: vec![Traction { from: 0.0, to, p2 }],
+            loads: vec![Traction {
+                from: 0.0,
+                to,
+                p2,
+                p1: 0.0,
+            }],
             levels: default_levels(),
         })
     }
@@ -180,12 +189,14 @@ impl Scene {
                     &format!("a segment must have from < to, here from = {}", l.from),
                 ));
             }
-            if !l.p2.is_finite() || (l.p2 != 0.0 && !l.p2.is_normal()) {
-                return Err(invalid(
-                    &field("p2"),
-                    l.p2,
-                    "the traction must be a finite number, zero or at least 2.2e-308 in size",
-                ));
+            for (name, p) in [("p2", l.p2), ("p1", l.p1)] {
+                if !p.is_finite() || (p != 0.0 && !p.is_normal()) {
+                    return Err(invalid(
+                        &field(name),
+                        p,
+                        "the traction must be a finite number, zero or at least 2.2e-308 in size",
+                    ));
+                }
             }
         }
         if self.levels.is_empty() {
@@ -277,11 +288,15 @@ mod tests {
                 from: 0.0,
                 to: 0.5,
                 p2: -10.0,
+
+                p1: 0.0,
             },
             Traction {
                 from: 0.5,
                 to: 1.0,
                 p2: 10.0,
+
+                p1: 0.0,
             },
         ];
         assert!(matches!(s.validate(), Err(SceneError::NoSolution { .. })));

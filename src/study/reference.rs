@@ -119,7 +119,7 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     mark_chosen(&mut candidates, Law::Coulomb, entry.name);
     let g = coulomb.coulomb.g.clone();
     let mut gf_best: Option<GivenFrictionReference> = None;
-    for &e in &exact {
+    for &e in exact.iter().filter(|e| e.solves(Law::GivenFriction)) {
         let settings = reference_settings(e, base)?;
         let mut budget = Budget::silent(e, None, Some(seconds));
         let (d, solution, _) = solve_given_friction(scene, &settings, e.name, &g, &mut budget)?;

@@ -10,7 +10,7 @@ use crate::coulomb::fixed_point::STAGE;
 use crate::io::charts::{Chart, Legend, Series};
 use crate::mechanics::contact_zone::ProfileRow;
 use crate::study::runner::Measured;
-use crate::study::sweep::{SCHEDULE, WORK_PRECISION};
+use crate::study::sweep::{SCHEDULE, WORK_PRECISION, WORK_PRECISION_COULOMB};
 use crate::study::trial::{Trial, TrialTiming};
 
 fn chart(
@@ -79,51 +79,37 @@ pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
             .iter()
             .filter(|(t, _)| t.scene == scene && t.h == h)
             .collect();
-        let mut wp: Vec<Series> = Vec::new();
-        for e in registry::solvers() {
-            let points = |certified: bool| -> Vec<(f64, f64)> {
-                let mut pts: Vec<(f64, f64)> = here
-                    .iter()
-                    .filter(|(t, _)| {
-                        t.group == WORK_PRECISION
-                            && t.solver == e.name
-                            && t.certified() == certified
-                            && (certified || t.solver_status.is_converged())
-                    })
-                    .filter_map(|(t, tm)| {
-                        t.pressure_error.map(|p| (p.max(WP_FLOOR), tm.seconds_min))
-                    })
-                    .collect();
-                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                pts
-            };
-            let (good, failed) = (points(true), points(false));
-            if !good.is_empty() {
-                wp.push(Series::line(e.name, good).with_markers());
+        for (group, file, what) in [
+            (
+                WORK_PRECISION,
+                "work_precision",
+                "given-friction subproblem",
+            ),
+            (
+                WORK_PRECISION_COULOMB,
+                "work_precision_coulomb",
+                "Coulomb problem",
+            ),
+        ] {
+            let wp = work_precision_series(&here, group);
+            if !wp.is_empty() {
+                out.push((
+                    format!("{file}_{tag}"),
+                    chart(
+                        format!("Work-precision, {what}, {scene}, h = {h}"),
+                        "max pressure error vs reference (relative; 1e-12: at or below its resolution)",
+                        "solver time [s]",
+                        true,
+                        true,
+                        wp,
+                    ),
+                ));
             }
-            if !failed.is_empty() {
-                wp.push(
-                    Series::line(format!("{}: claimed, not certified", e.name), failed).scatter(),
-                );
-            }
-        }
-        if !wp.is_empty() {
-            out.push((
-                format!("work_precision_{tag}"),
-                chart(
-                    format!("Work-precision, given-friction subproblem, {scene}, h = {h}"),
-                    "max pressure error vs reference (relative; 1e-12: at or below its resolution)",
-                    "solver time [s]",
-                    true,
-                    true,
-                    wp,
-                ),
-            ));
         }
         let mut variations: Vec<String> = here
             .iter()
             .map(|(t, _)| t.group.clone())
-            .filter(|g| g != WORK_PRECISION && g != SCHEDULE)
+            .filter(|g| g != WORK_PRECISION && g != WORK_PRECISION_COULOMB && g != SCHEDULE)
             .collect();
         variations.dedup();
         variations.sort();
@@ -138,6 +124,37 @@ pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
         }
     }
     out
+}
+
+/// One work-precision diagram's series: per solver its certified points
+/// (pressure error, fastest time) and, apart, those it claimed but the
+/// certificate refused.
+fn work_precision_series(here: &[&(&Trial, &TrialTiming)], group: &str) -> Vec<Series> {
+    let mut wp: Vec<Series> = Vec::new();
+    for e in registry::solvers() {
+        let points = |certified: bool| -> Vec<(f64, f64)> {
+            let mut pts: Vec<(f64, f64)> = here
+                .iter()
+                .filter(|(t, _)| {
+                    t.group == group
+                        && t.solver == e.name
+                        && t.certified() == certified
+                        && (certified || t.solver_status.is_converged())
+                })
+                .filter_map(|(t, tm)| t.pressure_error.map(|p| (p.max(WP_FLOOR), tm.seconds_min)))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pts
+        };
+        let (good, failed) = (points(true), points(false));
+        if !good.is_empty() {
+            wp.push(Series::line(e.name, good).with_markers());
+        }
+        if !failed.is_empty() {
+            wp.push(Series::line(format!("{}: claimed, not certified", e.name), failed).scatter());
+        }
+    }
+    wp
 }
 
 /// Iterations and errors against one knob's value; values that are not
@@ -376,6 +393,7 @@ pub fn convergence_chart(problem: u32, h: &str, measured: &[Measured]) -> (Strin
                     .map(|s| (s.name, s.name.to_string())),
             );
         }
+        let before = series.len();
         for (stage, what) in stages {
             let pts: Vec<(f64, f64)> = m
                 .history
@@ -388,6 +406,16 @@ pub fn convergence_chart(problem: u32, h: &str, measured: &[Measured]) -> (Strin
                 series
                     .push(Series::line(format!("{}: {what}", m.trial.solver), pts).with_markers());
             }
+        }
+        if series.len() == before {
+            // Nothing to draw, but said in the legend rather than left out.
+            series.push(Series::line(
+                format!(
+                    "{}: no iterations (its start passed its test)",
+                    m.trial.solver
+                ),
+                Vec::new(),
+            ));
         }
     }
     (

@@ -42,9 +42,11 @@ pub struct Measured {
     pub solution: Option<(Discretization, Solution)>,
 }
 
-/// Keeps the stages a convergence history wants.
+/// Keeps the stages a convergence history wants: the fixed point's and
+/// those the running solver's registry entry marks for it.
 struct Recorder {
     keep: bool,
+    entry: &'static contactlab_solvers::registry::Entry,
     events: Vec<Progress>,
 }
 
@@ -55,11 +57,7 @@ impl Observer for Recorder {
     }
 
     fn wants(&self, stage: &str) -> bool {
-        self.keep
-            && (stage == STAGE
-                || contactlab_solvers::registry::solvers()
-                    .iter()
-                    .any(|e| e.stage(stage).is_some_and(|s| s.history)))
+        self.keep && (stage == STAGE || self.entry.stage(stage).is_some_and(|s| s.history))
     }
 }
 
@@ -161,11 +159,13 @@ fn solve_unchecked(spec: &TrialSpec, budget: &mut Budget<'_>) -> Result<Solved> 
         .build(spec.solver)
         .map_err(anyhow::Error::msg)?;
     let t = Instant::now();
-    let solution = solver.solve(&d.problem, Law::GivenFriction, None, budget);
+    // One solve of the law the trial names, on the finest level: no fixed
+    // point (a solver of the subproblem at the discretization's g).
+    let solution = solver.solve(&d.problem, spec.law, None, budget);
     let seconds = t.elapsed().as_secs_f64();
     let certificate = certify_solution(
         &d.problem,
-        Law::GivenFriction,
+        spec.law,
         &solution,
         spec.settings.certificate.tolerance,
     );
@@ -190,6 +190,7 @@ fn solve_unchecked(spec: &TrialSpec, budget: &mut Budget<'_>) -> Result<Solved> 
 pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> Result<Measured> {
     let mut recorder = Recorder {
         keep: keep.history,
+        entry: spec.solver,
         events: Vec::new(),
     };
     let solved = solve_once(spec, reference, &mut recorder)?;
@@ -234,6 +235,12 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
         trial.objective_gap = Some(a.objective_gap);
     }
     trial.separated = intervals_text(&separation.intervals);
+    trial.diagnostics = s
+        .diagnostics
+        .iter()
+        .map(|(k, v)| format!("{k}={v:e}"))
+        .collect::<Vec<_>>()
+        .join(";");
     trial.separated_fraction = separation.fraction;
     if solved.status == contactlab_solvers::Status::Inaccurate {
         trial.detail = format!("{} ({})", trial.detail, solved.certificate.summary());

@@ -4,7 +4,11 @@
 //!   warm-start, the continuation schedule, on the whole Coulomb problem;
 //! - every solver through its accuracy knob on the given-friction
 //!   subproblem at the reference's g: the work-precision diagram, where no
-//!   outer loop blurs the comparison.
+//!   outer loop blurs the comparison;
+//! - every solver on the whole Coulomb problem: a solver of the Coulomb law
+//!   through its accuracy knob, a solver run inside the fixed point through
+//!   ε (every loop's, as `--epsilon` sets it): the second diagram, which
+//!   puts the direct solvers beside the fixed points.
 //!
 //! Every planned trial gives a row, certified or not: the status says which.
 
@@ -23,6 +27,10 @@ use crate::study::trial::TrialSpec;
 pub const STUDY: &str = "sweep";
 /// The group of work-precision trials.
 pub const WORK_PRECISION: &str = "work_precision";
+/// The group of work-precision trials on the Coulomb problem.
+pub const WORK_PRECISION_COULOMB: &str = "work_precision_coulomb";
+/// The ε values (relative) of fixed points in the Coulomb diagram.
+pub const FIXED_POINT_EPSILONS: &[f64] = &[1e-3, 1e-5, 1e-7, 1e-9];
 /// The group (and path) of the continuation schedule.
 pub const SCHEDULE: &str = "schedule";
 
@@ -94,15 +102,31 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
                         }
                     }
                 }
+                let stride = if spec.quick { 2 } else { 1 };
+                let path = format!("{}.{}", entry.name, entry.accuracy.knob);
                 if spec.work_precision && entry.solves(Law::GivenFriction) {
-                    let path = format!("{}.{}", entry.name, entry.accuracy.knob);
-                    let stride = if spec.quick { 2 } else { 1 };
                     for value in entry.accuracy.values.iter().step_by(stride) {
                         out.push(
                             trial(WORK_PRECISION.into(), Law::GivenFriction)
                                 .varying(&path, &format!("{value:e}"))?
                                 .with_repeats(spec.repeats),
                         );
+                    }
+                }
+                if spec.work_precision {
+                    let coulomb = || trial(WORK_PRECISION_COULOMB.into(), Law::Coulomb);
+                    if entry.solves(Law::Coulomb) {
+                        for value in entry.accuracy.values.iter().step_by(stride) {
+                            out.push(
+                                coulomb()
+                                    .varying(&path, &format!("{value:e}"))?
+                                    .with_repeats(spec.repeats),
+                            );
+                        }
+                    } else {
+                        for &value in FIXED_POINT_EPSILONS.iter().step_by(stride) {
+                            out.push(coulomb().varying_epsilon(value)?.with_repeats(spec.repeats));
+                        }
                     }
                 }
             }

@@ -74,6 +74,17 @@ impl TrialSpec {
         Ok(self)
     }
 
+    /// The same trial with the paper's ε set for every loop that uses one
+    /// (the fixed point's and every solver knob named `epsilon`, as
+    /// `--epsilon` does); recorded as the knob `epsilon`.
+    pub fn varying_epsilon(mut self, epsilon: f64) -> anyhow::Result<Self> {
+        self.settings
+            .set_epsilon(epsilon)
+            .map_err(anyhow::Error::msg)?;
+        self.knob = Some(("epsilon".to_string(), format!("{epsilon:e}")));
+        Ok(self)
+    }
+
     /// The same trial stopped after `work` events of the solver's work stage.
     pub fn with_work(mut self, work: Option<usize>) -> Self {
         self.work = work;
@@ -86,10 +97,17 @@ impl TrialSpec {
         self
     }
 
-    /// The same trial without the check of condition (13).
+    /// The same trial without the check of condition (13), on the
+    /// given-friction subproblem (where a solver can say "unbounded"
+    /// without a fixed point around it) if the solver solves it, else on
+    /// the Coulomb problem.
     pub fn unchecked(mut self) -> Self {
         self.check_solvable = false;
-        self.law = Law::GivenFriction;
+        self.law = if self.solver.solves(Law::GivenFriction) {
+            Law::GivenFriction
+        } else {
+            Law::Coulomb
+        };
         self
     }
 
@@ -168,6 +186,9 @@ pub struct Trial {
     #[serde(serialize_with = "fixed")]
     pub separated_fraction: f64,
     pub detail: String,
+    /// What the solver reports beyond its counts (`name=value;...`, e.g. the
+    /// condition number of its final Newton matrix).
+    pub diagnostics: String,
     /// A study's verdict on the trial (the stability map's class), and why;
     /// empty where a study does not classify.
     pub class: String,
@@ -273,6 +294,7 @@ impl Trial {
             separated: String::new(),
             separated_fraction: 0.0,
             detail,
+            diagnostics: String::new(),
             class: String::new(),
             reason: String::new(),
         }

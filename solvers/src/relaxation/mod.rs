@@ -153,6 +153,8 @@ pub const ENTRY: Entry = Entry {
     ],
     study_work: 2_000_000,
     kernel: Some(sweep_kernel),
+    restarts: &[],
+    diagnose: &[],
 };
 
 /// One relaxation sweep at the default relative settings, with multipliers
@@ -523,6 +525,7 @@ pub fn prox_uzawa(
             setup: 0.0,
             solve: t0.elapsed().as_secs_f64(),
         },
+        diagnostics: Vec::new(),
     };
     if !out.is_finite() {
         out.status = Status::NonFinite;
@@ -538,17 +541,9 @@ impl Solver for ProxUzawa {
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
-        let (n, m) = (problem.n(), problem.contacts().len());
-        if law != Law::GivenFriction {
-            return Solution::failed(
-                n,
-                m,
-                Status::NotRun,
-                "relaxation solves the given-friction subproblem only",
-            );
-        }
-        if let Err(e) = self.settings.validate() {
-            return Solution::failed(n, m, Status::NotRun, e);
+        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        {
+            return refused;
         }
         let t0 = Instant::now();
         let settings = self.settings.clone();

@@ -96,7 +96,7 @@ impl ReproduceSpec {
 
 /// Files every reproduce run writes (relative to the output folder),
 /// besides the per-problem profiles and the charts.
-pub const FILES: [&str; 16] = [
+pub const FILES: [&str; 17] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -110,6 +110,7 @@ pub const FILES: [&str; 16] = [
     "sweep_references.csv",
     "stability.csv",
     "stability_friction.csv",
+    "stability_uniqueness.csv",
     "stability_references.csv",
     "performance.csv",
     "performance_goals.md",
@@ -325,11 +326,7 @@ pub fn run(
         &|l| log(&format!("stability: {l}")),
         none,
     )?;
-    write_atomic(&out.join("stability.csv"), &to_csv(&map.trials, &[])?)?;
-    write_atomic(
-        &out.join("stability_friction.csv"),
-        &to_csv(&map.steps, &[])?,
-    )?;
+    crate::commands::stability::write_tables(out, &map)?;
     write_atomic(
         &out.join("stability_references.csv"),
         &to_csv(&stab_refs.candidates(), &[])?,

@@ -16,7 +16,7 @@ use crate::study::reproduce::{FILES, Outputs, PAPER_SETTINGS, ReproduceSpec};
 use crate::study::runner::Measured;
 use crate::study::stability::classify::WRONG_PRESSURE;
 use crate::study::stability::views;
-use crate::study::sweep::WORK_PRECISION;
+use crate::study::sweep::{WORK_PRECISION, WORK_PRECISION_COULOMB};
 use crate::study::table1::markdown as table1_markdown;
 use crate::study::trial::Trial;
 
@@ -143,7 +143,18 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         work_precision_text: work_precision_text(&out.sweep),
         variations_text: variations_text(&out.sweep),
         variation_charts: named("sweep_"),
-        stability_section: views::readme_section(&out.stability.trials),
+        stability_section: {
+            let mut s = views::readme_section(&out.stability.trials);
+            let lines =
+                crate::study::stability::uniqueness::readme_lines(&out.stability.uniqueness);
+            if !lines.is_empty() {
+                s += "\n**Past the fixed point's limit** (problem 1; a solver of the Coulomb problem itself from its \
+                      default start and from each starting point its registry entry lists; `stability_uniqueness.csv`):\n\n";
+                s += &lines.join("\n");
+                s += "\n";
+            }
+            s
+        },
         stability_charts: named("stability_"),
         stability_summary: views::summary_markdown(&out.stability.trials),
         goals: crate::study::bench::goals::goals_markdown(&out.bench.goals),
@@ -424,14 +435,33 @@ fn table1_text(out: &Outputs) -> String {
 }
 
 /// Ratios of time at equal accuracy, interpolated log-log along each
-/// solver's work-precision curve.
+/// solver's work-precision curve, in both diagrams.
 fn work_precision_text(sweep: &[Measured]) -> String {
+    let (Some(paper), Some(oracle)) = (
+        registry::with_role(Role::PapersMethod),
+        registry::with_role(Role::Oracle),
+    ) else {
+        return String::new();
+    };
+    format!(
+        "Each point is one value of a solver's accuracy knob, certified; errors are measured against the reference. \
+         On the given-friction subproblem at the reference's g, time at equal pressure error as a ratio (below 1: \
+         faster) of each solver over the oracle; `{}` is the paper's method:\n\n{}\n\n\
+         On the whole Coulomb problem (a solver run inside the fixed point through ε, every loop's; a solver of the \
+         Coulomb law through its own accuracy knob), the same ratios:\n\n{}\n",
+        paper.name,
+        time_ratios(sweep, WORK_PRECISION, oracle.name),
+        time_ratios(sweep, WORK_PRECISION_COULOMB, oracle.name),
+    )
+}
+
+/// One line per solver: its time over `baseline`'s at equal pressure error
+/// along the curves of `group`.
+fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> String {
     let curve = |solver: &str| -> Vec<(f64, f64)> {
         let mut pts: Vec<(f64, f64)> = sweep
             .iter()
-            .filter(|m| {
-                m.trial.group == WORK_PRECISION && m.trial.solver == solver && m.trial.certified()
-            })
+            .filter(|m| m.trial.group == group && m.trial.solver == solver && m.trial.certified())
             .filter_map(|m| {
                 m.trial
                     .pressure_error
@@ -442,41 +472,35 @@ fn work_precision_text(sweep: &[Measured]) -> String {
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         pts
     };
-    let mut lines = Vec::new();
-    let names = registry::names();
-    let (Some(paper), Some(oracle)) = (
-        registry::with_role(Role::PapersMethod),
-        registry::with_role(Role::Oracle),
-    ) else {
-        return String::new();
-    };
-    for other in names.iter().filter(|n| **n != oracle.name) {
-        let mut ratios = Vec::new();
-        for target in (2..=11).map(|k| 10f64.powi(-k)) {
-            if let (Some(a), Some(b)) = (
-                time_at(&curve(other), target),
-                time_at(&curve(oracle.name), target),
-            ) {
-                ratios.push(format!("{:.2} at {target:.0e}", a / b));
-            }
-        }
-        lines.push(format!(
-            "- `{other}` over `{}`: {}",
-            oracle.name,
-            if ratios.is_empty() {
-                "no common range of pressure errors".into()
-            } else {
-                ratios.join(", ")
-            }
-        ));
-    }
-    format!(
-        "Each point is one value of a solver's accuracy knob on the given-friction subproblem at the reference's g, \
-         certified; errors are measured against the reference. Time at equal pressure error, as a ratio (below 1: \
-         faster), of each solver over the oracle; `{}` is the paper's method:\n\n{}\n",
-        paper.name,
-        lines.join("\n")
-    )
+    let base = curve(baseline);
+    registry::names()
+        .into_iter()
+        .filter(|n| {
+            *n != baseline
+                && sweep
+                    .iter()
+                    .any(|m| m.trial.group == group && m.trial.solver == *n)
+        })
+        .map(|other| {
+            let points = curve(other);
+            let ratios: Vec<String> = (2..=11)
+                .map(|k| 10f64.powi(-k))
+                .filter_map(|target| {
+                    let (a, b) = (time_at(&points, target)?, time_at(&base, target)?);
+                    Some(format!("{:.2} at {target:.0e}", a / b))
+                })
+                .collect();
+            format!(
+                "- `{other}` over `{baseline}`: {}",
+                if ratios.is_empty() {
+                    "no common range of pressure errors".into()
+                } else {
+                    ratios.join(", ")
+                }
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// The time a solver needs for `target` error, interpolated log-log between
@@ -496,7 +520,7 @@ fn variations_text(sweep: &[Measured]) -> String {
     let mut groups: Vec<&str> = sweep
         .iter()
         .map(|m| m.trial.group.as_str())
-        .filter(|g| *g != WORK_PRECISION)
+        .filter(|g| *g != WORK_PRECISION && *g != WORK_PRECISION_COULOMB)
         .collect();
     groups.dedup();
     let mut seen = Vec::new();

@@ -12,6 +12,7 @@
 //!   and (check bypassed) what each solver does with such a problem.
 
 pub mod classify;
+pub mod uniqueness;
 pub mod views;
 
 use anyhow::Result;
@@ -51,6 +52,9 @@ pub struct StabilitySpec {
     pub load_totals: Vec<f64>,
     /// Upward totals that violate condition (13) (0: no load at all).
     pub violating_totals: Vec<f64>,
+    /// Friction coefficients of the uniqueness study (solvers of the
+    /// Coulomb problem itself, from several starts, on problem 1).
+    pub uniqueness_values: Vec<f64>,
 }
 
 impl StabilitySpec {
@@ -66,6 +70,7 @@ impl StabilitySpec {
             bisection_steps: 5,
             load_totals: vec![20.0, 2.0, 0.2, 2e-2, 2e-3, 2e-4, 2e-6],
             violating_totals: vec![0.0, 2.0],
+            uniqueness_values: vec![4.0, 7.5, 8.0, 10.0, 16.0, 32.0, 64.0],
         }
     }
 
@@ -81,6 +86,7 @@ impl StabilitySpec {
             bisection_steps: 2,
             load_totals: vec![20.0, 2e-4],
             violating_totals: vec![2.0],
+            uniqueness_values: vec![8.0],
         }
     }
 }
@@ -100,10 +106,12 @@ pub struct FrictionStep {
     pub certified: bool,
 }
 
-/// The map: classified trials and the friction scan's steps.
+/// The map: classified trials, the friction scan's steps and the
+/// uniqueness study's findings.
 pub struct Map {
     pub trials: Vec<Trial>,
     pub steps: Vec<FrictionStep>,
+    pub uniqueness: Vec<uniqueness::UniquenessRow>,
 }
 
 fn problem(n: u32, h: MeshSize) -> Result<Scene> {
@@ -122,6 +130,7 @@ pub fn lifted_problem(total: f64, h: MeshSize) -> Result<Scene> {
             from: 2.0 / 3.0,
             to: 1.0,
             p2: up,
+            p1: 0.0,
         });
     }
     s.name = format!("problem 1, total load {:e}", -total);
@@ -139,6 +148,7 @@ pub fn run(
     let mut map = Map {
         trials: Vec::new(),
         steps: Vec::new(),
+        uniqueness: Vec::new(),
     };
     let mut one = |map: &mut Map, spec: TrialSpec, cx: Context| -> Result<Measured> {
         let reference = if spec.check_solvable {
@@ -218,6 +228,31 @@ pub fn run(
             bypass.group = "refused_check_bypassed".into();
             one(&mut map, bypass, Context::default())?;
         }
+    }
+    log("past the fixed point's limit: solvers of the Coulomb problem from several starts");
+    if !spec.uniqueness_values.is_empty() {
+        let (measured, rows) = uniqueness::run(
+            &problem(1, spec.h_friction)?,
+            &spec.uniqueness_values,
+            base,
+            spec.work_scale,
+            references,
+            tick,
+        )?;
+        for m in measured {
+            let contractions: Vec<Option<f64>> = m.friction.iter().map(|f| f.contraction).collect();
+            let cx = Context {
+                solvable: true,
+                trend: trend(&contractions),
+                ..Context::default()
+            };
+            let mut t = m.trial;
+            let (class, reason) = classify(&t, &cx);
+            t.class = class.as_str().into();
+            t.reason = reason;
+            map.trials.push(t);
+        }
+        map.uniqueness = rows;
     }
     Ok(map)
 }

@@ -1,0 +1,289 @@
+//! ADMM on the primal given-friction problem (Glowinski & Marrocco 1975;
+//! Boyd, Parikh, Chu, Peleato & Eckstein 2011; the first-order family of
+//! OSQP, SCS and Siconos' ADMM), splitting the contact unknowns:
+//!
+//! ```text
+//! minimize ½ yᵀS y − b̂ᵀy + Σ w_i g_i |s_i| + I(t ≤ 0)   as   ½ yᵀS y − b̂ᵀy + G(z), y = z,
+//! y ← (S + ρI)⁻¹ (b̂ + ρ(z − u)),  z ← prox_{G/ρ}(y + u),  u ← u + y − z,
+//! ```
+//!
+//! on the contact unknowns y = (t_i, s_i) after the condensation (one sparse
+//! factorization: the interior unknowns are eliminated exactly), with one
+//! dense Cholesky factorization of S + ρI reused by every step. S + ρI is
+//! positive definite although S is singular: the semicoercive mode is held
+//! by the constraint t ≤ 0 through z, exactly. The prox of G/ρ is the
+//! projection t ≤ 0 and soft thresholding of s by w g/ρ. At convergence
+//! (y = z) the contact forces are r = ρu (λ = ρu_t, μ = −ρu_s).
+//!
+//! Penalty rule: ρ = factor × the mean of S's diagonal (the contact unknowns'
+//! stiffness after condensation; factor 1 by default), fixed, so that the
+//! factorization is reused. Stopping: the primal residual ‖y − z‖∞ over U
+//! and the dual residual ρ‖z − z_prev‖∞ over the nodal force scale (Boyd et
+//! al., section 3.3, in the problem's scales), and the balance of the
+//! contact forces with the net load along the rigid mode relative to that
+//! load, all below the tolerance. The last matters when the net load is
+//! small against the loads themselves (near condition (13)): measured, the
+//! first two alone left 1.4e-5 of the net load unbalanced there.
+
+use std::time::Instant;
+
+use faer::linalg::solvers::Solve;
+use faer::{Mat, Side};
+use serde::{Deserialize, Serialize};
+
+use crate::condensed::{Condensed, Ending, Kept, condense};
+use crate::observer::{Control, Observer, Progress};
+use crate::problem::ContactProblem;
+use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::settings::{
+    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
+use crate::solution::{Solution, Status, Timing};
+use crate::solver::{Law, Solver, Start};
+
+/// The registry entry of ADMM.
+pub const ENTRY: Entry = Entry {
+    name: "admm",
+    about: "ADMM on the primal problem splitting the contact unknowns: condensation, one Cholesky of S + ρI reused, ρ = mean diag S",
+    source: "Glowinski & Marrocco (1975); Boyd et al. (2011), Distributed optimization ... ADMM, sections 3 and 5",
+    laws: &[Law::GivenFriction],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "admm_step",
+        about: "one ADMM step; residual max(primal ‖y − z‖∞/U, dual ρ‖Δz‖∞/(P·w))",
+        history: true,
+    }],
+    work_stage: "admm_step",
+    knobs: &[
+        Knob {
+            name: "tolerance",
+            fields: &["tolerance"],
+            help: "stop when both ADMM residuals are below tolerance (relative) [default 1e-10]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "rho_factor",
+            fields: &["rho_factor"],
+            help: "penalty ρ as a multiple of the mean diagonal of S [default 1]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "max_iter",
+            fields: &["max_iter"],
+            help: "cap on steps per solve [default 1000000]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |_| to_tree(&AdmmSettings::default()),
+    build: |tree| Ok(Box::new(Admm::new(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "tolerance",
+        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+        reference: 1e-13,
+        exact: false,
+    },
+    role: Role::Other,
+    sweeps: &[Variation {
+        knob: "rho_factor",
+        values: &["0.01", "0.1", "1", "10", "100"],
+        quick: &["0.1", "10"],
+    }],
+    stress: &[Variation {
+        knob: "rho_factor",
+        values: &["1e-4", "1e4"],
+        quick: &["1e4"],
+    }],
+    study_work: 2_000_000,
+    kernel: None,
+    restarts: &[],
+    diagnose: &[],
+};
+
+/// Settings of ADMM (relative in both stopping modes).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AdmmSettings {
+    pub tolerance: f64,
+    pub rho_factor: f64,
+    pub max_iter: usize,
+}
+
+impl Default for AdmmSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-10,
+            rho_factor: 1.0,
+            max_iter: 1_000_000,
+        }
+    }
+}
+
+impl Validate for AdmmSettings {
+    fn validate(&self) -> Result<(), String> {
+        positive("admm.tolerance", self.tolerance, "default 1e-10")?;
+        positive("admm.rho_factor", self.rho_factor, "default 1")?;
+        at_least_one("admm.max_iter", self.max_iter, 1_000_000)
+    }
+}
+
+/// ADMM. Keeps the condensation and the factor of S + ρI across calls on
+/// the same problem operator and penalty.
+#[derive(Default)]
+pub struct Admm {
+    pub settings: AdmmSettings,
+    cache: Kept<(u64, f64), (Condensed, faer::linalg::solvers::Llt<f64>, f64)>,
+}
+
+impl Admm {
+    pub fn new(settings: AdmmSettings) -> Self {
+        Self {
+            settings,
+            cache: Kept::default(),
+        }
+    }
+}
+
+impl Solver for Admm {
+    fn solve(
+        &mut self,
+        problem: &ContactProblem,
+        law: Law,
+        _start: Option<Start<'_>>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let (n, contacts) = (problem.n(), problem.contacts());
+        let m = contacts.len();
+        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        {
+            return refused;
+        }
+        let t0 = Instant::now();
+        let factor = self.settings.rho_factor;
+        let kept = self
+            .cache
+            .get_or_build((problem.operator_id(), factor), || {
+                let condensed = condense(problem)?;
+                let n2 = condensed.b.len();
+                let mean = (0..n2).map(|k| condensed.s[(k, k)]).sum::<f64>() / n2.max(1) as f64;
+                let rho = factor * mean;
+                let mut a = condensed.s.clone();
+                for k in 0..n2 {
+                    a[(k, k)] += rho;
+                }
+                let llt = a
+                    .llt(Side::Lower)
+                    .map_err(|e| format!("S + ρI is not positive definite: {e:?}"))?;
+                Ok((condensed, llt, rho))
+            });
+        let (condensed, llt, rho) = match kept {
+            Ok((c, l, r)) => (c, l, *r),
+            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+        };
+        let setup = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let n2 = 2 * m;
+        let scales = problem.scales();
+        let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
+        let (u_scale, f_scale) = (scales.displacement, scales.pressure * w_max);
+        // prox_{G/ρ} of one component: t ≤ 0, soft thresholding of s.
+        let prox = |k: usize, v: f64| -> f64 {
+            if k.is_multiple_of(2) {
+                v.min(0.0)
+            } else {
+                let c = &contacts[k / 2];
+                let kappa = c.weight * c.g / rho;
+                v.signum() * (v.abs() - kappa).max(0.0)
+            }
+        };
+        // The rigid mode on the contact unknowns and the net load along it,
+        // z_Cᵀ b̂ = zᵀf: the forces must balance it, and ADMM's iterates do
+        // so only as y → z (z_Cᵀ(b̂ − ρu) = ρ z_Cᵀ(y − z) by the y-step, as
+        // z_Cᵀ S = 0), so its stopping test checks it relative to that load.
+        let mode: Option<Vec<f64>> = problem
+            .rigid_modes()
+            .first()
+            .map(|z| contacts.iter().flat_map(|c| [z[c.t], z[c.s]]).collect());
+        let net = mode.as_ref().map_or(0.0, |z| {
+            z.iter()
+                .zip(&condensed.b)
+                .map(|(z, b)| z * b)
+                .sum::<f64>()
+                .abs()
+        });
+        // Buffers allocated once.
+        let (mut z, mut u, mut z_next) = (vec![0.0; n2], vec![0.0; n2], vec![0.0; n2]);
+        let mut y = Mat::<f64>::zeros(n2, 1);
+        let mut status = Status::MaxIterations;
+        let mut detail = format!("step cap {} reached", self.settings.max_iter);
+        let mut steps = 0;
+        for k in 1..=self.settings.max_iter {
+            steps = k;
+            for i in 0..n2 {
+                y[(i, 0)] = condensed.b[i] + rho * (z[i] - u[i]);
+            }
+            llt.solve_in_place(y.as_mut());
+            for (i, zn) in z_next.iter_mut().enumerate() {
+                *zn = prox(i, y[(i, 0)] + u[i]);
+            }
+            let primal =
+                (0..n2).fold(0.0f64, |a, i| a.max((y[(i, 0)] - z_next[i]).abs())) / u_scale;
+            let dual = rho
+                * z_next
+                    .iter()
+                    .zip(&z)
+                    .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()))
+                / f_scale;
+            for i in 0..n2 {
+                u[i] += y[(i, 0)] - z_next[i];
+            }
+            std::mem::swap(&mut z, &mut z_next);
+            let equilibrium = match &mode {
+                Some(mode) if net > 0.0 => {
+                    let carried: f64 = mode.iter().zip(&u).map(|(z, u)| z * rho * u).sum();
+                    let load: f64 = mode.iter().zip(&condensed.b).map(|(z, b)| z * b).sum();
+                    (load - carried).abs() / net
+                }
+                _ => 0.0,
+            };
+            let residual = primal.max(dual).max(equilibrium);
+            let control = observer.observe(&Progress {
+                stage: "admm_step",
+                iteration: k,
+                residual,
+                seconds: t1.elapsed().as_secs_f64(),
+            });
+            if !residual.is_finite() {
+                status = Status::NonFinite;
+                detail = format!("non-finite iterate at step {k}");
+                break;
+            }
+            if residual <= self.settings.tolerance {
+                status = Status::Converged;
+                detail = format!(
+                    "residuals {primal:.2e} (primal), {dual:.2e} (dual), {equilibrium:.2e} (equilibrium) ≤ {:e} after {k} steps, ρ = {rho:.3e}",
+                    self.settings.tolerance
+                );
+                break;
+            }
+            if let Control::Stop(s) = control {
+                status = s;
+                detail = format!("stopped by the harness after {k} steps");
+                break;
+            }
+        }
+        condensed.solution(
+            problem,
+            &z,
+            &u.iter().map(|u| rho * u).collect::<Vec<f64>>(),
+            Ending {
+                status,
+                detail,
+                steps,
+                timing: Timing {
+                    setup,
+                    solve: t1.elapsed().as_secs_f64(),
+                },
+            },
+        )
+    }
+}

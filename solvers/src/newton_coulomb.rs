@@ -1,0 +1,526 @@
+//! A direct solver of the static Coulomb problem: semismooth Newton on its
+//! whole condensed KKT system, the friction bound 𝓕λ being part of the
+//! unknowns (no successive approximations around it):
+//!
+//! ```text
+//! F  = S y − b̂ + Σ λ_i e_{t_i} − Σ μ_i e_{s_i} = 0,
+//! Φ_N,i = φ(λ_i, −κ t_i) = 0                              (Signorini)
+//! Φ_F,i = φ(μ_i + G_i, −φ(G_i − μ_i, −κ s_i)) = 0,  G_i = 𝓕_i λ_i⁺   (Coulomb)
+//! ```
+//!
+//! with φ the Fischer-Burmeister function and the Billups box function for
+//! the friction (Fischer 1992, Billups 1995; the natural-map / FB form of the
+//! Coulomb problem of Acary, Brémond & Huber 2018, section 3), on the contact
+//! unknowns after the condensation (reused from [`crate::condensed`]). The
+//! Jacobian holds ∂Φ_F/∂λ = 𝓕 ∂Φ_F/∂G, the coupling the successive
+//! approximations leave out; it is assembled densely (4m × 4m) and solved by
+//! LU with partial pivoting.
+//!
+//! Globalization (stated, and tested): the Newton direction is taken when it
+//! descends the merit Ψ = ½‖(F, Φ_N, Φ_F)‖² enough, otherwise −∇Ψ; an Armijo
+//! line search on Ψ follows, so Ψ falls strictly at every step. Unlike the
+//! given-friction problem the Coulomb problem is not monotone: a stationary
+//! point of Ψ need not solve it, and the solution need not be unique for
+//! large 𝓕. The start is the closed, sticking state (y = 0), where the
+//! active contact rows hold the rigid mode (started with the contact open,
+//! the Newton matrix is singular along it), or the frictionless solution, or
+//! either with its forces perturbed (to look for other solutions).
+
+use std::time::Instant;
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+use serde::{Deserialize, Serialize};
+
+use crate::condensed::{Condensed, Kept, condense};
+use crate::newton::{billups_with_bound, fb};
+use crate::observer::{Control, Observer, Progress};
+use crate::problem::ContactProblem;
+use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::settings::{
+    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
+use crate::solution::{Iterations, Solution, Status, Timing};
+use crate::solver::{Law, Solver, Start};
+
+/// The registry entry of the direct Coulomb solver.
+pub const ENTRY: Entry = Entry {
+    name: "newton-coulomb",
+    about: "direct Coulomb solver: semismooth Newton on the whole Coulomb problem (the bound 𝓕λ among the unknowns), condensation, Armijo line search",
+    source: "Fischer (1992), Billups (1995); the FB form of the Coulomb problem in Acary, Brémond & Huber (2018), Inria RR-9118, section 3",
+    laws: &[Law::Coulomb],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "newton_step",
+        about: "one Newton step on the Coulomb system; residual max|Φ| / ‖b̂‖∞",
+        history: true,
+    }],
+    work_stage: "newton_step",
+    knobs: &[
+        Knob {
+            name: "tolerance",
+            fields: &["tolerance"],
+            help: "stop when max|Φ| ≤ tolerance·‖b̂‖∞ (relative) [default 1e-12]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "max_iter",
+            fields: &["max_iter"],
+            help: "cap on Newton steps [default 500]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "line_search",
+            fields: &["line_search"],
+            help: "Armijo line search on the merit (true/false) [default true]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "start",
+            fields: &["start"],
+            help: "starting point: `closed` (y = 0, sticking) or `frictionless` (the frictionless solution) [default closed]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "perturbation",
+            fields: &["perturbation"],
+            help: "perturb the starting forces by this relative amount (pseudo-random, see seed) [default 0]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "seed",
+            fields: &["seed"],
+            help: "seed of the perturbation [default 1]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "condition",
+            fields: &["condition"],
+            help: "report the condition number of the final Newton matrix (true/false; an SVD) [default false]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |_| to_tree(&NewtonCoulombSettings::default()),
+    build: |tree| Ok(Box::new(NewtonCoulomb::new(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "tolerance",
+        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+        reference: 1e-13,
+        exact: true,
+    },
+    role: Role::Other,
+    sweeps: &[],
+    stress: &[Variation {
+        knob: "line_search",
+        values: &["false"],
+        quick: &["false"],
+    }],
+    study_work: 5000,
+    kernel: None,
+    restarts: &[
+        &[("start", "frictionless")],
+        &[("perturbation", "0.5"), ("seed", "1")],
+        &[("perturbation", "0.5"), ("seed", "2")],
+        &[
+            ("start", "frictionless"),
+            ("perturbation", "0.5"),
+            ("seed", "3"),
+        ],
+    ],
+    diagnose: &[("condition", "true")],
+};
+
+/// Where the Newton iteration starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StartingPoint {
+    /// y = 0 (every node closed and sticking), the forces that hold it.
+    Closed,
+    /// The frictionless solution (𝓕 = 0), from the closed state.
+    Frictionless,
+}
+
+/// Settings of the direct Coulomb solver (relative in both stopping modes).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NewtonCoulombSettings {
+    pub tolerance: f64,
+    pub max_iter: usize,
+    pub line_search: bool,
+    pub start: StartingPoint,
+    pub perturbation: f64,
+    pub seed: u64,
+    pub condition: bool,
+}
+
+impl Default for NewtonCoulombSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-12,
+            max_iter: 500,
+            line_search: true,
+            start: StartingPoint::Closed,
+            perturbation: 0.0,
+            seed: 1,
+            condition: false,
+        }
+    }
+}
+
+impl Validate for NewtonCoulombSettings {
+    fn validate(&self) -> Result<(), String> {
+        positive("newton-coulomb.tolerance", self.tolerance, "default 1e-12")?;
+        at_least_one("newton-coulomb.max_iter", self.max_iter, 500)?;
+        if !(self.perturbation.is_finite() && (0.0..1.0).contains(&self.perturbation)) {
+            return Err(format!(
+                "newton-coulomb.perturbation = {} is invalid: give a relative amount in [0, 1)",
+                self.perturbation
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The Coulomb system on the contact unknowns.
+struct System<'a> {
+    s: &'a Mat<f64>,
+    b: &'a [f64],
+    /// 𝓕_i per node.
+    coefficient: &'a [f64],
+    kappa: f64,
+}
+
+impl System<'_> {
+    fn m(&self) -> usize {
+        self.coefficient.len()
+    }
+
+    /// The residual Φ = (F, Φ_N, Φ_F) at x = (y, λ, μ).
+    fn residual(&self, x: &[f64]) -> Vec<f64> {
+        let m = self.m();
+        let (y, rest) = x.split_at(2 * m);
+        let (lam, mu) = rest.split_at(m);
+        let mut phi = vec![0.0; 4 * m];
+        for (k, p) in phi[..2 * m].iter_mut().enumerate() {
+            *p = (0..2 * m).map(|l| self.s[(k, l)] * y[l]).sum::<f64>() - self.b[k];
+        }
+        for i in 0..m {
+            phi[2 * i] += lam[i];
+            phi[2 * i + 1] -= mu[i];
+            phi[2 * m + i] = fb(lam[i], -self.kappa * y[2 * i]).0;
+            let g = self.coefficient[i] * lam[i].max(0.0);
+            phi[3 * m + i] = billups_with_bound(mu[i], self.kappa * y[2 * i + 1], g).0;
+        }
+        phi
+    }
+
+    /// An element of the generalized Jacobian at x.
+    fn jacobian(&self, x: &[f64]) -> Mat<f64> {
+        let m = self.m();
+        let (y, rest) = x.split_at(2 * m);
+        let (lam, mu) = rest.split_at(m);
+        let mut j = Mat::<f64>::zeros(4 * m, 4 * m);
+        for k in 0..2 * m {
+            for l in 0..2 * m {
+                j[(k, l)] = self.s[(k, l)];
+            }
+        }
+        for i in 0..m {
+            j[(2 * i, 2 * m + i)] = 1.0;
+            j[(2 * i + 1, 3 * m + i)] = -1.0;
+            let (_, a, b) = fb(lam[i], -self.kappa * y[2 * i]);
+            j[(2 * m + i, 2 * m + i)] = a;
+            j[(2 * m + i, 2 * i)] = -self.kappa * b;
+            let g = self.coefficient[i] * lam[i].max(0.0);
+            let (_, dmu, df, dg) = billups_with_bound(mu[i], self.kappa * y[2 * i + 1], g);
+            j[(3 * m + i, 3 * m + i)] = dmu;
+            j[(3 * m + i, 2 * i + 1)] = self.kappa * df;
+            if lam[i] > 0.0 {
+                j[(3 * m + i, 2 * m + i)] = dg * self.coefficient[i];
+            }
+        }
+        j
+    }
+}
+
+fn norm_inf(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+}
+
+fn merit(phi: &[f64]) -> f64 {
+    0.5 * phi.iter().map(|v| v * v).sum::<f64>()
+}
+
+/// The outcome of the Newton iteration.
+struct Outcome {
+    x: Vec<f64>,
+    status: Status,
+    detail: String,
+    steps: usize,
+    jacobian: Option<Mat<f64>>,
+}
+
+/// Globalized semismooth Newton from `x` (see the module's documentation).
+fn newton(
+    sys: &System<'_>,
+    mut x: Vec<f64>,
+    settings: &NewtonCoulombSettings,
+    scale: f64,
+    observer: &mut dyn Observer,
+    t0: Instant,
+) -> Outcome {
+    let n = x.len();
+    let mut phi = sys.residual(&x);
+    let mut psi = merit(&phi);
+    let finish = |x, status, detail, steps, jacobian| Outcome {
+        x,
+        status,
+        detail,
+        steps,
+        jacobian,
+    };
+    for step in 1..=settings.max_iter {
+        let r = norm_inf(&phi) / scale;
+        if !r.is_finite() {
+            return finish(
+                x,
+                Status::NonFinite,
+                format!("non-finite residual at step {step}"),
+                step - 1,
+                None,
+            );
+        }
+        if r <= settings.tolerance {
+            let detail = format!(
+                "residual {r:.2e} ≤ {:e} after {} Newton steps",
+                settings.tolerance,
+                step - 1
+            );
+            let j = settings.condition.then(|| sys.jacobian(&x));
+            return finish(x, Status::Converged, detail, step - 1, j);
+        }
+        let j = sys.jacobian(&x);
+        // ∇Ψ = Jᵀ Φ.
+        let grad: Vec<f64> = (0..n)
+            .map(|c| (0..n).map(|r| j[(r, c)] * phi[r]).sum())
+            .collect();
+        let rhs = Mat::from_fn(n, 1, |r, _| -phi[r]);
+        let d = j.partial_piv_lu().solve(rhs);
+        let newton_dir: Option<Vec<f64>> = {
+            let v: Vec<f64> = (0..n).map(|r| d[(r, 0)]).collect();
+            v.iter().all(|x| x.is_finite()).then_some(v)
+        };
+        let slope = |d: &[f64]| d.iter().zip(&grad).map(|(a, b)| a * b).sum::<f64>();
+        let dir = match newton_dir {
+            Some(d) if !settings.line_search => d,
+            Some(d) if slope(&d) <= -1e-10 * d.iter().map(|x| x * x).sum::<f64>().powf(1.05) => d,
+            _ => grad.iter().map(|x| -x).collect(),
+        };
+        let g0 = slope(&dir);
+        let mut alpha = 1.0;
+        loop {
+            let trial: Vec<f64> = x.iter().zip(&dir).map(|(a, d)| a + alpha * d).collect();
+            let phi1 = sys.residual(&trial);
+            let psi1 = merit(&phi1);
+            if !settings.line_search || (psi1.is_finite() && psi1 <= psi + 1e-4 * alpha * g0) {
+                x = trial;
+                phi = phi1;
+                psi = psi1;
+                break;
+            }
+            alpha *= 0.5;
+            if alpha < 1e-14 {
+                let detail = format!(
+                    "line search failed at Newton step {step} (residual {r:.2e}): a stationary point of the merit that is not a solution"
+                );
+                return finish(
+                    x,
+                    Status::InsufficientProgress,
+                    detail,
+                    step,
+                    settings.condition.then_some(j),
+                );
+            }
+        }
+        let control = observer.observe(&Progress {
+            stage: "newton_step",
+            iteration: step,
+            residual: norm_inf(&phi) / scale,
+            seconds: t0.elapsed().as_secs_f64(),
+        });
+        if let Control::Stop(s) = control {
+            return finish(
+                x,
+                s,
+                format!("stopped by the harness after {step} Newton steps"),
+                step,
+                None,
+            );
+        }
+    }
+    let r = norm_inf(&phi) / scale;
+    let status = if r <= settings.tolerance {
+        Status::Converged
+    } else {
+        Status::MaxIterations
+    };
+    let detail = format!(
+        "Newton step cap {} reached with residual {r:.2e}",
+        settings.max_iter
+    );
+    finish(x, status, detail, settings.max_iter, None)
+}
+
+/// The direct Coulomb solver. Keeps the condensation across calls on the
+/// same problem operator.
+#[derive(Default)]
+pub struct NewtonCoulomb {
+    pub settings: NewtonCoulombSettings,
+    cache: Kept<u64, Condensed>,
+}
+
+impl NewtonCoulomb {
+    pub fn new(settings: NewtonCoulombSettings) -> Self {
+        Self {
+            settings,
+            cache: Kept::default(),
+        }
+    }
+}
+
+/// The closed, sticking state y = 0 with the forces that hold it.
+fn closed_start(b: &[f64], m: usize) -> Vec<f64> {
+    let mut x = vec![0.0; 4 * m];
+    for i in 0..m {
+        // F = −b̂ + λ e_t − μ e_s = 0 at y = 0.
+        x[2 * m + i] = b[2 * i].max(0.0);
+        x[3 * m + i] = -b[2 * i + 1];
+    }
+    x
+}
+
+/// Multiplies every force by (1 + p·u), u pseudo-random in [−1, 1].
+fn perturb(x: &mut [f64], m: usize, p: f64, seed: u64) {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    for v in &mut x[2 * m..] {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let u = (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
+        *v *= 1.0 + p * u;
+    }
+}
+
+impl Solver for NewtonCoulomb {
+    fn solve(
+        &mut self,
+        problem: &ContactProblem,
+        law: Law,
+        start: Option<Start<'_>>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let (n, contacts) = (problem.n(), problem.contacts());
+        let m = contacts.len();
+        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        {
+            return refused;
+        }
+        let t0 = Instant::now();
+        let condensed = match self
+            .cache
+            .get_or_build(problem.operator_id(), || condense(problem))
+        {
+            Ok(c) => c,
+            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+        };
+        let setup = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let kappa = {
+            let d =
+                (0..2 * m).map(|k| condensed.s[(k, k)].abs()).sum::<f64>() / (2 * m).max(1) as f64;
+            if d > 0.0 { d } else { 1.0 }
+        };
+        let scale = norm_inf(&condensed.b).max(f64::MIN_POSITIVE);
+        let coefficient: Vec<f64> = contacts.iter().map(|c| c.coefficient).collect();
+        let sys = System {
+            s: &condensed.s,
+            b: &condensed.b,
+            coefficient: &coefficient,
+            kappa,
+        };
+        let mut x = match start {
+            Some(st) if st.v.len() == n && st.pressure.len() == m => {
+                let mut x = closed_start(&condensed.b, m);
+                for (i, c) in contacts.iter().enumerate() {
+                    x[2 * i] = st.v[c.t];
+                    x[2 * i + 1] = st.v[c.s];
+                    x[2 * m + i] = c.weight * st.pressure[i].max(0.0);
+                }
+                x
+            }
+            _ => closed_start(&condensed.b, m),
+        };
+        let mut extra_steps = 0;
+        if self.settings.start == StartingPoint::Frictionless && start.is_none() {
+            let zero = vec![0.0; m];
+            let frictionless = System {
+                s: sys.s,
+                b: sys.b,
+                coefficient: &zero,
+                kappa: sys.kappa,
+            };
+            let out = newton(
+                &frictionless,
+                x.clone(),
+                &self.settings,
+                scale,
+                &mut crate::observer::Silent,
+                t1,
+            );
+            extra_steps = out.steps;
+            if out.status.is_converged() {
+                x = out.x;
+            }
+        }
+        if self.settings.perturbation > 0.0 {
+            perturb(&mut x, m, self.settings.perturbation, self.settings.seed);
+        }
+        let out = newton(&sys, x, &self.settings, scale, observer, t1);
+        let mut diagnostics = Vec::new();
+        if let Some(j) = &out.jacobian
+            && let Ok(sv) = j.singular_values()
+        {
+            let (hi, lo) = sv
+                .iter()
+                .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
+            diagnostics.push(("condition", if lo > 0.0 { hi / lo } else { f64::INFINITY }));
+        }
+        let (y, rest) = out.x.split_at(2 * m);
+        let (lam, mu) = rest.split_at(m);
+        let v = condensed.expand(problem, y);
+        let mut solution = Solution {
+            v,
+            pressure: contacts
+                .iter()
+                .zip(lam)
+                .map(|(c, l)| l / c.weight)
+                .collect(),
+            friction_traction: contacts.iter().zip(mu).map(|(c, u)| u / c.weight).collect(),
+            status: out.status,
+            detail: out.detail,
+            iterations: Iterations {
+                outer: out.steps + extra_steps,
+                inner: 0,
+            },
+            timing: Timing {
+                setup,
+                solve: t1.elapsed().as_secs_f64(),
+            },
+            diagnostics,
+        };
+        if !solution.is_finite() {
+            solution.status = Status::NonFinite;
+        }
+        solution
+    }
+}

@@ -1,0 +1,456 @@
+//! Nonsmooth Gauss-Seidel on the contact forces (Jean 1999; Acary, Brémond &
+//! Huber 2018, section 4, "NSGS"): sweep over the contact nodes, each time
+//! solving the node's two-dimensional contact problem exactly with the other
+//! nodes' forces fixed, on the condensed operator.
+//!
+//! With r_i = (λ_i, ν_i) the node's normal force and ν_i = −μ_i its friction
+//! force (see [`crate::dual`]), the local problem at node i is
+//!
+//! ```text
+//! (t_i, s_i) = q_i − W_ii r_i,   λ_i ≥ 0, t_i ≤ 0, λ_i t_i = 0,
+//! |ν_i| ≤ G_i, ν_i = G_i sign(s_i) where s_i ≠ 0,
+//! ```
+//!
+//! with W_ii the node's 2×2 block of M and G_i = w_i g_i (given friction) or
+//! 𝓕_i λ_i (Coulomb: the method solves the Coulomb problem itself). It is
+//! solved exactly by trying its six cases (closed or open × stick, slip
+//! forward or slip backward) in closed form. The semicoercive mode is kept
+//! exactly ([`crate::dual`]): after each sweep the translation β solves its
+//! own equation, the equilibrium of the contact forces with the load, with
+//! every node answering locally (a one-dimensional monotone root, found by
+//! bisection).
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::condensed::{Condensed, Ending, Kept, condense};
+use crate::dual::DualOperator;
+use crate::observer::{Control, Observer, Progress};
+use crate::problem::ContactProblem;
+use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::settings::{
+    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
+};
+use crate::solution::{Solution, Status, Timing};
+use crate::solver::{Law, Solver, Start};
+
+/// The registry entry of nonsmooth Gauss-Seidel.
+pub const ENTRY: Entry = Entry {
+    name: "nsgs",
+    about: "nonsmooth Gauss-Seidel on the contact forces: exact 2×2 local solves on the condensed operator, the rigid translation as an extra unknown",
+    source: "Jean (1999), the non-smooth contact dynamics method; Acary, Brémond & Huber (2018), Inria RR-9118, section 4",
+    laws: &[Law::GivenFriction, Law::Coulomb],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "nsgs_sweep",
+        about: "one sweep over the contact nodes; residual max|Δr| over the nodal force scale",
+        history: true,
+    }],
+    work_stage: "nsgs_sweep",
+    knobs: &[
+        Knob {
+            name: "tolerance",
+            fields: &["tolerance"],
+            help: "stop when a sweep changes no force by more than tolerance·P·w (relative) [default 1e-10]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "max_sweeps",
+            fields: &["max_sweeps"],
+            help: "cap on sweeps [default 100000]",
+            parse: parse_scalar,
+        },
+    ],
+    defaults: |_| to_tree(&NsgsSettings::default()),
+    build: |tree| Ok(Box::new(Nsgs::new(from_tree(tree)?))),
+    accuracy: Accuracy {
+        knob: "tolerance",
+        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+        reference: 1e-13,
+        exact: false,
+    },
+    role: Role::Other,
+    sweeps: &[],
+    stress: &[Variation {
+        knob: "tolerance",
+        values: &["1e-2", "1e-14"],
+        quick: &["1e-14"],
+    }],
+    study_work: 200_000,
+    kernel: None,
+    restarts: &[],
+    diagnose: &[],
+};
+
+/// Settings of nonsmooth Gauss-Seidel (the same in both stopping modes:
+/// its test is relative to the problem's scales).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NsgsSettings {
+    pub tolerance: f64,
+    pub max_sweeps: usize,
+}
+
+impl Default for NsgsSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-10,
+            max_sweeps: 100_000,
+        }
+    }
+}
+
+impl Validate for NsgsSettings {
+    fn validate(&self) -> Result<(), String> {
+        positive("nsgs.tolerance", self.tolerance, "default 1e-10")?;
+        at_least_one("nsgs.max_sweeps", self.max_sweeps, 100_000)
+    }
+}
+
+/// How the friction bound of a node is given.
+#[derive(Clone, Copy, Debug)]
+pub enum Bound {
+    /// G = w g (the given-friction subproblem).
+    Given(f64),
+    /// G = 𝓕 λ (the Coulomb problem).
+    Coulomb(f64),
+}
+
+/// The exact solution of one node's problem (t, s) = q − W r with
+/// r = (λ, ν): the first of the six cases whose conditions hold, or the one
+/// that violates them least.
+pub fn local_solve(w: [[f64; 2]; 2], q: [f64; 2], bound: Bound) -> [f64; 2] {
+    let [[wtt, wts], [wst, wss]] = w;
+    let mut best = ([0.0, 0.0], f64::INFINITY);
+    let mut consider = |r: [f64; 2], violation: f64| {
+        if violation < best.1 {
+            best = (r, violation);
+        }
+    };
+    let g_of = |lambda: f64| match bound {
+        Bound::Given(g) => g,
+        Bound::Coulomb(f) => f * lambda.max(0.0),
+    };
+    // Closed and sticking: W r = q.
+    let det = wtt * wss - wts * wst;
+    if det != 0.0 {
+        let lambda = (wss * q[0] - wts * q[1]) / det;
+        let nu = (wtt * q[1] - wst * q[0]) / det;
+        let v = (-lambda).max(0.0) + (nu.abs() - g_of(lambda)).max(0.0);
+        consider([lambda, nu], v);
+    }
+    for sigma in [1.0, -1.0] {
+        // Closed and slipping: t = 0, ν = σG.
+        let lambda = match bound {
+            Bound::Given(g) => (q[0] - wts * sigma * g) / wtt,
+            Bound::Coulomb(f) => {
+                let d = wtt + sigma * f * wts;
+                if d > 0.0 { q[0] / d } else { f64::NAN }
+            }
+        };
+        if lambda.is_finite() {
+            let nu = sigma * g_of(lambda);
+            let s = q[1] - wst * lambda - wss * nu;
+            consider([lambda, nu], (-lambda).max(0.0) + (-sigma * s).max(0.0));
+        }
+        // Open and slipping: λ = 0, ν = σG(0).
+        let nu = sigma * g_of(0.0);
+        let t = q[0] - wts * nu;
+        let s = q[1] - wss * nu;
+        let v = t.max(0.0)
+            + if nu != 0.0 {
+                (-sigma * s).max(0.0)
+            } else {
+                0.0
+            };
+        consider([0.0, nu], v);
+    }
+    // Open and sticking: λ = 0, s = 0.
+    let nu = q[1] / wss;
+    let t = q[0] - wts * nu;
+    consider([0.0, nu], t.max(0.0) + (nu.abs() - g_of(0.0)).max(0.0));
+    // No case may hold exactly (round-off): the least violation is kept.
+    best.0
+}
+
+/// Nonsmooth Gauss-Seidel. Keeps the condensation and the operator M
+/// across calls on the same problem operator.
+#[derive(Default)]
+pub struct Nsgs {
+    pub settings: NsgsSettings,
+    cache: Kept<u64, (Condensed, DualOperator)>,
+}
+
+impl Nsgs {
+    pub fn new(settings: NsgsSettings) -> Self {
+        Self {
+            settings,
+            cache: Kept::default(),
+        }
+    }
+}
+
+/// The sum Σ ẑ_k r_k of all nodes answering locally to the translation β
+/// (given y at β0 and the current forces r).
+fn equilibrium_at(
+    op: &DualOperator,
+    y: &[f64],
+    r: &[f64],
+    beta: f64,
+    beta0: f64,
+    bounds: &[Bound],
+) -> f64 {
+    let z = op.z.as_ref().expect("called with a rigid mode");
+    let mut e = 0.0;
+    for (i, &bound) in bounds.iter().enumerate() {
+        let k = 2 * i;
+        let w = block(op, k);
+        let q = [
+            y[k] + w[0][0] * r[k] + w[0][1] * r[k + 1] + (beta - beta0) * z[k],
+            y[k + 1] + w[1][0] * r[k] + w[1][1] * r[k + 1] + (beta - beta0) * z[k + 1],
+        ];
+        let local = local_solve(w, q, bound);
+        e += z[k] * (op.b[k] - local[0]) + z[k + 1] * (op.b[k + 1] - local[1]);
+    }
+    e
+}
+
+fn block(op: &DualOperator, k: usize) -> [[f64; 2]; 2] {
+    [
+        [op.m[(k, k)], op.m[(k, k + 1)]],
+        [op.m[(k + 1, k)], op.m[(k + 1, k + 1)]],
+    ]
+}
+
+impl Solver for Nsgs {
+    fn solve(
+        &mut self,
+        problem: &ContactProblem,
+        law: Law,
+        _start: Option<Start<'_>>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
+        let (n, contacts) = (problem.n(), problem.contacts());
+        let m = contacts.len();
+        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        {
+            return refused;
+        }
+        let t0 = Instant::now();
+        let (condensed, op) = match self.cache.get_or_build(problem.operator_id(), || {
+            let c = condense(problem)?;
+            let d = DualOperator::new(problem, &c)?;
+            Ok((c, d))
+        }) {
+            Ok((c, d)) => (c, d),
+            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+        };
+        let setup = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let bounds: Vec<Bound> = contacts
+            .iter()
+            .map(|c| match law {
+                Law::GivenFriction => Bound::Given(c.weight * c.g),
+                Law::Coulomb => Bound::Coulomb(c.coefficient),
+            })
+            .collect();
+        let scales = problem.scales();
+        let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
+        let force_tol = self.settings.tolerance * scales.pressure * w_max;
+        let mut r = vec![0.0; 2 * m];
+        let mut beta = 0.0;
+        let mut y = op.displacements(&r, beta);
+        let mut status = Status::MaxIterations;
+        let mut detail = format!("sweep cap {} reached", self.settings.max_sweeps);
+        let mut sweeps = 0;
+        for sweep in 1..=self.settings.max_sweeps {
+            sweeps = sweep;
+            let mut change = 0.0f64;
+            for (i, &bound) in bounds.iter().enumerate() {
+                let k = 2 * i;
+                let w = block(op, k);
+                let q = [
+                    y[k] + w[0][0] * r[k] + w[0][1] * r[k + 1],
+                    y[k + 1] + w[1][0] * r[k] + w[1][1] * r[k + 1],
+                ];
+                let local = local_solve(w, q, bound);
+                let d = [local[0] - r[k], local[1] - r[k + 1]];
+                if d[0] != 0.0 || d[1] != 0.0 {
+                    for (row, yr) in y.iter_mut().enumerate() {
+                        *yr -= op.m[(row, k)] * d[0] + op.m[(row, k + 1)] * d[1];
+                    }
+                    r[k] = local[0];
+                    r[k + 1] = local[1];
+                    change = change.max(d[0].abs()).max(d[1].abs());
+                }
+            }
+            // The translation: its equation is the equilibrium.
+            let mut beta_change = 0.0;
+            if let Some(z) = &op.z {
+                let e = |b: f64| equilibrium_at(op, &y, &r, b, beta, &bounds);
+                let step0 = scales.displacement * (m as f64).sqrt();
+                if let Some(b) = monotone_root(e, beta, step0) {
+                    beta_change = b - beta;
+                    for (yk, zk) in y.iter_mut().zip(z) {
+                        *yk += beta_change * zk;
+                    }
+                    beta = b;
+                } else {
+                    // No translation balances the load: the nodes' forces
+                    // cannot carry it (it pulls the body off), so the
+                    // problem is unbounded.
+                    status = Status::Unbounded;
+                    detail = format!(
+                        "sweep {sweep}: no rigid translation balances the load along the rigid mode (it pulls the body off)"
+                    );
+                    break;
+                }
+            }
+            let residual = change / (scales.pressure * w_max);
+            let control = observer.observe(&Progress {
+                stage: "nsgs_sweep",
+                iteration: sweep,
+                residual,
+                seconds: t1.elapsed().as_secs_f64(),
+            });
+            if !change.is_finite() {
+                status = Status::NonFinite;
+                detail = format!("non-finite force in sweep {sweep}");
+                break;
+            }
+            let moved = beta_change.abs() <= self.settings.tolerance * scales.displacement;
+            if change <= force_tol && moved {
+                status = Status::Converged;
+                detail = format!("max|Δr| = {change:.3e} ≤ {force_tol:.3e} after {sweep} sweeps");
+                break;
+            }
+            if let Control::Stop(s) = control {
+                status = s;
+                detail = format!("stopped by the harness after {sweep} sweeps");
+                break;
+            }
+        }
+        // Recompute y from the forces (no drift from the incremental updates).
+        let y = op.displacements(&r, beta);
+        condensed.solution(
+            problem,
+            &y,
+            &r,
+            Ending {
+                status,
+                detail,
+                steps: sweeps,
+                timing: Timing {
+                    setup,
+                    solve: t1.elapsed().as_secs_f64(),
+                },
+            },
+        )
+    }
+}
+
+/// A root of a nonincreasing function near `x0`: bracketed by doubling
+/// steps from `step`, then bisected to the last bit. None if no sign change
+/// is found.
+pub fn monotone_root(f: impl Fn(f64) -> f64, x0: f64, step: f64) -> Option<f64> {
+    let f0 = f(x0);
+    if f0 == 0.0 {
+        return Some(x0);
+    }
+    // f nonincreasing: f0 > 0 → the root is to the right.
+    let dir = if f0 > 0.0 { 1.0 } else { -1.0 };
+    let mut step = step.abs().max(f64::MIN_POSITIVE);
+    let (mut lo, mut hi) = (x0, x0);
+    let mut found = false;
+    for _ in 0..200 {
+        let x = x0 + dir * step;
+        if f(x) * f0 <= 0.0 {
+            if dir > 0.0 {
+                hi = x;
+            } else {
+                lo = x;
+            }
+            found = true;
+            break;
+        }
+        if dir > 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        step *= 2.0;
+    }
+    if !found {
+        return None;
+    }
+    // Invariant: the sign of f changes between lo and hi.
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        let fm = f(mid);
+        if fm == 0.0 {
+            return Some(mid);
+        }
+        if (fm > 0.0) == (dir > 0.0) {
+            // Same side as x0.
+            if dir > 0.0 { lo = mid } else { hi = mid }
+        } else if dir > 0.0 {
+            hi = mid
+        } else {
+            lo = mid
+        }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Checks the local law at r for (t, s) = q − W r.
+    fn holds(w: [[f64; 2]; 2], q: [f64; 2], r: [f64; 2], bound: Bound) -> bool {
+        let t = q[0] - w[0][0] * r[0] - w[0][1] * r[1];
+        let s = q[1] - w[1][0] * r[0] - w[1][1] * r[1];
+        let g = match bound {
+            Bound::Given(g) => g,
+            Bound::Coulomb(f) => f * r[0],
+        };
+        let e = 1e-10;
+        r[0] >= -e
+            && t <= e
+            && (r[0] * t).abs() <= e
+            && r[1].abs() <= g + e
+            && (s.abs() <= e || (r[1] - g * s.signum()).abs() <= e)
+    }
+
+    #[test]
+    fn the_local_solve_satisfies_the_law_in_every_case() {
+        let w = [[2.0, 0.3], [0.3, 1.0]];
+        let mut state = 3u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
+        };
+        for _ in 0..2000 {
+            let q = [rnd(), rnd()];
+            for bound in [Bound::Given(rnd().abs()), Bound::Coulomb(rnd().abs() * 0.8)] {
+                let r = local_solve(w, q, bound);
+                assert!(holds(w, q, r, bound), "q = {q:?}, {bound:?}: r = {r:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn monotone_roots_are_found_on_either_side() {
+        let f = |x: f64| 3.0 - x;
+        assert!((monotone_root(f, 0.0, 0.1).unwrap() - 3.0).abs() < 1e-12);
+        assert!((monotone_root(f, 10.0, 0.1).unwrap() - 3.0).abs() < 1e-12);
+        let flat = |_x: f64| 1.0;
+        assert!(monotone_root(flat, 0.0, 1.0).is_none());
+    }
+}

@@ -1,0 +1,238 @@
+//! Past the friction coefficient where the successive approximations stop
+//! contracting: does a solver of the Coulomb problem itself converge there,
+//! and to one solution from every start? For each coefficient, every solver
+//! whose registry entry solves the Coulomb law and lists other starting
+//! points runs from its default start and from each of them (with its
+//! diagnostics on, e.g. the condition number of its final Newton matrix);
+//! the fixed point runs beside it, around the given-friction solver that
+//! earned the scene's given-friction reference.
+//! The answers are compared pairwise: one solution, or several.
+
+use anyhow::Result;
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::{self, Entry};
+use serde::Serialize;
+
+use crate::io::csv::{fixed, fixed_opt};
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::study::agreement::agreement;
+use crate::study::reference::References;
+use crate::study::runner::{Keep, Measured, measure};
+use crate::study::stability::STUDY;
+use crate::study::sweep::work_cap;
+use crate::study::trial::TrialSpec;
+
+/// One friction coefficient's finding for one direct solver.
+#[derive(Clone, Debug, Serialize)]
+pub struct UniquenessRow {
+    pub scene: String,
+    pub solver: String,
+    #[serde(serialize_with = "fixed")]
+    pub friction_coefficient: f64,
+    /// Starts tried and answers certified.
+    pub starts: usize,
+    pub certified: usize,
+    /// The largest pressure difference between two certified answers,
+    /// relative to the largest pressure (0: one solution).
+    #[serde(serialize_with = "fixed_opt")]
+    pub spread: Option<f64>,
+    /// The range of the condition numbers its diagnostics report.
+    #[serde(serialize_with = "fixed_opt")]
+    pub condition_min: Option<f64>,
+    #[serde(serialize_with = "fixed_opt")]
+    pub condition_max: Option<f64>,
+    /// The fixed point beside it: its inner solver, certified status,
+    /// outcome, last contraction factor and distance from the first
+    /// certified direct answer.
+    pub fixed_point_solver: String,
+    pub fixed_point_status: String,
+    pub fixed_point_outcome: String,
+    #[serde(serialize_with = "fixed_opt")]
+    pub fixed_point_contraction: Option<f64>,
+    #[serde(serialize_with = "fixed_opt")]
+    pub fixed_point_difference: Option<f64>,
+}
+
+fn diagnostic(m: &Measured, name: &str) -> Option<f64> {
+    m.trial.diagnostics.split(';').find_map(|kv| {
+        let (k, v) = kv.split_once('=')?;
+        (k == name).then(|| v.parse().ok()).flatten()
+    })
+}
+
+/// Runs the study on `scene` for each coefficient; returns the trials (to be
+/// classified with the map's) and one row per coefficient and solver.
+pub fn run(
+    scene: &Scene,
+    coefficients: &[f64],
+    settings: &Settings,
+    work_scale: f64,
+    references: &mut References,
+    tick: &dyn Fn(&TrialSpec),
+) -> Result<(Vec<Measured>, Vec<UniquenessRow>)> {
+    let direct: Vec<&'static Entry> = registry::solvers()
+        .into_iter()
+        .filter(|e| e.solves(Law::Coulomb) && !e.restarts.is_empty())
+        .collect();
+    let keep = Keep {
+        history: false,
+        solution: true,
+    };
+    let mut measured = Vec::new();
+    let mut rows = Vec::new();
+    for &f in coefficients {
+        let mut sc = scene.clone();
+        sc.friction = f;
+        // The fixed point around the given-friction solver that earned this
+        // scene's given-friction reference (the most accurate one), else
+        // the first exact one.
+        let earned = references
+            .get(&sc, settings)?
+            .and_then(|r| r.given_friction.as_ref())
+            .and_then(|g| registry::by_name(g.solver))
+            .filter(|e| !e.solves(Law::Coulomb));
+        let fixed_point = earned.or_else(|| {
+            registry::solvers().into_iter().find(|e| {
+                e.accuracy.exact && !e.solves(Law::Coulomb) && e.solves(Law::GivenFriction)
+            })
+        });
+        let fp = match fixed_point {
+            Some(e) => {
+                let mut t = TrialSpec::new(STUDY, "uniqueness", &sc, e, Law::Coulomb, settings)
+                    .with_work(work_cap(e, work_scale));
+                t.knob = Some(("friction".into(), format!("{f}")));
+                let reference = references.get(&sc, settings)?;
+                let m = measure(&t, reference, keep)?;
+                tick(&t);
+                Some(m)
+            }
+            None => None,
+        };
+        for &e in &direct {
+            let mut answers: Vec<Measured> = Vec::new();
+            let mut starts: Vec<Vec<(&str, &str)>> = vec![Vec::new()];
+            starts.extend(e.restarts.iter().map(|r| r.to_vec()));
+            for (k, start) in starts.iter().enumerate() {
+                let mut t = TrialSpec::new(STUDY, "uniqueness", &sc, e, Law::Coulomb, settings)
+                    .with_work(work_cap(e, work_scale));
+                for (knob, value) in start.iter().chain(e.diagnose) {
+                    t.settings
+                        .set_text(&format!("{}.{knob}", e.name), value)
+                        .map_err(anyhow::Error::msg)?;
+                }
+                let label = if start.is_empty() {
+                    "default".to_string()
+                } else {
+                    start
+                        .iter()
+                        .map(|(k, v)| format!("{k}={v}"))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                };
+                t.knob = Some(("friction, start".into(), format!("{f}, {label}")));
+                let reference = references.get(&sc, settings)?;
+                let mut m = measure(&t, reference, keep)?;
+                m.trial.value = format!("{f}");
+                m.trial.knob = format!("friction (start {k}: {label})");
+                tick(&t);
+                answers.push(m);
+            }
+            let good: Vec<&Measured> = answers.iter().filter(|m| m.trial.certified()).collect();
+            let mut spread: Option<f64> = None;
+            for (i, a) in good.iter().enumerate() {
+                for b in &good[i + 1..] {
+                    if let (Some((d, sa)), Some((_, sb))) = (&a.solution, &b.solution) {
+                        let p = agreement(d, sa, sb).pressure_max;
+                        spread = Some(spread.map_or(p, |s| s.max(p)));
+                    }
+                }
+            }
+            if good.len() == 1 {
+                spread = Some(0.0);
+            }
+            let conds: Vec<f64> = answers
+                .iter()
+                .filter_map(|m| diagnostic(m, "condition"))
+                .collect();
+            let fp_difference = match (&fp, good.first()) {
+                (Some(fp), Some(g)) if fp.trial.certified() => match (&fp.solution, &g.solution) {
+                    (Some((d, a)), Some((_, b))) => Some(agreement(d, a, b).pressure_max),
+                    _ => None,
+                },
+                _ => None,
+            };
+            rows.push(UniquenessRow {
+                scene: sc.name.clone(),
+                solver: e.name.into(),
+                friction_coefficient: f,
+                starts: answers.len(),
+                certified: good.len(),
+                spread,
+                condition_min: conds.iter().copied().reduce(f64::min),
+                condition_max: conds.iter().copied().reduce(f64::max),
+                fixed_point_solver: fp
+                    .as_ref()
+                    .map(|m| m.trial.solver.clone())
+                    .unwrap_or_default(),
+                fixed_point_status: fp
+                    .as_ref()
+                    .map(|m| m.trial.status.to_string())
+                    .unwrap_or_default(),
+                fixed_point_outcome: fp
+                    .as_ref()
+                    .map(|m| format!("{:?}", m.trial.outcome).to_lowercase())
+                    .unwrap_or_default(),
+                fixed_point_contraction: fp.as_ref().and_then(|m| m.trial.contraction),
+                fixed_point_difference: fp_difference,
+            });
+            measured.extend(answers);
+        }
+        measured.extend(fp);
+    }
+    Ok((measured, rows))
+}
+
+/// The README's lines on the study.
+pub fn readme_lines(rows: &[UniquenessRow]) -> Vec<String> {
+    rows.iter()
+        .map(|r| {
+            let solutions = match (r.certified, r.spread) {
+                (0, _) => "no start gives a certified answer".to_string(),
+                (n, Some(s)) if s <= 1e-6 => format!(
+                    "certified from {n} of {} starts, all within {s:.1e} of each other: one solution",
+                    r.starts
+                ),
+                (n, Some(s)) => format!(
+                    "certified from {n} of {} starts, up to {s:.1e} apart: **several solutions**",
+                    r.starts
+                ),
+                (n, None) => format!("certified from {n} of {} starts", r.starts),
+            };
+            let condition = match (r.condition_min, r.condition_max) {
+                (Some(a), Some(b)) => format!("; condition number of the final Newton matrix {a:.1e} to {b:.1e}"),
+                _ => String::new(),
+            };
+            let fp = if r.fixed_point_solver.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " The fixed point around `{}`: {} ({}{}){}.",
+                    r.fixed_point_solver,
+                    r.fixed_point_status,
+                    r.fixed_point_outcome.replace('_', " "),
+                    r.fixed_point_contraction
+                        .map(|q| format!(", last contraction factor {q:.2}"))
+                        .unwrap_or_default(),
+                    r.fixed_point_difference
+                        .map(|d| format!(", {d:.1e} from the direct answer"))
+                        .unwrap_or_default()
+                )
+            };
+            format!(
+                "- {}, 𝓕 = {}: `{}` {solutions}{condition}.{fp}",
+                r.scene, r.friction_coefficient, r.solver
+            )
+        })
+        .collect()
+}
