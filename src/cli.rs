@@ -17,7 +17,7 @@ mod scene_args;
 mod settings_args;
 
 pub use scene_args::SceneArgs;
-pub use settings_args::{SettingsArgs, knob_flag, with_flag};
+pub use settings_args::{AllSolvers, PapersMethod, SettingsArgs, SolverSet, knob_flag, with_flag};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
 /// the semicoercive two-body contact problem with Coulomb friction of
@@ -36,7 +36,8 @@ pub enum Command {
     /// of the kernel of A and the problem's scales.
     Info(InfoArgs),
     /// Solve a scene's Coulomb problem with one solver and certify the answer.
-    /// Prints a summary; with --out writes profile.csv and summary.json.
+    /// Prints a summary; with --out writes profile.csv and summary.json (and
+    /// field.vtu with --vtu).
     Solve(SolveArgs),
     /// The paper's Table 1: its method with mesh continuation on problems
     /// 1-3 at the paper's settings (--stopping paper unless told otherwise),
@@ -70,6 +71,27 @@ pub enum Command {
     /// sparse factorization. Writes performance.csv, performance_goals.md and
     /// charts into --out.
     Bench(BenchArgs),
+    /// The benchmark over the problem collection (the paper's problems over
+    /// 𝓕 and h, sideways loads, nearly unbounded loads, fine meshes): every
+    /// solver on every instance at each target accuracy, with a time limit
+    /// per run. Writes benchmark.csv (one row per run), success rates,
+    /// shifted geometric means and performance profiles into --out. With
+    /// --shard K/N it runs every N-th instance; merge shards with
+    /// benchmark-merge.
+    Benchmark(BenchmarkArgs),
+    /// Merge the folders of benchmark shards into one set of tables and
+    /// charts.
+    BenchmarkMerge(BenchmarkMergeArgs),
+    /// Write a scene's problem (its finest level) as files any scientific
+    /// code reads: A, M, f and the rigid mode in Matrix Market, the contact
+    /// nodes' indices, weights, bounds and coefficients as CSV, the condensed
+    /// form on the contact unknowns, and problem.json (statement, signs,
+    /// units, scales).
+    Export(ExportArgs),
+    /// Certify an answer computed elsewhere for an exported problem:
+    /// displacements, contact forces per node, or both. Prints every
+    /// condition's violation; an answer that fails is a non-zero exit.
+    Certify(CertifyArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
     BenchOne(BenchOneArgs),
@@ -96,6 +118,10 @@ pub struct SolveArgs {
     /// Folder for profile.csv and summary.json (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Also write field.vtu into --out: both bodies for ParaView, with
+    /// displacement, stress, von Mises stress and the contact state.
+    #[arg(long, requires = "out")]
+    pub vtu: bool,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }
@@ -118,7 +144,7 @@ pub struct Table1Args {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     #[command(flatten)]
-    pub settings: SettingsArgs,
+    pub settings: SettingsArgs<PapersMethod>,
 }
 
 #[derive(Debug, Args)]
@@ -216,6 +242,87 @@ pub struct ReproduceArgs {
 }
 
 #[derive(Debug, Args)]
+pub struct BenchmarkArgs {
+    /// A small collection for tests (6 instances at h = 1/8, 5 s per run).
+    #[arg(long)]
+    pub quick: bool,
+    /// Run every N-th instance from the K-th (1-based), e.g. 2/8.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<crate::study::benchmark::Shard>,
+    /// Wall-clock limit per run in seconds [default: 20; quick: 5].
+    #[arg(long, value_name = "SECONDS", value_parser = positive_seconds)]
+    pub time_limit: Option<f64>,
+    /// Target accuracies in the certificate's measure [default: 1e-4,1e-8].
+    #[arg(long, value_delimiter = ',', value_name = "TOL", value_parser = positive_tolerance)]
+    pub targets: Vec<f64>,
+    /// Solvers to run [default: every registered solver].
+    #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
+    pub solvers: Vec<String>,
+    /// Output folder (replaced whole).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct BenchmarkMergeArgs {
+    /// The shards' output folders.
+    #[arg(required = true, value_name = "SHARD_DIR")]
+    pub shards: Vec<PathBuf>,
+    /// Output folder (replaced whole).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+fn positive_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("'{s}': give a positive number of seconds, e.g. 20")),
+    }
+}
+
+fn positive_tolerance(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 && x < 1.0 => Ok(x),
+        _ => Err(format!(
+            "'{s}': give a tolerance between 0 and 1, e.g. 1e-6"
+        )),
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output folder (replaced whole).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct CertifyArgs {
+    /// A folder written by `contactlab export`.
+    #[arg(long, value_name = "DIR")]
+    pub instance: PathBuf,
+    /// The displacements v, n values in the order of the exported unknowns:
+    /// Matrix Market (.mtx, one column) or one number per line.
+    #[arg(long, value_name = "FILE")]
+    pub displacements: Option<PathBuf>,
+    /// The contact forces: CSV with columns pressure,friction_traction, one
+    /// row per contact node in the order of contact.csv.
+    #[arg(long, value_name = "FILE")]
+    pub forces: Option<PathBuf>,
+    /// Check the given-friction subproblem at the exported bounds g
+    /// instead of the Coulomb problem.
+    #[arg(long)]
+    pub given_friction: bool,
+    /// The tolerance every condition's violation must meet.
+    #[arg(long, value_name = "TOL", default_value_t = crate::certificate::DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
+    pub tolerance: f64,
+}
+
+#[derive(Debug, Args)]
 pub struct BenchOneArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
@@ -276,6 +383,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Reproduce(a) => c::reproduce::run(&a),
         Command::Stability(a) => c::stability::run(&a),
         Command::Bench(a) => c::bench::run(&a),
+        Command::Benchmark(a) => c::benchmark::run(&a),
+        Command::BenchmarkMerge(a) => c::benchmark::merge(&a),
+        Command::Export(a) => c::export::run(&a),
+        Command::Certify(a) => c::certify::run(&a),
         Command::BenchOne(a) => c::bench::run_one(&a),
     }
 }

@@ -29,18 +29,37 @@ fn solve_writes_the_documented_profile_and_summary() {
     let mut lines = profile.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "x,u1_lower,u2_lower,u1_upper,u2_upper,jump,slip,pressure,friction_traction,status"
+        "x,u1_lower,u2_lower,u1_upper,u2_upper,jump,slip,pressure,friction_traction,g,state,status"
     );
+    let mut states = Vec::new();
     let rows: Vec<Vec<f64>> = lines
         .map(|l| {
             let fields: Vec<&str> = l.split(',').collect();
             assert_eq!(
-                fields[9], "converged",
+                fields[11], "converged",
                 "the run's certified status on every row"
             );
-            fields[..9].iter().map(|v| v.parse().unwrap()).collect()
+            states.push(fields[10].to_string());
+            fields[..10].iter().map(|v| v.parse().unwrap()).collect()
         })
         .collect();
+    // The contact state agrees with the law it names, at g = 𝓕p (𝓕 = 0.5),
+    // to the certificate's accuracy relative to the largest pressure.
+    let scale = 1e-6 * rows.iter().fold(0.0f64, |m, r| m.max(r[7]));
+    for (r, state) in rows.iter().zip(&states) {
+        assert!((r[9] - 0.5 * r[7]).abs() <= scale, "g = 𝓕p");
+        match state.as_str() {
+            "open" => assert!(r[7] <= scale && r[5] < 0.0, "open: no pressure, a gap"),
+            "slip" => assert!(
+                (r[8].abs() - r[9]).abs() <= scale && r[6] != 0.0,
+                "slip: |q| = g and the bodies slide"
+            ),
+            "stick" => assert!(r[8].abs() <= r[9] + scale && r[7] > scale, "stick: |q| ≤ g"),
+            other => panic!("unknown contact state {other}"),
+        }
+    }
+    assert_eq!(states.first().map(String::as_str), Some("stick"));
+    assert_eq!(states.last().map(String::as_str), Some("open"));
     assert_eq!(rows.len(), 9, "one row per contact node at h = 1/8");
     for w in rows.windows(2) {
         assert!(w[0][0] < w[1][0], "rows in increasing x");

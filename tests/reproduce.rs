@@ -48,6 +48,48 @@ fn svg_texts(path: &Path) -> Vec<String> {
         .collect()
 }
 
+/// The legend is a framed box, and nothing drawn on the plot (dots, line
+/// vertices: data, axes, grid) lies right of its left edge outside it: the
+/// legend never covers data.
+fn legend_beside_the_data(path: &Path) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let doc = roxmltree::Document::parse(&text).unwrap();
+    let num = |n: &roxmltree::Node, a: &str| n.attribute(a).and_then(|v| v.parse::<f64>().ok());
+    let legend = doc
+        .descendants()
+        .rfind(|n| n.tag_name().name() == "rect" && n.attribute("fill") == Some("none"))
+        .unwrap_or_else(|| panic!("{}: no framed legend", path.display()));
+    let (x0, y0) = (num(&legend, "x").unwrap(), num(&legend, "y").unwrap());
+    let (x1, y1) = (
+        x0 + num(&legend, "width").unwrap(),
+        y0 + num(&legend, "height").unwrap(),
+    );
+    let inside = |x: f64, y: f64| (x0..=x1).contains(&x) && (y0..=y1).contains(&y);
+    let mut points: Vec<(f64, f64)> = Vec::new();
+    for n in doc.descendants() {
+        match n.tag_name().name() {
+            "circle" => points.push((num(&n, "cx").unwrap(), num(&n, "cy").unwrap())),
+            "polyline" => points.extend(
+                n.attribute("points")
+                    .unwrap_or("")
+                    .split_whitespace()
+                    .filter_map(|p| {
+                        let (x, y) = p.split_once(',')?;
+                        Some((x.parse().ok()?, y.parse().ok()?))
+                    }),
+            ),
+            _ => {}
+        }
+    }
+    for (x, y) in points {
+        assert!(
+            x < x0 || inside(x, y),
+            "{}: a point at ({x}, {y}) is right of the legend's edge {x0}",
+            path.display()
+        );
+    }
+}
+
 fn trial_header() -> Vec<String> {
     let spec = TrialSpec::new(
         "x",
@@ -169,13 +211,52 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
                 true,
             )
         } else if name.starts_with("profile_") {
-            ("problem", "x along Γ_K", "[", true)
+            // The oracle's profile, the paper's method's on top (the zoom:
+            // the oracle with and without friction).
+            let roles: &[registry::Role] = if name.ends_with("_zoom") {
+                &[registry::Role::Oracle]
+            } else {
+                &[registry::Role::Oracle, registry::Role::PapersMethod]
+            };
+            for &role in roles {
+                let e = registry::with_role(role).unwrap();
+                assert!(has(e.name), "{name}: no series for {}", e.name);
+            }
+            ("problem", "x along Γ_K", "[", false)
+        } else if name.starts_with("convergence_inner") {
+            // Every solver run inside the fixed point.
+            for e in registry::solvers()
+                .iter()
+                .filter(|e| !e.solves(Law::Coulomb))
+            {
+                assert!(has(e.name), "{name}: no series for {}", e.name);
+            }
+            (
+                "Convergence histories of the inner loops",
+                "iteration",
+                "residual",
+                false,
+            )
         } else if name.starts_with("convergence") {
-            ("Convergence histories", "iteration", "residual", true)
+            (
+                "Convergence of the Coulomb problem",
+                "iteration",
+                "residual",
+                true,
+            )
         } else if name.starts_with("sweep_") {
             ("problem 1", "", "", false)
         } else if name.starts_with("performance_") {
             ("time against unknowns", "unknowns", "median time [s]", true)
+        } else if name.starts_with("benchmark_profile") {
+            // Dolan–Moré: every registered solver, its fraction solved
+            // (certified) against the time ratio τ.
+            (
+                "Performance profile",
+                "τ: time within",
+                "fraction of instances solved",
+                true,
+            )
         } else if name == "stability_friction" {
             (
                 "Coulomb fixed point",
@@ -205,9 +286,10 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
                 assert!(has(e.name), "{name}: no series for {}", e.name);
             }
         }
+        legend_beside_the_data(&path);
         seen += 1;
     }
-    assert!(seen >= 12 + 3 + 1 + 2 + 3, "only {seen} charts");
+    assert!(seen >= 12 + 3 + 1 + 2 + 3 + 2, "only {seen} charts");
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
     assert!(readme.contains("## Does the paper's solver agree with the reference?"));
     assert!(

@@ -165,3 +165,35 @@ impl DualOperator {
         lambda
     }
 }
+
+/// The displacements of a problem whose contact forces are given (nodal
+/// pressures p_i and friction tractions q_i per unit length): the elastic
+/// response y = M(b̂ − r) + βẑ on the contact unknowns, r = (w_i p_i,
+/// −w_i q_i), with the rigid translation β that closes the gap where the
+/// contact carries load, then the interior unknowns. For checking an answer
+/// given as forces alone (the certificate needs the displacements too).
+pub fn displacements_from_forces(
+    problem: &ContactProblem,
+    p: &[f64],
+    q: &[f64],
+) -> Result<Vec<f64>, String> {
+    let m = problem.contacts().len();
+    if p.len() != m || q.len() != m {
+        return Err(format!(
+            "expected {m} pressures and friction tractions, got {} and {}",
+            p.len(),
+            q.len()
+        ));
+    }
+    let condensed = crate::condensed::condense(problem)?;
+    let op = DualOperator::new(problem, &condensed)?;
+    let r: Vec<f64> = problem
+        .contacts()
+        .iter()
+        .enumerate()
+        .flat_map(|(i, c)| [c.weight * p[i], -c.weight * q[i]])
+        .collect();
+    let y0 = op.displacements(&r, 0.0);
+    let beta = op.closing_translation(&y0).unwrap_or(0.0);
+    Ok(condensed.expand(problem, &op.displacements(&r, beta)))
+}

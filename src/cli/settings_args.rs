@@ -11,9 +11,42 @@ use serde_json::Value;
 use crate::coulomb::continuation::Schedule;
 use crate::settings::Settings;
 
-/// Changes to the settings given on the command line.
+/// Which solvers' knobs a command offers as flags.
+pub trait SolverSet: Clone + std::fmt::Debug + Default + Send + Sync + 'static {
+    fn solvers() -> Vec<&'static registry::Entry>;
+    /// Whether the command offers --schedule (a command with its own
+    /// schedule flag does not).
+    const SCHEDULE: bool = true;
+}
+
+/// Every registered solver.
+#[derive(Clone, Debug, Default)]
+pub struct AllSolvers;
+
+impl SolverSet for AllSolvers {
+    fn solvers() -> Vec<&'static registry::Entry> {
+        registry::solvers()
+    }
+}
+
+/// The paper's method alone (Table 1).
+#[derive(Clone, Debug, Default)]
+pub struct PapersMethod;
+
+impl SolverSet for PapersMethod {
+    fn solvers() -> Vec<&'static registry::Entry> {
+        registry::with_role(registry::Role::PapersMethod)
+            .into_iter()
+            .collect()
+    }
+    const SCHEDULE: bool = false;
+}
+
+/// Changes to the settings given on the command line; the knobs offered are
+/// those of the solvers in `S`.
 #[derive(Debug, Clone, Default)]
-pub struct SettingsArgs {
+pub struct SettingsArgs<S: SolverSet = AllSolvers> {
+    pub solvers: std::marker::PhantomData<S>,
     pub stopping: Option<Stopping>,
     pub epsilon: Option<f64>,
     pub max_friction_iterations: Option<String>,
@@ -50,7 +83,7 @@ fn number<T: std::str::FromStr>(
     }
 }
 
-impl clap::Args for SettingsArgs {
+impl<S: SolverSet> clap::Args for SettingsArgs<S> {
     fn augment_args(cmd: Command) -> Command {
         let mut cmd = cmd
             .arg(
@@ -76,13 +109,6 @@ impl clap::Args for SettingsArgs {
                     .help("Cap on friction iterations, coulomb.max_iterations [default: 50]"),
             )
             .arg(
-                Arg::new(SCHEDULE)
-                    .long(SCHEDULE)
-                    .value_name("SCHEDULE")
-                    .value_parser(["revisit", "finest-only"])
-                    .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first [default: revisit]"),
-            )
-            .arg(
                 Arg::new(CERTIFY_TOL)
                     .long(CERTIFY_TOL)
                     .value_name("TOL")
@@ -104,7 +130,16 @@ impl clap::Args for SettingsArgs {
                         crate::settings::example_path()
                     )),
             );
-        for e in registry::solvers() {
+        if S::SCHEDULE {
+            cmd = cmd            .arg(
+                Arg::new(SCHEDULE)
+                    .long(SCHEDULE)
+                    .value_name("SCHEDULE")
+                    .value_parser(["revisit", "finest-only"])
+                    .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first [default: revisit]"),
+            );
+        }
+        for e in S::solvers() {
             for k in e.knobs {
                 cmd = cmd.arg(
                     Arg::new(knob_id(e.name, k))
@@ -124,10 +159,11 @@ impl clap::Args for SettingsArgs {
     }
 }
 
-impl clap::FromArgMatches for SettingsArgs {
+impl<S: SolverSet> clap::FromArgMatches for SettingsArgs<S> {
     fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
         let text = |id: &str| m.try_get_one::<String>(id).ok().flatten().cloned();
         let mut out = SettingsArgs {
+            solvers: std::marker::PhantomData,
             stopping: text(STOPPING).map(|s| match s.as_str() {
                 "paper" => Stopping::Paper,
                 _ => Stopping::Relative,
@@ -141,7 +177,7 @@ impl clap::FromArgMatches for SettingsArgs {
             certificate_tolerance: m.try_get_one::<f64>(CERTIFY_TOL).ok().flatten().copied(),
             assignments: Vec::new(),
         };
-        for e in registry::solvers() {
+        for e in S::solvers() {
             for k in e.knobs {
                 if let Some(value) = text(&knob_id(e.name, k)) {
                     out.assignments.push((
@@ -168,7 +204,7 @@ impl clap::FromArgMatches for SettingsArgs {
     }
 }
 
-impl SettingsArgs {
+impl<S: SolverSet> SettingsArgs<S> {
     /// Default settings with these flags applied, validated.
     pub fn resolve(&self) -> Result<Settings> {
         self.resolve_on(Settings::default())
@@ -200,11 +236,19 @@ impl SettingsArgs {
                 .set("coulomb.max_iterations", Value::from(value))
                 .map_err(|m| anyhow::anyhow!(with_flag(m)))?;
         }
+        let offered: Vec<&str> = S::solvers().iter().map(|e| e.name).collect();
         for (path, text, flag) in &self.assignments {
             if flag == "--set" && !text_has_value(path, text) {
                 bail!(
                     "--set '{path}': write it as PATH=VALUE, e.g. --set {}=VALUE",
                     crate::settings::example_path()
+                );
+            }
+            let owner = path.split('.').next().unwrap_or("");
+            if registry::by_name(owner).is_some() && !offered.contains(&owner) {
+                bail!(
+                    "--set '{path}': this command runs only {}; settings of {owner} would be ignored",
+                    offered.join(", ")
                 );
             }
             settings.set_text(path, text).map_err(|m| {

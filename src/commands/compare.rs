@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::cli::CompareArgs;
-use crate::commands::{progress_bar, solver_list, ticker};
+use crate::commands::{StudyProgress, solver_list};
 use crate::io::csv::to_csv;
 use crate::io::output::{print, write_atomic};
 use crate::io::run_folder::RunFolder;
@@ -20,7 +20,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let solvers = solver_list(&args.solvers)?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
     let specs = compare::plan(&scene, &settings, &solvers, args.repeats as usize);
-    let bar = progress_bar(specs.len() as u64, "compare");
+    let bar = StudyProgress::new(specs.len() as u64, "compare");
     let mut references = References::default();
     let measured = compare::run(
         &scene,
@@ -28,9 +28,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         &solvers,
         args.repeats as usize,
         &mut references,
-        &ticker(&bar),
+        &|t| bar.tick(t),
     )?;
-    bar.finish_and_clear();
+    bar.finish();
     let mut report = markdown(&measured);
     if let Some(folder) = folder {
         write_files(folder.path(), &measured, &references)?;

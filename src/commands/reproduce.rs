@@ -22,8 +22,16 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     let folder = RunFolder::create(&args.out)?;
     let started = Instant::now();
     let dir = folder.path().to_path_buf();
-    let outputs = reproduce::run(&dir, &spec, &settings, &|l| log(format!("reproduce: {l}")))?;
-    log("reproduce: charts and README");
+    let outputs = reproduce::run(&dir, &spec, &settings, &|l| {
+        log(format!(
+            "reproduce [{:.0} s]: {l}",
+            started.elapsed().as_secs_f64()
+        ))
+    })?;
+    log(format!(
+        "reproduce [{:.0} s]: charts and README",
+        started.elapsed().as_secs_f64()
+    ));
     write_all(&dir.join("charts"), &outputs.charts)?;
     let seconds = started.elapsed().as_secs_f64();
     let manifest = Manifest::collect(

@@ -38,11 +38,17 @@ pub fn run(args: &SolveArgs) -> Result<()> {
             &to_csv(&run.profile, &PROFILE_COLUMNS)?,
         )?;
         write_atomic(&dir.join("summary.json"), &json_bytes(&summary)?)?;
+        if args.vtu {
+            let text =
+                crate::io::vtu::vtu(&run.discretization, &scene.material, &run.coulomb.solution);
+            write_atomic(&dir.join("field.vtu"), text.as_bytes())?;
+        }
         let target = folder.commit()?;
         report += &format!(
-            "wrote {} and {}\n",
+            "wrote {} and {}{}\n",
             target.join("profile.csv").display(),
-            target.join("summary.json").display()
+            target.join("summary.json").display(),
+            if args.vtu { " and field.vtu" } else { "" }
         );
     }
     print(&report)?;

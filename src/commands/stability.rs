@@ -38,14 +38,16 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
 /// Runs the map with logs on stderr.
 pub fn run_map(spec: &StabilitySpec, settings: &Settings) -> Result<Map> {
     let mut references = References::default();
-    let count = std::cell::Cell::new(0usize);
-    stability::run(
+    let progress = crate::commands::StudyProgress::new(0, "stability");
+    let map = stability::run(
         spec,
         settings,
         &mut references,
         &|l| log(format!("stability: {l}")),
-        &|_| count.set(count.get() + 1),
-    )
+        &|t| progress.tick(t),
+    );
+    progress.finish();
+    map
 }
 
 /// The map's files: stability.csv, stability_friction.csv,

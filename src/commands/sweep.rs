@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use contactlab_solvers::Law;
 
 use crate::cli::SweepArgs;
-use crate::commands::{progress_bar, solver_list, ticker};
+use crate::commands::{StudyProgress, solver_list};
 use crate::io::csv::to_csv;
 use crate::io::output::{log, print, write_atomic};
 use crate::io::run_folder::RunFolder;
@@ -46,10 +46,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let mut specs = sweep::plan(&spec, &settings)?;
     specs.extend(varied(args, &spec, &settings)?);
     let folder = RunFolder::create(&args.out)?;
-    let bar = progress_bar(specs.len() as u64, "sweep");
+    let bar = StudyProgress::new(specs.len() as u64, "sweep");
     let mut references = References::default();
-    let measured = measure_all(&specs, &mut references, Keep::default(), &ticker(&bar))?;
-    bar.finish_and_clear();
+    let measured = measure_all(&specs, &mut references, Keep::default(), &|t| bar.tick(t))?;
+    bar.finish();
     write_files(folder.path(), &measured, &references)?;
     let target = folder.commit()?;
     let failed = measured.iter().filter(|m| !m.trial.certified()).count();

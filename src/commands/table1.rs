@@ -3,7 +3,7 @@
 use anyhow::Result;
 
 use crate::cli::Table1Args;
-use crate::commands::{progress_bar, ticker};
+use crate::commands::StudyProgress;
 use crate::io::csv::to_csv;
 use crate::io::output::{print, write_atomic};
 use crate::io::run_folder::RunFolder;
@@ -24,9 +24,9 @@ pub fn run(args: &Table1Args) -> Result<()> {
         args.h,
         args.plane,
     )?;
-    let bar = progress_bar(specs.len() as u64, "table1");
-    let (measured, rows) = table1::run(&specs, &args.problems, &ticker(&bar))?;
-    bar.finish_and_clear();
+    let bar = StudyProgress::new(specs.len() as u64, "table1");
+    let (measured, rows) = table1::run(&specs, &args.problems, &|t| bar.tick(t))?;
+    bar.finish();
     let mut report = table1::markdown(&rows);
     if let Some(folder) = folder {
         let trials: Vec<_> = measured.iter().map(|m| m.trial.clone()).collect();

@@ -242,6 +242,11 @@ pub fn solve_given_friction(
 /// `summary.json`.
 #[derive(Debug, Serialize)]
 pub struct Summary {
+    /// The whole scene: material, loads (normal and tangential), friction,
+    /// mesh levels.
+    pub scene: Scene,
+    /// The commit of contactlab that produced it.
+    pub git_commit: String,
     pub problem: String,
     pub h: String,
     pub solver: String,
@@ -290,6 +295,8 @@ impl Run {
         let iterations = self.coulomb.total_iterations();
         let setup: f64 = self.coulomb.history.iter().map(|h| h.setup_seconds).sum();
         Summary {
+            scene: self.scene.clone(),
+            git_commit: crate::io::manifest::git_commit(),
             problem: self.scene.name.clone(),
             h: self.discretization.h().to_string(),
             solver: self.solver.to_string(),

@@ -1,25 +1,45 @@
 //! SVG charts (plotters, SVG backend only: no system font libraries needed;
 //! text is written as SVG `<text>`). One description type, [`Chart`], for
-//! every chart the harness draws.
+//! every chart the harness draws, with the rules that make them readable:
+//! the legend in its own panel right of the plot (never over data), log
+//! axes labelled at every decade, values below the chart's resolution drawn
+//! as zero (round-off is not structure), failed points drawn as crosses, and
+//! one colour per solver across every chart ([`solver_color`]).
 
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
+use contactlab_solvers::registry;
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 
 use crate::io::output::write_atomic;
 
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Style {
+    /// A line.
+    #[default]
+    Line,
+    /// A line with a dot at each point.
+    LineMarkers,
+    /// Dots only.
+    Dots,
+    /// A dashed line (a reference level, or a second loop of one solver).
+    Dashed,
+    /// Crosses only: points whose answer failed (not certified, or stopped).
+    Failed,
+}
+
 /// One named curve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
-    /// Draw markers at the points (and lines between them unless `markers_only`).
-    pub markers: bool,
-    pub markers_only: bool,
-    pub dashed: bool,
+    pub style: Style,
+    /// Index into the palette; None: by the series' position.
+    pub color: Option<usize>,
 }
 
 impl Series {
@@ -27,36 +47,72 @@ impl Series {
         Self {
             name: name.into(),
             points,
-            markers: false,
-            markers_only: false,
-            dashed: false,
+            style: Style::Line,
+            color: None,
         }
     }
 
     pub fn with_markers(mut self) -> Self {
-        self.markers = true;
+        self.style = Style::LineMarkers;
         self
     }
 
     pub fn scatter(mut self) -> Self {
-        self.markers = true;
-        self.markers_only = true;
+        self.style = Style::Dots;
         self
     }
 
     pub fn dashed(mut self) -> Self {
-        self.dashed = true;
+        self.style = Style::Dashed;
         self
     }
-}
 
-/// Where the legend goes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Legend {
-    #[default]
-    UpperRight,
-    UpperLeft,
-    LowerRight,
+    pub fn failed(mut self) -> Self {
+        self.style = Style::Failed;
+        self
+    }
+
+    /// One solver's certified points as a line with markers and, when there
+    /// are any, its uncertified points as crosses in the same colour.
+    pub fn certified_and_failed(
+        solver: &str,
+        certified: Vec<(f64, f64)>,
+        failed: Vec<(f64, f64)>,
+    ) -> Vec<Series> {
+        let mut out = Vec::new();
+        if !certified.is_empty() {
+            out.push(
+                Series::line(solver, certified)
+                    .with_markers()
+                    .of_solver(solver),
+            );
+        }
+        if !failed.is_empty() {
+            out.push(
+                Series::line(format!("{solver}: not certified"), failed)
+                    .failed()
+                    .of_solver(solver),
+            );
+        }
+        out
+    }
+
+    /// The colour of `solver` (the same in every chart).
+    pub fn of_solver(mut self, solver: &str) -> Self {
+        self.color = Some(solver_color(solver));
+        self
+    }
+
+    pub fn colored(mut self, index: usize) -> Self {
+        self.color = Some(index);
+        self
+    }
+
+    /// Black: a reference level or curve that is no solver's.
+    pub fn black(mut self) -> Self {
+        self.color = Some(BLACK_INDEX);
+        self
+    }
 }
 
 /// A chart: title, axis labels with units, scales, series.
@@ -68,10 +124,13 @@ pub struct Chart {
     pub log_x: bool,
     pub log_y: bool,
     pub series: Vec<Series>,
-    pub legend: Legend,
+    /// On a linear y axis: values with |y| at most this are round-off, drawn
+    /// as 0, and the axis spans at least ±10 times it.
+    pub y_resolution: Option<f64>,
 }
 
-const PALETTE: [RGBColor; 8] = [
+/// Ten distinguishable colours (Tableau 10).
+const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -79,12 +138,70 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
 
+const BLACK_INDEX: usize = usize::MAX;
+
+/// The palette index of a solver: its place in the registry.
+pub fn solver_color(solver: &str) -> usize {
+    registry::names()
+        .iter()
+        .position(|n| *n == solver)
+        .unwrap_or_else(|| solver.bytes().map(usize::from).sum::<usize>())
+        % PALETTE.len()
+}
+
+const WIDTH: u32 = 980;
+const HEIGHT: u32 = 520;
+/// The legend panel's width, right of the plot.
+const LEGEND_WIDTH: u32 = 260;
+
+/// Key points of a log axis: every decade in range (with 2 and 5 between
+/// when the range spans less than two decades).
+fn decades(lo: f64, hi: f64) -> Vec<f64> {
+    let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let mut out: Vec<f64> = (a..=b).map(|k| 10f64.powi(k)).collect();
+    if hi / lo < 100.0 {
+        out = (a..=b)
+            .flat_map(|k| [1.0, 2.0, 5.0].map(|m| m * 10f64.powi(k)))
+            .collect();
+    }
+    out.retain(|v| *v >= lo && *v <= hi);
+    out
+}
+
 impl Chart {
-    /// Points that can be drawn: finite, and positive on a log axis.
+    pub fn new(
+        title: impl Into<String>,
+        x: &str,
+        y: &str,
+        log_x: bool,
+        log_y: bool,
+        series: Vec<Series>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x.into(),
+            y_label: y.into(),
+            log_x,
+            log_y,
+            series,
+            y_resolution: None,
+        }
+    }
+
+    pub fn with_y_resolution(mut self, resolution: f64) -> Self {
+        self.y_resolution = Some(resolution).filter(|r| r.is_finite() && *r > 0.0);
+        self
+    }
+
+    /// Points that can be drawn: finite, positive on a log axis, round-off
+    /// set to zero.
     fn drawable(&self) -> Vec<Vec<(f64, f64)>> {
+        let floor = if self.log_y { None } else { self.y_resolution };
         self.series
             .iter()
             .map(|s| {
@@ -97,16 +214,27 @@ impl Chart {
                             && (!self.log_x || x > 0.0)
                             && (!self.log_y || y > 0.0)
                     })
+                    .map(|(x, y)| match floor {
+                        Some(r) if y.abs() <= r => (x, 0.0),
+                        _ => (x, y),
+                    })
                     .collect()
             })
             .collect()
+    }
+
+    fn color(&self, i: usize) -> RGBColor {
+        match self.series[i].color.unwrap_or(i) {
+            BLACK_INDEX => BLACK,
+            k => PALETTE[k % PALETTE.len()],
+        }
     }
 
     /// Renders the chart as SVG text.
     pub fn to_svg(&self) -> Result<String> {
         let points = self.drawable();
         let all: Vec<(f64, f64)> = points.iter().flatten().copied().collect();
-        let range = |values: Vec<f64>, log: bool| -> (f64, f64) {
+        let range = |values: Vec<f64>, log: bool, floor: Option<f64>| -> (f64, f64) {
             let (lo, hi) = values
                 .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
@@ -123,6 +251,10 @@ impl Chart {
                 };
                 (lo / 1.5, hi * 1.5)
             } else {
+                let (lo, hi) = match floor {
+                    Some(r) => (lo.min(-10.0 * r).min(0.0), hi.max(10.0 * r).max(0.0)),
+                    None => (lo, hi),
+                };
                 let pad = if hi > lo {
                     0.05 * (hi - lo)
                 } else {
@@ -131,25 +263,41 @@ impl Chart {
                 (lo - pad, hi + pad)
             }
         };
-        let (x0, x1) = range(all.iter().map(|p| p.0).collect(), self.log_x);
-        let (y0, y1) = range(all.iter().map(|p| p.1).collect(), self.log_y);
+        let floor = if self.log_y { None } else { self.y_resolution };
+        let (x0, x1) = range(all.iter().map(|p| p.0).collect(), self.log_x, None);
+        let (y0, y1) = range(all.iter().map(|p| p.1).collect(), self.log_y, floor);
         let mut svg = String::new();
         {
-            let root = SVGBackend::with_string(&mut svg, (820, 520)).into_drawing_area();
+            let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| anyhow!("chart: {e}"))?;
+            let (plot, legend) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
             let scales = (x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
+            let (kx, ky) = (decades(x0, x1), decades(y0, y1));
             match (self.log_x, self.log_y) {
-                (false, false) => self.draw(&root, &points, x0..x1, y0..y1, scales),
-                (true, false) => self.draw(&root, &points, (x0..x1).log_scale(), y0..y1, scales),
-                (false, true) => self.draw(&root, &points, x0..x1, (y0..y1).log_scale(), scales),
-                (true, true) => self.draw(
-                    &root,
+                (false, false) => self.draw(&plot, &points, x0..x1, y0..y1, scales),
+                (true, false) => self.draw(
+                    &plot,
                     &points,
-                    (x0..x1).log_scale(),
-                    (y0..y1).log_scale(),
+                    (x0..x1).log_scale().with_key_points(kx),
+                    y0..y1,
+                    scales,
+                ),
+                (false, true) => self.draw(
+                    &plot,
+                    &points,
+                    x0..x1,
+                    (y0..y1).log_scale().with_key_points(ky),
+                    scales,
+                ),
+                (true, true) => self.draw(
+                    &plot,
+                    &points,
+                    (x0..x1).log_scale().with_key_points(kx),
+                    (y0..y1).log_scale().with_key_points(ky),
                     scales,
                 ),
             }?;
+            self.draw_legend(&legend)?;
             root.present().map_err(|e| anyhow!("chart: {e}"))?;
         }
         Ok(svg)
@@ -157,7 +305,7 @@ impl Chart {
 
     fn draw<X, Y>(
         &self,
-        root: &DrawingArea<SVGBackend<'_>, Shift>,
+        area: &DrawingArea<SVGBackend<'_>, Shift>,
         points: &[Vec<(f64, f64)>],
         x: X,
         y: Y,
@@ -170,8 +318,8 @@ impl Chart {
         Y::CoordDescType: ValueFormatter<f64>,
     {
         let err = |e: DrawingAreaErrorKind<_>| anyhow!("chart '{}': {e}", self.title);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 20))
+        let mut chart = ChartBuilder::on(area)
+            .caption(&self.title, ("sans-serif", 17))
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(78)
@@ -189,48 +337,100 @@ impl Chart {
             .draw()
             .map_err(err)?;
         for (i, (s, pts)) in self.series.iter().zip(points).enumerate() {
-            let color = PALETTE[i % PALETTE.len()];
+            let color = self.color(i);
             let style = color.stroke_width(2);
-            if !s.markers_only {
-                if s.dashed {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts.iter().copied(), 8, 5, style))
-                        .map_err(err)?
-                        .label(&s.name)
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                        });
-                } else {
+            match s.style {
+                Style::Line | Style::LineMarkers => {
                     chart
                         .draw_series(LineSeries::new(pts.iter().copied(), style))
-                        .map_err(err)?
-                        .label(&s.name)
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                        });
+                        .map_err(err)?;
                 }
+                Style::Dashed => {
+                    chart
+                        .draw_series(DashedLineSeries::new(pts.iter().copied(), 8, 5, style))
+                        .map_err(err)?;
+                }
+                Style::Dots | Style::Failed => {}
             }
-            if s.markers {
-                let anno = chart
-                    .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                    .map_err(err)?;
-                if s.markers_only {
-                    anno.label(&s.name)
-                        .legend(move |(x, y)| Circle::new((x + 10, y), 3, color.filled()));
+            match s.style {
+                Style::LineMarkers | Style::Dots => {
+                    chart
+                        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                        .map_err(err)?;
                 }
+                Style::Failed => {
+                    chart
+                        .draw_series(pts.iter().map(|&p| Cross::new(p, 5, color.stroke_width(2))))
+                        .map_err(err)?;
+                }
+                _ => {}
             }
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(match self.legend {
-                Legend::UpperRight => SeriesLabelPosition::UpperRight,
-                Legend::UpperLeft => SeriesLabelPosition::UpperLeft,
-                Legend::LowerRight => SeriesLabelPosition::LowerRight,
-            })
-            .draw()
+        Ok(())
+    }
+
+    /// The legend, in its own panel: one row per series, its sample drawn
+    /// as on the plot.
+    fn draw_legend(&self, area: &DrawingArea<SVGBackend<'_>, Shift>) -> Result<()> {
+        let err = |e: DrawingAreaErrorKind<_>| anyhow!("chart '{}' legend: {e}", self.title);
+        let rows = self.series.len().max(1) as i32;
+        let row = (((HEIGHT as i32) - 60) / rows).clamp(9, 17);
+        let font = (row - 3).clamp(8, 13);
+        let (left, top) = (6, 40);
+        let bottom = top + rows * row + 6;
+        area.draw(&Rectangle::new(
+            [(left, top - 6), (LEGEND_WIDTH as i32 - 4, bottom)],
+            BLACK.stroke_width(1),
+        ))
+        .map_err(err)?;
+        for (i, s) in self.series.iter().enumerate() {
+            let y = top + i as i32 * row + row / 2;
+            let color = self.color(i);
+            let (a, b) = (left + 6, left + 30);
+            match s.style {
+                Style::Line | Style::LineMarkers => {
+                    area.draw(&PathElement::new(
+                        vec![(a, y), (b, y)],
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?;
+                }
+                Style::Dashed => {
+                    for k in 0..3 {
+                        let x = a + k * 9;
+                        area.draw(&PathElement::new(
+                            vec![(x, y), (x + 5, y)],
+                            color.stroke_width(2),
+                        ))
+                        .map_err(err)?;
+                    }
+                }
+                _ => {}
+            }
+            match s.style {
+                Style::LineMarkers | Style::Dots => {
+                    area.draw(&Circle::new(((a + b) / 2, y), 3, color.filled()))
+                        .map_err(err)?;
+                }
+                Style::Failed => {
+                    area.draw(&Cross::new(((a + b) / 2, y), 5, color.stroke_width(2)))
+                        .map_err(err)?;
+                }
+                _ => {}
+            }
+            let max_chars = ((LEGEND_WIDTH as i32 - 50) * 2 / font).max(10) as usize;
+            let mut name: String = s.name.chars().take(max_chars).collect();
+            if s.name.chars().count() > max_chars {
+                name.pop();
+                name.push('…');
+            }
+            area.draw(&Text::new(
+                name,
+                (b + 6, y - font / 2),
+                ("sans-serif", font).into_font().color(&BLACK),
+            ))
             .map_err(err)?;
+        }
         Ok(())
     }
 
@@ -274,23 +474,31 @@ mod tests {
     }
 
     #[test]
+    fn log_axes_are_labelled_at_every_decade() {
+        assert_eq!(
+            decades(0.5e-9, 2e-3),
+            (-9..=-3).map(|k| 10f64.powi(k)).collect::<Vec<_>>()
+        );
+        // Less than two decades: 1, 2, 5 in each.
+        assert_eq!(decades(1.5, 30.0), vec![2.0, 5.0, 10.0, 20.0]);
+    }
+
+    #[test]
     fn svg_has_title_axes_and_every_series() {
         for (log_x, log_y) in [(false, false), (true, true), (true, false), (false, true)] {
-            let chart = Chart {
-                title: "A title".into(),
-                x_label: "x label [m]".into(),
-                y_label: "y label [s]".into(),
+            let chart = Chart::new(
+                "A title",
+                "x label [m]",
+                "y label [s]",
                 log_x,
                 log_y,
-                series: vec![
+                vec![
                     Series::line("first", vec![(1.0, 2.0), (10.0, 20.0)]),
-                    Series::line("second", vec![(2.0, 1.0), (5.0, f64::NAN), (20.0, 3.0)])
-                        .with_markers()
-                        .dashed(),
+                    Series::line("second", vec![(2.0, 1.0), (5.0, f64::NAN), (20.0, 3.0)]).dashed(),
                     Series::line("third", vec![(3.0, 3.0)]).scatter(),
+                    Series::line("fourth", vec![(4.0, 3.0)]).failed(),
                 ],
-                legend: Legend::UpperLeft,
-            };
+            );
             let svg = chart.to_svg().unwrap();
             assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
             for text in [
@@ -300,9 +508,26 @@ mod tests {
                 "first",
                 "second",
                 "third",
+                "fourth",
             ] {
                 assert!(svg.contains(text), "missing {text}");
             }
         }
+    }
+
+    #[test]
+    fn round_off_is_drawn_as_zero() {
+        let drawn = |points: Vec<(f64, f64)>| {
+            Chart::new("t", "x", "y", false, false, vec![Series::line("s", points)])
+                .with_y_resolution(1e-9)
+                .drawable()[0]
+                .clone()
+        };
+        assert_eq!(
+            drawn(vec![(0.0, 1e-13), (1.0, -2e-13)]),
+            vec![(0.0, 0.0), (1.0, 0.0)]
+        );
+        // A real value stays.
+        assert_eq!(drawn(vec![(0.0, 1e-6)]), vec![(0.0, 1e-6)]);
     }
 }

@@ -27,6 +27,16 @@ pub fn fixed_opt<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error
 
 /// Rows as CSV bytes (header from the first row's fields; a header alone
 /// from `header` when there are no rows).
+/// Reads what [`fixed`] writes: a number, or an empty field (not finite)
+/// as NaN.
+pub fn fixed_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let text = <String as serde::Deserialize>::deserialize(d)?;
+    if text.trim().is_empty() {
+        return Ok(f64::NAN);
+    }
+    text.trim().parse().map_err(serde::de::Error::custom)
+}
+
 pub fn to_csv<T: Serialize>(rows: &[T], header: &[&str]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     if rows.is_empty() {

@@ -25,22 +25,30 @@ pub struct Manifest {
     pub run: serde_json::Value,
 }
 
+/// A git command's output in the working directory, if it succeeds.
+fn git(args: &[&str]) -> Option<String> {
+    Command::new("git")
+        .args(args)
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+}
+
+/// The commit of the source this binary runs from (`unknown` outside a git
+/// checkout).
+pub fn git_commit() -> String {
+    git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into())
+}
+
 impl Manifest {
     /// `out`: the results directory, left out of the dirty check (it is
     /// being rewritten).
     pub fn collect(settings: &Settings, run: serde_json::Value, out: &std::path::Path) -> Self {
-        let git = |args: &[&str]| {
-            Command::new("git")
-                .args(args)
-                .output()
-                .ok()
-                .filter(|o| o.status.success())
-                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        };
         Self {
             command: std::env::args().collect(),
             contactlab_version: env!("CARGO_PKG_VERSION"),
-            git_commit: git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into()),
+            git_commit: git_commit(),
             git_dirty: {
                 let mut args = vec![
                     "status".to_string(),

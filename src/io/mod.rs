@@ -3,7 +3,10 @@
 
 pub mod charts;
 pub mod csv;
+pub mod export;
+pub mod latex;
 pub mod manifest;
 pub mod output;
 pub mod run_folder;
 pub mod scene_file;
+pub mod vtu;

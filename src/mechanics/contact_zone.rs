@@ -40,12 +40,53 @@ pub struct ProfileRow {
     /// x-traction on the lower body; |q| ≤ g, opposing the slip.
     #[serde(serialize_with = "fixed")]
     pub friction_traction: f64,
+    /// The friction bound g of the last given-friction subproblem (for a
+    /// Coulomb answer of the fixed point 𝓕p of the previous iterate; for a
+    /// direct Coulomb solver 𝓕p of its own answer), force per length.
+    #[serde(serialize_with = "fixed")]
+    pub g: f64,
+    /// The node's contact state, from the jump and slip at the separation
+    /// tolerance ([`SEPARATION_TOL`] × the largest displacement).
+    pub state: ContactState,
     /// The certified status of the run the profile comes from.
     pub status: Status,
 }
 
+/// A contact node's state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactState {
+    /// Closed and not slipping: |jump| and |slip| within the tolerance.
+    Stick,
+    /// Closed and slipping: |slip| beyond the tolerance.
+    Slip,
+    /// Separated: jump below −tolerance.
+    Open,
+}
+
+impl ContactState {
+    /// The state from a node's jump t and slip s at tolerance `tol`.
+    pub fn of(jump: f64, slip: f64, tol: f64) -> Self {
+        if jump < -tol {
+            Self::Open
+        } else if slip.abs() > tol {
+            Self::Slip
+        } else {
+            Self::Stick
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Stick => "stick",
+            Self::Slip => "slip",
+            Self::Open => "open",
+        }
+    }
+}
+
 /// Column names of `profile.csv`, in order.
-pub const PROFILE_COLUMNS: [&str; 10] = [
+pub const PROFILE_COLUMNS: [&str; 12] = [
     "x",
     "u1_lower",
     "u2_lower",
@@ -55,12 +96,16 @@ pub const PROFILE_COLUMNS: [&str; 10] = [
     "slip",
     "pressure",
     "friction_traction",
+    "g",
+    "state",
     "status",
 ];
 
 /// The profile along Γ_K in increasing x, marked with the run's status.
 pub fn contact_profile(d: &Discretization, solution: &Solution, status: Status) -> Vec<ProfileRow> {
     let u = d.displacements(&solution.v);
+    let tol = SEPARATION_TOL * largest_displacement(d, solution);
+    let nodes = d.problem.contacts();
     d.dofs
         .contacts()
         .iter()
@@ -75,6 +120,8 @@ pub fn contact_profile(d: &Discretization, solution: &Solution, status: Status) 
             slip: solution.v[c.s],
             pressure: solution.pressure[i],
             friction_traction: solution.friction_traction[i],
+            g: nodes[i].g,
+            state: ContactState::of(solution.v[c.t], solution.v[c.s], tol),
             status,
         })
         .collect()

@@ -5,6 +5,7 @@
 
 pub mod agreement;
 pub mod bench;
+pub mod benchmark;
 pub mod compare;
 pub mod reference;
 pub mod report;

@@ -7,30 +7,11 @@ use anyhow::Result;
 use contactlab_solvers::registry;
 
 use crate::coulomb::fixed_point::STAGE;
-use crate::io::charts::{Chart, Legend, Series};
+use crate::io::charts::{Chart, Series};
 use crate::mechanics::contact_zone::ProfileRow;
 use crate::study::runner::Measured;
 use crate::study::sweep::{SCHEDULE, WORK_PRECISION, WORK_PRECISION_COULOMB};
 use crate::study::trial::{Trial, TrialTiming};
-
-fn chart(
-    title: impl Into<String>,
-    x: &str,
-    y: &str,
-    log_x: bool,
-    log_y: bool,
-    series: Vec<Series>,
-) -> Chart {
-    Chart {
-        title: title.into(),
-        x_label: x.into(),
-        y_label: y.into(),
-        log_x,
-        log_y,
-        series,
-        legend: Legend::default(),
-    }
-}
 
 /// Writes each chart as `dir/name.svg`; returns the paths.
 pub fn write_all(dir: &Path, charts: &[(String, Chart)]) -> Result<Vec<PathBuf>> {
@@ -95,7 +76,7 @@ pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
             if !wp.is_empty() {
                 out.push((
                     format!("{file}_{tag}"),
-                    chart(
+                    Chart::new(
                         format!("Work-precision, {what}, {scene}, h = {h}"),
                         "max pressure error vs reference (relative; 1e-12: at or below its resolution)",
                         "solver time [s]",
@@ -146,13 +127,11 @@ fn work_precision_series(here: &[&(&Trial, &TrialTiming)], group: &str) -> Vec<S
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             pts
         };
-        let (good, failed) = (points(true), points(false));
-        if !good.is_empty() {
-            wp.push(Series::line(e.name, good).with_markers());
-        }
-        if !failed.is_empty() {
-            wp.push(Series::line(format!("{}: claimed, not certified", e.name), failed).scatter());
-        }
+        wp.extend(Series::certified_and_failed(
+            e.name,
+            points(true),
+            points(false),
+        ));
     }
     wp
 }
@@ -192,7 +171,7 @@ fn variation_charts(
             .filter_map(|t| Some((numeric(t)?, f(t)?)))
             .collect();
         if !failed.is_empty() {
-            v.push(Series::line(format!("{name}, not certified"), failed).scatter());
+            v.push(Series::line(format!("{name}, not certified"), failed).failed());
         }
         for t in runs.iter().filter(|t| numeric(t).is_none()) {
             if let Some(y) = f(t) {
@@ -217,7 +196,7 @@ fn variation_charts(
     vec![
         (
             format!("sweep_{slug}_iterations_{tag}"),
-            chart(
+            Chart::new(
                 format!("Iterations against {group}, {scene}, h = {h}"),
                 group,
                 "iterations (count)",
@@ -228,7 +207,7 @@ fn variation_charts(
         ),
         (
             format!("sweep_{slug}_error_{tag}"),
-            chart(
+            Chart::new(
                 format!("Error against {group}, vs reference, {scene}, h = {h}"),
                 group,
                 "relative error / certificate (dimensionless)",
@@ -248,11 +227,17 @@ pub struct ProfilePair<'a> {
 }
 
 /// The paper's figures 2-5 for one problem: both bodies' vertical
-/// displacements, the jump, the multiplier l, and a zoom on the separation zone.
+/// displacements, the jump, the multiplier l, and a zoom on the separation
+/// zone. `lines` (the oracle) is drawn as lines, friction solid and
+/// frictionless dashed; `dots` (the paper's method) as dots on top, with
+/// friction: every solver's profile is in `profiles/`, and these two agree
+/// to the plotted resolution. Values below 1e-9 of the largest displacement
+/// (or pressure) are round-off, drawn as zero.
 pub fn profile_charts(
     problem: u32,
     h: &str,
-    pairs: &[ProfilePair<'_>],
+    lines: &ProfilePair<'_>,
+    dots: Option<&ProfilePair<'_>>,
     zoom_from: f64,
 ) -> Vec<(String, Chart)> {
     let col = |rows: &[ProfileRow], f: fn(&ProfileRow) -> f64, from: f64| -> Vec<(f64, f64)> {
@@ -261,172 +246,239 @@ pub fn profile_charts(
             .map(|r| (r.x, f(r)))
             .collect()
     };
-    let styled = |s: Series, i: usize| if i == 0 { s } else { s.scatter() };
-    let mut displacement = Vec::new();
-    let mut zoom = Vec::new();
-    let mut jump = Vec::new();
-    let mut pressure = Vec::new();
-    for (i, p) in pairs.iter().enumerate() {
-        for (body, f) in [
-            (
-                "lower u'₂",
-                (|r: &ProfileRow| r.u2_lower) as fn(&ProfileRow) -> f64,
-            ),
-            ("upper u''₂", |r: &ProfileRow| r.u2_upper),
-        ] {
-            displacement.push(styled(
-                Series::line(format!("{body}, {}", p.solver), col(p.friction, f, 0.0)),
-                i,
-            ));
-            zoom.push(styled(
+    let largest = |f: fn(&ProfileRow) -> f64| {
+        [lines.friction, lines.frictionless]
+            .iter()
+            .flat_map(|rows| rows.iter().map(f))
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    };
+    let u_scale = largest(|r| r.u2_lower).max(largest(|r| r.u2_upper));
+    let p_scale = largest(|r| r.pressure);
+    // One metric: series of the oracle (friction, frictionless) and the
+    // paper's method (friction).
+    let curves = |f: fn(&ProfileRow) -> f64, from: f64, label: &str| -> Vec<Series> {
+        let mut v = vec![
+            Series::line(
+                format!("{label}friction, {}", lines.solver),
+                col(lines.friction, f, from),
+            )
+            .of_solver(lines.solver),
+            Series::line(
+                format!("{label}no friction, {}", lines.solver),
+                col(lines.frictionless, f, from),
+            )
+            .dashed()
+            .of_solver(lines.solver),
+        ];
+        if let Some(d) = dots {
+            v.push(
                 Series::line(
-                    format!("{body}, friction, {}", p.solver),
-                    col(p.friction, f, zoom_from),
-                ),
-                i,
-            ));
-            zoom.push(styled(
-                Series::line(
-                    format!("{body}, no friction, {}", p.solver),
-                    col(p.frictionless, f, zoom_from),
+                    format!("{label}friction, {}", d.solver),
+                    col(d.friction, f, from),
                 )
-                .dashed(),
-                i,
-            ));
+                .scatter()
+                .of_solver(d.solver),
+            );
         }
-        jump.push(styled(
-            Series::line(
-                format!("friction, {}", p.solver),
-                col(p.friction, |r| r.jump, 0.0),
-            ),
-            i,
-        ));
-        jump.push(styled(
-            Series::line(
-                format!("no friction, {}", p.solver),
-                col(p.frictionless, |r| r.jump, 0.0),
-            )
-            .dashed(),
-            i,
-        ));
-        pressure.push(styled(
-            Series::line(
-                format!("friction, {}", p.solver),
-                col(p.friction, |r| r.pressure, 0.0),
-            ),
-            i,
-        ));
-        pressure.push(styled(
-            Series::line(
-                format!("no friction, {}", p.solver),
-                col(p.frictionless, |r| r.pressure, 0.0),
-            )
-            .dashed(),
-            i,
-        ));
+        v
+    };
+    // Both bodies with friction: the lower body solid, the upper dashed,
+    // the paper's method as dots on both.
+    let lower = |r: &ProfileRow| r.u2_lower;
+    let upper = |r: &ProfileRow| r.u2_upper;
+    let mut bodies = vec![
+        Series::line(
+            format!("lower u'₂, {}", lines.solver),
+            col(lines.friction, lower, 0.0),
+        )
+        .of_solver(lines.solver),
+        Series::line(
+            format!("upper u''₂, {}", lines.solver),
+            col(lines.friction, upper, 0.0),
+        )
+        .dashed()
+        .of_solver(lines.solver),
+    ];
+    if let Some(d) = dots {
+        for (body, f) in [
+            ("lower u'₂", lower as fn(&ProfileRow) -> f64),
+            ("upper u''₂", upper),
+        ] {
+            bodies.push(
+                Series::line(format!("{body}, {}", d.solver), col(d.friction, f, 0.0))
+                    .scatter()
+                    .of_solver(d.solver),
+            );
+        }
     }
+    // The separation zone, the oracle with and without friction: lower
+    // body lines (solid, dashed), upper body dots (with a line: friction).
+    let zoom = vec![
+        Series::line(
+            format!("lower, friction, {}", lines.solver),
+            col(lines.friction, lower, zoom_from),
+        )
+        .of_solver(lines.solver),
+        Series::line(
+            format!("lower, no friction, {}", lines.solver),
+            col(lines.frictionless, lower, zoom_from),
+        )
+        .dashed()
+        .of_solver(lines.solver),
+        Series::line(
+            format!("upper, friction, {}", lines.solver),
+            col(lines.friction, upper, zoom_from),
+        )
+        .with_markers()
+        .of_solver(lines.solver),
+        Series::line(
+            format!("upper, no friction, {}", lines.solver),
+            col(lines.frictionless, upper, zoom_from),
+        )
+        .scatter()
+        .of_solver(lines.solver),
+    ];
     let x = "x along Γ_K";
+    let resolution_u = 1e-9 * u_scale;
     vec![
         (
             format!("profile_p{problem}_displacement"),
-            chart(
-                format!(
-                    "Vertical displacements on Γ_K, problem {problem}, h = {h} (with friction)"
-                ),
+            Chart::new(
+                format!("Vertical displacements on Γ_K with friction, problem {problem}, h = {h}"),
                 x,
                 "u₂ [length]",
                 false,
                 false,
-                displacement,
-            ),
+                bodies,
+            )
+            .with_y_resolution(resolution_u),
         ),
         (
             format!("profile_p{problem}_zoom"),
-            chart(
+            Chart::new(
                 format!("Separation zone, problem {problem}, h = {h}: with and without friction"),
                 x,
                 "u₂ [length]",
                 false,
                 false,
                 zoom,
-            ),
+            )
+            .with_y_resolution(resolution_u),
         ),
         (
             format!("profile_p{problem}_jump"),
-            chart(
+            Chart::new(
                 format!("Jump [u] = u'₂ − u''₂ on Γ_K, problem {problem}, h = {h}"),
                 x,
                 "[u] [length]",
                 false,
                 false,
-                jump,
-            ),
+                curves(|r| r.jump, 0.0, ""),
+            )
+            .with_y_resolution(resolution_u),
         ),
         (
             format!("profile_p{problem}_pressure"),
-            chart(
+            Chart::new(
                 format!("Multiplier l (contact pressure), problem {problem}, h = {h}"),
                 x,
                 "l [force/length]",
                 false,
                 false,
-                pressure,
-            ),
+                curves(|r| r.pressure, 0.0, ""),
+            )
+            .with_y_resolution(1e-9 * p_scale),
         ),
     ]
 }
 
-/// Residual against iteration for each solver's Coulomb solve, the fixed
-/// point included, from a comparison's measured trials of one problem.
-pub fn convergence_chart(problem: u32, h: &str, measured: &[Measured]) -> (String, Chart) {
-    let mut series = Vec::new();
+/// Residual against iteration for each solver's Coulomb solve, from a
+/// comparison's measured trials of one problem: two charts, so that no axis
+/// carries two kinds of loop: the friction fixed point's max|Δg| (a direct
+/// Coulomb solver's own steps stand in its place), and every inner loop
+/// (log iteration axis: counts run from tens to thousands).
+pub fn convergence_charts(problem: u32, h: &str, measured: &[Measured]) -> Vec<(String, Chart)> {
+    let mut outer = Vec::new();
+    let mut inner = Vec::new();
     for m in measured
         .iter()
         .filter(|m| m.trial.law == contactlab_solvers::Law::Coulomb)
     {
-        let mut stages = vec![(STAGE, "friction max|Δg|".to_string())];
-        if let Some(e) = registry::by_name(&m.trial.solver) {
-            stages.extend(
+        let solver = m.trial.solver.as_str();
+        let direct =
+            registry::by_name(solver).is_some_and(|e| e.solves(contactlab_solvers::Law::Coulomb));
+        let stages: Vec<&str> = registry::by_name(solver)
+            .map(|e| {
                 e.stages
                     .iter()
                     .filter(|s| s.history)
-                    .map(|s| (s.name, s.name.to_string())),
-            );
-        }
-        let before = series.len();
-        for (stage, what) in stages {
-            let pts: Vec<(f64, f64)> = m
-                .history
+                    .map(|s| s.name)
+                    .collect()
+            })
+            .unwrap_or_default();
+        let points = |stage: &str| -> Vec<(f64, f64)> {
+            m.history
                 .iter()
                 .filter(|p| p.stage == stage)
                 .enumerate()
                 .map(|(i, p)| ((i + 1) as f64, p.residual))
-                .collect();
-            if !pts.is_empty() {
-                series
-                    .push(Series::line(format!("{}: {what}", m.trial.solver), pts).with_markers());
+                .collect()
+        };
+        let friction = points(STAGE);
+        if !friction.is_empty() {
+            outer.push(
+                Series::line(format!("{solver}: friction max|Δg|"), friction)
+                    .with_markers()
+                    .of_solver(solver),
+            );
+        }
+        for stage in stages {
+            let pts = points(stage);
+            if pts.is_empty() {
+                continue;
+            }
+            let line = Series::line(format!("{solver}: {stage}"), pts).of_solver(solver);
+            if direct {
+                outer.push(line.with_markers());
+            } else {
+                inner.push(line);
             }
         }
-        if series.len() == before {
+        if direct && m.history.is_empty() {
             // Nothing to draw, but said in the legend rather than left out.
-            series.push(Series::line(
-                format!(
-                    "{}: no iterations (its start passed its test)",
-                    m.trial.solver
-                ),
-                Vec::new(),
-            ));
+            outer.push(
+                Series::line(
+                    format!("{solver}: no iterations (its start passed its test)"),
+                    Vec::new(),
+                )
+                .of_solver(solver),
+            );
         }
     }
-    (
-        format!("convergence_p{problem}"),
-        chart(
-            format!("Convergence histories, Coulomb problem {problem}, h = {h}"),
-            "iteration (counted over the whole run, per loop)",
-            "residual of that loop",
-            false,
-            true,
-            series,
+    vec![
+        (
+            format!("convergence_p{problem}"),
+            Chart::new(
+                format!("Convergence of the Coulomb problem {problem}, h = {h}: the outer loop"),
+                "iteration (friction fixed point; a direct solver's own steps)",
+                "residual: max|Δg| (or the solver's own)",
+                false,
+                true,
+                outer,
+            ),
         ),
-    )
+        (
+            format!("convergence_inner_p{problem}"),
+            Chart::new(
+                format!(
+                    "Convergence histories of the inner loops, Coulomb problem {problem}, h = {h}"
+                ),
+                "iteration of the inner loop, counted over the whole run",
+                "residual of that loop",
+                true,
+                true,
+                inner,
+            ),
+        ),
+    ]
 }

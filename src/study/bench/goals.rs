@@ -8,7 +8,7 @@ use anyhow::Result;
 use contactlab_solvers::registry::{self, Role};
 use serde::Serialize;
 
-use crate::io::charts::{Chart, Legend, Series};
+use crate::io::charts::{Chart, Series};
 use crate::io::csv::to_csv;
 use crate::io::output::write_atomic;
 use crate::mechanics::mesh_size::MeshSize;
@@ -139,15 +139,20 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
                 let slope = fit_slope(&pts)
                     .map(|s| format!("{s:.2}"))
                     .unwrap_or_else(|| "n/a".into());
-                series
-                    .push(Series::line(format!("{} (slope {slope})", e.name), pts).with_markers());
+                series.push(
+                    Series::line(format!("{} (slope {slope})", e.name), pts)
+                        .with_markers()
+                        .of_solver(e.name),
+                );
             }
         }
         let slope = fit_slope(&factor)
             .map(|s| format!("{s:.2}"))
             .unwrap_or_else(|| "n/a".into());
         series.push(
-            Series::line(format!("one factorization + solve (slope {slope})"), factor).dashed(),
+            Series::line(format!("one factorization + solve (slope {slope})"), factor)
+                .dashed()
+                .black(),
         );
         let title = if what == "coulomb" {
             "Whole Coulomb problem: time against unknowns (problem 1)"
@@ -163,7 +168,7 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
                 log_x: true,
                 log_y: true,
                 series,
-                legend: Legend::UpperLeft,
+                y_resolution: None,
             },
         ));
     }

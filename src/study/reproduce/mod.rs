@@ -5,6 +5,7 @@
 //! the benchmark, the charts, a manifest and a README that is a view of
 //! the trials ([`readme`]).
 
+pub mod intents;
 pub mod readme;
 
 use std::path::Path;
@@ -17,6 +18,7 @@ use serde::Serialize;
 use crate::coulomb::continuation::Schedule;
 use crate::io::charts::Chart;
 use crate::io::csv::{fixed, to_csv};
+use crate::io::latex::booktabs;
 use crate::io::output::write_atomic;
 use crate::mechanics::contact_zone::{PROFILE_COLUMNS, contact_profile};
 use crate::mechanics::material::PlaneModel;
@@ -25,9 +27,10 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::bench::BenchSpec;
 use crate::study::bench::goals::{BenchOutput, write_bench};
+use crate::study::benchmark::{self, BenchmarkRow, BenchmarkSpec};
 use crate::study::compare;
 use crate::study::reference::References;
-use crate::study::report::{ProfilePair, convergence_chart, profile_charts, sweep_charts};
+use crate::study::report::{ProfilePair, convergence_charts, profile_charts, sweep_charts};
 use crate::study::runner::{Keep, Measured, measure, measure_all, write_trials};
 use crate::study::stability::{self, Map, StabilitySpec};
 use crate::study::sweep::{self, SweepSpec};
@@ -51,6 +54,9 @@ pub struct ReproduceSpec {
     pub sweep_h: MeshSize,
     pub stability: StabilitySpec,
     pub bench: BenchSpec,
+    /// The benchmark over the problem collection (its solvers: all).
+    #[serde(skip)]
+    pub benchmark: BenchmarkSpec,
 }
 
 impl ReproduceSpec {
@@ -69,6 +75,7 @@ impl ReproduceSpec {
             sweep_h,
             stability: StabilitySpec::standard(),
             bench: BenchSpec::standard(),
+            benchmark: BenchmarkSpec::new(false, registry::solvers()),
         }
     }
 
@@ -90,18 +97,21 @@ impl ReproduceSpec {
             sweep_h: h,
             stability: StabilitySpec::quick(),
             bench: BenchSpec::quick(),
+            benchmark: BenchmarkSpec::new(true, registry::solvers()),
         }
     }
 }
 
 /// Files every reproduce run writes (relative to the output folder),
 /// besides the per-problem profiles and the charts.
-pub const FILES: [&str; 17] = [
+pub const FILES: [&str; 26] = [
     "README.md",
     "manifest.json",
     "table1.csv",
+    "table1.tex",
     "table1_trials.csv",
     "compare.csv",
+    "compare.tex",
     "compare_timing.csv",
     "references.csv",
     "separation.csv",
@@ -114,6 +124,13 @@ pub const FILES: [&str; 17] = [
     "stability_references.csv",
     "performance.csv",
     "performance_goals.md",
+    "benchmark.csv",
+    "benchmark.md",
+    "benchmark_trials.csv",
+    "benchmark_trials_timing.csv",
+    "benchmark_summary.csv",
+    "benchmark_1e-4.tex",
+    "benchmark_1e-8.tex",
 ];
 
 /// One problem's separation with one solver.
@@ -141,6 +158,8 @@ pub struct Outputs {
     pub sweep: Vec<Measured>,
     pub stability: Map,
     pub bench: BenchOutput,
+    /// The benchmark's rows.
+    pub benchmark: Vec<BenchmarkRow>,
     pub references: References,
     pub charts: Vec<(String, Chart)>,
 }
@@ -176,6 +195,10 @@ pub fn run(
     )?;
     let (t1_measured, t1) = table1::run(&t1_specs, &[1, 2, 3], none)?;
     write_atomic(&out.join("table1.csv"), &to_csv(&t1, &[])?)?;
+    write_atomic(
+        &out.join("table1.tex"),
+        booktabs(&table1::markdown(&t1), "Table 1 of Zhiltsov & Namm (2019): iteration counts of the paper's method, ours beside the paper's (contactlab reproduce)").as_bytes(),
+    )?;
     let t1_trials: Vec<Trial> = t1_measured.iter().map(|m| m.trial.clone()).collect();
     write_atomic(&out.join("table1_trials.csv"), &to_csv(&t1_trials, &[])?)?;
 
@@ -269,21 +292,27 @@ pub fn run(
             .filter_map(|r| first_start(&r.separated))
             .fold(1.0f64, f64::min)
             - 0.1;
-        let pairs: Vec<ProfilePair<'_>> = profiles
-            .iter()
-            .map(|(s, w, wo)| ProfilePair {
-                solver: s,
-                friction: w,
-                frictionless: wo,
-            })
-            .collect();
-        charts.extend(profile_charts(
-            problem,
-            &spec.h.to_string(),
-            &pairs,
-            zoom_from.clamp(0.0, 0.9),
-        ));
-        charts.push(convergence_chart(
+        let pair = |role: Role| {
+            let name = registry::with_role(role)?.name;
+            profiles
+                .iter()
+                .find(|(s, ..)| *s == name)
+                .map(|(s, w, wo)| ProfilePair {
+                    solver: s,
+                    friction: w,
+                    frictionless: wo,
+                })
+        };
+        if let Some(oracle) = pair(Role::Oracle) {
+            charts.extend(profile_charts(
+                problem,
+                &spec.h.to_string(),
+                &oracle,
+                pair(Role::PapersMethod).as_ref(),
+                zoom_from.clamp(0.0, 0.9),
+            ));
+        }
+        charts.extend(convergence_charts(
             problem,
             &spec.h.to_string(),
             &measured
@@ -299,6 +328,12 @@ pub fn run(
         .flat_map(|(_, m)| m.iter().map(clone_for_chart))
         .collect();
     crate::commands::compare::write_files(out, &all, &references)?;
+    let trials: Vec<Trial> = all.iter().map(|m| m.trial.clone()).collect();
+    let seconds: Vec<f64> = all.iter().map(|m| m.timing.seconds_min).collect();
+    write_atomic(
+        &out.join("compare.tex"),
+        booktabs(&compare::markdown(&trials, &seconds), "every solver on the paper's problems against the earned reference (contactlab reproduce)").as_bytes(),
+    )?;
     write_atomic(&out.join("separation.csv"), &to_csv(&separation, &[])?)?;
     let mut stress = scene(1, spec.h)?;
     stress.material.plane = PlaneModel::Stress;
@@ -333,9 +368,21 @@ pub fn run(
     )?;
     charts.extend(stability::views::charts(&map.trials, &map.steps));
 
-    log("benchmark");
+    log("speed");
     let bench = write_bench(out, &spec.bench, settings, &|l| log(&format!("bench: {l}")))?;
     charts.extend(bench.charts.clone());
+
+    let planned = benchmark::plan(&spec.benchmark, settings)?.len();
+    log(&format!(
+        "benchmark over the problem collection: {planned} runs"
+    ));
+    let progress = crate::commands::StudyProgress::new(planned as u64, "reproduce: benchmark");
+    let done = benchmark::run(&spec.benchmark, settings, &|t| progress.tick(t))?;
+    progress.finish();
+    let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
+    write_atomic(&out.join("benchmark.csv"), &to_csv(&rows, &[])?)?;
+    write_trials(out, "benchmark_trials", &measured)?;
+    charts.extend(benchmark::views::write(out, &rows)?);
     Ok(Outputs {
         table1: t1,
         compare: compared,
@@ -344,6 +391,7 @@ pub fn run(
         sweep: swept,
         stability: map,
         bench,
+        benchmark: rows,
         references,
         charts,
     })

@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use crate::io::manifest::Manifest;
 use crate::study::compare;
+use crate::study::reproduce::intents::{ChartRef, named};
 use crate::study::reproduce::{FILES, Outputs, PAPER_SETTINGS, ReproduceSpec};
 use crate::study::runner::Measured;
 use crate::study::stability::classify::WRONG_PRESSURE;
@@ -59,33 +60,28 @@ struct Context {
     separation_text: String,
     table1: String,
     table1_text: String,
-    profile_charts: Vec<String>,
-    convergence_charts: Vec<String>,
+    profile_charts: Vec<ChartRef>,
+    convergence_charts: Vec<ChartRef>,
     sweep_scene: String,
     sweep_h: String,
-    work_precision_charts: Vec<String>,
+    work_precision_charts: Vec<ChartRef>,
     work_precision_text: String,
     variations_text: String,
-    variation_charts: Vec<String>,
+    variation_charts: Vec<ChartRef>,
     stability_section: String,
-    stability_charts: Vec<String>,
+    stability_charts: Vec<ChartRef>,
     stability_summary: String,
     goals: String,
     speed_table: String,
-    performance_charts: Vec<String>,
+    performance_charts: Vec<ChartRef>,
     files: Vec<&'static str>,
+    benchmark: String,
+    benchmark_charts: Vec<ChartRef>,
 }
 
 /// Renders the README.
 pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -> Result<String> {
     let chart_names: Vec<String> = out.charts.iter().map(|(n, _)| n.clone()).collect();
-    let named = |prefix: &str| -> Vec<String> {
-        chart_names
-            .iter()
-            .filter(|n| n.starts_with(prefix))
-            .cloned()
-            .collect()
-    };
     let compare_trials: Vec<&Measured> = out.compare.iter().flat_map(|(_, v)| v.iter()).collect();
     let tol = compare_trials
         .first()
@@ -130,8 +126,8 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         separation_text: separation_text(spec, out),
         table1: table1_markdown(&out.table1),
         table1_text: table1_text(out),
-        profile_charts: named("profile_"),
-        convergence_charts: named("convergence_"),
+        profile_charts: named(&chart_names, "profile_"),
+        convergence_charts: named(&chart_names, "convergence_"),
         sweep_scene: spec
             .sweep
             .scenes
@@ -139,10 +135,10 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
             .map(|s| s.name.clone())
             .unwrap_or_default(),
         sweep_h: spec.sweep_h.to_string(),
-        work_precision_charts: named("work_precision_"),
+        work_precision_charts: named(&chart_names, "work_precision_"),
         work_precision_text: work_precision_text(&out.sweep),
         variations_text: variations_text(&out.sweep),
-        variation_charts: named("sweep_"),
+        variation_charts: named(&chart_names, "sweep_"),
         stability_section: {
             let mut s = views::readme_section(&out.stability.trials);
             let lines =
@@ -155,12 +151,14 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
             }
             s
         },
-        stability_charts: named("stability_"),
+        stability_charts: named(&chart_names, "stability_"),
         stability_summary: views::summary_markdown(&out.stability.trials),
         goals: crate::study::bench::goals::goals_markdown(&out.bench.goals),
         speed_table: speed_table(out),
-        performance_charts: named("performance_"),
+        performance_charts: named(&chart_names, "performance_"),
         files: FILES.to_vec(),
+        benchmark: crate::study::benchmark::views::report(&out.benchmark),
+        benchmark_charts: named(&chart_names, "benchmark_"),
     };
     let mut env = minijinja::Environment::new();
     env.add_template("readme", TEMPLATE)?;

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::io::charts::{Chart, Legend, Series};
+use crate::io::charts::{Chart, Series};
 use crate::study::stability::FrictionStep;
 use crate::study::stability::classify::{Class, SLOW_FACTOR, WRONG_PRESSURE};
 use crate::study::trial::Trial;
@@ -316,7 +316,14 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
                     .filter(|(_, t)| class_of(t) == c)
                     .map(|(v, t)| (*v, t.work.max(1) as f64))
                     .collect();
-                (!pts.is_empty()).then(|| Series::line(c.as_str(), pts).scatter())
+                (!pts.is_empty()).then(|| {
+                    let s = Series::line(c.as_str(), pts).colored(c as usize);
+                    if matches!(c, Class::Converged | Class::Slow) {
+                        s.scatter()
+                    } else {
+                        s.failed()
+                    }
+                })
             })
             .collect();
         out.push((
@@ -328,7 +335,7 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
                 log_x: true,
                 log_y: true,
                 series,
-                legend: Legend::default(),
+                y_resolution: None,
             },
         ));
     }
@@ -365,7 +372,13 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
             })
             .collect();
         if !pts.is_empty() {
-            series.push(Series::line(format!("{scene}, {solver}"), pts).with_markers());
+            // The solver's colour; the scene by style.
+            let line = Series::line(format!("{scene}, {solver}"), pts).of_solver(&solver);
+            series.push(match scene.as_str() {
+                "problem 1" => line.with_markers(),
+                "problem 2" => line.dashed(),
+                _ => line.scatter(),
+            });
         }
     }
     if !series.is_empty() {
@@ -378,7 +391,11 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
                 (a.min(x), b.max(x))
             });
-        series.push(Series::line("contraction factor 1", vec![(lo, 1.0), (hi, 1.0)]).dashed());
+        series.push(
+            Series::line("contraction factor 1", vec![(lo, 1.0), (hi, 1.0)])
+                .dashed()
+                .black(),
+        );
         out.push((
             "stability_friction".into(),
             Chart {
@@ -388,7 +405,7 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
                 log_x: true,
                 log_y: true,
                 series,
-                legend: Legend::LowerRight,
+                y_resolution: None,
             },
         ));
     }
@@ -397,20 +414,19 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
         let mut solvers: Vec<&str> = load.iter().map(|t| t.solver.as_str()).collect();
         solvers.sort();
         solvers.dedup();
-        let series = solvers
-            .iter()
-            .map(|&s| {
-                let pts: Vec<(f64, f64)> = load
-                    .iter()
-                    .filter(|t| t.solver == s)
+        let mut series = Vec::new();
+        for &s in &solvers {
+            let points = |certified: bool| -> Vec<(f64, f64)> {
+                load.iter()
+                    .filter(|t| t.solver == s && t.certified() == certified)
                     .filter_map(|t| {
                         let total = t.scene.rsplit(' ').next()?.parse::<f64>().ok()?;
                         Some((-total, t.certificate.max(1e-16)))
                     })
-                    .collect();
-                Series::line(s, pts).with_markers()
-            })
-            .collect();
+                    .collect()
+            };
+            series.extend(Series::certified_and_failed(s, points(true), points(false)));
+        }
         out.push((
             "stability_load".into(),
             Chart {
@@ -420,7 +436,7 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
                 log_x: true,
                 log_y: true,
                 series,
-                legend: Legend::default(),
+                y_resolution: None,
             },
         ));
     }

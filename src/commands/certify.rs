@@ -1,0 +1,98 @@
+//! `contactlab certify`: the certificate of an answer computed elsewhere,
+//! for a problem written by `contactlab export`. The answer is the
+//! displacements (contact forces then follow from stationarity at the
+//! contact rows), the contact forces per node (displacements then follow
+//! from the elastic response, [`contactlab_solvers::dual::displacements_from_forces`]),
+//! or both. An answer that fails is a non-zero exit.
+
+use anyhow::{Result, bail};
+use contactlab_solvers::Law;
+use contactlab_solvers::dual::displacements_from_forces;
+
+use crate::certificate::certify;
+use crate::cli::CertifyArgs;
+use crate::io::export::{import, read_forces, read_vector};
+use crate::io::output::print;
+
+pub fn run(args: &CertifyArgs) -> Result<()> {
+    let problem = import(&args.instance)?;
+    let (n, m) = (problem.n(), problem.contacts().len());
+    let v = args.displacements.as_deref().map(read_vector).transpose()?;
+    let forces = args.forces.as_deref().map(read_forces).transpose()?;
+    if let Some(v) = &v
+        && v.len() != n
+    {
+        bail!(
+            "--displacements: {} values, the problem has {n} unknowns",
+            v.len()
+        );
+    }
+    if let Some((p, _)) = &forces
+        && p.len() != m
+    {
+        bail!(
+            "--forces: {} rows, the problem has {m} contact nodes",
+            p.len()
+        );
+    }
+    let (v, p, q, how) = match (v, forces) {
+        (Some(v), Some((p, q))) => (v, p, q, "displacements and contact forces as given"),
+        (Some(v), None) => {
+            // A v − f + Σ w p e_t − Σ w q e_s = 0 at the contact rows.
+            let (offsets, cols, vals) = problem.a().csr_data();
+            let row = |i: usize| -> f64 {
+                (offsets[i]..offsets[i + 1])
+                    .map(|k| vals[k] * v[cols[k]])
+                    .sum::<f64>()
+                    - problem.f()[i]
+            };
+            let p = problem
+                .contacts()
+                .iter()
+                .map(|c| -row(c.t) / c.weight)
+                .collect();
+            let q = problem
+                .contacts()
+                .iter()
+                .map(|c| row(c.s) / c.weight)
+                .collect();
+            (
+                v,
+                p,
+                q,
+                "displacements as given; contact forces from stationarity at the contact rows",
+            )
+        }
+        (None, Some((p, q))) => {
+            let v = displacements_from_forces(&problem, &p, &q).map_err(anyhow::Error::msg)?;
+            (
+                v,
+                p,
+                q,
+                "contact forces as given; displacements from the elastic response to them",
+            )
+        }
+        (None, None) => bail!("no answer given: add --displacements FILE and/or --forces FILE"),
+    };
+    let law = if args.given_friction {
+        Law::GivenFriction
+    } else {
+        Law::Coulomb
+    };
+    let c = certify(&problem, law, &v, &p, &q, args.tolerance);
+    let mut text = format!(
+        "instance {} ({n} unknowns, {m} contact nodes), law {}: {how}\n",
+        args.instance.display(),
+        law.as_str()
+    );
+    for (cond, x) in c.measures() {
+        let mark = if x <= c.tolerance { "ok" } else { "FAILS" };
+        text += &format!("  {:<16} {x:.3e}  {mark}\n", cond.as_str());
+    }
+    text += &format!("certificate: {}\n", c.summary());
+    print(&text)?;
+    if !c.passed() {
+        bail!("the answer is not certified: {}", c.summary());
+    }
+    Ok(())
+}

@@ -1,0 +1,299 @@
+//! An instance as files any scientific code reads, and back: the matrices in
+//! Matrix Market (coordinate, general, every value in shortest round-trip
+//! decimal, so that a reader gets the same doubles), the index sets and
+//! per-node data as CSV, and `problem.json`, which states the problem, its
+//! unknowns, signs, units and scales; and the condensed form on the contact
+//! unknowns with its rigid-mode constraint.
+//!
+//! Files of an exported folder (0-based indices everywhere):
+//!
+//! | file | what |
+//! |---|---|
+//! | `A.mtx` | stiffness A (n × n, symmetric positive semidefinite) |
+//! | `M.mtx` | mass matrix M (the L2 inner product of displacements) |
+//! | `f.mtx` | load vector f (n × 1) |
+//! | `rigid_modes.mtx` | the kernel of A (n × k; here k = 1, the upper body's vertical translation) |
+//! | `contact.csv` | per contact node: `node,x,t,s,weight,g,coefficient` |
+//! | `S.mtx`, `b_condensed.mtx`, `z_condensed.mtx` | the condensed problem on y = (t_0, s_0, t_1, s_1, ...): S y = b̂ − r, and its rigid mode ẑ (2m × k) |
+//! | `problem.json` | the statement, conventions, units, scales and the scene |
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use contactlab_solvers::condensed::condense;
+use contactlab_solvers::{ContactNode, ContactProblem};
+use nalgebra_sparse::io::{load_coo_from_matrix_market_file, save_to_matrix_market_str};
+use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use serde::{Deserialize, Serialize};
+
+use crate::io::output::{json_bytes, write_atomic};
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::scene::Scene;
+
+/// One row of `contact.csv`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactRow {
+    pub node: usize,
+    /// Position along Γ_K.
+    pub x: f64,
+    /// Index of the jump t_i = v'₂ − v''₂ among the unknowns.
+    pub t: usize,
+    /// Index of the slip s_i = v'₁ − v''₁.
+    pub s: usize,
+    /// Trapezoid weight w_i of Γ_K.
+    pub weight: f64,
+    /// Friction bound g_i of the given-friction subproblem (force/length).
+    pub g: f64,
+    /// Coulomb coefficient 𝓕_i.
+    pub coefficient: f64,
+}
+
+/// `problem.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Description {
+    pub format: &'static str,
+    pub statement: Vec<&'static str>,
+    pub unknowns: String,
+    pub conventions: Vec<&'static str>,
+    pub units: Vec<&'static str>,
+    pub n: usize,
+    pub contact_nodes: usize,
+    pub rigid_modes: usize,
+    pub scales: contactlab_solvers::Scales,
+    pub certificate: Vec<&'static str>,
+    pub files: Vec<(&'static str, &'static str)>,
+    pub scene: Scene,
+    pub h: String,
+    pub git_commit: String,
+}
+
+fn mtx(coo: &CooMatrix<f64>) -> Vec<u8> {
+    save_to_matrix_market_str(coo).into_bytes()
+}
+
+fn dense(rows: usize, cols: usize, at: impl Fn(usize, usize) -> f64) -> CooMatrix<f64> {
+    let mut c = CooMatrix::new(rows, cols);
+    for j in 0..cols {
+        for i in 0..rows {
+            c.push(i, j, at(i, j));
+        }
+    }
+    c
+}
+
+/// Writes the instance `d` (the finest level of `scene`) into `dir`.
+pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
+    let p = &d.problem;
+    let n = p.n();
+    write_atomic(&dir.join("A.mtx"), &mtx(&CooMatrix::from(p.a())))?;
+    write_atomic(&dir.join("M.mtx"), &mtx(&CooMatrix::from(p.mass())))?;
+    write_atomic(&dir.join("f.mtx"), &mtx(&dense(n, 1, |i, _| p.f()[i])))?;
+    let modes = p.rigid_modes();
+    write_atomic(
+        &dir.join("rigid_modes.mtx"),
+        &mtx(&dense(n, modes.len(), |i, j| modes[j][i])),
+    )?;
+    let x = d.contact_x();
+    let rows: Vec<ContactRow> = p
+        .contacts()
+        .iter()
+        .enumerate()
+        .map(|(i, c)| ContactRow {
+            node: i,
+            x: x[i],
+            t: c.t,
+            s: c.s,
+            weight: c.weight,
+            g: c.g,
+            coefficient: c.coefficient,
+        })
+        .collect();
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in &rows {
+        w.serialize(r)?;
+    }
+    write_atomic(&dir.join("contact.csv"), &w.into_inner()?)?;
+    let c = condense(p).map_err(anyhow::Error::msg)?;
+    let m2 = c.b.len();
+    write_atomic(&dir.join("S.mtx"), &mtx(&dense(m2, m2, |i, j| c.s[(i, j)])))?;
+    write_atomic(
+        &dir.join("b_condensed.mtx"),
+        &mtx(&dense(m2, 1, |i, _| c.b[i])),
+    )?;
+    let on_contacts = |z: &[f64], k: usize| {
+        let node = &p.contacts()[k / 2];
+        if k.is_multiple_of(2) {
+            z[node.t]
+        } else {
+            z[node.s]
+        }
+    };
+    write_atomic(
+        &dir.join("z_condensed.mtx"),
+        &mtx(&dense(m2, modes.len(), |i, j| on_contacts(&modes[j], i))),
+    )?;
+    let description = Description {
+        format: "contactlab instance, version 1",
+        statement: vec![
+            "Given-friction (Tresca) subproblem, paper (10): minimize 1/2 v'A v - f'v + sum_i w_i g_i |v[s_i]| subject to v[t_i] <= 0 for every contact node i.",
+            "Coulomb problem, paper (7)-(8): the same with g_i = coefficient_i * p_i, p_i the contact pressure of the solution itself.",
+            "A is singular: its kernel is spanned by the columns of rigid_modes.mtx (the upper body's vertical translation); a solution exists only if the contact forces can balance the load along it, paper condition (13).",
+            "Optimality (what `contactlab certify` checks): A v - f + sum_i w_i p_i e_{t_i} - sum_i w_i q_i e_{s_i} = 0; t_i <= 0, p_i >= 0, p_i t_i = 0; |q_i| <= g_i, s_i = 0 where |q_i| < g_i, q_i = -g_i sign(s_i) where s_i != 0.",
+            "Condensed form: with y = (t_0, s_0, t_1, s_1, ...) the contact unknowns and r = (w_0 p_0, -w_0 q_0, ...) the nodal contact forces, S y = b_condensed - r, and z_condensed' (b_condensed - r) = 0 (S z_condensed = 0: the rigid mode).",
+        ],
+        unknowns: format!(
+            "v, {n} values: the free displacement unknowns of both bodies after the change of variables of paper section 5 (at a contact node the lower body's displacement and the jump t = v'2 - v''2 and slip s = v'1 - v''1 are unknowns)"
+        ),
+        conventions: vec![
+            "indices are 0-based (Matrix Market files are 1-based as the format requires)",
+            "t_i <= 0: negative jump means the bodies separate",
+            "p_i >= 0: contact pressure (the multiplier l = -sigma_n), force per length of Gamma_K",
+            "q_i: tangential (x) traction on the lower body, |q_i| <= g_i, opposing the slip",
+        ],
+        units: vec![
+            "those of the scene: lengths in its length unit, Young's modulus and tractions in force per length (plane problem, unit thickness)",
+            "the paper gives none; its values: E = 73e3, loads -60 or -120 on parts of the top side of length 1/3 or 1",
+        ],
+        n,
+        contact_nodes: p.contacts().len(),
+        rigid_modes: modes.len(),
+        scales: *p.scales(),
+        certificate: vec![
+            "each condition's violation in the problem's scales: jumps and slips over displacement U, pressures and tractions over pressure P, nodal force residuals over P * max w_i, the balance over |z'f|",
+            "an answer is certified if every violation is at most the tolerance (default 1e-5)",
+        ],
+        files: vec![
+            ("A.mtx", "stiffness A, n x n"),
+            ("M.mtx", "mass matrix M, n x n"),
+            ("f.mtx", "load f, n x 1"),
+            ("rigid_modes.mtx", "kernel of A, n x k"),
+            (
+                "contact.csv",
+                "node,x,t,s,weight,g,coefficient per contact node",
+            ),
+            (
+                "S.mtx",
+                "condensed operator on the contact unknowns, 2m x 2m (dense, every entry)",
+            ),
+            ("b_condensed.mtx", "condensed load, 2m x 1"),
+            (
+                "z_condensed.mtx",
+                "rigid mode on the contact unknowns, 2m x k",
+            ),
+        ],
+        scene: scene.clone(),
+        h: d.h().to_string(),
+        git_commit: crate::io::manifest::git_commit(),
+    };
+    write_atomic(&dir.join("problem.json"), &json_bytes(&description)?)?;
+    Ok(())
+}
+
+fn load(dir: &Path, name: &str) -> Result<CooMatrix<f64>> {
+    let path = dir.join(name);
+    load_coo_from_matrix_market_file::<f64, _>(&path)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))
+}
+
+/// Reads an exported folder back into the algebraic problem.
+pub fn import(dir: &Path) -> Result<ContactProblem> {
+    if !dir.join("A.mtx").is_file() {
+        bail!(
+            "{}: no A.mtx; give a folder written by `contactlab export`",
+            dir.display()
+        );
+    }
+    let a = CsrMatrix::from(&load(dir, "A.mtx")?);
+    let mass = CsrMatrix::from(&load(dir, "M.mtx")?);
+    let column = |m: &CooMatrix<f64>, j: usize| -> Vec<f64> {
+        let mut v = vec![0.0; m.nrows()];
+        for (i, jj, x) in m.triplet_iter() {
+            if jj == j {
+                v[i] += x;
+            }
+        }
+        v
+    };
+    let f = column(&load(dir, "f.mtx")?, 0);
+    let modes_coo = load(dir, "rigid_modes.mtx")?;
+    let modes: Vec<Vec<f64>> = (0..modes_coo.ncols())
+        .map(|j| column(&modes_coo, j))
+        .collect();
+    let path = dir.join("contact.csv");
+    let mut r =
+        csv::Reader::from_path(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut contacts = Vec::new();
+    for rec in r.deserialize::<ContactRow>() {
+        let c = rec.with_context(|| format!("{}: a row does not parse", path.display()))?;
+        contacts.push(ContactNode {
+            t: c.t,
+            s: c.s,
+            weight: c.weight,
+            g: c.g,
+            coefficient: c.coefficient,
+        });
+    }
+    ContactProblem::new(a, f, mass, contacts, modes)
+        .with_context(|| format!("{}: the files do not form a contact problem", dir.display()))
+}
+
+/// Reads a vector: a Matrix Market file (`.mtx`, one column), or plain text
+/// with one number per line (lines starting with `#` or `%` skipped).
+pub fn read_vector(path: &Path) -> Result<Vec<f64>> {
+    if path.extension().is_some_and(|e| e == "mtx") {
+        let m = load_coo_from_matrix_market_file::<f64, _>(path)
+            .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+        if m.ncols() != 1 {
+            bail!(
+                "{}: expected one column, found {}",
+                path.display(),
+                m.ncols()
+            );
+        }
+        let mut v = vec![0.0; m.nrows()];
+        for (i, _, x) in m.triplet_iter() {
+            v[i] += x;
+        }
+        return Ok(v);
+    }
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    text.lines()
+        .map(str::trim)
+        .enumerate()
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with('%'))
+        .map(|(k, l)| {
+            l.parse::<f64>().with_context(|| {
+                format!("{}: line {} is not a number: '{l}'", path.display(), k + 1)
+            })
+        })
+        .collect()
+}
+
+/// One row of a contact-forces file.
+#[derive(Clone, Debug, Deserialize)]
+pub struct ForceRow {
+    pub pressure: f64,
+    pub friction_traction: f64,
+}
+
+/// Reads pressures and friction tractions per contact node (CSV with
+/// columns `pressure,friction_traction`, others ignored, in the order of
+/// `contact.csv`).
+pub fn read_forces(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
+    let mut r =
+        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut p = Vec::new();
+    let mut q = Vec::new();
+    for rec in r.deserialize::<ForceRow>() {
+        let row = rec.with_context(|| {
+            format!(
+                "{}: each row needs numbers in columns pressure and friction_traction",
+                path.display()
+            )
+        })?;
+        p.push(row.pressure);
+        q.push(row.friction_traction);
+    }
+    Ok((p, q))
+}

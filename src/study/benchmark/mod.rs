@@ -1,0 +1,215 @@
+//! The benchmark over the problem collection ([`collection`]), in the manner
+//! of the field's solver benchmarks (Dolan & Moré 2002, performance
+//! profiles; Mittelmann's and qpbenchmark's shifted geometric means; Acary,
+//! Brémond & Huber 2018 on FCLIB): every solver on every instance at each
+//! target accuracy, one Coulomb solve with a time limit.
+//!
+//! A target accuracy τ is read in the certificate's measure: the solver's
+//! accuracy knob and every ε (the fixed point's, and a solver's own) are set
+//! to [`SAFETY`]·τ (a stopping test measures something else than the
+//! certificate's largest violation: one rule for every solver), and the run
+//! succeeds only if its answer passes the certificate at tolerance τ. A solver that claims success on an answer that fails it
+//! counts as a failure, and is listed as such ([`views`]).
+//!
+//! The collection is embarrassingly parallel: a shard K/N runs every N-th
+//! instance from the K-th, and [`views`] reads any set of shards' rows.
+
+pub mod collection;
+pub mod views;
+
+use anyhow::Result;
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::Entry;
+use serde::{Deserialize, Serialize};
+
+use crate::io::csv::{fixed, fixed_or_nan};
+use crate::mechanics::discretization::Discretization;
+use crate::settings::Settings;
+use crate::study::runner::{Keep, Measured, measure};
+use crate::study::trial::TrialSpec;
+
+pub use collection::{Instance, collection};
+
+/// The study's name in trial records.
+pub const STUDY: &str = "benchmark";
+
+/// Which part of the collection a run covers: every `of`-th instance from
+/// the `index`-th (1-based, as `--shard K/N` is written).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Shard {
+    pub index: usize,
+    pub of: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("--shard '{s}': write it K/N with 1 ≤ K ≤ N, e.g. 2/8");
+        let (k, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, of): (usize, usize) = (
+            k.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if index == 0 || of == 0 || index > of {
+            return Err(bad());
+        }
+        Ok(Self { index, of })
+    }
+}
+
+impl Shard {
+    pub const WHOLE: Shard = Shard { index: 1, of: 1 };
+
+    /// Whether instance `i` (0-based, in collection order) is in the shard.
+    pub fn contains(&self, i: usize) -> bool {
+        i % self.of == self.index - 1
+    }
+}
+
+/// What a benchmark run covers.
+#[derive(Clone)]
+pub struct BenchmarkSpec {
+    pub quick: bool,
+    /// Target accuracies, in the certificate's measure.
+    pub targets: Vec<f64>,
+    /// Wall-clock limit per run, seconds.
+    pub time_limit: f64,
+    pub shard: Shard,
+    pub solvers: Vec<&'static Entry>,
+}
+
+impl BenchmarkSpec {
+    /// The documented run: targets 1e-4 and 1e-8, 20 s per run (quick: 5 s).
+    pub fn new(quick: bool, solvers: Vec<&'static Entry>) -> Self {
+        Self {
+            quick,
+            targets: vec![1e-4, 1e-8],
+            time_limit: if quick { 5.0 } else { 20.0 },
+            shard: Shard::WHOLE,
+            solvers,
+        }
+    }
+}
+
+/// One run of the benchmark: the tidy row the tables are views of.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchmarkRow {
+    pub instance: String,
+    pub family: String,
+    pub h: String,
+    pub unknowns: usize,
+    pub friction_coefficient: f64,
+    pub solver: String,
+    /// The target accuracy (certificate tolerance, accuracy knob, ε).
+    #[serde(serialize_with = "fixed")]
+    pub target: f64,
+    /// The certified status at that tolerance.
+    pub status: String,
+    /// The solver's own claim.
+    pub solver_status: String,
+    pub success: bool,
+    /// Claimed convergence but failed the certificate at the target.
+    pub claimed_but_failed: bool,
+    #[serde(serialize_with = "fixed", deserialize_with = "fixed_or_nan")]
+    pub certificate: f64,
+    pub failing: String,
+    /// Wall-clock seconds of the whole Coulomb solve (set-up included).
+    #[serde(serialize_with = "fixed")]
+    pub seconds: f64,
+    /// The run's time limit, seconds.
+    #[serde(serialize_with = "fixed")]
+    pub time_limit: f64,
+    pub work: usize,
+    pub detail: String,
+}
+
+/// Every solver's own tolerances are this fraction of the target: measured
+/// at h = 1/8 with the knob at the target itself, 29 of 72 runs at 1e-8
+/// stopped with a certificate 1.5 to 30 times the target.
+pub const SAFETY: f64 = 0.1;
+
+/// The settings of a solver at target accuracy `target`.
+pub fn target_settings(entry: &Entry, base: &Settings, target: f64) -> Result<Settings> {
+    let mut s = base.clone();
+    let own = SAFETY * target;
+    s.set_epsilon(own).map_err(anyhow::Error::msg)?;
+    s.set_text(
+        &format!("{}.{}", entry.name, entry.accuracy.knob),
+        &format!("{own:e}"),
+    )
+    .map_err(anyhow::Error::msg)?;
+    s.certificate.tolerance = target;
+    Ok(s)
+}
+
+/// The trials of a run, with each instance's family.
+pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<(Instance, TrialSpec, f64)>> {
+    let mut out = Vec::new();
+    for (i, inst) in collection(spec.quick)?.into_iter().enumerate() {
+        if !spec.shard.contains(i) {
+            continue;
+        }
+        for &target in &spec.targets {
+            for &e in &spec.solvers {
+                let settings = target_settings(e, base, target)?;
+                let mut t = TrialSpec::new(
+                    STUDY,
+                    inst.id.clone(),
+                    &inst.scene,
+                    e,
+                    Law::Coulomb,
+                    &settings,
+                )
+                .with_seconds(Some(spec.time_limit));
+                t.knob = Some(("target".into(), format!("{target:e}")));
+                out.push((inst.clone(), t, target));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the planned trials; returns each row beside its measured trial.
+pub fn run(
+    spec: &BenchmarkSpec,
+    base: &Settings,
+    tick: &dyn Fn(&TrialSpec),
+) -> Result<Vec<(BenchmarkRow, Measured)>> {
+    let plan = plan(spec, base)?;
+    let mut out = Vec::with_capacity(plan.len());
+    let mut unknowns: Option<(String, usize)> = None;
+    for (inst, t, target) in plan {
+        if unknowns.as_ref().is_none_or(|(id, _)| *id != inst.id) {
+            let n = Discretization::new(&inst.scene, inst.scene.finest())?
+                .problem
+                .n();
+            unknowns = Some((inst.id.clone(), n));
+        }
+        let m = measure(&t, None, Keep::default())?;
+        let tr = &m.trial;
+        let claimed = tr.solver_status.is_converged();
+        let row = BenchmarkRow {
+            instance: inst.id.clone(),
+            family: inst.family.into(),
+            h: tr.h.clone(),
+            unknowns: unknowns.as_ref().map_or(0, |(_, n)| *n),
+            friction_coefficient: inst.scene.friction,
+            solver: tr.solver.clone(),
+            target,
+            status: tr.status.to_string(),
+            solver_status: tr.solver_status.to_string(),
+            success: tr.certified(),
+            claimed_but_failed: claimed && !tr.certified(),
+            certificate: tr.certificate,
+            failing: tr.failing.clone(),
+            seconds: m.timing.seconds_min,
+            time_limit: spec.time_limit,
+            work: tr.work,
+            detail: tr.detail.clone(),
+        };
+        tick(&t);
+        out.push((row, m));
+    }
+    Ok(out)
+}

@@ -1,0 +1,320 @@
+//! The benchmark's tables and charts, views of its rows (one run's, or the
+//! merged rows of several shards): per target accuracy, each solver's
+//! success rate, the shifted geometric mean of its time (a failure counts
+//! at the time limit), the runs it claimed but the certificate refused, and
+//! performance profiles (Dolan & Moré 2002).
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use serde::Serialize;
+
+use crate::io::charts::{Chart, Series};
+use crate::io::csv::{fixed, to_csv};
+use crate::io::output::write_atomic;
+use crate::study::benchmark::BenchmarkRow;
+
+/// The shift of the shifted geometric mean, seconds: times well below it
+/// count as about equal (a 1 ms and a 10 ms solve are both fast), so the
+/// mean is not ruled by the smallest instances.
+pub const SHIFT: f64 = 0.1;
+
+/// One solver at one target accuracy.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    #[serde(serialize_with = "fixed")]
+    pub target: f64,
+    pub solver: String,
+    pub runs: usize,
+    pub successes: usize,
+    #[serde(serialize_with = "fixed")]
+    pub success_rate: f64,
+    /// Runs whose solver claimed convergence on an answer the certificate
+    /// refused at the target.
+    pub claimed_but_failed: usize,
+    /// exp(mean log(t + SHIFT)) − SHIFT over all instances, a failure at
+    /// the time limit.
+    #[serde(serialize_with = "fixed")]
+    pub shifted_geometric_mean: f64,
+    /// The same over the best solver's (1: the best).
+    #[serde(serialize_with = "fixed")]
+    pub relative_to_best: f64,
+}
+
+/// Reads the rows of `benchmark.csv` in each folder (shards), and checks
+/// that no (instance, solver, target) appears twice.
+pub fn read_rows(dirs: &[impl AsRef<Path>]) -> Result<Vec<BenchmarkRow>> {
+    let mut rows: Vec<BenchmarkRow> = Vec::new();
+    for d in dirs {
+        let path = d.as_ref().join("benchmark.csv");
+        let mut r = csv::Reader::from_path(&path).with_context(|| {
+            format!(
+                "cannot read {} (a folder written by `contactlab benchmark`?)",
+                path.display()
+            )
+        })?;
+        for rec in r.deserialize() {
+            rows.push(rec.with_context(|| format!("{}: a row does not parse", path.display()))?);
+        }
+    }
+    let mut keys: Vec<(String, String, String)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r.instance.clone(),
+                r.solver.clone(),
+                format!("{:e}", r.target),
+            )
+        })
+        .collect();
+    keys.sort();
+    if let Some(w) = keys.windows(2).find(|w| w[0] == w[1]) {
+        bail!(
+            "instance {} with {} at target {} appears in two shards: merge each shard once",
+            w[0].0,
+            w[0].1,
+            w[0].2
+        );
+    }
+    Ok(rows)
+}
+
+fn targets(rows: &[BenchmarkRow]) -> Vec<f64> {
+    let mut t: Vec<f64> = rows.iter().map(|r| r.target).collect();
+    t.sort_by(|a, b| b.total_cmp(a));
+    t.dedup();
+    t
+}
+
+fn solvers(rows: &[BenchmarkRow]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for r in rows {
+        if !out.contains(&r.solver) {
+            out.push(r.solver.clone());
+        }
+    }
+    out
+}
+
+/// A run's time as the profile and the mean count it: its time if it
+/// succeeded, else the time limit (the mean) or infinity (the profile).
+fn charged(r: &BenchmarkRow) -> f64 {
+    if r.success {
+        r.seconds
+    } else {
+        r.time_limit.max(r.seconds)
+    }
+}
+
+/// The per-solver summaries at every target.
+pub fn summaries(rows: &[BenchmarkRow]) -> Vec<Summary> {
+    let mut out = Vec::new();
+    for target in targets(rows) {
+        let here: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.target == target).collect();
+        let mut block: Vec<Summary> = solvers(rows)
+            .into_iter()
+            .map(|solver| {
+                let mine: Vec<&&BenchmarkRow> =
+                    here.iter().filter(|r| r.solver == solver).collect();
+                let successes = mine.iter().filter(|r| r.success).count();
+                let sgm = (mine.iter().map(|r| (charged(r) + SHIFT).ln()).sum::<f64>()
+                    / mine.len().max(1) as f64)
+                    .exp()
+                    - SHIFT;
+                Summary {
+                    target,
+                    solver,
+                    runs: mine.len(),
+                    successes,
+                    success_rate: successes as f64 / mine.len().max(1) as f64,
+                    claimed_but_failed: mine.iter().filter(|r| r.claimed_but_failed).count(),
+                    shifted_geometric_mean: sgm,
+                    relative_to_best: f64::NAN,
+                }
+            })
+            .collect();
+        let best = block
+            .iter()
+            .map(|s| s.shifted_geometric_mean + SHIFT)
+            .fold(f64::INFINITY, f64::min);
+        for s in &mut block {
+            s.relative_to_best = (s.shifted_geometric_mean + SHIFT) / best;
+        }
+        out.extend(block);
+    }
+    out
+}
+
+/// Performance profiles, one chart per target: ρ_s(τ), the fraction of
+/// instances that solver s solves within τ times the fastest solver's time
+/// on each.
+pub fn profile_charts(rows: &[BenchmarkRow]) -> Vec<(String, Chart)> {
+    let mut out = Vec::new();
+    for target in targets(rows) {
+        let here: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.target == target).collect();
+        let mut instances: Vec<&str> = here.iter().map(|r| r.instance.as_str()).collect();
+        instances.sort();
+        instances.dedup();
+        let best = |inst: &str| {
+            here.iter()
+                .filter(|r| r.instance == inst && r.success)
+                .map(|r| r.seconds.max(1e-9))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let bests: Vec<(&str, f64)> = instances.iter().map(|i| (*i, best(i))).collect();
+        let mut ratios_of = Vec::new();
+        for solver in solvers(rows) {
+            let mut ratios: Vec<f64> = bests
+                .iter()
+                .map(|(inst, b)| {
+                    here.iter()
+                        .find(|r| r.instance == *inst && r.solver == solver)
+                        .filter(|r| r.success)
+                        .map_or(f64::INFINITY, |r| r.seconds.max(1e-9) / b)
+                })
+                .collect();
+            ratios.sort_by(f64::total_cmp);
+            ratios_of.push((solver, ratios));
+        }
+        let tau_max = ratios_of
+            .iter()
+            .flat_map(|(_, r)| r.iter().copied().filter(|x| x.is_finite()))
+            .fold(1.0f64, f64::max)
+            * 1.5;
+        let n = instances.len().max(1) as f64;
+        let series = ratios_of
+            .iter()
+            .map(|(solver, ratios)| {
+                // A step function: up by 1/n at each ratio.
+                let mut pts = vec![(1.0, 0.0)];
+                let mut solved = 0usize;
+                for &r in ratios.iter().filter(|r| r.is_finite()) {
+                    let last = solved as f64 / n;
+                    solved += 1;
+                    pts.push((r.max(1.0), last));
+                    pts.push((r.max(1.0), solved as f64 / n));
+                }
+                pts.push((tau_max, solved as f64 / n));
+                Series::line(solver.clone(), pts).of_solver(solver)
+            })
+            .collect();
+        out.push((
+            format!("benchmark_profile_{}", tag(target)),
+            Chart::new(
+                format!(
+                    "Performance profile at target accuracy {target:.0e} ({} instances)",
+                    instances.len()
+                ),
+                "τ: time within τ × the fastest solver's on the instance",
+                "fraction of instances solved (certified)",
+                true,
+                false,
+                series,
+            ),
+        ));
+    }
+    out
+}
+
+/// `1e-4` as a file-name tag: `1e-4`.
+pub fn tag(target: f64) -> String {
+    format!("{target:.0e}")
+}
+
+/// The Markdown table at one target.
+pub fn markdown(summaries: &[Summary], target: f64) -> String {
+    let mut s = String::from(
+        "| solver | success | claimed, refused by the certificate | shifted geometric mean [s] | relative to the best |\n|---|---|---|---|---|\n",
+    );
+    for x in summaries.iter().filter(|x| x.target == target) {
+        s += &format!(
+            "| {} | {}/{} ({:.0}%) | {} | {:.3} | {:.2} |\n",
+            x.solver,
+            x.successes,
+            x.runs,
+            100.0 * x.success_rate,
+            x.claimed_but_failed,
+            x.shifted_geometric_mean,
+            x.relative_to_best
+        );
+    }
+    s
+}
+
+/// The runs claimed but refused, one line each.
+pub fn refused_lines(rows: &[BenchmarkRow]) -> Vec<String> {
+    rows.iter()
+        .filter(|r| r.claimed_but_failed)
+        .map(|r| {
+            format!(
+                "- `{}` on `{}` at {:.0e}: certificate {:.1e} ({})",
+                r.solver,
+                r.instance,
+                r.target,
+                r.certificate,
+                r.failing.replace(';', ", ")
+            )
+        })
+        .collect()
+}
+
+/// Writes the views of `rows` into `dir`: benchmark_summary.csv, a
+/// Markdown and a LaTeX table per target, benchmark.md, and the profiles.
+/// Returns the charts (to be drawn by the caller with the others).
+pub fn write(dir: &Path, rows: &[BenchmarkRow]) -> Result<Vec<(String, Chart)>> {
+    let sums = summaries(rows);
+    write_atomic(&dir.join("benchmark_summary.csv"), &to_csv(&sums, &[])?)?;
+    for t in targets(rows) {
+        let comment = format!(
+            "contactlab benchmark at target accuracy {t:.0e}; shifted geometric mean with shift {SHIFT} s, a failure at the time limit"
+        );
+        write_atomic(
+            &dir.join(format!("benchmark_{}.tex", tag(t))),
+            crate::io::latex::booktabs(&markdown(&sums, t), &comment).as_bytes(),
+        )?;
+    }
+    write_atomic(&dir.join("benchmark.md"), report(rows).as_bytes())?;
+    Ok(profile_charts(rows))
+}
+
+/// The benchmark's section of a report: per target the table, the runs
+/// claimed but refused, and which solver wins by how much.
+pub fn report(rows: &[BenchmarkRow]) -> String {
+    let sums = summaries(rows);
+    let mut instances: Vec<&str> = rows.iter().map(|r| r.instance.as_str()).collect();
+    instances.sort();
+    instances.dedup();
+    let limit = rows.iter().map(|r| r.time_limit).fold(0.0f64, f64::max);
+    let mut s = format!(
+        "{} instances, {} solvers, {} runs; a run succeeds if its answer passes the certificate at the target accuracy; \
+         time limit {limit} s per run; shifted geometric mean of time with shift {SHIFT} s, a failure counted at the time limit.\n",
+        instances.len(),
+        solvers(rows).len(),
+        rows.len()
+    );
+    for t in targets(rows) {
+        s += &format!("\n**Target accuracy {t:.0e}**\n\n{}", markdown(&sums, t));
+        let mut ranked: Vec<&Summary> = sums.iter().filter(|x| x.target == t).collect();
+        ranked.sort_by(|a, b| a.relative_to_best.total_cmp(&b.relative_to_best));
+        if let [first, second, ..] = ranked.as_slice() {
+            s += &format!(
+                "\nFastest over the collection: `{}` ({:.0}% solved); the next, `{}`, is {:.2}× slower in shifted geometric mean ({:.0}% solved).\n",
+                first.solver,
+                100.0 * first.success_rate,
+                second.solver,
+                second.relative_to_best / first.relative_to_best,
+                100.0 * second.success_rate
+            );
+        }
+        let at_t: Vec<BenchmarkRow> = rows.iter().filter(|r| r.target == t).cloned().collect();
+        let refused = refused_lines(&at_t);
+        if !refused.is_empty() {
+            s += &format!(
+                "\nClaimed convergence, refused by the certificate ({}):\n\n{}\n",
+                refused.len(),
+                refused.join("\n")
+            );
+        }
+    }
+    s
+}

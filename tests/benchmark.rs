@@ -1,0 +1,215 @@
+//! The benchmark: `benchmark --quick` writes every file with the documented
+//! columns; two shards merged give the runs of the whole; and a solver that
+//! claims success on a wrong answer is counted as a failure and listed.
+
+use std::path::Path;
+use std::process::Command;
+
+use contactlab::settings::Settings;
+use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo};
+use contactlab::solvers::settings::{Validate, from_tree, parse_positive, to_tree};
+use contactlab::solvers::{ContactProblem, Law, Observer, Solution, Solver, Start, Status};
+use contactlab::study::benchmark::views::{self, summaries};
+use contactlab::study::benchmark::{self, BenchmarkRow, BenchmarkSpec};
+
+const COLUMNS: [&str; 17] = [
+    "instance",
+    "family",
+    "h",
+    "unknowns",
+    "friction_coefficient",
+    "solver",
+    "target",
+    "status",
+    "solver_status",
+    "success",
+    "claimed_but_failed",
+    "certificate",
+    "failing",
+    "seconds",
+    "time_limit",
+    "work",
+    "detail",
+];
+
+fn contactlab(args: &[&str]) {
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+fn header(path: &Path) -> Vec<String> {
+    csv::Reader::from_path(path)
+        .unwrap()
+        .headers()
+        .unwrap()
+        .iter()
+        .map(String::from)
+        .collect()
+}
+
+fn outcomes(rows: &[BenchmarkRow]) -> Vec<(String, String, String, bool)> {
+    let mut v: Vec<_> = rows
+        .iter()
+        .map(|r| {
+            (
+                r.instance.clone(),
+                r.solver.clone(),
+                format!("{:e}", r.target),
+                r.success,
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn quick_benchmark_writes_every_file_and_shards_merge_to_the_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let s = |name: &str| p(name).to_string_lossy().into_owned();
+    contactlab(&["benchmark", "--quick", "--out", &s("whole")]);
+    let whole = p("whole");
+    assert_eq!(header(&whole.join("benchmark.csv")), COLUMNS);
+    for f in [
+        "benchmark_trials.csv",
+        "benchmark_trials_timing.csv",
+        "benchmark_summary.csv",
+        "benchmark_1e-4.tex",
+        "benchmark_1e-8.tex",
+        "benchmark.md",
+        "manifest.json",
+        "charts/benchmark_profile_1e-4.svg",
+        "charts/benchmark_profile_1e-8.svg",
+    ] {
+        assert!(whole.join(f).is_file(), "missing {f}");
+    }
+    let tex = std::fs::read_to_string(whole.join("benchmark_1e-8.tex")).unwrap();
+    assert!(tex.contains("\\toprule") && tex.contains("\\bottomrule"));
+    // Two shards, merged.
+    contactlab(&["benchmark", "--quick", "--shard", "1/2", "--out", &s("a")]);
+    contactlab(&["benchmark", "--quick", "--shard", "2/2", "--out", &s("b")]);
+    contactlab(&["benchmark-merge", &s("a"), &s("b"), "--out", &s("merged")]);
+    let rows = |d: &str| views::read_rows(&[p(d)]).unwrap();
+    let (a, b) = (rows("a"), rows("b"));
+    assert!(!a.is_empty() && !b.is_empty());
+    assert!(
+        a.iter()
+            .all(|r| !b.iter().any(|q| q.instance == r.instance)),
+        "shards overlap"
+    );
+    assert_eq!(outcomes(&rows("merged")), outcomes(&rows("whole")));
+    assert!(
+        p("merged")
+            .join("charts/benchmark_profile_1e-4.svg")
+            .is_file()
+    );
+    // A shard merged twice is refused.
+    assert!(views::read_rows(&[p("a"), p("a")]).is_err());
+}
+
+/// A solver that claims convergence with no contact force at all: a wrong
+/// answer (the load is not balanced).
+struct Liar;
+
+impl Solver for Liar {
+    fn solve(
+        &mut self,
+        p: &ContactProblem,
+        _law: Law,
+        _s: Option<Start<'_>>,
+        _o: &mut dyn Observer,
+    ) -> Solution {
+        let mut s = Solution::failed(p.n(), p.contacts().len(), Status::Converged, "trust me");
+        s.status = Status::Converged;
+        s
+    }
+}
+
+static LIAR: Entry = Entry {
+    name: "liar",
+    about: "claims convergence on a zero answer (a test's)",
+    source: "none",
+    laws: &[Law::Coulomb],
+    warm_starts: false,
+    stages: &[StageInfo {
+        name: "lie",
+        about: "never reported",
+        history: false,
+    }],
+    work_stage: "lie",
+    knobs: &[Knob {
+        name: "tolerance",
+        fields: &["tolerance"],
+        help: "ignored",
+        parse: parse_positive,
+    }],
+    defaults: |_| to_tree(&LiarSettings { tolerance: 1e-10 }),
+    build: |tree| {
+        let _: LiarSettings = from_tree(tree)?;
+        Ok(Box::new(Liar))
+    },
+    accuracy: Accuracy {
+        knob: "tolerance",
+        values: &[1e-6],
+        reference: 1e-10,
+        exact: false,
+    },
+    role: Role::Other,
+    sweeps: &[],
+    stress: &[],
+    study_work: 10,
+    kernel: None,
+    restarts: &[],
+    diagnose: &[],
+};
+
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LiarSettings {
+    tolerance: f64,
+}
+
+impl Validate for LiarSettings {
+    fn validate(&self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_solver_claiming_success_on_a_wrong_answer_counts_as_failed() {
+    if registry::by_name("liar").is_none() {
+        registry::register(&LIAR).unwrap();
+    }
+    let honest = registry::by_name("newton-coulomb").unwrap();
+    let spec = BenchmarkSpec::new(true, vec![&LIAR, honest]);
+    let done = benchmark::run(&spec, &Settings::default(), &|_| {}).unwrap();
+    let rows: Vec<BenchmarkRow> = done.into_iter().map(|(r, _)| r).collect();
+    let liar: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.solver == "liar").collect();
+    assert!(!liar.is_empty());
+    for r in &liar {
+        assert_eq!(r.solver_status, "converged");
+        assert!(!r.success && r.claimed_but_failed, "{r:?}");
+        assert!(r.failing.contains("force_balance"), "{r:?}");
+    }
+    for s in summaries(&rows).iter().filter(|s| s.solver == "liar") {
+        assert_eq!((s.successes, s.claimed_but_failed), (0, s.runs));
+    }
+    assert!(
+        views::report(&rows).contains("`liar` on"),
+        "the refused runs are listed"
+    );
+    // The honest solver solves every instance.
+    assert!(
+        rows.iter()
+            .filter(|r| r.solver == honest.name)
+            .all(|r| r.success)
+    );
+}

@@ -1,0 +1,100 @@
+//! Export and certify: an exported instance reads back as the same problem,
+//! a solution computed from the read-back problem is certified by
+//! `contactlab certify` (given as displacements or as contact forces), and
+//! a deliberately wrong one is refused with a non-zero exit.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use contactlab::io::export::{export, import};
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
+use contactlab::settings::Settings;
+use contactlab::solvers::{Law, Silent, registry};
+
+fn certify(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(["certify", "--instance", dir.to_str().unwrap()])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn lines(x: &[f64]) -> String {
+    x.iter().map(|v| format!("{v:e}\n")).collect()
+}
+
+#[test]
+fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let inst = dir.path().join("instance");
+    std::fs::create_dir(&inst).unwrap();
+    let mut scene = Scene::paper_problem(1).unwrap();
+    scene.set_finest(MeshSize::from_level(4).unwrap());
+    let d = Discretization::new(&scene, scene.finest()).unwrap();
+    export(&inst, &scene, &d).unwrap();
+    // The same problem, to the last bit.
+    let p = import(&inst).unwrap();
+    assert_eq!(p.n(), d.problem.n());
+    assert_eq!(p.f(), d.problem.f());
+    assert_eq!(p.contacts(), d.problem.contacts());
+    assert_eq!(p.rigid_modes(), d.problem.rigid_modes());
+    assert_eq!(p.a().csr_data(), d.problem.a().csr_data());
+    assert_eq!(p.mass().csr_data(), d.problem.mass().csr_data());
+    // Solve the read-back problem (as another code would) and certify.
+    let entry = registry::by_name("newton-coulomb").unwrap();
+    let mut solver = Settings::default().build(entry).unwrap();
+    let s = solver.solve(&p, Law::Coulomb, None, &mut Silent);
+    assert!(s.status.is_converged(), "{}", s.detail);
+    let v_file = dir.path().join("v.txt");
+    std::fs::write(&v_file, lines(&s.v)).unwrap();
+    let f_file = dir.path().join("forces.csv");
+    let forces = |scale: f64| {
+        let mut t = String::from("pressure,friction_traction\n");
+        for (p, q) in s.pressure.iter().zip(&s.friction_traction) {
+            t += &format!("{:e},{q:e}\n", p * scale);
+        }
+        t
+    };
+    std::fs::write(&f_file, forces(1.0)).unwrap();
+    for args in [
+        vec!["--displacements", v_file.to_str().unwrap()],
+        vec!["--forces", f_file.to_str().unwrap()],
+        vec![
+            "--displacements",
+            v_file.to_str().unwrap(),
+            "--forces",
+            f_file.to_str().unwrap(),
+        ],
+    ] {
+        let o = certify(&inst, &args);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{args:?}: {out} {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(out.contains("certified at 1e-5"), "{out}");
+    }
+    // Wrong answers: displacements 1% too large; pressures 10% too small.
+    let wrong_v: Vec<f64> = s.v.iter().map(|x| 1.01 * x).collect();
+    std::fs::write(&v_file, lines(&wrong_v)).unwrap();
+    let o = certify(&inst, &["--displacements", v_file.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("FAILS"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not certified"));
+    std::fs::write(&f_file, forces(0.9)).unwrap();
+    let o = certify(&inst, &["--forces", f_file.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("force_balance") && out.contains("FAILS"),
+        "{out}"
+    );
+    // A wrong length is a one-line error naming the flag.
+    std::fs::write(&v_file, lines(&s.v[1..])).unwrap();
+    let o = certify(&inst, &["--displacements", v_file.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--displacements"));
+}
