@@ -3,7 +3,7 @@
 
 use contactlab::mechanics::assembly::{self, strain_matrix};
 use contactlab::mechanics::discretization::{BuildError, Discretization};
-use contactlab::mechanics::dofs::PhysicalDofs;
+use contactlab::mechanics::dofs::{DofExpansion, DofMap, PhysicalDofs};
 use contactlab::mechanics::material::{Material, PlaneModel};
 use contactlab::mechanics::mesh::{Body, Mesh};
 use contactlab::mechanics::mesh_size::MeshSize;
@@ -417,5 +417,68 @@ fn transfer_between_levels_interpolates_linearly_and_injects_back() {
     let exact = fine.dofs.from_physical(&field(&fine));
     for (a, b) in vf.iter().zip(&exact) {
         assert!((a - b).abs() < 1e-15, "{a} vs {b}");
+    }
+}
+
+/// The assembly by triplets that contactlab used before the row-wise one:
+/// every element entry pushed, duplicates summed by the COO → CSR
+/// conversion.
+fn assemble_by_triplets(
+    mesh: &Mesh,
+    dofs: &DofMap,
+    element: impl Fn([[f64; 2]; 3]) -> [[f64; 6]; 6],
+) -> CsrMatrix<f64> {
+    let mut coo = CooMatrix::new(dofs.n(), dofs.n());
+    for (_, tri) in mesh.triangles() {
+        let ke = element(tri.map(|node| mesh.coords(node)));
+        let terms: Vec<_> = (0..6).map(|l| dofs.terms(tri[l / 2], l % 2)).collect();
+        for (a, ta) in terms.iter().enumerate() {
+            for (b, tb) in terms.iter().enumerate() {
+                for &(i, ci) in ta.as_slice() {
+                    for &(j, cj) in tb.as_slice() {
+                        coo.push(i, j, ci * cj * ke[a][b]);
+                    }
+                }
+            }
+        }
+    }
+    CsrMatrix::from(&coo)
+}
+
+/// The row-wise assembly (element matrices shared between congruent
+/// triangles, a dense accumulator per row) stores the same entries as the
+/// triplet assembly, explicit zeros included, with the same values up to the
+/// order of summation: a wrong place, a lost contact-expansion term, a
+/// missing triangle or a wrong shape shared would show here.
+#[test]
+fn row_wise_assembly_equals_the_triplet_assembly_entry_by_entry() {
+    for k in 1..=5 {
+        let mesh = Mesh::new(h(k));
+        let dofs = DofMap::new(&mesh);
+        for material in materials() {
+            let d = material.elasticity_matrix();
+            let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &material);
+            let pairs = [
+                (
+                    a,
+                    assemble_by_triplets(&mesh, &dofs, |p| assembly::element_stiffness(p, &d)),
+                ),
+                (
+                    m,
+                    assemble_by_triplets(&mesh, &dofs, assembly::element_mass),
+                ),
+            ];
+            for (new, old) in pairs {
+                assert_eq!(new.row_offsets(), old.row_offsets(), "k = {k}");
+                assert_eq!(new.col_indices(), old.col_indices(), "k = {k}");
+                let scale = max_abs(old.values());
+                for (x, y) in new.values().iter().zip(old.values()) {
+                    assert!(
+                        (x - y).abs() <= 4.0 * f64::EPSILON * scale,
+                        "k = {k}: {x} against {y}"
+                    );
+                }
+            }
+        }
     }
 }

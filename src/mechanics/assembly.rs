@@ -2,7 +2,10 @@
 //! the consistent mass matrix of the L2 product, and loads from piecewise
 //! constant tractions on the top side y = 1, integrated exactly.
 
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
+use std::collections::HashMap;
+
+use nalgebra_sparse::CsrMatrix;
+use nalgebra_sparse::pattern::SparsityPattern;
 
 use crate::mechanics::dofs::DofExpansion;
 use crate::mechanics::material::Material;
@@ -68,35 +71,200 @@ pub fn element_mass(p: [[f64; 2]; 3]) -> [[f64; 6]; 6] {
     m
 }
 
-/// Assembles an element matrix over every triangle (optionally one body) into
-/// the unknowns of `dofs` (eliminated components drop out, relative ones
-/// expand into their two terms).
+/// The triangles of the mesh (optionally one body's), as node triples.
+fn triangles(mesh: &Mesh, only: Option<Body>) -> Vec<[usize; 3]> {
+    mesh.triangles()
+        .filter(|(body, _)| only.is_none_or(|b| b == *body))
+        .map(|(_, tri)| tri)
+        .collect()
+}
+
+/// `rows[i]` as a compressed list: offsets and the flattened items.
+struct Lists {
+    offsets: Vec<usize>,
+    items: Vec<usize>,
+}
+
+impl Lists {
+    /// Groups the `(row, item)` pairs that `pairs` emits (it is called twice)
+    /// by row with a counting sort, keeping their order within a row:
+    /// O(rows + pairs).
+    fn group(rows: usize, pairs: impl Fn(&mut dyn FnMut(usize, usize))) -> Self {
+        let mut offsets = vec![0; rows + 1];
+        pairs(&mut |r, _| offsets[r + 1] += 1);
+        for r in 0..rows {
+            offsets[r + 1] += offsets[r];
+        }
+        let mut next = offsets.clone();
+        let mut items = vec![0; offsets[rows]];
+        pairs(&mut |r, item| {
+            items[next[r]] = item;
+            next[r] += 1;
+        });
+        Self { offsets, items }
+    }
+
+    fn of(&self, row: usize) -> &[usize] {
+        &self.items[self.offsets[row]..self.offsets[row + 1]]
+    }
+}
+
+/// An element matrix of a triangle from its corners, local order
+/// (u1_a, u2_a, u1_b, ...).
+pub type ElementMatrix<'a> = dyn Fn([[f64; 2]; 3]) -> [[f64; 6]; 6] + 'a;
+
+/// Up to this many distinct shapes are found by a scan.
+const SCANNED_SHAPES: usize = 8;
+
+/// The element matrices of every triangle, computed once per shape: an
+/// element matrix depends on the edge vectors only, and on a mesh of
+/// h = 1/2^k those are exact, so congruent triangles share one matrix
+/// bit for bit (this mesh has two shapes). Any other mesh gets one entry per
+/// distinct shape, at worst one per triangle.
+struct ElementTable<const K: usize> {
+    shape: Vec<u32>,
+    matrices: Vec<[[[f64; 6]; 6]; K]>,
+}
+
+impl<const K: usize> ElementTable<K> {
+    fn new(mesh: &Mesh, tris: &[[usize; 3]], elements: [&ElementMatrix<'_>; K]) -> Self {
+        // Shapes seen so far; looked up by scanning while they are few (this
+        // mesh has two), by hashing beyond.
+        let mut keys: Vec<[u64; 4]> = Vec::new();
+        let mut index: HashMap<[u64; 4], u32> = HashMap::new();
+        let mut matrices = Vec::new();
+        let shape = tris
+            .iter()
+            .map(|tri| {
+                let p = tri.map(|node| mesh.coords(node));
+                let key = [
+                    p[1][0] - p[0][0],
+                    p[1][1] - p[0][1],
+                    p[2][0] - p[0][0],
+                    p[2][1] - p[0][1],
+                ]
+                .map(f64::to_bits);
+                let known = if keys.len() <= SCANNED_SHAPES {
+                    keys.iter().position(|k| *k == key).map(|i| i as u32)
+                } else {
+                    index.get(&key).copied()
+                };
+                known.unwrap_or_else(|| {
+                    let i = matrices.len() as u32;
+                    matrices.push(elements.map(|element| element(p)));
+                    keys.push(key);
+                    if keys.len() == SCANNED_SHAPES + 1 {
+                        index.extend(keys.iter().enumerate().map(|(i, k)| (*k, i as u32)));
+                    } else if keys.len() > SCANNED_SHAPES + 1 {
+                        index.insert(key, i);
+                    }
+                    i
+                })
+            })
+            .collect();
+        Self { shape, matrices }
+    }
+}
+
+/// Assembles element matrices over every triangle (optionally one body) into
+/// the unknowns of `dofs`, one matrix per element function, all on one
+/// pattern: eliminated components drop out, relative ones expand into their
+/// two terms, and (i, j) is stored when a triangle couples a component
+/// involving unknown i with one involving j (explicit zeros included, so the
+/// stiffness and the mass share the pattern).
+///
+/// Row by row, Gustavson's way: for unknown i, the triangles around each node
+/// whose components involve i add their element row into a dense
+/// accumulator, a marker array collects the row's columns, which are then
+/// sorted. Linear in the mesh, no triplet list, no search; each element
+/// matrix is computed once per shape ([`ElementTable`]).
+pub fn assemble_all<const K: usize>(
+    mesh: &Mesh,
+    dofs: &impl DofExpansion,
+    only: Option<Body>,
+    elements: [&ElementMatrix<'_>; K],
+) -> [CsrMatrix<f64>; K] {
+    let n = dofs.n();
+    let tris = triangles(mesh, only);
+    let table = ElementTable::new(mesh, &tris, elements);
+    let node_triangles = Lists::group(mesh.num_nodes(), |emit| {
+        for (e, tri) in tris.iter().enumerate() {
+            for &node in tri {
+                emit(node, e);
+            }
+        }
+    });
+    // Each unknown's physical components, as 2·node + k.
+    let components = Lists::group(n, |emit| {
+        for c in 0..2 * mesh.num_nodes() {
+            for &(i, _) in dofs.terms(c / 2, c % 2).as_slice() {
+                emit(i, c);
+            }
+        }
+    });
+    // A P1 row of this mesh has at most 14 entries (18 with the contact
+    // expansion): one allocation in the usual case.
+    let capacity = 16 * n;
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0);
+    let mut columns: Vec<usize> = Vec::with_capacity(capacity);
+    let mut values: [Vec<f64>; K] = [(); K].map(|_| Vec::with_capacity(capacity));
+    let mut marker = vec![usize::MAX; n];
+    let mut accumulator = vec![[0.0; K]; n];
+    for i in 0..n {
+        let start = columns.len();
+        for &c in components.of(i) {
+            let (node, k) = (c / 2, c % 2);
+            let ci = dofs
+                .terms(node, k)
+                .as_slice()
+                .iter()
+                .find(|(unknown, _)| *unknown == i)
+                .map_or(0.0, |(_, coefficient)| *coefficient);
+            for &e in node_triangles.of(node) {
+                let tri = &tris[e];
+                let a = 2 * tri.iter().position(|&m| m == node).expect("node of e") + k;
+                let ke = &table.matrices[table.shape[e] as usize];
+                for b in 0..6 {
+                    for &(j, cj) in dofs.terms(tri[b / 2], b % 2).as_slice() {
+                        if marker[j] != i {
+                            marker[j] = i;
+                            columns.push(j);
+                            accumulator[j] = [0.0; K];
+                        }
+                        for (acc, m) in accumulator[j].iter_mut().zip(ke) {
+                            *acc += ci * cj * m[a][b];
+                        }
+                    }
+                }
+            }
+        }
+        columns[start..].sort_unstable();
+        for &j in &columns[start..] {
+            for (v, acc) in values.iter_mut().zip(accumulator[j]) {
+                v.push(acc);
+            }
+        }
+        offsets.push(columns.len());
+    }
+    let pattern = SparsityPattern::try_from_offsets_and_indices(n, n, offsets, columns)
+        .expect("rows are sorted and deduplicated");
+    values.map(|v| {
+        CsrMatrix::try_from_pattern_and_values(pattern.clone(), v)
+            .expect("one value per stored entry")
+    })
+}
+
+/// Assembles one element matrix over every triangle (optionally one body);
+/// see [`assemble_all`].
 pub fn assemble(
     mesh: &Mesh,
     dofs: &impl DofExpansion,
     only: Option<Body>,
     element: impl Fn([[f64; 2]; 3]) -> [[f64; 6]; 6],
 ) -> CsrMatrix<f64> {
-    let n = dofs.n();
-    let mut coo = CooMatrix::new(n, n);
-    for (body, tri) in mesh.triangles() {
-        if only.is_some_and(|b| b != body) {
-            continue;
-        }
-        let p = tri.map(|node| mesh.coords(node));
-        let ke = element(p);
-        let terms: Vec<_> = (0..6).map(|l| dofs.terms(tri[l / 2], l % 2)).collect();
-        for (a, ta) in terms.iter().enumerate() {
-            for (b, tb) in terms.iter().enumerate() {
-                for &(i, ci) in ta.as_slice() {
-                    for &(j, cj) in tb.as_slice() {
-                        coo.push(i, j, ci * cj * ke[a][b]);
-                    }
-                }
-            }
-        }
-    }
-    CsrMatrix::from(&coo)
+    let [m] = assemble_all(mesh, dofs, only, [&element]);
+    m
 }
 
 /// Stiffness matrix of both bodies.
@@ -108,6 +276,22 @@ pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, material: &Material) -> 
 /// Mass matrix of both bodies (L2 product of displacement fields).
 pub fn mass(mesh: &Mesh, dofs: &impl DofExpansion) -> CsrMatrix<f64> {
     assemble(mesh, dofs, None, element_mass)
+}
+
+/// Stiffness and mass of both bodies in one pass on one pattern.
+pub fn stiffness_and_mass(
+    mesh: &Mesh,
+    dofs: &impl DofExpansion,
+    material: &Material,
+) -> (CsrMatrix<f64>, CsrMatrix<f64>) {
+    let d = material.elasticity_matrix();
+    let [a, m] = assemble_all(
+        mesh,
+        dofs,
+        None,
+        [&|p| element_stiffness(p, &d), &element_mass],
+    );
+    (a, m)
 }
 
 /// Physical nodal forces (per node, x and y) of tractions (P''_1, P''_2) on

@@ -58,8 +58,7 @@ impl Discretization {
     fn assemble(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
         let mesh = Mesh::new(h);
         let dofs = DofMap::new(&mesh);
-        let a = assembly::stiffness(&mesh, &dofs, &scene.material);
-        let m = assembly::mass(&mesh, &dofs);
+        let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.material);
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
         let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);

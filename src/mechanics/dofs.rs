@@ -30,6 +30,7 @@ pub struct Terms {
 }
 
 impl Terms {
+    #[inline]
     pub fn as_slice(&self) -> &[(usize, f64)] {
         &self.items[..self.len]
     }
@@ -167,6 +168,7 @@ impl DofExpansion for DofMap {
         self.n
     }
 
+    #[inline]
     fn terms(&self, node: usize, k: usize) -> Terms {
         match self.map[node][k] {
             Dof::Fixed => Terms {
