@@ -18,13 +18,14 @@
 //! silent stop.
 
 pub mod pointwise;
+pub mod residual;
 
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
 use crate::observer::{Control, Observer, Progress};
-use crate::problem::ContactProblem;
+use crate::problem::{ContactNode, ContactProblem};
 use crate::registry::{Accuracy, Entry, InnerKernel, Knob, Role, StageInfo, Variation};
 use crate::settings::{
     Stopping, Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
@@ -83,6 +84,24 @@ pub const ENTRY: Entry = Entry {
             fields: &["smoothing"],
             help: "|s| along slip coordinates: `exact` (soft thresholding) or a Huber width δ; relative: in units of U [default 1e-7; paper: 1e-10]",
             parse: pointwise::parse_smoothing,
+        },
+        Knob {
+            name: "omega",
+            fields: &["omega"],
+            help: "over-relaxation ω of the free coordinates in each sweep, in (0, 2); 1 is the paper's Gauss–Seidel [default 1]",
+            parse: parse_positive,
+        },
+        Knob {
+            name: "target",
+            fields: &["target"],
+            help: "certified stopping: stop when the contact law's and stationarity's largest violation in the problem's scales (the certificate's measure) is ≤ target, checked after every Uzawa step and every check_every sweeps; 0: the paper's rules on max|Δl| and max|Δv| [default 0]",
+            parse: parse_scalar,
+        },
+        Knob {
+            name: "check_every",
+            fields: &["check_every"],
+            help: "sweeps between two checks of the certified stopping rule (each costs about half a sweep) [default 10]",
+            parse: parse_scalar,
         },
         Knob {
             name: "max_uzawa",
@@ -182,6 +201,7 @@ pub fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
                 wg: &wg,
                 r: resolved.r,
                 smoothing: resolved.smoothing,
+                omega: 1.0,
             };
             std::hint::black_box(op.sweep(&mut v, &data));
         }),
@@ -208,6 +228,13 @@ pub struct RelaxationSettings {
     pub proximal: f64,
     /// Treatment of |s| along slip coordinates.
     pub smoothing: Smoothing,
+    /// Over-relaxation ω ∈ (0, 2) of the free coordinates (1: the paper).
+    pub omega: f64,
+    /// Certified stopping: stop once [`residual::contact_residual`] ≤ target
+    /// (0: the paper's rules).
+    pub target: f64,
+    /// Sweeps between two checks of the certified rule.
+    pub check_every: usize,
     /// Cap on Uzawa iterations per call.
     pub max_uzawa: usize,
     /// Cap on relaxation sweeps per Uzawa iteration.
@@ -256,6 +283,9 @@ impl RelaxationSettings {
                 smoothing: Smoothing::Huber {
                     delta: DEFAULT_HUBER_DELTA,
                 },
+                omega: 1.0,
+                target: 0.0,
+                check_every: 10,
                 max_uzawa: 1000,
                 max_sweeps: 2_000_000,
             },
@@ -266,6 +296,9 @@ impl RelaxationSettings {
                 sweep_factor: 1.0,
                 proximal: 1e-5,
                 smoothing: Smoothing::Huber { delta: 1e-7 },
+                omega: 1.0,
+                target: 0.0,
+                check_every: 10,
                 max_uzawa: 1000,
                 max_sweeps: 2_000_000,
             },
@@ -348,6 +381,19 @@ impl Validate for RelaxationSettings {
         if let Smoothing::Huber { delta } = self.smoothing {
             positive("relaxation.smoothing", delta, "a Huber width, or `exact`")?;
         }
+        if !(self.omega > 0.0 && self.omega < 2.0) {
+            return Err(format!(
+                "relaxation.omega = {} is invalid: over-relaxation needs 0 < ω < 2 (1 is the paper's Gauss–Seidel)",
+                self.omega
+            ));
+        }
+        if !(self.target.is_finite() && self.target >= 0.0) {
+            return Err(format!(
+                "relaxation.target = {} is invalid: a tolerance ≥ 0 in the certificate's measure, e.g. 1e-6 (0: the paper's rules)",
+                self.target
+            ));
+        }
+        at_least_one("relaxation.check_every", self.check_every, 10)?;
         at_least_one("relaxation.max_uzawa", self.max_uzawa, 1000)?;
         at_least_one("relaxation.max_sweeps", self.max_sweeps, 2_000_000)
     }
@@ -409,8 +455,14 @@ pub fn prox_uzawa(
     let rho = resolved.proximal;
     let mut b = problem.f().to_vec();
     let mut mv = vec![0.0; n];
-    let sweep_tol = resolved.sweep_tolerance;
+    let mut sweep_tol = resolved.sweep_tolerance;
     let want_sweeps = observer.wants("sweep");
+    // The certified rule's scratch: the multipliers the next Uzawa step would
+    // make, the friction traction, the stationarity residual.
+    let certified = settings.target > 0.0;
+    let (mut l_next, mut q) = (vec![0.0; m], vec![0.0; m]);
+    let mut scratch = vec![0.0; if certified { n } else { 0 }];
+    let mut last_residual = f64::INFINITY;
     let (mut sweeps, mut uzawa) = (0usize, 0usize);
     let mut status = Status::MaxIterations;
     let mut detail = format!("Uzawa iteration cap {} reached", settings.max_uzawa);
@@ -429,15 +481,17 @@ pub fn prox_uzawa(
             wg: &wg,
             r: resolved.r,
             smoothing: resolved.smoothing,
+            omega: settings.omega,
         };
         let mut converged_inner = false;
-        for q in 1..=settings.max_sweeps {
+        let mut reached = None;
+        for q_sweep in 1..=settings.max_sweeps {
             let change = op.sweep(&mut v, &data);
             sweeps += 1;
             if want_sweeps {
                 let control = observer.observe(&Progress {
                     stage: "sweep",
-                    iteration: q,
+                    iteration: q_sweep,
                     residual: change,
                     seconds: t0.elapsed().as_secs_f64(),
                 });
@@ -451,13 +505,31 @@ pub fn prox_uzawa(
             }
             if !change.is_finite() {
                 status = Status::NonFinite;
-                detail = format!("non-finite iterate in sweep {q} of Uzawa iteration {k}");
+                detail = format!("non-finite iterate in sweep {q_sweep} of Uzawa iteration {k}");
                 break 'uzawa;
+            }
+            if certified && sweeps.is_multiple_of(settings.check_every) {
+                uzawa_update(&l, &v, contacts, resolved.r, &mut l_next);
+                friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
+                let residual = residual::contact_residual(problem, &v, &l_next, &q, &mut scratch);
+                if residual <= settings.target {
+                    reached = Some(residual);
+                    break;
+                }
             }
             if change <= sweep_tol {
                 converged_inner = true;
                 break;
             }
+        }
+        if let Some(residual) = reached {
+            l.copy_from_slice(&l_next);
+            status = Status::Converged;
+            detail = format!(
+                "contact residual {residual:.3e} ≤ {:.0e} in Uzawa iteration {k} after {sweeps} sweeps",
+                settings.target
+            );
+            break;
         }
         if !converged_inner {
             status = Status::MaxIterations;
@@ -468,12 +540,12 @@ pub fn prox_uzawa(
             break;
         }
         // l^{k+1} = (l^k + r t^{k+1})⁺, paper (14).
-        let mut dl = 0.0f64;
-        for (li, c) in l.iter_mut().zip(contacts) {
-            let new = (*li + resolved.r * v[c.t]).max(0.0);
-            dl = dl.max((new - *li).abs());
-            *li = new;
-        }
+        uzawa_update(&l, &v, contacts, resolved.r, &mut l_next);
+        let dl = l
+            .iter()
+            .zip(&l_next)
+            .fold(0.0f64, |d, (a, b)| d.max((a - b).abs()));
+        l.copy_from_slice(&l_next);
         let control = observer.observe(&Progress {
             stage: "uzawa",
             iteration: k,
@@ -485,7 +557,24 @@ pub fn prox_uzawa(
             detail = format!("non-finite multiplier in Uzawa iteration {k}");
             break;
         }
-        if dl <= resolved.uzawa_tolerance {
+        if certified {
+            friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
+            let residual = residual::contact_residual(problem, &v, &l, &q, &mut scratch);
+            if residual <= settings.target {
+                status = Status::Converged;
+                detail = format!(
+                    "contact residual {residual:.3e} ≤ {:.0e} after {k} Uzawa iterations, {sweeps} sweeps",
+                    settings.target
+                );
+                break;
+            }
+            // Inexact Uzawa: when a step no longer gains a tenth, the inner
+            // solves are the limit; tighten their threshold tenfold.
+            if residual > 0.9 * last_residual {
+                sweep_tol /= 10.0;
+            }
+            last_residual = residual;
+        } else if dl <= resolved.uzawa_tolerance {
             status = Status::Converged;
             detail = format!(
                 "max|Δl| = {dl:.3e} ≤ {:.3e} after {k} Uzawa iterations, {sweeps} sweeps",
@@ -499,18 +588,8 @@ pub fn prox_uzawa(
             break;
         }
     }
-    // Friction traction from the one-dimensional optimality condition along
-    // each slip coordinate: (Hv − b)_s + w g ξ = 0 with ξ ∈ ∂φ(s).
-    let friction_traction = contacts
-        .iter()
-        .map(|c| {
-            let g = c.g;
-            match resolved.smoothing {
-                Smoothing::Huber { delta } => -g * (v[c.s] / delta).clamp(-1.0, 1.0),
-                Smoothing::Exact => (op.gradient_at(&v, &b, c.s) / c.weight).clamp(-g, g),
-            }
-        })
-        .collect();
+    friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
+    let friction_traction = q;
     let mut out = Solution {
         v,
         pressure: l,
@@ -531,6 +610,32 @@ pub fn prox_uzawa(
         out.status = Status::NonFinite;
     }
     out
+}
+
+/// The multipliers of the Uzawa step l^{k+1} = (l^k + r t^{k+1})⁺, paper (14).
+fn uzawa_update(l: &[f64], v: &[f64], contacts: &[ContactNode], r: f64, out: &mut [f64]) {
+    for ((o, li), c) in out.iter_mut().zip(l).zip(contacts) {
+        *o = (li + r * v[c.t]).max(0.0);
+    }
+}
+
+/// Friction traction from the one-dimensional optimality condition along
+/// each slip coordinate: (Hv − b)_s + w g ξ = 0 with ξ ∈ ∂φ(s).
+fn friction_traction(
+    op: &RelaxationOperator,
+    v: &[f64],
+    b: &[f64],
+    contacts: &[ContactNode],
+    smoothing: Smoothing,
+    out: &mut [f64],
+) {
+    for (o, c) in out.iter_mut().zip(contacts) {
+        let g = c.g;
+        *o = match smoothing {
+            Smoothing::Huber { delta } => -g * (v[c.s] / delta).clamp(-1.0, 1.0),
+            Smoothing::Exact => (op.gradient_at(v, b, c.s) / c.weight).clamp(-g, g),
+        };
+    }
 }
 
 impl Solver for ProxUzawa {
