@@ -8,9 +8,9 @@ use thiserror::Error;
 
 /// Smallest and largest exponent k accepted for h = 1/2^k.
 pub const MIN_LEVEL: u32 = 1;
-pub const MAX_LEVEL: u32 = 9;
+pub const MAX_LEVEL: u32 = 10;
 
-/// A mesh size h = 1/2^k with 1/2 ≥ h ≥ 1/512.
+/// A mesh size h = 1/2^k with 1/2 ≥ h ≥ 1/1024.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct MeshSize {
     k: u32,
@@ -155,7 +155,7 @@ mod tests {
     #[test]
     fn refuses_what_is_not_one_over_a_power_of_two() {
         for s in [
-            "1/60", "2/64", "1/0", "0", "1", "64", "abc", "1/1024", "1/-8", "-0.125",
+            "1/60", "2/64", "1/0", "0", "1", "64", "abc", "1/2048", "1/-8", "-0.125",
         ] {
             assert!(s.parse::<MeshSize>().is_err(), "{s} was accepted");
         }

@@ -39,6 +39,10 @@ pub struct BenchSpec {
     /// Seconds: a solver slower than this on one mesh (or predicted to be
     /// on the next) is not run on finer meshes; also each run's deadline.
     pub budget: f64,
+    /// Finer meshes where only assembly, one factorization and the
+    /// registry's direct Coulomb solver are timed, once each and cold (a
+    /// solve at 1/1024 takes a minute and 6 GB).
+    pub large: Vec<MeshSize>,
 }
 
 impl BenchSpec {
@@ -50,6 +54,9 @@ impl BenchSpec {
                 .collect(),
             runs: 3,
             budget: 15.0,
+            large: (9..=10)
+                .map(|k| MeshSize::from_level(k).expect("in range"))
+                .collect(),
         }
     }
 
@@ -61,6 +68,7 @@ impl BenchSpec {
                 .collect(),
             runs: 1,
             budget: 5.0,
+            large: Vec::new(),
         }
     }
 }
@@ -256,7 +264,70 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             }
         }
     }
+    if let Some(direct) = registry::solvers()
+        .into_iter()
+        .find(|e| e.solves(Law::Coulomb))
+    {
+        for &h in &spec.large {
+            large_mesh(spec.problem, h, direct, settings, &mut rows, log)?;
+        }
+    }
     Ok(rows)
+}
+
+/// On a large mesh: assembly, one factorization and `solver` on the whole
+/// Coulomb problem, each timed once (no warm-up, no reference: the
+/// certificate alone judges the answer).
+fn large_mesh(
+    problem: u32,
+    h: MeshSize,
+    solver: &'static contactlab_solvers::registry::Entry,
+    settings: &Settings,
+    rows: &mut Vec<PerfRow>,
+    log: &dyn Fn(&str),
+) -> Result<()> {
+    let mut scene = Scene::paper_problem(problem)?;
+    scene.set_finest(h);
+    log(&format!("h = {h}: assembly and one factorization"));
+    let (d, assembly) = timed(0, || Ok(Discretization::new(&scene, h)?))?;
+    let a = pinned(&d);
+    let (_, factor) = timed(0, || {
+        let c = SparseCholesky::new(&a)?;
+        let mut b = d.problem.f().to_vec();
+        c.solve_vec(&mut b);
+        Ok(b[0])
+    })?;
+    drop(a);
+    let unknowns = d.problem.n();
+    drop(d);
+    let mut mesh = MeshRows {
+        rows,
+        h,
+        unknowns,
+        factorization: median(&factor),
+    };
+    let note = "symbolic + numeric + one solve, once".to_string();
+    mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
+    mesh.push("assembly", "-", &assembly, "done", "once".into());
+    log(&format!("h = {h}: {} coulomb", solver.name));
+    let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
+    let m = measure(&t, None, Keep::default())?;
+    let tr = &m.trial;
+    let note = format!(
+        "once; {} friction iterations, {} outer, {} inner",
+        tr.friction_iterations, tr.outer_iterations, tr.inner_iterations
+    );
+    mesh.push(
+        "coulomb",
+        solver.name,
+        &[m.timing.seconds_median],
+        tr.status.as_str(),
+        note,
+    );
+    let row = mesh.rows.last_mut().expect("just pushed");
+    row.certificate = tr.certificate;
+    row.work = tr.work;
+    Ok(())
 }
 
 /// Times a kernel step and one product with its operator, interleaved so
