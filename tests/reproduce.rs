@@ -257,6 +257,8 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
                 "fraction of instances solved",
                 true,
             )
+        } else if name.starts_with("discretization_error") {
+            ("Discretization error", "h", "relative error", false)
         } else if name == "stability_friction" {
             (
                 "Coulomb fixed point",
@@ -289,7 +291,7 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         legend_beside_the_data(&path);
         seen += 1;
     }
-    assert!(seen >= 12 + 3 + 1 + 2 + 3 + 2, "only {seen} charts");
+    assert!(seen >= 12 + 3 + 1 + 2 + 3 + 2 + 2, "only {seen} charts");
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
     assert!(readme.contains("## Does the paper's solver agree with the reference?"));
     assert!(

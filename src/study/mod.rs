@@ -7,6 +7,7 @@ pub mod agreement;
 pub mod bench;
 pub mod benchmark;
 pub mod compare;
+pub mod discretization_error;
 pub mod reference;
 pub mod report;
 pub mod reproduce;

@@ -41,6 +41,8 @@ pub fn intent(name: &str) -> String {
         "How each solver's time grows with the number of unknowns (fitted slope in the legend), beside one sparse factorization."
     } else if name.starts_with("benchmark_profile") {
         "Performance profile over the collection: the fraction of instances each solver solves (certified) within τ times the fastest solver's time."
+    } else if name.starts_with("discretization_error") {
+        "How fast each error falls as h → 0 against the finest mesh: on log–log axes the slope is the observed order."
     } else {
         "A chart of this run."
     };

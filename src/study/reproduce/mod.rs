@@ -29,6 +29,7 @@ use crate::study::bench::BenchSpec;
 use crate::study::bench::goals::{BenchOutput, write_bench};
 use crate::study::benchmark::{self, BenchmarkRow, BenchmarkSpec};
 use crate::study::compare;
+use crate::study::discretization_error::{self, ErrorRow, ErrorSpec};
 use crate::study::reference::References;
 use crate::study::report::{ProfilePair, convergence_charts, profile_charts, sweep_charts};
 use crate::study::runner::{Keep, Measured, measure, measure_all, write_trials};
@@ -57,6 +58,8 @@ pub struct ReproduceSpec {
     /// The benchmark over the problem collection (its solvers: all).
     #[serde(skip)]
     pub benchmark: BenchmarkSpec,
+    /// The discretization-error study.
+    pub errors: ErrorSpec,
 }
 
 impl ReproduceSpec {
@@ -76,6 +79,7 @@ impl ReproduceSpec {
             stability: StabilitySpec::standard(),
             bench: BenchSpec::standard(),
             benchmark: BenchmarkSpec::new(false, registry::solvers()),
+            errors: ErrorSpec::standard(),
         }
     }
 
@@ -98,13 +102,14 @@ impl ReproduceSpec {
             stability: StabilitySpec::quick(),
             bench: BenchSpec::quick(),
             benchmark: BenchmarkSpec::new(true, registry::solvers()),
+            errors: ErrorSpec::quick(),
         }
     }
 }
 
 /// Files every reproduce run writes (relative to the output folder),
 /// besides the per-problem profiles and the charts.
-pub const FILES: [&str; 26] = [
+pub const FILES: [&str; 27] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -131,6 +136,7 @@ pub const FILES: [&str; 26] = [
     "benchmark_summary.csv",
     "benchmark_1e-4.tex",
     "benchmark_1e-8.tex",
+    "discretization_error.csv",
 ];
 
 /// One problem's separation with one solver.
@@ -160,6 +166,8 @@ pub struct Outputs {
     pub bench: BenchOutput,
     /// The benchmark's rows.
     pub benchmark: Vec<BenchmarkRow>,
+    /// The discretization-error study's rows.
+    pub errors: Vec<ErrorRow>,
     pub references: References,
     pub charts: Vec<(String, Chart)>,
 }
@@ -383,6 +391,19 @@ pub fn run(
     write_atomic(&out.join("benchmark.csv"), &to_csv(&rows, &[])?)?;
     write_trials(out, "benchmark_trials", &measured)?;
     charts.extend(benchmark::views::write(out, &rows)?);
+
+    log(&format!(
+        "discretization error against h = {}",
+        spec.errors.reference
+    ));
+    let errors = discretization_error::run(&spec.errors, settings, &|l| {
+        log(&format!("discretization error: {l}"))
+    })?;
+    write_atomic(
+        &out.join("discretization_error.csv"),
+        &to_csv(&errors, &[])?,
+    )?;
+    charts.extend(discretization_error::charts(&errors));
     Ok(Outputs {
         table1: t1,
         compare: compared,
@@ -392,6 +413,7 @@ pub fn run(
         stability: map,
         bench,
         benchmark: rows,
+        errors,
         references,
         charts,
     })

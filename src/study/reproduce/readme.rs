@@ -77,6 +77,10 @@ struct Context {
     files: Vec<&'static str>,
     benchmark: String,
     benchmark_charts: Vec<ChartRef>,
+    errors_reference: String,
+    errors_table: String,
+    errors_text: String,
+    errors_charts: Vec<ChartRef>,
 }
 
 /// Renders the README.
@@ -159,6 +163,10 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         files: FILES.to_vec(),
         benchmark: crate::study::benchmark::views::report(&out.benchmark),
         benchmark_charts: named(&chart_names, "benchmark_"),
+        errors_reference: spec.errors.reference.to_string(),
+        errors_table: crate::study::discretization_error::markdown(&out.errors),
+        errors_text: crate::study::discretization_error::findings(&out.errors),
+        errors_charts: named(&chart_names, "discretization_error_"),
     };
     let mut env = minijinja::Environment::new();
     env.add_template("readme", TEMPLATE)?;
