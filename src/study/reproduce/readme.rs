@@ -333,6 +333,8 @@ fn separation_text(spec: &ReproduceSpec, out: &Outputs) -> String {
     for a in &out.separation {
         for b in &out.separation {
             if a.problem == b.problem
+                && a.status == "converged"
+                && b.status == "converged"
                 && a.friction_coefficient == b.friction_coefficient
                 && a.solver < b.solver
                 && (a.separated_fraction - b.separated_fraction).abs() > 1e-3
@@ -353,14 +355,40 @@ fn separation_text(spec: &ReproduceSpec, out: &Outputs) -> String {
             }
         }
     }
+    let uncertified: Vec<String> = out
+        .separation
+        .iter()
+        .filter(|r| r.status != "converged")
+        .map(|r| {
+            format!(
+                "{} on problem {} {} ({})",
+                r.solver,
+                r.problem,
+                if r.friction_coefficient > 0.0 {
+                    "with friction"
+                } else {
+                    "without"
+                },
+                r.status
+            )
+        })
+        .collect();
     let _ = writeln!(
         s,
         "\nSeparation: the jump is below −1e-6 × the largest displacement; interval ends are where the P1 jump crosses \
-         that level. The solvers' zones {}.",
+         that level. The certified solvers' zones {}.{}",
         if differ.is_empty() {
             "agree to 0.1% of Γ_K everywhere".to_string()
         } else {
             format!("differ in: {}", differ.join("; "))
+        },
+        if uncertified.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " Not certified, so not compared: {}.",
+                uncertified.join("; ")
+            )
         }
     );
     if let Some(r) = reference {
