@@ -7,6 +7,8 @@
 
 pub mod intents;
 pub mod readme;
+mod separation_text;
+mod sweep_text;
 
 use std::path::Path;
 

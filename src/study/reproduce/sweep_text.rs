@@ -1,0 +1,156 @@
+//! The README's sentences about the sweeps and the work-precision diagrams,
+//! computed from the trials.
+
+use contactlab_solvers::registry::{self, Role};
+
+use crate::study::runner::Measured;
+use crate::study::sweep::{WORK_PRECISION, WORK_PRECISION_COULOMB};
+use crate::study::trial::Trial;
+
+/// Ratios of time at equal accuracy, interpolated log-log along each
+/// solver's work-precision curve, in both diagrams.
+pub(super) fn work_precision_text(sweep: &[Measured]) -> String {
+    let (Some(paper), Some(oracle)) = (
+        registry::with_role(Role::PapersMethod),
+        registry::with_role(Role::Oracle),
+    ) else {
+        return String::new();
+    };
+    format!(
+        "Each point is one value of a solver's accuracy knob, certified; errors are measured against the reference. \
+         On the given-friction subproblem at the reference's g, time at equal pressure error as a ratio (below 1: \
+         faster) of each solver over the oracle; `{}` is the paper's method:\n\n{}\n\n\
+         On the whole Coulomb problem (a solver run inside the fixed point through ε, every loop's; a solver of the \
+         Coulomb law through its own accuracy knob), the same ratios:\n\n{}\n",
+        paper.name,
+        time_ratios(sweep, WORK_PRECISION, oracle.name),
+        time_ratios(sweep, WORK_PRECISION_COULOMB, oracle.name),
+    )
+}
+
+/// One line per solver: its time over `baseline`'s at equal pressure error
+/// along the curves of `group`.
+pub(super) fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> String {
+    let curve = |solver: &str| -> Vec<(f64, f64)> {
+        let mut pts: Vec<(f64, f64)> = sweep
+            .iter()
+            .filter(|m| m.trial.group == group && m.trial.solver == solver && m.trial.certified())
+            .filter_map(|m| {
+                m.trial
+                    .pressure_error
+                    .map(|e| (e.max(crate::study::report::WP_FLOOR), m.timing.seconds_min))
+            })
+            .filter(|(_, t)| *t > 0.0)
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pts
+    };
+    let base = curve(baseline);
+    registry::names()
+        .into_iter()
+        .filter(|n| {
+            *n != baseline
+                && sweep
+                    .iter()
+                    .any(|m| m.trial.group == group && m.trial.solver == *n)
+        })
+        .map(|other| {
+            let points = curve(other);
+            let ratios: Vec<String> = (2..=11)
+                .map(|k| 10f64.powi(-k))
+                .filter_map(|target| {
+                    let (a, b) = (time_at(&points, target)?, time_at(&base, target)?);
+                    Some(format!("{:.2} at {target:.0e}", a / b))
+                })
+                .collect();
+            format!(
+                "- `{other}` over `{baseline}`: {}",
+                if ratios.is_empty() {
+                    "no common range of pressure errors".into()
+                } else {
+                    ratios.join(", ")
+                }
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The time a solver needs for `target` error, interpolated log-log between
+/// its points (errors increasing); None outside its range.
+pub(super) fn time_at(points: &[(f64, f64)], target: f64) -> Option<f64> {
+    points.windows(2).find_map(|w| {
+        let ((e0, t0), (e1, t1)) = (w[0], w[1]);
+        (e0 <= target && target <= e1 && e1 > e0).then(|| {
+            let a = (target.ln() - e0.ln()) / (e1.ln() - e0.ln());
+            (t0.ln() + a * (t1.ln() - t0.ln())).exp()
+        })
+    })
+}
+
+/// For each variation: the values certified, and the cheapest certified one.
+pub(super) fn variations_text(sweep: &[Measured]) -> String {
+    let mut groups: Vec<&str> = sweep
+        .iter()
+        .map(|m| m.trial.group.as_str())
+        .filter(|g| *g != WORK_PRECISION && *g != WORK_PRECISION_COULOMB)
+        .collect();
+    groups.dedup();
+    let mut seen = Vec::new();
+    let mut lines = Vec::new();
+    for g in groups {
+        if seen.contains(&g) {
+            continue;
+        }
+        seen.push(g);
+        let runs: Vec<&Trial> = sweep
+            .iter()
+            .map(|m| &m.trial)
+            .filter(|t| t.group == g)
+            .collect();
+        let certified: Vec<&&Trial> = runs.iter().filter(|t| t.certified()).collect();
+        let failed: Vec<String> = runs
+            .iter()
+            .filter(|t| !t.certified())
+            .map(|t| format!("{} ({})", t.value, t.status))
+            .collect();
+        let cheapest = certified.iter().min_by_key(|t| t.work);
+        lines.push(format!(
+            "- `{g}` ({}): certified at {}; {}{}",
+            runs.first().map(|t| t.solver.as_str()).unwrap_or(""),
+            if certified.is_empty() {
+                "no value".to_string()
+            } else {
+                certified
+                    .iter()
+                    .map(|t| t.value.clone())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+            match cheapest {
+                Some(t) => format!(
+                    "the least work at {} ({} work, pressure error {})",
+                    t.value,
+                    t.work,
+                    t.pressure_error
+                        .map(|e| format!("{e:.1e}"))
+                        .unwrap_or_else(|| "–".into())
+                ),
+                None => String::new(),
+            },
+            if failed.is_empty() {
+                String::new()
+            } else {
+                format!("; not certified at {}", failed.join(", "))
+            }
+        ));
+    }
+    if lines.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "One factor at a time around the defaults, on the whole Coulomb problem (every trial stops at a work cap):\n\n{}\n",
+            lines.join("\n")
+        )
+    }
+}
