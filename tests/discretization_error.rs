@@ -18,6 +18,7 @@ fn a_mesh_against_itself_has_no_error() {
         problems: vec![1],
         meshes: vec![level(4)],
         reference: level(4),
+        solver: None,
     };
     let rows = run(&spec, &Settings::default(), &|_| {}).unwrap();
     let r = &rows[0];
@@ -35,6 +36,7 @@ fn errors_fall_at_the_orders_of_p1_elements() {
         problems: vec![1],
         meshes: vec![level(3), level(4), level(5)],
         reference: level(6),
+        solver: None,
     };
     let rows = run(&spec, &Settings::default(), &|_| {}).unwrap();
     for r in &rows[1..] {

@@ -398,7 +398,15 @@ pub fn run(
         "discretization error against h = {}",
         spec.errors.reference
     ));
-    let errors = discretization_error::run(&spec.errors, settings, &|l| {
+    let mut error_spec = spec.errors.clone();
+    let finest = spec
+        .bench
+        .meshes
+        .last()
+        .map(|h| h.to_string())
+        .unwrap_or_default();
+    error_spec.solver = crate::study::bench::fastest_direct(&bench.rows, &finest);
+    let errors = discretization_error::run(&error_spec, settings, &|l| {
         log(&format!("discretization error: {l}"))
     })?;
     write_atomic(

@@ -73,6 +73,7 @@ struct Context {
     benchmark: String,
     benchmark_charts: Vec<ChartRef>,
     errors_reference: String,
+    errors_solver: String,
     errors_table: String,
     errors_text: String,
     errors_charts: Vec<ChartRef>,
@@ -159,6 +160,10 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         benchmark: crate::study::benchmark::views::report(&out.benchmark),
         benchmark_charts: named(&chart_names, "benchmark_"),
         errors_reference: spec.errors.reference.to_string(),
+        errors_solver: out
+            .errors
+            .first()
+            .map_or(String::new(), |r| r.solver.clone()),
         errors_table: crate::study::discretization_error::markdown(&out.errors),
         errors_text: crate::study::discretization_error::findings(&out.errors),
         errors_charts: named(&chart_names, "discretization_error_"),
