@@ -405,7 +405,11 @@ pub fn run(
         .last()
         .map(|h| h.to_string())
         .unwrap_or_default();
-    error_spec.solver = crate::study::bench::fastest_direct(&bench.rows, &finest);
+    // The direct solver certified on the reference mesh in the speed study,
+    // else the fastest certified on its finest mesh.
+    error_spec.solver =
+        crate::study::bench::certified_direct(&bench.rows, &spec.errors.reference.to_string())
+            .or_else(|| crate::study::bench::certified_direct(&bench.rows, &finest));
     let errors = discretization_error::run(&error_spec, settings, &|l| {
         log(&format!("discretization error: {l}"))
     })?;
