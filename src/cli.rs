@@ -68,8 +68,10 @@ pub enum Command {
     /// Measure speed: assembly, each solver's inner kernel against one SpMV,
     /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
     /// 1/256, as medians after a warm-up on one thread and as ratios to one
-    /// sparse factorization. Writes performance.csv, performance_goals.md and
-    /// charts into --out.
+    /// sparse factorization; at 1/512 and 1/1024 (not with --quick) assembly,
+    /// one factorization and the fastest certified direct Coulomb solver, once
+    /// each. Writes performance.csv, performance_goals.md and charts into
+    /// --out.
     Bench(BenchArgs),
     /// The benchmark over the problem collection (the paper's problems over
     /// 𝓕 and h, sideways loads, nearly unbounded loads, fine meshes): every
