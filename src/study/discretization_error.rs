@@ -131,8 +131,8 @@ fn zone_start(run: &Run) -> f64 {
         .map_or(f64::NAN, |iv| iv[0])
 }
 
-/// The errors of `coarse` against `reference`, without rates.
-fn errors(coarse: &Run, reference: &Run) -> ErrorRow {
+/// The errors of `coarse` against `reference` for `problem`, without rates.
+fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
     let (dc, df) = (&coarse.discretization, &reference.discretization);
     let uc = dc.displacements(&coarse.coulomb.solution.v);
     let uf = df.displacements(&reference.coulomb.solution.v);
@@ -173,7 +173,7 @@ fn errors(coarse: &Run, reference: &Run) -> ErrorRow {
         / p_max;
     let (start, start_ref) = (zone_start(coarse), zone_start(reference));
     ErrorRow {
-        problem: 0,
+        problem,
         h: dc.h().to_string(),
         reference_h: df.h().to_string(),
         solver: coarse.solver.to_string(),
@@ -212,8 +212,7 @@ pub fn run(spec: &ErrorSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<
         for &h in &spec.meshes {
             log(&format!("problem {problem}: h = {h}"));
             let coarse = solve(problem, h, solver, settings)?;
-            let mut row = errors(&coarse, &reference);
-            row.problem = problem;
+            let mut row = errors(problem, &coarse, &reference);
             if let Some(prev) = &previous {
                 let rate = |a: f64, b: f64| (a / b).log2();
                 row.l2_rate = rate(prev.l2_error, row.l2_error);

@@ -131,6 +131,25 @@ pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
     CsrMatrix::from(&coo)
 }
 
+/// Assembles `scene` at `h` and factors its stiffness (rigid mode pinned)
+/// with one solve, each timed `runs` times after a warm-up (0: the warm-up
+/// alone, cold). Returns the discretization and both lists of seconds.
+fn assemble_and_factor(
+    scene: &Scene,
+    h: MeshSize,
+    runs: usize,
+) -> Result<(Discretization, Vec<f64>, Vec<f64>)> {
+    let (d, assembly) = timed(runs, || Ok(Discretization::new(scene, h)?))?;
+    let a = pinned(&d);
+    let (_, factor) = timed(runs, || {
+        let c = SparseCholesky::new(&a)?;
+        let mut b = d.problem.f().to_vec();
+        c.solve_vec(&mut b);
+        Ok(b[0])
+    })?;
+    Ok((d, assembly, factor))
+}
+
 /// Rows of one mesh's measurements, with the factorization as the unit.
 struct MeshRows<'a> {
     rows: &'a mut Vec<PerfRow>,
@@ -174,14 +193,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
     for &h in &spec.meshes {
         let mut scene = Scene::paper_problem(spec.problem)?;
         scene.set_finest(h);
-        let (d, assembly) = timed(spec.runs, || Ok(Discretization::new(&scene, h)?))?;
-        let a = pinned(&d);
-        let (_, factor) = timed(spec.runs, || {
-            let c = SparseCholesky::new(&a)?;
-            let mut b = d.problem.f().to_vec();
-            c.solve_vec(&mut b);
-            Ok(b[0])
-        })?;
+        let (d, assembly, factor) = assemble_and_factor(&scene, h, spec.runs)?;
         let mut mesh = MeshRows {
             rows: &mut rows,
             h,
@@ -324,15 +336,7 @@ fn large_mesh(
     let mut scene = Scene::paper_problem(problem)?;
     scene.set_finest(h);
     log(&format!("h = {h}: assembly and one factorization"));
-    let (d, assembly) = timed(0, || Ok(Discretization::new(&scene, h)?))?;
-    let a = pinned(&d);
-    let (_, factor) = timed(0, || {
-        let c = SparseCholesky::new(&a)?;
-        let mut b = d.problem.f().to_vec();
-        c.solve_vec(&mut b);
-        Ok(b[0])
-    })?;
-    drop(a);
+    let (d, assembly, factor) = assemble_and_factor(&scene, h, 0)?;
     let unknowns = d.problem.n();
     drop(d);
     let mut mesh = MeshRows {
