@@ -15,7 +15,6 @@
 //! they serve every friction iteration and every solver setting.
 
 use faer::Mat;
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 use crate::linalg::{LinalgError, SparseCholesky};
 use crate::problem::ContactProblem;
@@ -59,17 +58,23 @@ impl Condensed {
             }
         }
         let ni = interior.len();
-        let mut a_ii = CooMatrix::new(ni, ni);
         let mut a_ci: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m2];
         let mut s = Mat::<f64>::zeros(m2, m2);
-        for (r, c, &v) in problem.a().triplet_iter() {
-            match (position[r], position[c]) {
-                (Ok(i), Ok(j)) => a_ii.push(i, j, v),
-                (Err(k), Ok(j)) => a_ci[k].push((j, v)),
-                (Err(k), Err(l)) => s[(k, l)] += v,
-                (Ok(_), Err(_)) => {} // A_IC = A_CIᵀ
+        let (offsets, cols, vals) = problem.a().csr_data();
+        for (i, c) in contacts.iter().enumerate() {
+            for (k, r) in [(2 * i, c.t), (2 * i + 1, c.s)] {
+                for p in offsets[r]..offsets[r + 1] {
+                    match position[cols[p]] {
+                        Ok(j) => a_ci[k].push((j, vals[p])),
+                        Err(l) => s[(k, l)] += vals[p],
+                    }
+                }
             }
         }
+        // A_II's lower triangle straight from A's rows (A_IC = A_CIᵀ).
+        let interior_map: Vec<usize> = position.iter().map(|p| p.unwrap_or(usize::MAX)).collect();
+        let a_ii = crate::linalg::lower_part(ni, offsets, cols, vals, &interior_map);
+        drop(interior_map);
         // B: the interior unknowns coupled to the contact unknowns. Ordered
         // last, A_IC is zero outside them, so the forward solve of A_II⁻¹A_IC
         // stays in the trailing block: A_CI A_II⁻¹ A_IC = WᵀW, W = L_BB⁻¹ A_BC.
@@ -83,7 +88,7 @@ impl Condensed {
                 }
             }
         }
-        let factor = SparseCholesky::with_trailing(&CsrMatrix::from(&a_ii), &boundary)?;
+        let factor = SparseCholesky::with_trailing(a_ii, &boundary)?;
         let l_bb = factor
             .trailing_factor(boundary.len())
             .ok_or_else(|| LinalgError::Faer("no supernodal trailing block".into()))?;
@@ -114,17 +119,7 @@ impl Condensed {
                 s[(l, k)] = avg;
             }
         }
-        let f = problem.f();
-        let mut interior_load: Vec<f64> = interior.iter().map(|&j| f[j]).collect();
-        factor.solve_vec(&mut interior_load);
-        let mut b = vec![0.0; m2];
-        for (i, c) in contacts.iter().enumerate() {
-            b[2 * i] = f[c.t];
-            b[2 * i + 1] = f[c.s];
-        }
-        for (k, row) in a_ci.iter().enumerate() {
-            b[k] -= row.iter().map(|&(j, v)| v * interior_load[j]).sum::<f64>();
-        }
+        let (b, interior_load) = reduce_load(&factor, &interior, &a_ci, contacts, problem.f());
         Ok(Self {
             factor_nnz: factor.factor_nnz(),
             factor,
@@ -157,6 +152,27 @@ impl Condensed {
         }
         v
     }
+}
+
+/// b̂ = f_C − A_CI A_II⁻¹ f_I and A_II⁻¹ f_I.
+fn reduce_load(
+    factor: &SparseCholesky,
+    interior: &[usize],
+    a_ci: &[Vec<(usize, f64)>],
+    contacts: &[crate::problem::ContactNode],
+    f: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    let mut interior_load: Vec<f64> = interior.iter().map(|&j| f[j]).collect();
+    factor.solve_vec(&mut interior_load);
+    let mut b = vec![0.0; 2 * contacts.len()];
+    for (i, c) in contacts.iter().enumerate() {
+        b[2 * i] = f[c.t];
+        b[2 * i + 1] = f[c.s];
+    }
+    for (k, row) in a_ci.iter().enumerate() {
+        b[k] -= row.iter().map(|&(j, v)| v * interior_load[j]).sum::<f64>();
+    }
+    (b, interior_load)
 }
 
 /// Something built from a problem's operator (its condensation, a factor),
