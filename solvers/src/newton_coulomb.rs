@@ -303,15 +303,7 @@ impl System<'_> {
             reduced[(2 * i + 1, 2 * i + 1)] += d.f_s;
         }
         let dy = reduced.partial_piv_lu().solve(rhs);
-        let mut sdy = Mat::<f64>::zeros(2 * m, 1);
-        faer::linalg::matmul::matmul(
-            sdy.as_mut(),
-            faer::Accum::Replace,
-            s.as_ref(),
-            dy.as_ref(),
-            1.0,
-            faer::get_global_parallelism(),
-        );
+        let sdy = s * &dy;
         let mut dir = vec![0.0; 4 * m];
         for k in 0..2 * m {
             dir[k] = dy[(k, 0)];
@@ -322,15 +314,7 @@ impl System<'_> {
         }
         // ∇Ψ = JᵀΦ: (S F + D_yᵀΦ_c, EᵀF + D_zᵀΦ_c), S symmetric.
         let fm = Mat::from_fn(2 * m, 1, |k, _| f[k]);
-        let mut sf = Mat::<f64>::zeros(2 * m, 1);
-        faer::linalg::matmul::matmul(
-            sf.as_mut(),
-            faer::Accum::Replace,
-            s.as_ref(),
-            fm.as_ref(),
-            1.0,
-            faer::get_global_parallelism(),
-        );
+        let sf = s * &fm;
         let mut grad = vec![0.0; 4 * m];
         for (i, d) in nodes.iter().enumerate() {
             let (t, sl) = (2 * i, 2 * i + 1);
