@@ -187,10 +187,11 @@ pub fn assemble_all<const K: usize>(
     let n = dofs.n();
     let tris = triangles(mesh, only);
     let table = ElementTable::new(mesh, &tris, elements);
+    // Around each node, its triangles as 3·e + (the node's corner in e).
     let node_triangles = Lists::group(mesh.num_nodes(), |emit| {
         for (e, tri) in tris.iter().enumerate() {
-            for &node in tri {
-                emit(node, e);
+            for (corner, &node) in tri.iter().enumerate() {
+                emit(node, 3 * e + corner);
             }
         }
     });
@@ -221,9 +222,10 @@ pub fn assemble_all<const K: usize>(
                 .iter()
                 .find(|(unknown, _)| *unknown == i)
                 .map_or(0.0, |(_, coefficient)| *coefficient);
-            for &e in node_triangles.of(node) {
+            for &around in node_triangles.of(node) {
+                let (e, corner) = (around / 3, around % 3);
                 let tri = &tris[e];
-                let a = 2 * tri.iter().position(|&m| m == node).expect("node of e") + k;
+                let a = 2 * corner + k;
                 let ke = &table.matrices[table.shape[e] as usize];
                 for b in 0..6 {
                     for &(j, cj) in dofs.terms(tri[b / 2], b % 2).as_slice() {
