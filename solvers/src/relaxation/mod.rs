@@ -21,7 +21,7 @@ mod entry;
 pub mod pointwise;
 pub mod residual;
 
-pub use entry::{ENTRY, sweep_kernel};
+pub use entry::{CERTIFIED_STOP_KNOB, ENTRY, OVER_RELAXATION_KNOB, STUDIED_OMEGA, sweep_kernel};
 
 use std::time::Instant;
 

@@ -7,6 +7,7 @@
 //! timing study, its file is a timing file); each solver's inner kernel
 //! (from its registry entry) is timed against one product with its operator.
 
+pub mod equal_accuracy;
 pub mod goals;
 
 use std::time::Instant;
@@ -43,6 +44,14 @@ pub struct BenchSpec {
     /// registry's direct Coulomb solver are timed, once each and cold (a
     /// solve at 1/1024 takes a minute and 6 GB).
     pub large: Vec<MeshSize>,
+    /// Meshes where the paper's method runs to a certified accuracy with and
+    /// without over-relaxation, beside the fastest oracle variant, once each
+    /// ([`equal_accuracy`]).
+    pub equal_accuracy: Vec<MeshSize>,
+    /// The tolerance of that certified stop, in the certificate's measure.
+    pub accuracy_target: f64,
+    /// The mesh of the oracle's time goal (run once, without the budget).
+    pub oracle_mesh: Option<MeshSize>,
 }
 
 impl BenchSpec {
@@ -57,6 +66,11 @@ impl BenchSpec {
             large: (9..=10)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
+            equal_accuracy: (5..=7)
+                .map(|k| MeshSize::from_level(k).expect("in range"))
+                .collect(),
+            accuracy_target: 1e-6,
+            oracle_mesh: MeshSize::from_level(8).ok(),
         }
     }
 
@@ -69,6 +83,9 @@ impl BenchSpec {
             runs: 1,
             budget: 5.0,
             large: Vec::new(),
+            equal_accuracy: vec![MeshSize::from_level(3).expect("in range")],
+            accuracy_target: 1e-6,
+            oracle_mesh: MeshSize::from_level(4).ok(),
         }
     }
 }
@@ -80,6 +97,9 @@ pub struct PerfRow {
     /// `spmv`, `given_friction` or `coulomb`.
     pub what: String,
     pub solver: String,
+    /// Settings varied from the solver's defaults, as `path=value` (empty:
+    /// none).
+    pub variant: String,
     pub h: String,
     pub unknowns: usize,
     pub runs: usize,
@@ -131,15 +151,36 @@ pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
     CsrMatrix::from(&coo)
 }
 
+/// Writes as many bytes as the stiffness and the mass take (nalgebra-sparse
+/// keeps a pattern per matrix: two offset and two index arrays, and two
+/// value arrays) into freshly allocated memory, all held until the end:
+/// what any assembly that returns both matrices must at least do, the
+/// floor of the `assembly` row. Returns the number of items written.
+pub fn write_output_storage(a: &CsrMatrix<f64>) -> usize {
+    let (n, nnz) = (a.nrows(), a.nnz());
+    // A fill with a nonzero value writes every page (a zero fill may be
+    // mapped lazily and never touched).
+    let patterns: Vec<(Vec<usize>, Vec<usize>)> = (0..2)
+        .map(|_| (vec![1usize; n + 1], vec![1usize; nnz]))
+        .collect();
+    let values: Vec<Vec<f64>> = (0..2).map(|_| vec![1.0f64; nnz]).collect();
+    std::hint::black_box(&patterns)
+        .iter()
+        .map(|(o, i)| o.len() + i.len())
+        .sum::<usize>()
+        + std::hint::black_box(&values)
+            .iter()
+            .map(Vec::len)
+            .sum::<usize>()
+}
+
 /// Assembles `scene` at `h` and factors its stiffness (rigid mode pinned)
 /// with one solve, each timed `runs` times after a warm-up (0: the warm-up
-/// alone, cold). Returns the discretization and both lists of seconds.
-fn assemble_and_factor(
-    scene: &Scene,
-    h: MeshSize,
-    runs: usize,
-) -> Result<(Discretization, Vec<f64>, Vec<f64>)> {
+/// alone, cold), and times writing the two matrices' storage
+/// ([`write_output_storage`]).
+fn assemble_and_factor(scene: &Scene, h: MeshSize, runs: usize) -> Result<SetUp> {
     let (d, assembly) = timed(runs, || Ok(Discretization::new(scene, h)?))?;
+    let (_, storage) = timed(runs, || Ok(write_output_storage(d.problem.a())))?;
     let a = pinned(&d);
     let (_, factor) = timed(runs, || {
         let c = SparseCholesky::new(&a)?;
@@ -147,8 +188,25 @@ fn assemble_and_factor(
         c.solve_vec(&mut b);
         Ok(b[0])
     })?;
-    Ok((d, assembly, factor))
+    Ok(SetUp {
+        d,
+        assembly,
+        storage,
+        factor,
+    })
 }
+
+/// One mesh's discretization and the seconds of each timed run of its
+/// assembly, of writing its matrices' storage, and of one factorization.
+struct SetUp {
+    d: Discretization,
+    assembly: Vec<f64>,
+    storage: Vec<f64>,
+    factor: Vec<f64>,
+}
+
+/// The note of the `output_storage` rows.
+const STORAGE_NOTE: &str = "writing A's and M's storage to fresh memory: the floor of assembly";
 
 /// Rows of one mesh's measurements, with the factorization as the unit.
 struct MeshRows<'a> {
@@ -164,6 +222,7 @@ impl MeshRows<'_> {
         self.rows.push(PerfRow {
             what: what.into(),
             solver: solver.into(),
+            variant: String::new(),
             h: self.h.to_string(),
             unknowns: self.unknowns,
             runs: times.len(),
@@ -193,7 +252,12 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
     for &h in &spec.meshes {
         let mut scene = Scene::paper_problem(spec.problem)?;
         scene.set_finest(h);
-        let (d, assembly, factor) = assemble_and_factor(&scene, h, spec.runs)?;
+        let SetUp {
+            d,
+            assembly,
+            storage,
+            factor,
+        } = assemble_and_factor(&scene, h, spec.runs)?;
         let mut mesh = MeshRows {
             rows: &mut rows,
             h,
@@ -203,6 +267,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         let note = "symbolic + numeric + one solve".to_string();
         mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
         mesh.push("assembly", "-", &assembly, "done", String::new());
+        mesh.push("output_storage", "-", &storage, "done", STORAGE_NOTE.into());
         for entry in registry::solvers() {
             let Some(prepare) = entry.kernel else {
                 continue;
@@ -276,6 +341,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             }
         }
     }
+    equal_accuracy::equal_accuracy(spec, settings, &mut rows, log)?;
     // The large meshes get the direct Coulomb solvers certified on the
     // finest mesh above, fastest first; the next is timed only when an
     // answer fails the certificate (a failure is a row too).
@@ -336,7 +402,12 @@ fn large_mesh(
     let mut scene = Scene::paper_problem(problem)?;
     scene.set_finest(h);
     log(&format!("h = {h}: assembly and one factorization"));
-    let (d, assembly, factor) = assemble_and_factor(&scene, h, 0)?;
+    let SetUp {
+        d,
+        assembly,
+        storage,
+        factor,
+    } = assemble_and_factor(&scene, h, 0)?;
     let unknowns = d.problem.n();
     drop(d);
     let mut mesh = MeshRows {
@@ -348,6 +419,8 @@ fn large_mesh(
     let note = "symbolic + numeric + one solve, once".to_string();
     mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
     mesh.push("assembly", "-", &assembly, "done", "once".into());
+    let note = format!("{STORAGE_NOTE}, once");
+    mesh.push("output_storage", "-", &storage, "done", note);
     log(&format!("h = {h}: {} coulomb", solver.name));
     let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
     let m = measure(&t, None, Keep::default())?;

@@ -67,6 +67,7 @@ struct Context {
     stability_charts: Vec<ChartRef>,
     stability_summary: String,
     goals: String,
+    equal_accuracy: String,
     speed_table: String,
     performance_charts: Vec<ChartRef>,
     files: Vec<&'static str>,
@@ -154,6 +155,7 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         stability_charts: named(&chart_names, "stability_"),
         stability_summary: views::summary_markdown(&out.stability.trials),
         goals: crate::study::bench::goals::goals_markdown(&out.bench.goals),
+        equal_accuracy: crate::study::bench::goals::equal_accuracy_markdown(&out.bench.rows),
         speed_table: speed_table(out),
         performance_charts: named(&chart_names, "performance_"),
         files: FILES.to_vec(),
@@ -305,8 +307,14 @@ fn table1_text(out: &Outputs) -> String {
 
 fn speed_table(out: &Outputs) -> String {
     let rows = &out.bench.rows;
-    let mut meshes: Vec<&str> = rows.iter().map(|r| r.h.as_str()).collect();
-    meshes.dedup();
+    // Each mesh once, in the order of its first row (later studies revisit
+    // meshes).
+    let mut meshes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !meshes.contains(&r.h.as_str()) {
+            meshes.push(&r.h);
+        }
+    }
     let mut s = String::from(
         "\nWhole Coulomb problem, median seconds (× one factorization), certified status:\n\n| solver |",
     );

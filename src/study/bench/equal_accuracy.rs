@@ -1,0 +1,243 @@
+//! The paper's method at a guaranteed accuracy, against the oracle (issue
+//! "scale and accuracy"): on each mesh, the relaxation stopped by its
+//! certified rule (a tolerance in the certificate's measure) with the
+//! paper's Gauss–Seidel sweeps (ω = 1) and with over-relaxation, beside the
+//! fastest variant of the oracle at its own settings, each once on the
+//! whole Coulomb problem; and that oracle alone on one finer mesh, without
+//! the benchmark's budget, for its time goal.
+//!
+//! Each run is a trial of the study engine, certified after the solve like
+//! every other; a row records its status and its certificate, so that
+//! "equal accuracy" is read off the rows, not assumed.
+
+use anyhow::{Result, bail};
+use contactlab_solvers::registry::{self, Entry, Role};
+use contactlab_solvers::{Law, relaxation};
+
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::study::bench::{BenchSpec, PerfRow, STUDY};
+use crate::study::runner::{Keep, measure};
+use crate::study::trial::TrialSpec;
+
+/// `what` of the rows of the equal-accuracy comparison.
+pub const EQUAL_ACCURACY: &str = "equal_accuracy";
+/// `what` of the oracle's row on its goal's mesh.
+pub const ORACLE_GOAL: &str = "oracle_goal";
+
+/// Seconds after which one run of this comparison is stopped (a run that
+/// long is reported as stopped, not waited for).
+const DEADLINE: f64 = 1200.0;
+
+/// The oracle and its registered variants: the entries with the oracle's
+/// knobs (the same program with other defaults, e.g. another linear solver).
+pub fn oracle_family() -> Vec<&'static Entry> {
+    let Some(oracle) = registry::with_role(Role::Oracle) else {
+        return Vec::new();
+    };
+    let knobs = |e: &Entry| e.knobs.iter().map(|k| k.name).collect::<Vec<_>>();
+    registry::solvers()
+        .into_iter()
+        .filter(|e| e.laws == oracle.laws && knobs(e) == knobs(oracle))
+        .collect()
+}
+
+/// The oracle variant with the smallest median time on the given-friction
+/// subproblem on the finest mesh where any of them was timed in `rows`.
+pub fn fastest_oracle(rows: &[PerfRow]) -> Option<&'static Entry> {
+    let family = oracle_family();
+    let timed: Vec<&PerfRow> = rows
+        .iter()
+        .filter(|r| r.what == Law::GivenFriction.as_str() && r.median_seconds.is_finite())
+        .filter(|r| family.iter().any(|e| e.name == r.solver))
+        .collect();
+    let finest = timed.iter().map(|r| r.unknowns).max()?;
+    timed
+        .into_iter()
+        .filter(|r| r.unknowns == finest)
+        .min_by(|a, b| a.median_seconds.total_cmp(&b.median_seconds))
+        .and_then(|r| registry::by_name(&r.solver))
+}
+
+/// The settings varied in a row of the comparison, as the command line
+/// writes them (empty: the solver's defaults).
+fn variant(settings: &[(String, String)]) -> String {
+    settings
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Runs one trial once and turns it into a row (with the median of one
+/// factorization on the same mesh and its number of unknowns, from the
+/// benchmark's rows).
+#[allow(clippy::too_many_arguments)]
+fn run_once(
+    what: &str,
+    scene: &Scene,
+    h: MeshSize,
+    entry: &'static Entry,
+    varied: &[(String, String)],
+    settings: &Settings,
+    (factorization, unknowns): (f64, usize),
+    log: &dyn Fn(&str),
+) -> Result<PerfRow> {
+    let mut t = TrialSpec::new(STUDY, what, scene, entry, Law::Coulomb, settings)
+        .with_seconds(Some(DEADLINE));
+    for (path, value) in varied {
+        t = t.varying(path, value)?;
+    }
+    let shown = variant(varied);
+    let with = if shown.is_empty() {
+        "its defaults"
+    } else {
+        &shown
+    };
+    log(&format!("h = {h}: {} with {with}, once", entry.name));
+    let m = measure(&t, None, Keep::default())?;
+    let tr = &m.trial;
+    let seconds = m.timing.seconds_median;
+    Ok(PerfRow {
+        what: what.into(),
+        solver: entry.name.into(),
+        variant: shown,
+        h: h.to_string(),
+        unknowns,
+        runs: 1,
+        median_seconds: seconds,
+        min_seconds: seconds,
+        ratio_to_factorization: seconds / factorization,
+        status: tr.status.as_str().into(),
+        certificate: tr.certificate,
+        pressure_error: f64::NAN,
+        work: tr.work,
+        note: format!(
+            "once; {} friction iterations, {} outer, {} inner",
+            tr.friction_iterations, tr.outer_iterations, tr.inner_iterations
+        ),
+    })
+}
+
+/// The comparison's rows, appended to `rows` (which must hold this run's
+/// factorizations on the meshes of `spec.equal_accuracy` and
+/// `spec.oracle_mesh`, and its given-friction oracle timings).
+pub fn equal_accuracy(
+    spec: &BenchSpec,
+    settings: &Settings,
+    rows: &mut Vec<PerfRow>,
+    log: &dyn Fn(&str),
+) -> Result<()> {
+    let Some(paper) = registry::with_role(Role::PapersMethod) else {
+        return Ok(());
+    };
+    for knob in [
+        relaxation::CERTIFIED_STOP_KNOB,
+        relaxation::OVER_RELAXATION_KNOB,
+    ] {
+        if paper.knob(knob).is_none() {
+            bail!("the paper's method ({}) has no knob `{knob}`", paper.name);
+        }
+    }
+    let oracle = fastest_oracle(rows);
+    let factorization = |rows: &[PerfRow], h: MeshSize| {
+        rows.iter()
+            .find(|r| r.what == "factorization" && r.h == h.to_string())
+            .map_or((f64::NAN, 0), |r| (r.median_seconds, r.unknowns))
+    };
+    let target = format!("{:e}", spec.accuracy_target);
+    for &h in &spec.equal_accuracy {
+        let mut scene = Scene::paper_problem(spec.problem)?;
+        scene.set_finest(h);
+        let f = factorization(rows, h);
+        for omega in [1.0, relaxation::STUDIED_OMEGA] {
+            let varied = [
+                (
+                    format!("{}.{}", paper.name, relaxation::CERTIFIED_STOP_KNOB),
+                    target.clone(),
+                ),
+                (
+                    format!("{}.{}", paper.name, relaxation::OVER_RELAXATION_KNOB),
+                    format!("{omega}"),
+                ),
+            ];
+            let row = run_once(EQUAL_ACCURACY, &scene, h, paper, &varied, settings, f, log)?;
+            rows.push(row);
+        }
+        if let Some(oracle) = oracle {
+            let row = run_once(EQUAL_ACCURACY, &scene, h, oracle, &[], settings, f, log)?;
+            rows.push(row);
+        }
+    }
+    if let (Some(h), Some(oracle)) = (spec.oracle_mesh, oracle) {
+        let mut scene = Scene::paper_problem(spec.problem)?;
+        scene.set_finest(h);
+        let f = factorization(rows, h);
+        let row = run_once(ORACLE_GOAL, &scene, h, oracle, &[], settings, f, log)?;
+        rows.push(row);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(what: &str, solver: &str, unknowns: usize, seconds: f64) -> PerfRow {
+        PerfRow {
+            what: what.into(),
+            solver: solver.into(),
+            variant: String::new(),
+            h: String::new(),
+            unknowns,
+            runs: 1,
+            median_seconds: seconds,
+            min_seconds: seconds,
+            ratio_to_factorization: f64::NAN,
+            status: "converged".into(),
+            certificate: f64::NAN,
+            pressure_error: f64::NAN,
+            work: 0,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn the_oracle_family_is_the_oracle_and_its_variants_only() {
+        let family: Vec<&str> = oracle_family().iter().map(|e| e.name).collect();
+        let oracle = registry::with_role(Role::Oracle).expect("registered");
+        let paper = registry::with_role(Role::PapersMethod).expect("registered");
+        assert!(family.contains(&oracle.name), "{family:?}");
+        assert!(!family.contains(&paper.name), "{family:?}");
+        for name in &family {
+            let e = registry::by_name(name).expect("registered");
+            assert_eq!(e.laws, oracle.laws, "{name} solves other laws");
+        }
+    }
+
+    #[test]
+    fn the_fastest_oracle_is_read_on_the_finest_mesh_where_one_was_timed() {
+        let family = oracle_family();
+        let [a, b, ..] = family[..] else {
+            // One variant only: it is the fastest wherever it was timed.
+            let only = family[0];
+            let rows = [row("given_friction", only.name, 10, 1.0)];
+            assert_eq!(fastest_oracle(&rows).map(|e| e.name), Some(only.name));
+            return;
+        };
+        let gf = Law::GivenFriction.as_str();
+        let rows = [
+            // a is faster on the coarse mesh, b on the finest one where any ran;
+            // a's finer row was skipped (no time), and a Coulomb row is ignored.
+            row(gf, a.name, 10, 1.0),
+            row(gf, b.name, 10, 2.0),
+            row(gf, b.name, 40, 5.0),
+            row(gf, a.name, 40, f64::NAN),
+            row("coulomb", a.name, 40, 0.1),
+        ];
+        assert_eq!(fastest_oracle(&rows).map(|e| e.name), Some(b.name));
+        assert_eq!(fastest_oracle(&rows[..2]).map(|e| e.name), Some(a.name));
+        assert!(fastest_oracle(&[]).is_none());
+    }
+}
