@@ -195,6 +195,37 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             }
         }
     }
+    // The bench's comparison at a certified accuracy: on each of its meshes
+    // the paper's method with and without over-relaxation, each certified
+    // within the target it was given (the shared certificate's measure), and
+    // the oracle at its own settings; and the oracle's row on its goal's mesh.
+    let (header, rows) = read_csv(&out.join("performance.csv"));
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let paper = registry::with_role(registry::Role::PapersMethod).unwrap();
+    let compared: Vec<&Vec<String>> = rows
+        .iter()
+        .filter(|r| r[col("what")] == "equal_accuracy")
+        .collect();
+    let ours: Vec<&&Vec<String>> = compared
+        .iter()
+        .filter(|r| r[col("solver")] == paper.name)
+        .collect();
+    assert_eq!(ours.len(), 2, "{compared:?}");
+    assert_ne!(ours[0][col("variant")], ours[1][col("variant")]);
+    for r in &ours {
+        let variant = &r[col("variant")];
+        assert!(variant.contains(".target=1e-6"), "{variant}");
+        assert_eq!(r[col("status")], "converged", "{r:?}");
+        let certificate: f64 = r[col("certificate")].parse().unwrap();
+        assert!(certificate <= 1e-6, "{r:?}");
+    }
+    assert!(
+        compared
+            .iter()
+            .any(|r| r[col("solver")] != paper.name && r[col("variant")].is_empty()),
+        "no oracle row: {compared:?}"
+    );
+    assert!(rows.iter().any(|r| r[col("what")] == "oracle_goal"));
     // Charts: valid SVG, title, axis labels, one series per solver where drawn per solver.
     let mut seen = 0;
     for entry in std::fs::read_dir(out.join("charts")).unwrap() {

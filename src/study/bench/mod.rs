@@ -151,36 +151,15 @@ pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
     CsrMatrix::from(&coo)
 }
 
-/// Writes as many bytes as the stiffness and the mass take (nalgebra-sparse
-/// keeps a pattern per matrix: two offset and two index arrays, and two
-/// value arrays) into freshly allocated memory, all held until the end:
-/// what any assembly that returns both matrices must at least do, the
-/// floor of the `assembly` row. Returns the number of items written.
-pub fn write_output_storage(a: &CsrMatrix<f64>) -> usize {
-    let (n, nnz) = (a.nrows(), a.nnz());
-    // A fill with a nonzero value writes every page (a zero fill may be
-    // mapped lazily and never touched).
-    let patterns: Vec<(Vec<usize>, Vec<usize>)> = (0..2)
-        .map(|_| (vec![1usize; n + 1], vec![1usize; nnz]))
-        .collect();
-    let values: Vec<Vec<f64>> = (0..2).map(|_| vec![1.0f64; nnz]).collect();
-    std::hint::black_box(&patterns)
-        .iter()
-        .map(|(o, i)| o.len() + i.len())
-        .sum::<usize>()
-        + std::hint::black_box(&values)
-            .iter()
-            .map(Vec::len)
-            .sum::<usize>()
-}
-
 /// Assembles `scene` at `h` and factors its stiffness (rigid mode pinned)
 /// with one solve, each timed `runs` times after a warm-up (0: the warm-up
-/// alone, cold), and times writing the two matrices' storage
-/// ([`write_output_storage`]).
-fn assemble_and_factor(scene: &Scene, h: MeshSize, runs: usize) -> Result<SetUp> {
+/// alone, cold). Returns the discretization and both lists of seconds.
+fn assemble_and_factor(
+    scene: &Scene,
+    h: MeshSize,
+    runs: usize,
+) -> Result<(Discretization, Vec<f64>, Vec<f64>)> {
     let (d, assembly) = timed(runs, || Ok(Discretization::new(scene, h)?))?;
-    let (_, storage) = timed(runs, || Ok(write_output_storage(d.problem.a())))?;
     let a = pinned(&d);
     let (_, factor) = timed(runs, || {
         let c = SparseCholesky::new(&a)?;
@@ -188,25 +167,8 @@ fn assemble_and_factor(scene: &Scene, h: MeshSize, runs: usize) -> Result<SetUp>
         c.solve_vec(&mut b);
         Ok(b[0])
     })?;
-    Ok(SetUp {
-        d,
-        assembly,
-        storage,
-        factor,
-    })
+    Ok((d, assembly, factor))
 }
-
-/// One mesh's discretization and the seconds of each timed run of its
-/// assembly, of writing its matrices' storage, and of one factorization.
-struct SetUp {
-    d: Discretization,
-    assembly: Vec<f64>,
-    storage: Vec<f64>,
-    factor: Vec<f64>,
-}
-
-/// The note of the `output_storage` rows.
-const STORAGE_NOTE: &str = "writing A's and M's storage to fresh memory: the floor of assembly";
 
 /// Rows of one mesh's measurements, with the factorization as the unit.
 struct MeshRows<'a> {
@@ -252,12 +214,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
     for &h in &spec.meshes {
         let mut scene = Scene::paper_problem(spec.problem)?;
         scene.set_finest(h);
-        let SetUp {
-            d,
-            assembly,
-            storage,
-            factor,
-        } = assemble_and_factor(&scene, h, spec.runs)?;
+        let (d, assembly, factor) = assemble_and_factor(&scene, h, spec.runs)?;
         let mut mesh = MeshRows {
             rows: &mut rows,
             h,
@@ -267,7 +224,6 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         let note = "symbolic + numeric + one solve".to_string();
         mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
         mesh.push("assembly", "-", &assembly, "done", String::new());
-        mesh.push("output_storage", "-", &storage, "done", STORAGE_NOTE.into());
         for entry in registry::solvers() {
             let Some(prepare) = entry.kernel else {
                 continue;
@@ -402,12 +358,7 @@ fn large_mesh(
     let mut scene = Scene::paper_problem(problem)?;
     scene.set_finest(h);
     log(&format!("h = {h}: assembly and one factorization"));
-    let SetUp {
-        d,
-        assembly,
-        storage,
-        factor,
-    } = assemble_and_factor(&scene, h, 0)?;
+    let (d, assembly, factor) = assemble_and_factor(&scene, h, 0)?;
     let unknowns = d.problem.n();
     drop(d);
     let mut mesh = MeshRows {
@@ -419,8 +370,6 @@ fn large_mesh(
     let note = "symbolic + numeric + one solve, once".to_string();
     mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
     mesh.push("assembly", "-", &assembly, "done", "once".into());
-    let note = format!("{STORAGE_NOTE}, once");
-    mesh.push("output_storage", "-", &storage, "done", note);
     log(&format!("h = {h}: {} coulomb", solver.name));
     let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
     let m = measure(&t, None, Keep::default())?;
