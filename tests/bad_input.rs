@@ -142,6 +142,32 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             Input::Args(&["solve", "--problem", "1", "--clarabel-tol", "-1e-8"]),
             "--clarabel-tol",
         ),
+        // A valid setting of a solver the run does not use would be
+        // ignored: an error that names the flag for the solver run.
+        (
+            Input::Args(&[
+                "solve",
+                "--problem",
+                "1",
+                "--solver",
+                "clarabel-faer",
+                "--clarabel-tol",
+                "1e-8",
+            ]),
+            "use --clarabel-faer-tol instead",
+        ),
+        (
+            Input::Args(&[
+                "solve",
+                "--problem",
+                "1",
+                "--solver",
+                "newton",
+                "--set",
+                "relaxation.omega=1.5",
+            ]),
+            "--set relaxation.omega sets a setting of relaxation",
+        ),
         (
             Input::Args(&["solve", "--problem", "1", "--relaxation-smoothing", "abc"]),
             "--relaxation-smoothing",

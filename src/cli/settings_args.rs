@@ -267,6 +267,44 @@ impl<S: SolverSet> SettingsArgs<S> {
     }
 }
 
+impl<S: SolverSet> SettingsArgs<S> {
+    /// Refuses settings of a registered solver that this run does not use
+    /// (`running`): they would be ignored without a word, e.g.
+    /// `--clarabel-tol` with `--solver clarabel-faer`, whose flags are
+    /// `--clarabel-faer-*`. The error names the flag for the solver run.
+    pub fn check_used_by(&self, running: &[&'static registry::Entry]) -> Result<()> {
+        for (path, _, flag) in &self.assignments {
+            let (owner, knob) = path.split_once('.').unwrap_or((path.as_str(), ""));
+            let Some(entry) = registry::by_name(owner) else {
+                continue;
+            };
+            if running.iter().any(|r| r.name == entry.name) {
+                continue;
+            }
+            let names: Vec<&str> = running.iter().map(|r| r.name).collect();
+            let instead: Vec<String> = running
+                .iter()
+                .filter_map(|r| r.knob(knob).map(|k| format!("--{}", knob_flag(r.name, k))))
+                .collect();
+            let hint = if instead.is_empty() {
+                String::new()
+            } else {
+                format!(": use {} instead", instead.join(" or "))
+            };
+            let given = if flag == "--set" {
+                format!("--set {path}")
+            } else {
+                flag.clone()
+            };
+            bail!(
+                "{given} sets a setting of {owner}, but this run uses {}; it would be ignored{hint}",
+                names.join(", ")
+            );
+        }
+        Ok(())
+    }
+}
+
 fn text_has_value(path: &str, text: &str) -> bool {
     !path.is_empty() && !text.trim().is_empty()
 }

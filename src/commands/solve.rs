@@ -21,6 +21,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         Some(name) => crate::coulomb::driver::solver_entry(name)?,
         None => registry::with_role(Role::Oracle).context("no oracle is registered")?,
     };
+    args.settings.check_used_by(&[solver])?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
     log(format!(
         "solving {} at h = {} with {}",
