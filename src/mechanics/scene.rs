@@ -126,6 +126,13 @@ impl Scene {
         })
     }
 
+    /// The paper's problem `number` with its continuation levels 1/8, ..., h.
+    pub fn paper_problem_to(number: u32, h: MeshSize) -> Result<Self, SceneError> {
+        let mut scene = Self::paper_problem(number)?;
+        scene.set_finest(h);
+        Ok(scene)
+    }
+
     /// The finest mesh level.
     pub fn finest(&self) -> MeshSize {
         *self.levels.last().expect("validated scenes have levels")

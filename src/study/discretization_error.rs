@@ -119,8 +119,7 @@ fn solver(spec: &ErrorSpec) -> Result<&'static str> {
 }
 
 fn solve(problem: u32, h: MeshSize, solver: &str, settings: &Settings) -> Result<Run> {
-    let mut scene = Scene::paper_problem(problem)?;
-    scene.set_finest(h);
+    let scene = Scene::paper_problem_to(problem, h)?;
     solve_scene(&scene, settings, solver, &mut Silent)
 }
 

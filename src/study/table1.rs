@@ -68,8 +68,7 @@ pub fn plan(
     let mut out = Vec::new();
     for &schedule in schedules {
         for &problem in problems {
-            let mut scene = Scene::paper_problem(problem)?;
-            scene.set_finest(finest);
+            let mut scene = Scene::paper_problem_to(problem, finest)?;
             scene.material.plane = plane;
             let mut s = settings.clone();
             s.schedule = schedule;

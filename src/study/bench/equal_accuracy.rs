@@ -148,8 +148,7 @@ pub fn equal_accuracy(
     };
     let target = format!("{:e}", spec.accuracy_target);
     for &h in &spec.equal_accuracy {
-        let mut scene = Scene::paper_problem(spec.problem)?;
-        scene.set_finest(h);
+        let scene = Scene::paper_problem_to(spec.problem, h)?;
         let f = factorization(rows, h);
         for omega in [1.0, relaxation::STUDIED_OMEGA] {
             let varied = [
@@ -171,8 +170,7 @@ pub fn equal_accuracy(
         }
     }
     if let (Some(h), Some(oracle)) = (spec.oracle_mesh, oracle) {
-        let mut scene = Scene::paper_problem(spec.problem)?;
-        scene.set_finest(h);
+        let scene = Scene::paper_problem_to(spec.problem, h)?;
         let f = factorization(rows, h);
         let row = run_once(ORACLE_GOAL, &scene, h, oracle, &[], settings, f, log)?;
         rows.push(row);

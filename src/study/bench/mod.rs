@@ -212,8 +212,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
     // Per (law, solver): median seconds on the meshes so far, or why it stopped.
     let mut history: std::collections::HashMap<(Law, &str), Past> = Default::default();
     for &h in &spec.meshes {
-        let mut scene = Scene::paper_problem(spec.problem)?;
-        scene.set_finest(h);
+        let scene = Scene::paper_problem_to(spec.problem, h)?;
         let (d, assembly, factor) = assemble_and_factor(&scene, h, spec.runs)?;
         let mut mesh = MeshRows {
             rows: &mut rows,
@@ -355,8 +354,7 @@ fn large_mesh(
     rows: &mut Vec<PerfRow>,
     log: &dyn Fn(&str),
 ) -> Result<bool> {
-    let mut scene = Scene::paper_problem(problem)?;
-    scene.set_finest(h);
+    let scene = Scene::paper_problem_to(problem, h)?;
     log(&format!("h = {h}: assembly and one factorization"));
     let (d, assembly, factor) = assemble_and_factor(&scene, h, 0)?;
     let unknowns = d.problem.n();

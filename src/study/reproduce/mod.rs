@@ -174,12 +174,6 @@ pub struct Outputs {
     pub charts: Vec<(String, Chart)>,
 }
 
-fn scene(problem: u32, h: MeshSize) -> Result<Scene> {
-    let mut s = Scene::paper_problem(problem)?;
-    s.set_finest(h);
-    Ok(s)
-}
-
 /// Runs everything, writing the data files into `out` (charts, manifest and
 /// README are the caller's). `log` receives one line per stage.
 pub fn run(
@@ -223,7 +217,7 @@ pub fn run(
             "problem {problem}: every solver at h = {}",
             spec.h
         ));
-        let sc = scene(problem, spec.h)?;
+        let sc = Scene::paper_problem_to(problem, spec.h)?;
         let mut measured =
             compare::run(&sc, settings, &solvers, spec.repeats, &mut references, none)?;
         let at_paper = TrialSpec::new(
@@ -345,7 +339,7 @@ pub fn run(
         booktabs(&compare::markdown(&trials, &seconds), "every solver on the paper's problems against the earned reference (contactlab reproduce)").as_bytes(),
     )?;
     write_atomic(&out.join("separation.csv"), &to_csv(&separation, &[])?)?;
-    let mut stress = scene(1, spec.h)?;
+    let mut stress = Scene::paper_problem_to(1, spec.h)?;
     stress.material.plane = PlaneModel::Stress;
     stress.name = "problem 1, plane stress".into();
     let plane_stress_fraction = references

@@ -114,16 +114,10 @@ pub struct Map {
     pub uniqueness: Vec<uniqueness::UniquenessRow>,
 }
 
-fn problem(n: u32, h: MeshSize) -> Result<Scene> {
-    let mut s = Scene::paper_problem(n)?;
-    s.set_finest(h);
-    Ok(s)
-}
-
 /// Problem 1 plus an upward traction on [2/3, 1] so that the total
 /// vertical load is −`total` (a negative `total` lifts the body).
 pub fn lifted_problem(total: f64, h: MeshSize) -> Result<Scene> {
-    let mut s = problem(1, h)?;
+    let mut s = Scene::paper_problem_to(1, h)?;
     let up = 3.0 * (20.0 - total);
     if up != 0.0 {
         s.loads.push(Traction {
@@ -171,7 +165,7 @@ pub fn run(
         Ok(m)
     };
     log("each solver at its defaults and under its stress conditions");
-    let p1 = problem(1, spec.h)?;
+    let p1 = Scene::paper_problem_to(1, spec.h)?;
     for entry in registry::solvers() {
         let cap = work_cap(entry, spec.work_scale);
         let trial = |group: &str| {
@@ -232,7 +226,7 @@ pub fn run(
     log("past the fixed point's limit: solvers of the Coulomb problem from several starts");
     if !spec.uniqueness_values.is_empty() {
         let (measured, rows) = uniqueness::run(
-            &problem(1, spec.h_friction)?,
+            &Scene::paper_problem_to(1, spec.h_friction)?,
             &spec.uniqueness_values,
             base,
             spec.work_scale,
@@ -273,7 +267,7 @@ fn friction_group(
         for n in [1, 2, 3] {
             let mut default_iterations = None;
             let mut attempt = |map: &mut Map, f: f64, group: &str| -> Result<bool> {
-                let mut scene = problem(n, spec.h_friction)?;
+                let mut scene = Scene::paper_problem_to(n, spec.h_friction)?;
                 scene.friction = f;
                 let mut t = TrialSpec::new(STUDY, group, &scene, entry, Law::Coulomb, &settings)
                     .with_work(work_cap(entry, spec.work_scale));
