@@ -244,8 +244,8 @@ impl<S: SolverSet> SettingsArgs<S> {
                     crate::settings::example_path()
                 );
             }
-            let owner = path.split('.').next().unwrap_or("");
-            if registry::by_name(owner).is_some() && !offered.contains(&owner) {
+            if let Some(owner) = other_solver(path, &offered) {
+                let owner = owner.name;
                 bail!(
                     "--set '{path}': this command runs only {}; settings of {owner} would be ignored",
                     offered.join(", ")
@@ -265,23 +265,19 @@ impl<S: SolverSet> SettingsArgs<S> {
         }
         Ok(settings)
     }
-}
 
-impl<S: SolverSet> SettingsArgs<S> {
     /// Refuses settings of a registered solver that this run does not use
     /// (`running`): they would be ignored without a word, e.g.
     /// `--clarabel-tol` with `--solver clarabel-faer`, whose flags are
     /// `--clarabel-faer-*`. The error names the flag for the solver run.
     pub fn check_used_by(&self, running: &[&'static registry::Entry]) -> Result<()> {
+        let names: Vec<&str> = running.iter().map(|r| r.name).collect();
         for (path, _, flag) in &self.assignments {
-            let (owner, knob) = path.split_once('.').unwrap_or((path.as_str(), ""));
-            let Some(entry) = registry::by_name(owner) else {
+            let Some(owner) = other_solver(path, &names) else {
                 continue;
             };
-            if running.iter().any(|r| r.name == entry.name) {
-                continue;
-            }
-            let names: Vec<&str> = running.iter().map(|r| r.name).collect();
+            let owner = owner.name;
+            let knob = path.split_once('.').map_or("", |(_, k)| k);
             let instead: Vec<String> = running
                 .iter()
                 .filter_map(|r| r.knob(knob).map(|k| format!("--{}", knob_flag(r.name, k))))
@@ -303,6 +299,13 @@ impl<S: SolverSet> SettingsArgs<S> {
         }
         Ok(())
     }
+}
+
+/// The registered solver that owns setting `path`, if it is not one of
+/// `names` (its settings would be ignored by a run of those).
+fn other_solver(path: &str, names: &[&str]) -> Option<&'static registry::Entry> {
+    let owner = path.split('.').next().unwrap_or("");
+    registry::by_name(owner).filter(|e| !names.contains(&e.name))
 }
 
 fn text_has_value(path: &str, text: &str) -> bool {

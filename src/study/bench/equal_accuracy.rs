@@ -10,7 +10,7 @@
 //! every other; a row records its status and its certificate, so that
 //! "equal accuracy" is read off the rows, not assumed.
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry, Role};
 use contactlab_solvers::{Law, relaxation};
 
@@ -132,14 +132,6 @@ pub fn equal_accuracy(
     let Some(paper) = registry::with_role(Role::PapersMethod) else {
         return Ok(());
     };
-    for knob in [
-        relaxation::CERTIFIED_STOP_KNOB,
-        relaxation::OVER_RELAXATION_KNOB,
-    ] {
-        if paper.knob(knob).is_none() {
-            bail!("the paper's method ({}) has no knob `{knob}`", paper.name);
-        }
-    }
     let oracle = fastest_oracle(rows);
     let factorization = |rows: &[PerfRow], h: MeshSize| {
         rows.iter()

@@ -182,7 +182,9 @@ fn equal_accuracy_goal(rows: &[PerfRow]) -> Option<Goal> {
                     let label = if r.solver == paper.name {
                         r.variant
                             .split(' ')
-                            .find(|v| v.contains(relaxation_omega()))
+                            .find(|v| {
+                                v.contains(contactlab_solvers::relaxation::OVER_RELAXATION_KNOB)
+                            })
                             .unwrap_or(&r.variant)
                             .to_string()
                     } else {
@@ -210,11 +212,6 @@ fn equal_accuracy_goal(rows: &[PerfRow]) -> Option<Goal> {
         ),
         pass: Some(ours.iter().all(|r| r.status == "converged")),
     })
-}
-
-/// The over-relaxation knob's path suffix, as rows record it.
-fn relaxation_omega() -> &'static str {
-    contactlab_solvers::relaxation::OVER_RELAXATION_KNOB
 }
 
 /// The equal-accuracy comparison as a table: one row per run.
