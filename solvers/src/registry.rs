@@ -144,6 +144,7 @@ pub const SOLVERS: &[&Entry] = &[
     &crate::newton::ENTRY,
     &crate::conic::ENTRY_QP,
     &crate::conic::ENTRY_FAER,
+    &crate::conic::ENTRY_CONDENSED,
     &crate::nsgs::ENTRY,
     &crate::apgd::ENTRY,
     &crate::admm::ENTRY,
