@@ -22,7 +22,7 @@
 //! y = (t_i, s_i) alone, A and f replaced by the Schur complement S and the
 //! reduced load b̂ of [`crate::condensed`] (static condensation: exact, one
 //! sparse factorization kept across calls), and v recovered from y. Clarabel
-//! then factors KKT systems of order 5m instead of n + 4m.
+//! then factors KKT systems of order 6m instead of n + 4m.
 
 use std::sync::{Arc, Mutex};
 use std::time::Instant;

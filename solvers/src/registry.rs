@@ -185,6 +185,20 @@ pub fn with_role(role: Role) -> Option<&'static Entry> {
     solvers().into_iter().find(|e| e.role == role)
 }
 
+/// The oracle and its registered variants: the entries with the oracle's
+/// laws and knobs (the same program with other defaults: another
+/// formulation, linear solver or condensation). Empty without an oracle.
+pub fn oracle_family() -> Vec<&'static Entry> {
+    let Some(oracle) = with_role(Role::Oracle) else {
+        return Vec::new();
+    };
+    let knobs = |e: &Entry| e.knobs.iter().map(|k| k.name).collect::<Vec<_>>();
+    solvers()
+        .into_iter()
+        .filter(|e| e.laws == oracle.laws && knobs(e) == knobs(oracle))
+        .collect()
+}
+
 /// Looks a solver up by name.
 pub fn by_name(name: &str) -> Option<&'static Entry> {
     solvers().into_iter().find(|e| e.name == name)
@@ -225,6 +239,19 @@ mod tests {
         for role in [Role::PapersMethod, Role::Oracle] {
             let n = SOLVERS.iter().filter(|e| e.role == role).count();
             assert!(n <= 1, "at most one solver has role {role:?}");
+        }
+    }
+
+    #[test]
+    fn the_oracle_family_is_the_oracle_and_its_variants_only() {
+        let family: Vec<&str> = oracle_family().iter().map(|e| e.name).collect();
+        let oracle = with_role(Role::Oracle).expect("registered");
+        let paper = with_role(Role::PapersMethod).expect("registered");
+        assert!(family.contains(&oracle.name), "{family:?}");
+        assert!(!family.contains(&paper.name), "{family:?}");
+        for name in &family {
+            let e = by_name(name).expect("registered");
+            assert_eq!(e.laws, oracle.laws, "{name} solves other laws");
         }
     }
 }

@@ -30,23 +30,10 @@ pub const ORACLE_GOAL: &str = "oracle_goal";
 /// long is reported as stopped, not waited for).
 const DEADLINE: f64 = 1200.0;
 
-/// The oracle and its registered variants: the entries with the oracle's
-/// knobs (the same program with other defaults, e.g. another linear solver).
-pub fn oracle_family() -> Vec<&'static Entry> {
-    let Some(oracle) = registry::with_role(Role::Oracle) else {
-        return Vec::new();
-    };
-    let knobs = |e: &Entry| e.knobs.iter().map(|k| k.name).collect::<Vec<_>>();
-    registry::solvers()
-        .into_iter()
-        .filter(|e| e.laws == oracle.laws && knobs(e) == knobs(oracle))
-        .collect()
-}
-
 /// The oracle variant with the smallest median time on the given-friction
 /// subproblem on the finest mesh where any of them was timed in `rows`.
 pub fn fastest_oracle(rows: &[PerfRow]) -> Option<&'static Entry> {
-    let family = oracle_family();
+    let family = registry::oracle_family();
     let timed: Vec<&PerfRow> = rows
         .iter()
         .filter(|r| r.what == Law::GivenFriction.as_str() && r.median_seconds.is_finite())
@@ -194,21 +181,8 @@ mod tests {
     }
 
     #[test]
-    fn the_oracle_family_is_the_oracle_and_its_variants_only() {
-        let family: Vec<&str> = oracle_family().iter().map(|e| e.name).collect();
-        let oracle = registry::with_role(Role::Oracle).expect("registered");
-        let paper = registry::with_role(Role::PapersMethod).expect("registered");
-        assert!(family.contains(&oracle.name), "{family:?}");
-        assert!(!family.contains(&paper.name), "{family:?}");
-        for name in &family {
-            let e = registry::by_name(name).expect("registered");
-            assert_eq!(e.laws, oracle.laws, "{name} solves other laws");
-        }
-    }
-
-    #[test]
     fn the_fastest_oracle_is_read_on_the_finest_mesh_where_one_was_timed() {
-        let family = oracle_family();
+        let family = registry::oracle_family();
         let [a, b, ..] = family[..] else {
             // One variant only: it is the fastest wherever it was timed.
             let only = family[0];
