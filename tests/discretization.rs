@@ -446,10 +446,12 @@ fn assemble_by_triplets(
 }
 
 /// The row-wise assembly (element matrices shared between congruent
-/// triangles, a dense accumulator per row) stores the same entries as the
+/// triangles, rows filled in node blocks) stores the same entries as the
 /// triplet assembly, explicit zeros included, with the same values up to the
 /// order of summation: a wrong place, a lost contact-expansion term, a
-/// missing triangle or a wrong shape shared would show here.
+/// missing triangle, a wrong shape shared, or a block's second row taking
+/// the first's component (the roller nodes have single rows, the contact
+/// nodes pairs over two nodes) would show here.
 #[test]
 fn row_wise_assembly_equals_the_triplet_assembly_entry_by_entry() {
     for k in 1..=5 {

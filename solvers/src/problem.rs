@@ -329,12 +329,15 @@ fn check_stiffness_and_mass(
 
 /// Checks that each matrix, all on one pattern, is n × n, finite and
 /// symmetric to 1e-12 of its largest entry.
+///
+/// One pass over the pattern measures each matrix's largest entry, its
+/// largest asymmetry and whether it is finite; only when a matrix fails is
+/// the pattern walked again to name the first offending entry.
 fn check_square_symmetric<const K: usize>(
     named: [(&'static str, &CsrMatrix<f64>); K],
     n: usize,
 ) -> Result<(), ProblemError> {
-    let mut tol = [0.0; K];
-    for ((what, m), tol) in named.iter().zip(&mut tol) {
+    for (what, m) in &named {
         for (dim, got) in [(n, m.nrows()), (n, m.ncols())] {
             if dim != got {
                 return Err(ProblemError::Dimension {
@@ -344,25 +347,60 @@ fn check_square_symmetric<const K: usize>(
                 });
             }
         }
-        let mut scale = 0.0f64;
-        for x in m.values() {
-            if !x.is_finite() {
-                return Err(ProblemError::NonFinite { what });
-            }
-            scale = scale.max(x.abs());
-        }
-        *tol = 1e-12 * scale;
     }
     let Some((_, first)) = named.first() else {
         return Ok(());
     };
-    let values = named.map(|(_, m)| m.values());
-    // Each stored (row, col) is compared with (col, row), found by a cursor
-    // per row that only moves forward: the rows visiting column `col` come in
-    // increasing order, and so do the columns of row `col`. One pass over
-    // the pattern, no search (a binary search per entry was a third of the
-    // set-up at h = 1/256).
     let (offsets, indices) = (first.row_offsets(), first.col_indices());
+    let values = named.map(|(_, m)| m.values());
+    let (mut scale, mut asymmetry, mut finite) = ([0.0f64; K], [0.0f64; K], [true; K]);
+    walk_mirrors(offsets, indices, |_, _, k, mirror| {
+        for m in 0..K {
+            let x = values[m][k];
+            finite[m] &= x.is_finite();
+            scale[m] = scale[m].max(x.abs());
+            let across = mirror.map_or(0.0, |c| values[m][c]);
+            asymmetry[m] = asymmetry[m].max((across - x).abs());
+        }
+        true
+    });
+    if let Some(m) = (0..K).find(|&m| !finite[m]) {
+        return Err(ProblemError::NonFinite { what: named[m].0 });
+    }
+    let tol = scale.map(|s| 1e-12 * s);
+    if (0..K).all(|m| asymmetry[m] <= tol[m]) {
+        return Ok(());
+    }
+    let mut offending = None;
+    walk_mirrors(offsets, indices, |row, col, k, mirror| {
+        for m in 0..K {
+            let across = mirror.map_or(0.0, |c| values[m][c]);
+            if (across - values[m][k]).abs() > tol[m] {
+                offending = Some(ProblemError::NotSymmetric {
+                    what: named[m].0,
+                    row,
+                    col,
+                });
+                return false;
+            }
+        }
+        true
+    });
+    Err(offending.expect("an asymmetry was measured, so an entry exceeds it"))
+}
+
+/// Visits each stored (row, col, position) in row order with the position of
+/// its mirror (col, row), if stored, until `visit` returns false. The mirror
+/// is found by a cursor per row that only moves forward: the rows visiting
+/// column `col` come in increasing order, and so do the columns of row
+/// `col`. One pass over the pattern, no search (a binary search per entry
+/// was a third of the set-up at h = 1/256).
+fn walk_mirrors(
+    offsets: &[usize],
+    indices: &[usize],
+    mut visit: impl FnMut(usize, usize, usize, Option<usize>) -> bool,
+) {
+    let n = offsets.len() - 1;
     let mut cursor = offsets[..n].to_vec();
     for row in 0..n {
         for k in offsets[row]..offsets[row + 1] {
@@ -373,16 +411,12 @@ fn check_square_symmetric<const K: usize>(
                 c += 1;
             }
             cursor[col] = c;
-            let stored = c < end && indices[c] == row;
-            for ((values, tol), (what, _)) in values.iter().zip(tol).zip(&named) {
-                let mirror = if stored { values[c] } else { 0.0 };
-                if (mirror - values[k]).abs() > tol {
-                    return Err(ProblemError::NotSymmetric { what, row, col });
-                }
+            let mirror = (c < end && indices[c] == row).then_some(c);
+            if !visit(row, col, k, mirror) {
+                return;
             }
         }
     }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -174,10 +174,16 @@ impl<const K: usize> ElementTable<K> {
 /// stiffness and the mass share the pattern).
 ///
 /// Row by row, Gustavson's way: for unknown i, the triangles around each node
-/// whose components involve i add their element row into a dense
-/// accumulator, a marker array collects the row's columns, which are then
-/// sorted. Linear in the mesh, no triplet list, no search; each element
+/// whose components involve i add their element row into an accumulator, a
+/// marker array finds each column's place in it, and the row's columns are
+/// then sorted. Linear in the mesh, no triplet list, no search; each element
 /// matrix is computed once per shape ([`ElementTable`]).
+///
+/// Rows come in node blocks: two consecutive unknowns whose components lie
+/// on the same nodes (the x and y unknowns of a node, or the slip and jump
+/// of a contact node) have the same columns, so one visit of the triangles
+/// around those nodes fills both rows and their columns are found and
+/// sorted once.
 pub fn assemble_all<const K: usize>(
     mesh: &Mesh,
     dofs: &impl DofExpansion,
@@ -203,6 +209,14 @@ pub fn assemble_all<const K: usize>(
             }
         }
     });
+    // The coefficient of unknown i in component c.
+    let coefficient = |i: usize, c: usize| {
+        dofs.terms(c / 2, c % 2)
+            .as_slice()
+            .iter()
+            .find(|(unknown, _)| *unknown == i)
+            .map_or(0.0, |(_, coefficient)| *coefficient)
+    };
     // A P1 row of this mesh has at most 14 entries (18 with the contact
     // expansion): one allocation in the usual case.
     let capacity = 16 * n;
@@ -210,50 +224,80 @@ pub fn assemble_all<const K: usize>(
     offsets.push(0);
     let mut columns: Vec<usize> = Vec::with_capacity(capacity);
     let mut values: [Vec<f64>; K] = [(); K].map(|_| Vec::with_capacity(capacity));
-    let mut marker = vec![usize::MAX; n];
-    let mut accumulator = vec![[0.0; K]; n];
-    for i in 0..n {
-        let start = columns.len();
-        for &c in components.of(i) {
-            let (node, k) = (c / 2, c % 2);
-            let ci = dofs
-                .terms(node, k)
-                .as_slice()
-                .iter()
-                .find(|(unknown, _)| *unknown == i)
-                .map_or(0.0, |(_, coefficient)| *coefficient);
+    // marker[j] = (block, slot): column j was met in this block, and its sums
+    // are found[slot]. The sums live in a short list per block, so the
+    // accumulator stays in cache (the block's columns are its only entries).
+    let mut marker = vec![(usize::MAX, 0u32); n];
+    // The block's columns and, per column, both rows' sums (a single row
+    // leaves the second at zero).
+    let mut found: Vec<(usize, [[f64; K]; 2])> = Vec::with_capacity(32);
+    let mut i = 0;
+    while i < n {
+        let first = components.of(i);
+        let paired = i + 1 < n && {
+            let second = components.of(i + 1);
+            second.len() == first.len() && first.iter().zip(second).all(|(c, d)| c / 2 == d / 2)
+        };
+        found.clear();
+        for (p, &c) in first.iter().enumerate() {
+            let node = c / 2;
+            // Row r of the block takes component (node, k[r]) with
+            // coefficient ci[r]; a single row repeats its k with ci = 0.
+            let (k, ci) = if paired {
+                let d = components.of(i + 1)[p];
+                ([c % 2, d % 2], [coefficient(i, c), coefficient(i + 1, d)])
+            } else {
+                ([c % 2; 2], [coefficient(i, c), 0.0])
+            };
             for &around in node_triangles.of(node) {
                 let (e, corner) = (around / 3, around % 3);
                 let tri = &tris[e];
-                let a = 2 * corner + k;
+                let rows = k.map(|k| 2 * corner + k);
                 let ke = &table.matrices[table.shape[e] as usize];
                 for b in 0..6 {
                     for &(j, cj) in dofs.terms(tri[b / 2], b % 2).as_slice() {
-                        if marker[j] != i {
-                            marker[j] = i;
-                            columns.push(j);
-                            accumulator[j] = [0.0; K];
+                        let (block, slot) = &mut marker[j];
+                        if *block != i {
+                            *block = i;
+                            *slot = found.len() as u32;
+                            found.push((j, [[0.0; K]; 2]));
                         }
-                        for (acc, m) in accumulator[j].iter_mut().zip(ke) {
-                            *acc += ci * cj * m[a][b];
+                        let sums = &mut found[*slot as usize].1;
+                        for r in 0..2 {
+                            let weight = ci[r] * cj;
+                            for (acc, m) in sums[r].iter_mut().zip(ke) {
+                                *acc += weight * m[rows[r]][b];
+                            }
                         }
                     }
                 }
             }
         }
-        columns[start..].sort_unstable();
-        for &j in &columns[start..] {
-            for (v, acc) in values.iter_mut().zip(accumulator[j]) {
-                v.push(acc);
+        found.sort_unstable_by_key(|(j, _)| *j);
+        for r in 0..1 + usize::from(paired) {
+            for (j, sums) in &found {
+                columns.push(*j);
+                for (v, acc) in values.iter_mut().zip(sums[r]) {
+                    v.push(acc);
+                }
             }
+            offsets.push(columns.len());
         }
-        offsets.push(columns.len());
+        i += 1 + usize::from(paired);
     }
     let pattern = SparsityPattern::try_from_offsets_and_indices(n, n, offsets, columns)
         .expect("rows are sorted and deduplicated");
+    // Each matrix owns its pattern: copies for all but the last, which takes it.
+    let (mut pattern, mut left) = (Some(pattern), K);
     values.map(|v| {
-        CsrMatrix::try_from_pattern_and_values(pattern.clone(), v)
-            .expect("one value per stored entry")
+        left -= 1;
+        let pattern = if left == 0 {
+            pattern.take()
+        } else {
+            pattern.clone()
+        }
+        .expect("one pattern per matrix");
+        CsrMatrix::try_from_pattern_and_values(pattern, v).expect("one value per stored entry")
     })
 }
 
