@@ -226,6 +226,16 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         "no oracle row: {compared:?}"
     );
     assert!(rows.iter().any(|r| r[col("what")] == "oracle_goal"));
+    // Beside each mesh's assembly, the floor under it: a fresh copy of its
+    // output, timed in the same run.
+    for assembly in rows.iter().filter(|r| r[col("what")] == "assembly") {
+        let output = rows
+            .iter()
+            .find(|r| r[col("what")] == "output" && r[col("h")] == assembly[col("h")])
+            .unwrap_or_else(|| panic!("no output row beside {assembly:?}"));
+        let seconds: f64 = output[col("median_seconds")].parse().unwrap();
+        assert!(seconds > 0.0 && seconds.is_finite(), "{output:?}");
+    }
     // Charts: valid SVG, title, axis labels, one series per solver where drawn per solver.
     let mut seen = 0;
     for entry in std::fs::read_dir(out.join("charts")).unwrap() {

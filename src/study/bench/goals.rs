@@ -103,20 +103,39 @@ pub fn goals(rows: &[PerfRow], peak: Option<(MeshSize, u64)>) -> Vec<Goal> {
             pass: Some((kb as f64) < limit_kb),
         });
     }
-    // Assembly against one factorization on every mesh from 1/64 on.
-    let assembly: Vec<(String, f64)> = rows
+    // Assembly against one factorization on every mesh from 1/64 on, and
+    // against the floor under it: writing its output (a fresh copy of A, M).
+    let assembly: Vec<(String, f64, Option<f64>)> = rows
         .iter()
         .filter(|r| r.what == "assembly" && r.unknowns >= 8000)
-        .map(|r| (r.h.clone(), r.ratio_to_factorization))
+        .map(|r| {
+            let output = rows
+                .iter()
+                .find(|o| o.what == "output" && o.h == r.h)
+                .map(|o| r.median_seconds / o.median_seconds);
+            (r.h.clone(), r.ratio_to_factorization, output)
+        })
         .collect();
-    if let Some((worst_h, worst)) = assembly.iter().max_by(|a, b| a.1.total_cmp(&b.1)).cloned() {
+    if let Some((worst_h, worst, _)) = assembly.iter().max_by(|a, b| a.1.total_cmp(&b.1)).cloned() {
         let all: Vec<String> = assembly
             .iter()
-            .map(|(h, r)| format!("{h}: {r:.2}"))
+            .map(|(h, r, _)| format!("{h}: {r:.2}"))
             .collect();
+        let floor: Vec<String> = assembly
+            .iter()
+            .filter_map(|(h, _, o)| o.map(|o| format!("{h}: {o:.1}")))
+            .collect();
+        let floor = if floor.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; assembly ÷ writing its output (a fresh copy of A and M): {}",
+                floor.join(", ")
+            )
+        };
         out.push(Goal {
             goal: "assembly (both matrices, loads, the problem) at most 0.2 × one factorization at every h ≥ 1/64".into(),
-            measured: format!("worst {worst:.2} × at h = {worst_h} ({})", all.join(", ")),
+            measured: format!("worst {worst:.2} × at h = {worst_h} ({}){floor}", all.join(", ")),
             pass: Some(worst <= 0.2),
         });
     }

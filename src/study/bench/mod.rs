@@ -93,7 +93,8 @@ impl BenchSpec {
 /// One measurement (a row of the timing file `performance.csv`).
 #[derive(Clone, Debug, Serialize)]
 pub struct PerfRow {
-    /// `factorization`, `assembly`, `kernel` (a solver's inner iteration),
+    /// `factorization`, `assembly`, `output` (a fresh copy of A and M, the
+    /// floor under assembly), `kernel` (a solver's inner iteration),
     /// `spmv`, `given_friction` or `coulomb`.
     pub what: String,
     pub solver: String,
@@ -151,23 +152,53 @@ pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
     CsrMatrix::from(&coo)
 }
 
-/// Assembles `scene` at `h` and factors its stiffness (rigid mode pinned)
-/// with one solve, each timed `runs` times after a warm-up (0: the warm-up
-/// alone, cold). Returns the discretization and both lists of seconds.
-fn assemble_and_factor(
-    scene: &Scene,
-    h: MeshSize,
-    runs: usize,
-) -> Result<(Discretization, Vec<f64>, Vec<f64>)> {
+/// Seconds of one mesh's set-up measurements, each timed `runs` times after
+/// a warm-up (0: the warm-up alone, cold).
+struct SetUp {
+    /// Assembly: both matrices, the loads and the problem with its checks.
+    assembly: Vec<f64>,
+    /// A fresh copy of A and M: the memory the assembly must at least write
+    /// (allocation, first touch of its pages, the copy), the floor under it.
+    output: Vec<f64>,
+    /// Symbolic and numeric factorization of A (rigid mode pinned), one solve.
+    factorization: Vec<f64>,
+}
+
+/// Assembles `scene` at `h`, copies its matrices and factors its stiffness
+/// (rigid mode pinned) with one solve; see [`SetUp`].
+fn assemble_and_factor(scene: &Scene, h: MeshSize, runs: usize) -> Result<(Discretization, SetUp)> {
     let (d, assembly) = timed(runs, || Ok(Discretization::new(scene, h)?))?;
+    let (_, output) = timed(runs, || {
+        let copy = (d.problem.a().clone(), d.problem.mass().clone());
+        Ok(std::hint::black_box(copy).0.nnz())
+    })?;
     let a = pinned(&d);
-    let (_, factor) = timed(runs, || {
+    let (_, factorization) = timed(runs, || {
         let c = SparseCholesky::new(&a)?;
         let mut b = d.problem.f().to_vec();
         c.solve_vec(&mut b);
         Ok(b[0])
     })?;
-    Ok((d, assembly, factor))
+    let times = SetUp {
+        assembly,
+        output,
+        factorization,
+    };
+    Ok((d, times))
+}
+
+/// Pushes one mesh's set-up rows.
+fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, once: bool) {
+    let once = |note: &str| match (once, note) {
+        (true, "") => "once".to_string(),
+        (true, _) => format!("{note}, once"),
+        (false, _) => note.to_string(),
+    };
+    let f = once("symbolic + numeric + one solve");
+    mesh.push("factorization", "faer LLᵀ", &times.factorization, "done", f);
+    mesh.push("assembly", "-", &times.assembly, "done", once(""));
+    let copy = once("a fresh copy of A and M: what the assembly must write");
+    mesh.push("output", "-", &times.output, "done", copy);
 }
 
 /// Rows of one mesh's measurements, with the factorization as the unit.
@@ -213,16 +244,14 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
     let mut history: std::collections::HashMap<(Law, &str), Past> = Default::default();
     for &h in &spec.meshes {
         let scene = Scene::paper_problem_to(spec.problem, h)?;
-        let (d, assembly, factor) = assemble_and_factor(&scene, h, spec.runs)?;
+        let (d, set_up) = assemble_and_factor(&scene, h, spec.runs)?;
         let mut mesh = MeshRows {
             rows: &mut rows,
             h,
             unknowns: d.problem.n(),
-            factorization: median(&factor),
+            factorization: median(&set_up.factorization),
         };
-        let note = "symbolic + numeric + one solve".to_string();
-        mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
-        mesh.push("assembly", "-", &assembly, "done", String::new());
+        push_set_up(&mut mesh, &set_up, false);
         for entry in registry::solvers() {
             let Some(prepare) = entry.kernel else {
                 continue;
@@ -356,18 +385,16 @@ fn large_mesh(
 ) -> Result<bool> {
     let scene = Scene::paper_problem_to(problem, h)?;
     log(&format!("h = {h}: assembly and one factorization"));
-    let (d, assembly, factor) = assemble_and_factor(&scene, h, 0)?;
+    let (d, set_up) = assemble_and_factor(&scene, h, 0)?;
     let unknowns = d.problem.n();
     drop(d);
     let mut mesh = MeshRows {
         rows,
         h,
         unknowns,
-        factorization: median(&factor),
+        factorization: median(&set_up.factorization),
     };
-    let note = "symbolic + numeric + one solve, once".to_string();
-    mesh.push("factorization", "faer LLᵀ", &factor, "done", note);
-    mesh.push("assembly", "-", &assembly, "done", "once".into());
+    push_set_up(&mut mesh, &set_up, true);
     log(&format!("h = {h}: {} coulomb", solver.name));
     let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
     let m = measure(&t, None, Keep::default())?;
