@@ -234,13 +234,13 @@ fn equal_accuracy_goal(rows: &[PerfRow]) -> Option<Goal> {
 }
 
 /// The equal-accuracy comparison as a table: one row per run.
-pub fn equal_accuracy_markdown(rows: &[PerfRow]) -> String {
+pub fn equal_accuracy_markdown(rows: &[PerfRow], problem: u32) -> String {
     let compared: Vec<&PerfRow> = rows.iter().filter(|r| r.what == EQUAL_ACCURACY).collect();
     if compared.is_empty() {
         return String::new();
     }
-    let mut s = String::from(
-        "\n### The paper's method at a certified accuracy, against the oracle (problem 1, once each)\n\n| h | solver | settings | status | certificate | seconds | × factorization | work |\n|---|---|---|---|---|---|---|---|\n",
+    let mut s = format!(
+        "\n### The paper's method at a certified accuracy, against the oracle (problem {problem}, once each)\n\n| h | solver | settings | status | certificate | seconds | × factorization | work |\n|---|---|---|---|---|---|---|---|\n",
     );
     for r in compared {
         s += &format!(
@@ -366,6 +366,8 @@ pub fn peak_memory_kb() -> Option<u64> {
 
 /// What one benchmark run wrote.
 pub struct BenchOutput {
+    /// The paper's problem the benchmark ran on.
+    pub problem: u32,
     pub rows: Vec<PerfRow>,
     pub goals: Vec<Goal>,
     pub peak_kb: Option<u64>,
@@ -415,9 +417,10 @@ pub fn write_bench(
             kb as f64 / 1024.0
         );
     }
-    md += &equal_accuracy_markdown(&rows);
+    md += &equal_accuracy_markdown(&rows, spec.problem);
     write_atomic(&out.join("performance_goals.md"), md.as_bytes())?;
     Ok(BenchOutput {
+        problem: spec.problem,
         charts: performance_charts(&rows),
         rows,
         goals,

@@ -155,7 +155,10 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         stability_charts: named(&chart_names, "stability_"),
         stability_summary: views::summary_markdown(&out.stability.trials),
         goals: crate::study::bench::goals::goals_markdown(&out.bench.goals),
-        equal_accuracy: crate::study::bench::goals::equal_accuracy_markdown(&out.bench.rows),
+        equal_accuracy: crate::study::bench::goals::equal_accuracy_markdown(
+            &out.bench.rows,
+            out.bench.problem,
+        ),
         speed_table: speed_table(out),
         performance_charts: named(&chart_names, "performance_"),
         files: FILES.to_vec(),
