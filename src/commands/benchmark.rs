@@ -27,11 +27,12 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         spec.targets = args.targets.clone();
     }
     let folder = RunFolder::create(&args.out)?;
-    let planned = benchmark::plan(&spec, &settings)?.len();
+    let plan = benchmark::plan(&spec, &settings)?;
     let progress = StudyProgress::new(
-        planned as u64,
+        plan.len() as u64,
         &format!("benchmark {}/{}", spec.shard.index, spec.shard.of),
-    );
+    )
+    .with_costs(benchmark::expected_costs(&plan), spec.time_limit);
     let done = benchmark::run(&spec, &settings, &|t| progress.tick(t))?;
     progress.finish();
     let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();

@@ -53,6 +53,9 @@ pub struct StudyProgress {
     done: std::cell::Cell<u64>,
     total: u64,
     terminal: bool,
+    /// Expected relative cost of each unit, in the order they are done, and
+    /// the seconds one unit can take at most (see [`StudyProgress::with_costs`]).
+    costs: Option<(Vec<f64>, f64)>,
 }
 
 impl StudyProgress {
@@ -89,6 +92,47 @@ impl StudyProgress {
             done: std::cell::Cell::new(0),
             total: len,
             terminal,
+            costs: None,
+        }
+    }
+
+    /// Estimates the time left from each unit's expected relative cost
+    /// (`costs`, one per unit in the order they are done) instead of
+    /// assuming all units alike: seconds per unit of cost are measured on
+    /// the units done, and each unit left is predicted at that rate, capped
+    /// at `cap` seconds (a time limit per run). A plan whose finest meshes
+    /// come last is then not predicted at the pace of its coarse ones.
+    pub fn with_costs(mut self, costs: Vec<f64>, cap: f64) -> Self {
+        if costs.len() as u64 == self.total && costs.iter().all(|c| c.is_finite() && *c > 0.0) {
+            self.costs = Some((costs, cap));
+            // indicatif's own estimate assumes units alike: the message
+            // carries this one instead.
+            self.bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{prefix} [{bar:30}] {pos}/{len} {msg} (elapsed {elapsed})",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
+            );
+        }
+        self
+    }
+
+    /// Seconds left after `done` units in `elapsed` seconds.
+    fn left(&self, done: u64, elapsed: f64) -> f64 {
+        let done = done as usize;
+        match &self.costs {
+            Some((costs, cap)) => {
+                let spent: f64 = costs[..done.min(costs.len())].iter().sum();
+                let rate = elapsed / spent;
+                // + 0.0: an empty sum is −0.0, which would print as "-0".
+                costs[done.min(costs.len())..]
+                    .iter()
+                    .map(|c| (rate * c).min(*cap))
+                    .sum::<f64>()
+                    + 0.0
+            }
+            None => elapsed / done as f64 * self.total.saturating_sub(done as u64) as f64,
         }
     }
 
@@ -106,7 +150,14 @@ impl StudyProgress {
     /// One unit of work is done, described by `msg`.
     pub fn step(&self, msg: &str) {
         self.done.set(self.done.get() + 1);
-        self.bar.set_message(msg.to_string());
+        if self.costs.is_some() {
+            let elapsed = self.start.elapsed().as_secs_f64();
+            let left = self.left(self.done.get(), elapsed);
+            self.bar
+                .set_message(format!("{msg}, about {} left", clock(left)));
+        } else {
+            self.bar.set_message(msg.to_string());
+        }
         self.bar.inc(1);
         let now = std::time::Instant::now();
         let last = self.done.get() == self.total;
@@ -123,7 +174,7 @@ impl StudyProgress {
                     self.what
                 ));
             } else {
-                let left = elapsed / done as f64 * self.total.saturating_sub(done) as f64;
+                let left = self.left(done, elapsed);
                 log(format!(
                     "{}: {done}/{} done (last: {msg}), {elapsed:.0} s elapsed, about {left:.0} s left",
                     self.what, self.total
@@ -137,6 +188,12 @@ impl StudyProgress {
     }
 }
 
+/// Seconds as h:mm:ss.
+fn clock(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
 /// The solvers named (all registered ones if none).
 pub fn solver_list(names: &[String]) -> Result<Vec<&'static Entry>> {
     if names.is_empty() {
@@ -146,4 +203,26 @@ pub fn solver_list(names: &[String]) -> Result<Vec<&'static Entry>> {
         .iter()
         .map(|n| crate::coulomb::driver::solver_entry(n))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StudyProgress;
+
+    /// Two cheap units done in 2 s, two eight times dearer left: 16 s at the
+    /// measured rate, not the 2 s a count of units predicts; a cap per unit
+    /// bounds each prediction.
+    #[test]
+    fn the_estimate_left_weighs_units_by_their_expected_cost() {
+        let alike = StudyProgress::new(4, "test");
+        assert_eq!(alike.left(2, 2.0), 2.0);
+        let weighted = StudyProgress::new(4, "test").with_costs(vec![1.0, 1.0, 8.0, 8.0], 100.0);
+        assert_eq!(weighted.left(2, 2.0), 16.0);
+        let capped = StudyProgress::new(4, "test").with_costs(vec![1.0, 1.0, 8.0, 8.0], 5.0);
+        assert_eq!(capped.left(2, 2.0), 10.0);
+        assert_eq!(capped.left(4, 30.0), 0.0);
+        // Costs that do not match the plan are ignored, not misread.
+        let ignored = StudyProgress::new(4, "test").with_costs(vec![1.0, 8.0], 100.0);
+        assert_eq!(ignored.left(2, 2.0), 2.0);
+    }
 }

@@ -376,11 +376,13 @@ pub fn run(
     let bench = write_bench(out, &spec.bench, settings, &|l| log(&format!("bench: {l}")))?;
     charts.extend(bench.charts.clone());
 
-    let planned = benchmark::plan(&spec.benchmark, settings)?.len();
+    let plan = benchmark::plan(&spec.benchmark, settings)?;
     log(&format!(
-        "benchmark over the problem collection: {planned} runs"
+        "benchmark over the problem collection: {} runs",
+        plan.len()
     ));
-    let progress = crate::commands::StudyProgress::new(planned as u64, "reproduce: benchmark");
+    let progress = crate::commands::StudyProgress::new(plan.len() as u64, "reproduce: benchmark")
+        .with_costs(benchmark::expected_costs(&plan), spec.benchmark.time_limit);
     let done = benchmark::run(&spec.benchmark, settings, &|t| progress.tick(t))?;
     progress.finish();
     let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
