@@ -70,10 +70,11 @@ pub enum Command {
     /// 1/256, as medians after a warm-up on one thread and as ratios to one
     /// sparse factorization; at 1/512 and 1/1024 (not with --quick) assembly,
     /// one factorization and the fastest certified direct Coulomb solver, once
-    /// each; at 1/32 to 1/128 the paper's method to a certified 1e-6 with
+    /// each; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
     /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle
-    /// at 1/256, once each without the budget (about 10 min). Writes
-    /// performance.csv, performance_goals.md and charts into --out.
+    /// at 1/256, once each without the budget (about 2 h, 1.5 h of it the
+    /// paper's method at 1/256; --quick: seconds). Writes performance.csv,
+    /// performance_goals.md and charts into --out.
     Bench(BenchArgs),
     /// The benchmark over the problem collection (the paper's problems over
     /// 𝓕 and h, sideways loads, nearly unbounded loads, fine meshes): every

@@ -66,7 +66,7 @@ impl BenchSpec {
             large: (9..=10)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
-            equal_accuracy: (5..=7)
+            equal_accuracy: (5..=8)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
             accuracy_target: 1e-6,
