@@ -28,7 +28,7 @@ pub const ORACLE_GOAL: &str = "oracle_goal";
 
 /// Seconds after which one run of this comparison is stopped (a run that
 /// long is reported as stopped, not waited for). The paper's method to 1e-6
-/// at h = 1/256 took 23 min with ω = 1.5 and 65 min with ω = 1 (2.2 million
+/// at h = 1/256 took 20-23 min with ω = 1.5 and 65 min with ω = 1 (2.2 million
 /// sweeps) by hand on the 2-core machine of `results/`; two hours leave
 /// room for a slower machine.
 const DEADLINE: f64 = 7200.0;
