@@ -147,30 +147,19 @@ pub const ENTRY_QP: Entry = Entry {
     name: "clarabel-qp",
     about: "the conic oracle as a QP: the friction cone of each node as two half-planes (nonnegative cones only)",
     source: "Goulart & Chen (2024), Clarabel; paper (10) with |s| ≤ z written as s − z ≤ 0, −s − z ≤ 0",
-    laws: &[Law::GivenFriction],
-    warm_starts: false,
-    stages: ENTRY.stages,
-    work_stage: "interior_point",
-    knobs: ENTRY.knobs,
     defaults: |_| {
         to_tree(&ConicSettings {
             formulation: Formulation::Qp,
             ..ConicSettings::default()
         })
     },
-    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
-    accuracy: ENTRY.accuracy,
     role: Role::Other,
-    sweeps: &[],
     stress: &[Variation {
         knob: "tol",
         values: &["1e-4", "1e-6", "1e-8", "1e-12", "1e-14"],
         quick: &["1e-14"],
     }],
-    study_work: 2000,
-    kernel: None,
-    restarts: &[],
-    diagnose: &[],
+    ..ENTRY
 };
 
 /// The registry entry of the oracle with Clarabel's other linear solver:
@@ -181,26 +170,15 @@ pub const ENTRY_FAER: Entry = Entry {
     name: "clarabel-faer",
     about: "the conic oracle (second-order cones) with faer's sparse LDLᵀ instead of QDLDL inside Clarabel",
     source: "Goulart & Chen (2024), Clarabel, direct_solve_method = \"faer\"; paper (10) as a conic program",
-    laws: &[Law::GivenFriction],
-    warm_starts: false,
-    stages: ENTRY.stages,
-    work_stage: "interior_point",
-    knobs: ENTRY.knobs,
     defaults: |_| {
         to_tree(&ConicSettings {
             linear_solver: LinearSolver::Faer,
             ..ConicSettings::default()
         })
     },
-    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
-    accuracy: ENTRY.accuracy,
     role: Role::Other,
-    sweeps: &[],
     stress: &[],
-    study_work: 2000,
-    kernel: None,
-    restarts: &[],
-    diagnose: &[],
+    ..ENTRY
 };
 
 /// The registry entry of the oracle on the condensed problem: the interior
@@ -218,11 +196,6 @@ pub const ENTRY_CONDENSED: Entry = Entry {
     name: "clarabel-condensed",
     about: "the conic oracle on the problem condensed onto the contact unknowns (dense Schur complement; cone as two half-planes; faer's LDLᵀ)",
     source: "Goulart & Chen (2024), Clarabel; paper (10) as a QP in the contact unknowns after static condensation (Schur complement of the interior unknowns)",
-    laws: &[Law::GivenFriction],
-    warm_starts: false,
-    stages: ENTRY.stages,
-    work_stage: "interior_point",
-    knobs: ENTRY.knobs,
     defaults: |_| {
         to_tree(&ConicSettings {
             linear_solver: LinearSolver::Faer,
@@ -231,15 +204,9 @@ pub const ENTRY_CONDENSED: Entry = Entry {
             ..ConicSettings::default()
         })
     },
-    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
-    accuracy: ENTRY.accuracy,
     role: Role::Other,
-    sweeps: &[],
     stress: &[],
-    study_work: 2000,
-    kernel: None,
-    restarts: &[],
-    diagnose: &[],
+    ..ENTRY
 };
 
 /// Clarabel's linear solver for its KKT systems.
