@@ -74,11 +74,7 @@ impl StudyProgress {
         } else {
             "{prefix} [{bar:30}] {pos}/{len} {msg} (elapsed {elapsed}, eta {eta})"
         };
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(template)
-                .expect("valid template")
-                .progress_chars("=> "),
-        );
+        bar.set_style(style(template));
         bar.set_prefix(what.to_string());
         if terminal {
             bar.enable_steady_tick(std::time::Duration::from_secs(1));
@@ -107,13 +103,9 @@ impl StudyProgress {
             self.costs = Some((costs, cap));
             // indicatif's own estimate assumes units alike: the message
             // carries this one instead.
-            self.bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{prefix} [{bar:30}] {pos}/{len} {msg} (elapsed {elapsed})",
-                )
-                .expect("valid template")
-                .progress_chars("=> "),
-            );
+            self.bar.set_style(style(
+                "{prefix} [{bar:30}] {pos}/{len} {msg} (elapsed {elapsed})",
+            ));
         }
         self
     }
@@ -186,6 +178,13 @@ impl StudyProgress {
     pub fn finish(&self) {
         self.bar.finish_and_clear();
     }
+}
+
+/// The bar's look with one of the templates above.
+fn style(template: &str) -> indicatif::ProgressStyle {
+    indicatif::ProgressStyle::with_template(template)
+        .expect("valid template")
+        .progress_chars("=> ")
 }
 
 /// Seconds as h:mm:ss.
