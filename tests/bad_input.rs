@@ -168,6 +168,43 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             ]),
             "--set relaxation.omega sets a setting of relaxation",
         ),
+        // The same for commands that run a chosen list of solvers.
+        (
+            Input::Args(&[
+                "compare",
+                "--problem",
+                "1",
+                "--solvers",
+                "newton",
+                "--relaxation-omega",
+                "1.5",
+            ]),
+            "--relaxation-omega sets a setting of relaxation, but this run uses newton",
+        ),
+        (
+            Input::Args(&[
+                "sweep",
+                "--solvers",
+                "newton,nsgs",
+                "--set",
+                "clarabel.tol=1e-9",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
+            "--set clarabel.tol sets a setting of clarabel, but this run uses newton, nsgs",
+        ),
+        (
+            Input::Args(&[
+                "benchmark",
+                "--solvers",
+                "clarabel-faer",
+                "--clarabel-tol",
+                "1e-9",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
+            "use --clarabel-faer-tol instead",
+        ),
         (
             Input::Args(&["solve", "--problem", "1", "--relaxation-smoothing", "abc"]),
             "--relaxation-smoothing",

@@ -18,7 +18,9 @@ use crate::study::runner::{Measured, write_trials};
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
     let settings = args.settings.resolve()?;
-    let mut spec = BenchmarkSpec::new(args.quick, solver_list(&args.solvers)?);
+    let solvers = solver_list(&args.solvers)?;
+    args.settings.check_used_by(&solvers)?;
+    let mut spec = BenchmarkSpec::new(args.quick, solvers);
     spec.shard = args.shard.unwrap_or(Shard::WHOLE);
     if let Some(t) = args.time_limit {
         spec.time_limit = t;

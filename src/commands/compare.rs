@@ -18,6 +18,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let (scene, base) = args.scene.load()?;
     let settings = args.settings.resolve_on(base)?;
     let solvers = solver_list(&args.solvers)?;
+    args.settings.check_used_by(&solvers)?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
     let specs = compare::plan(&scene, &settings, &solvers, args.repeats as usize);
     let bar = StudyProgress::new(specs.len() as u64, "compare");

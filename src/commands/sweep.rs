@@ -33,10 +33,12 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         ),
     };
     let settings = args.settings.resolve_on(base)?;
+    let solvers = solver_list(&args.solvers)?;
+    args.settings.check_used_by(&solvers)?;
     let spec = SweepSpec {
         scenes,
         meshes: args.meshes.clone(),
-        solvers: solver_list(&args.solvers)?,
+        solvers,
         variations: args.vary.is_empty(),
         work_precision: !args.no_work_precision,
         quick: args.quick,
