@@ -35,7 +35,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         &format!("benchmark {}/{}", spec.shard.index, spec.shard.of),
     )
     .with_costs(benchmark::expected_costs(&plan), spec.time_limit);
-    let done = benchmark::run(&spec, &settings, &|t| progress.tick(t))?;
+    let done = benchmark::run(plan, &|t| progress.tick(t))?;
     progress.finish();
     let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
     let dir = folder.path();

@@ -147,7 +147,11 @@ pub fn target_settings(entry: &Entry, base: &Settings, target: f64) -> Result<Se
 }
 
 /// The trials of a run, with each instance's family.
-pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<(Instance, TrialSpec, f64)>> {
+/// One planned run: the instance, its trial (with the time limit), the
+/// target accuracy.
+pub type Planned = (Instance, TrialSpec, f64);
+
+pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<Planned>> {
     let mut out = Vec::new();
     for (i, inst) in collection(spec.quick)?.into_iter().enumerate() {
         if !spec.shard.contains(i) {
@@ -179,7 +183,7 @@ pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<(Instance, Tria
 /// 2392 s of solves), this estimate was within 0.9-1.6× of the time
 /// actually left at every tenth of the run; n^1.5 within 1.1-2.2×, and a
 /// count of runs (all alike) 3-7× short.
-pub fn expected_costs(plan: &[(Instance, TrialSpec, f64)]) -> Vec<f64> {
+pub fn expected_costs(plan: &[Planned]) -> Vec<f64> {
     let mut unknowns: Vec<(MeshSize, f64)> = Vec::new();
     plan.iter()
         .map(|(inst, ..)| {
@@ -196,13 +200,9 @@ pub fn expected_costs(plan: &[(Instance, TrialSpec, f64)]) -> Vec<f64> {
         .collect()
 }
 
-/// Runs the planned trials; returns each row beside its measured trial.
-pub fn run(
-    spec: &BenchmarkSpec,
-    base: &Settings,
-    tick: &dyn Fn(&TrialSpec),
-) -> Result<Vec<(BenchmarkRow, Measured)>> {
-    let plan = plan(spec, base)?;
+/// Runs the trials of [`plan`] (the caller plans, to count and weigh them
+/// for its progress); returns each row beside its measured trial.
+pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(BenchmarkRow, Measured)>> {
     let mut out = Vec::with_capacity(plan.len());
     let mut unknowns: Option<(String, usize)> = None;
     for (inst, t, target) in plan {
@@ -230,7 +230,7 @@ pub fn run(
             certificate: tr.certificate,
             failing: tr.failing.clone(),
             seconds: m.timing.seconds_min,
-            time_limit: spec.time_limit,
+            time_limit: t.seconds.unwrap_or(f64::INFINITY),
             work: tr.work,
             detail: tr.detail.clone(),
         };

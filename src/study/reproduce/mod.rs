@@ -383,7 +383,7 @@ pub fn run(
     ));
     let progress = crate::commands::StudyProgress::new(plan.len() as u64, "reproduce: benchmark")
         .with_costs(benchmark::expected_costs(&plan), spec.benchmark.time_limit);
-    let done = benchmark::run(&spec.benchmark, settings, &|t| progress.tick(t))?;
+    let done = benchmark::run(plan, &|t| progress.tick(t))?;
     progress.finish();
     let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
     write_atomic(&out.join("benchmark.csv"), &to_csv(&rows, &[])?)?;
