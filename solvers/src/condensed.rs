@@ -223,7 +223,7 @@ impl Condensed {
         end: Ending,
     ) -> Solution {
         let contacts = problem.contacts();
-        let mut out = Solution {
+        let out = Solution {
             v: self.expand(problem, y),
             pressure: contacts
                 .iter()
@@ -244,10 +244,7 @@ impl Condensed {
             timing: end.timing,
             diagnostics: Vec::new(),
         };
-        if !out.is_finite() {
-            out.status = Status::NonFinite;
-        }
-        out
+        out.flag_non_finite()
     }
 }
 

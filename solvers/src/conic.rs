@@ -442,7 +442,7 @@ impl Solver for ConicSolver {
             Ok(a) => a,
             Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
         };
-        let mut out = Solution {
+        let out = Solution {
             pressure: contacts
                 .iter()
                 .zip(&answer.forces)
@@ -463,10 +463,7 @@ impl Solver for ConicSolver {
             timing: answer.end.timing,
             diagnostics: Vec::new(),
         };
-        if !out.is_finite() && out.status.is_converged() {
-            out.status = Status::NonFinite;
-        }
-        out
+        out.flag_non_finite()
     }
 }
 

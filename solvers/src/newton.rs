@@ -552,7 +552,7 @@ impl Solver for CondensedNewton {
             observer,
         );
         let v = condensed.expand(problem, &out.y);
-        let mut solution = Solution {
+        let solution = Solution {
             v,
             pressure: contacts
                 .iter()
@@ -576,9 +576,6 @@ impl Solver for CondensedNewton {
             },
             diagnostics: Vec::new(),
         };
-        if !solution.is_finite() {
-            solution.status = Status::NonFinite;
-        }
-        solution
+        solution.flag_non_finite()
     }
 }

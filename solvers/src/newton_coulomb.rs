@@ -575,7 +575,7 @@ impl Solver for NewtonCoulomb {
         let (y, rest) = out.x.split_at(2 * m);
         let (lam, mu) = rest.split_at(m);
         let v = condensed.expand(problem, y);
-        let mut solution = Solution {
+        let solution = Solution {
             v,
             pressure: contacts
                 .iter()
@@ -595,10 +595,7 @@ impl Solver for NewtonCoulomb {
             },
             diagnostics,
         };
-        if !solution.is_finite() {
-            solution.status = Status::NonFinite;
-        }
-        solution
+        solution.flag_non_finite()
     }
 }
 

@@ -160,4 +160,40 @@ impl Solution {
             .chain(&self.friction_traction)
             .all(|x| x.is_finite())
     }
+
+    /// The solution with status [`Status::NonFinite`] if any of its numbers
+    /// is not finite, whatever the solver said: every solver ends through
+    /// this one rule, so a NaN never passes as a claim of any kind.
+    pub fn flag_non_finite(mut self) -> Self {
+        if !self.is_finite() {
+            self.status = Status::NonFinite;
+        }
+        self
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A NaN anywhere marks the answer non-finite whatever the solver
+    /// claimed, converged or not; a finite answer keeps its status.
+    #[test]
+    fn any_non_finite_number_overrides_the_status() {
+        for status in [Status::Converged, Status::MaxIterations, Status::TimeLimit] {
+            for field in 0..3 {
+                let mut s = Solution::failed(4, 2, status, "");
+                match field {
+                    0 => s.v[3] = f64::NAN,
+                    1 => s.pressure[1] = f64::INFINITY,
+                    _ => s.friction_traction[0] = f64::NEG_INFINITY,
+                }
+                assert_eq!(s.flag_non_finite().status, Status::NonFinite);
+            }
+            assert_eq!(
+                Solution::failed(4, 2, status, "").flag_non_finite().status,
+                status
+            );
+        }
+    }
 }

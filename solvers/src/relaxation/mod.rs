@@ -416,7 +416,7 @@ pub fn prox_uzawa(
     }
     friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
     let friction_traction = q;
-    let mut out = Solution {
+    Solution {
         v,
         pressure: l,
         friction_traction,
@@ -431,11 +431,8 @@ pub fn prox_uzawa(
             solve: t0.elapsed().as_secs_f64(),
         },
         diagnostics: Vec::new(),
-    };
-    if !out.is_finite() {
-        out.status = Status::NonFinite;
     }
-    out
+    .flag_non_finite()
 }
 
 /// The multipliers of the Uzawa step l^{k+1} = (l^k + r t^{k+1})⁺, paper (14).
