@@ -39,6 +39,20 @@ pub struct Condensed {
 }
 
 impl Condensed {
+    /// What the condensation keeps, in bytes, for a solver's diagnostics:
+    /// the values of the factor of A_II (its indices come on top) and the
+    /// dense Schur complement S. Where a large solve's memory goes.
+    pub fn memory_diagnostics(&self) -> [(&'static str, f64); 2] {
+        let bytes = std::mem::size_of::<f64>();
+        [
+            ("factor_values_bytes", (bytes * self.factor_nnz) as f64),
+            (
+                "schur_bytes",
+                (bytes * self.s.nrows() * self.s.ncols()) as f64,
+            ),
+        ]
+    }
+
     /// Factors A_II (the unknowns coupled to Γ_K ordered last) and forms S and b̂.
     pub fn new(problem: &ContactProblem) -> Result<Self, LinalgError> {
         let n = problem.n();

@@ -563,7 +563,7 @@ impl Solver for NewtonCoulomb {
             perturb(&mut x, m, self.settings.perturbation, self.settings.seed);
         }
         let out = newton(&sys, x, &self.settings, scale, observer, t1);
-        let mut diagnostics = Vec::new();
+        let mut diagnostics = condensed.memory_diagnostics().to_vec();
         if let Some(j) = &out.jacobian
             && let Ok(sv) = j.singular_values()
         {
