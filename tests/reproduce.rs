@@ -114,6 +114,10 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     for f in FILES {
         assert!(out.join(f).is_file(), "missing {f}");
     }
+    // The memory probe ran in its fresh process and its table was written.
+    let goals = std::fs::read_to_string(out.join("performance_goals.md")).unwrap();
+    assert!(goals.contains("### Where the memory goes"), "{goals}");
+    assert!(!goals.contains("was not measured"), "{goals}");
     for p in [1, 2, 3] {
         for solver in registry::names() {
             for kind in ["friction", "frictionless"] {

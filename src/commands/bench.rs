@@ -4,11 +4,11 @@
 use anyhow::{Result, bail};
 
 use crate::cli::{BenchArgs, BenchOneArgs};
-use crate::coulomb::driver::solve_scene;
 use crate::io::output::{log, print};
 use crate::io::run_folder::RunFolder;
 use crate::study::bench::BenchSpec;
-use crate::study::bench::goals::{goals_markdown, peak_memory_kb, write_bench};
+use crate::study::bench::goals::{goals_markdown, write_bench};
+use crate::study::bench::memory::measure_here;
 use crate::study::report::write_all;
 
 pub fn run(args: &BenchArgs) -> Result<()> {
@@ -40,18 +40,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     ))
 }
 
+/// `bench-one`: one solve's memory in this (fresh) process, as JSON.
 pub fn run_one(args: &BenchOneArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     faer::set_global_parallelism(faer::Par::Seq);
-    let run = solve_scene(
-        &scene,
-        &crate::settings::Settings::default(),
-        &args.solver,
-        &mut contactlab_solvers::Silent,
-    )?;
-    let peak = peak_memory_kb();
-    print(&format!(
-        "{}\n",
-        serde_json::json!({"seconds": run.coulomb.seconds, "status": run.status, "peak_kb": peak})
-    ))
+    let used = measure_here(&scene, &args.solver)?;
+    print(&format!("{}\n", serde_json::to_string(&used)?))
 }

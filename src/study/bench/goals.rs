@@ -1,5 +1,5 @@
 //! Views of the benchmark: the performance goals checked against the rows
-//! of one run, charts of time against size, the peak memory of the fastest
+//! of one run, charts of time against size, the memory of the fastest
 //! solver measured in a fresh process, and the files.
 
 use std::path::Path;
@@ -14,6 +14,7 @@ use crate::io::output::write_atomic;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
+use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow, bench};
 
 /// One goal, measured.
@@ -352,31 +353,21 @@ pub fn fit_slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-/// Peak resident memory of this process so far, in KiB (Linux).
-pub fn peak_memory_kb() -> Option<u64> {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()?
-        .lines()
-        .find(|l| l.starts_with("VmHWM:"))?
-        .split_whitespace()
-        .nth(1)?
-        .parse()
-        .ok()
-}
-
 /// What one benchmark run wrote.
 pub struct BenchOutput {
     /// The paper's problem the benchmark ran on.
     pub problem: u32,
     pub rows: Vec<PerfRow>,
     pub goals: Vec<Goal>,
-    pub peak_kb: Option<u64>,
+    /// Each large mesh's fastest solver, measured in a fresh process.
+    pub memory: Vec<MemoryUse>,
     pub charts: Vec<(String, Chart)>,
 }
 
-/// Runs the benchmark, measures the fastest solver's peak memory on the
-/// finest mesh in a fresh process, and writes `performance.csv` and
-/// `performance_goals.md` into `out` (the charts are returned).
+/// Runs the benchmark, measures the memory of the fastest solver on each
+/// large mesh (the finest mesh if there are none) in a fresh process, and
+/// writes `performance.csv` and `performance_goals.md` into `out` (the
+/// charts are returned).
 pub fn write_bench(
     out: &Path,
     spec: &BenchSpec,
@@ -384,39 +375,35 @@ pub fn write_bench(
     log: &dyn Fn(&str),
 ) -> Result<BenchOutput> {
     let rows = bench(spec, settings, log)?;
-    let finest = spec.large.last().or(spec.meshes.last()).copied();
-    let fastest =
-        finest.and_then(|h| fastest(&rows, &h.to_string()).map(|r| (h, r.solver.clone())));
-    let peak_kb = match &fastest {
-        Some((h, solver)) => {
-            log(&format!(
-                "peak memory of {solver} at h = {h} (fresh process)"
-            ));
-            let o = std::process::Command::new(std::env::current_exe()?)
-                .args([
-                    "bench-one",
-                    "--problem",
-                    &spec.problem.to_string(),
-                    "--h",
-                    &h.to_string(),
-                    "--solver",
-                    solver,
-                ])
-                .output()?;
-            let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_default();
-            v.get("peak_kb").and_then(|x| x.as_u64())
-        }
-        None => None,
+    let measured_meshes = if spec.large.is_empty() {
+        spec.meshes.last().into_iter().copied().collect()
+    } else {
+        spec.large.clone()
     };
-    let goals = goals(&rows, fastest.as_ref().map(|f| f.0).zip(peak_kb));
+    // A probe that fails costs its line in the report, not the run.
+    let (mut memory, mut unmeasured) = (Vec::new(), String::new());
+    for h in measured_meshes {
+        let Some(fastest) = fastest(&rows, &h.to_string()) else {
+            continue;
+        };
+        log(&format!(
+            "memory of {} at h = {h} (fresh process)",
+            fastest.solver
+        ));
+        match measure_in_fresh_process(spec.problem, h, &fastest.solver) {
+            Ok(used) => memory.push(used),
+            Err(e) => {
+                log(&format!("memory at h = {h} not measured: {e:#}"));
+                unmeasured += &format!("\nMemory at h = {h} was not measured: {e:#}.\n");
+            }
+        }
+    }
+    let finest = memory.last().map(|u| (u.h, u.peak_kb));
+    let goals = goals(&rows, finest);
     write_atomic(&out.join("performance.csv"), &to_csv(&rows, &[])?)?;
     let mut md = goals_markdown(&goals);
-    if let (Some(kb), Some((h, solver))) = (peak_kb, fastest) {
-        md += &format!(
-            "\nPeak resident memory of `{solver}` on the whole Coulomb problem at h = {h}, in a fresh process: {:.0} MiB.\n",
-            kb as f64 / 1024.0
-        );
-    }
+    md += &memory::markdown(&memory);
+    md += &unmeasured;
     md += &equal_accuracy_markdown(&rows, spec.problem);
     write_atomic(&out.join("performance_goals.md"), md.as_bytes())?;
     Ok(BenchOutput {
@@ -424,6 +411,6 @@ pub fn write_bench(
         charts: performance_charts(&rows),
         rows,
         goals,
-        peak_kb,
+        memory,
     })
 }

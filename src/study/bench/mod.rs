@@ -9,6 +9,7 @@
 
 pub mod equal_accuracy;
 pub mod goals;
+pub mod memory;
 
 use std::time::Instant;
 

@@ -67,6 +67,7 @@ struct Context {
     stability_charts: Vec<ChartRef>,
     stability_summary: String,
     goals: String,
+    memory: String,
     equal_accuracy: String,
     speed_table: String,
     performance_charts: Vec<ChartRef>,
@@ -155,6 +156,7 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
         stability_charts: named(&chart_names, "stability_"),
         stability_summary: views::summary_markdown(&out.stability.trials),
         goals: crate::study::bench::goals::goals_markdown(&out.bench.goals),
+        memory: crate::study::bench::memory::markdown(&out.bench.memory),
         equal_accuracy: crate::study::bench::goals::equal_accuracy_markdown(
             &out.bench.rows,
             out.bench.problem,

@@ -1,0 +1,152 @@
+//! Where a large solve's memory goes: the peak resident memory of one
+//! Coulomb solve in a fresh process (the hidden `bench-one` command), split
+//! into the assembly's peak, the assembled problem, and what the solver
+//! reports keeping (the factor of A_II and the Schur complement S).
+//!
+//! Resident figures are the kernel's (`/proc/self/status`, Linux); the
+//! solver's are exact byte counts of its arrays, from its diagnostics.
+
+use anyhow::{Context, Result};
+use serde::{Deserialize, Serialize};
+
+use crate::coulomb::driver::solve_scene;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+
+/// One solve's memory, measured in a fresh process.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MemoryUse {
+    pub h: MeshSize,
+    pub solver: String,
+    pub status: String,
+    pub seconds: f64,
+    /// Peak resident memory of the whole process (VmHWM), KiB.
+    pub peak_kb: u64,
+    /// Peak resident memory once the problem is assembled, before any
+    /// solve: the assembly with its temporaries, KiB.
+    pub assembly_peak_kb: u64,
+    /// Resident memory the assembled problem holds (A, M, f, mesh and
+    /// unknowns: the growth of VmRSS across the assembly), KiB.
+    pub problem_kb: u64,
+    /// The values of the factor of A_II, as the solver reports (bytes).
+    pub factor_values_bytes: Option<f64>,
+    /// The dense Schur complement S, as the solver reports (bytes).
+    pub schur_bytes: Option<f64>,
+}
+
+/// A field of `/proc/self/status` in KiB (Linux), e.g. `VmHWM` or `VmRSS`.
+fn status_kb(field: &str) -> Option<u64> {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()?
+        .lines()
+        .find(|l| l.strip_prefix(field).is_some_and(|r| r.starts_with(':')))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()
+}
+
+/// Peak resident memory of this process so far, in KiB (Linux).
+pub fn peak_memory_kb() -> Option<u64> {
+    status_kb("VmHWM")
+}
+
+/// Measures `solver` on the whole Coulomb problem of `scene` (its finest
+/// mesh) in this process: assembles once to read the assembly's peak and
+/// the problem's size, then solves (which assembles again into the memory
+/// just freed). Meaningful only in a fresh process.
+pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
+    let unread =
+        || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
+    let before = status_kb("VmRSS").ok_or_else(unread)?;
+    let d = Discretization::new(scene, scene.finest())?;
+    let assembly_peak_kb = peak_memory_kb().ok_or_else(unread)?;
+    let problem_kb = status_kb("VmRSS")
+        .ok_or_else(unread)?
+        .saturating_sub(before);
+    drop(d);
+    let run = solve_scene(
+        scene,
+        &Settings::default(),
+        solver,
+        &mut contactlab_solvers::Silent,
+    )?;
+    let diagnostic = |name: &str| {
+        run.coulomb
+            .solution
+            .diagnostics
+            .iter()
+            .find(|(k, _)| *k == name)
+            .map(|(_, v)| *v)
+    };
+    Ok(MemoryUse {
+        h: scene.finest(),
+        solver: solver.to_string(),
+        status: run.status.to_string(),
+        seconds: run.coulomb.seconds,
+        peak_kb: peak_memory_kb().ok_or_else(unread)?,
+        assembly_peak_kb,
+        problem_kb,
+        factor_values_bytes: diagnostic("factor_values_bytes"),
+        schur_bytes: diagnostic("schur_bytes"),
+    })
+}
+
+/// Runs `bench-one` for `solver` on problem `problem` at `h` in a fresh
+/// process and reads its answer.
+pub fn measure_in_fresh_process(problem: u32, h: MeshSize, solver: &str) -> Result<MemoryUse> {
+    let o = std::process::Command::new(std::env::current_exe()?)
+        .args([
+            "bench-one",
+            "--problem",
+            &problem.to_string(),
+            "--h",
+            &h.to_string(),
+            "--solver",
+            solver,
+        ])
+        .output()?;
+    anyhow::ensure!(
+        o.status.success(),
+        "bench-one for {solver} at h = {h} failed: {}",
+        String::from_utf8_lossy(&o.stderr).trim()
+    );
+    serde_json::from_slice(&o.stdout)
+        .with_context(|| format!("bench-one for {solver} at h = {h} printed no measurement"))
+}
+
+/// The table of where memory goes, one row per measured solve.
+pub fn markdown(uses: &[MemoryUse]) -> String {
+    if uses.is_empty() {
+        return String::new();
+    }
+    let mib_kb = |kb: u64| format!("{:.0}", kb as f64 / 1024.0);
+    let mib_bytes = |b: Option<f64>| b.map_or("–".into(), |b| format!("{:.0}", b / 1048576.0));
+    let mut md = String::from(
+        "\n### Where the memory goes (whole Coulomb problem, each in a fresh process; MiB)\n\n\
+         | h | solver | status | peak | assembly's peak | assembled problem | factor of A_II (values) | Schur complement S | rest of the peak |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
+    );
+    for u in uses {
+        let known = u.problem_kb as f64 * 1024.0
+            + u.factor_values_bytes.unwrap_or(0.0)
+            + u.schur_bytes.unwrap_or(0.0);
+        let rest = (u.peak_kb as f64 * 1024.0 - known).max(0.0);
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.0} |\n",
+            u.h,
+            u.solver,
+            u.status,
+            mib_kb(u.peak_kb),
+            mib_kb(u.assembly_peak_kb),
+            mib_kb(u.problem_kb),
+            mib_bytes(u.factor_values_bytes),
+            mib_bytes(u.schur_bytes),
+            rest / 1048576.0,
+        );
+    }
+    md += "\nThe rest is the factor's indices and workspace, the solver's other arrays and the program itself; the assembly's peak includes the program.\n";
+    md
+}
