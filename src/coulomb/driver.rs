@@ -126,8 +126,21 @@ fn solve_directly(
     observer: &mut dyn Observer,
 ) -> Result<Run> {
     settings.validate().map_err(anyhow::Error::msg)?;
-    let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
     let finest = Discretization::new(scene, scene.finest())?;
+    solve_assembled(scene, finest, settings, entry, observer)
+}
+
+/// A solver of the Coulomb problem itself on `finest`, the scene's finest
+/// level already assembled (e.g. to measure the assembly apart).
+pub fn solve_assembled(
+    scene: &Scene,
+    finest: Discretization,
+    settings: &Settings,
+    entry: &'static Entry,
+    observer: &mut dyn Observer,
+) -> Result<Run> {
+    settings.validate().map_err(anyhow::Error::msg)?;
+    let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
     let t = std::time::Instant::now();
     let solution = solver.solve(&finest.problem, Law::Coulomb, None, observer);
     let seconds = t.elapsed().as_secs_f64();

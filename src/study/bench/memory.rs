@@ -9,7 +9,9 @@
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
-use crate::coulomb::driver::solve_scene;
+use contactlab_solvers::Law;
+
+use crate::coulomb::driver::{solve_assembled, solve_scene, solver_entry};
 use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
@@ -54,25 +56,28 @@ pub fn peak_memory_kb() -> Option<u64> {
 }
 
 /// Measures `solver` on the whole Coulomb problem of `scene` (its finest
-/// mesh) in this process: assembles once to read the assembly's peak and
-/// the problem's size, then solves (which assembles again into the memory
-/// just freed). Meaningful only in a fresh process.
+/// mesh) in this process: the assembly's peak and the problem's size first,
+/// then the solve on that assembly (a solver of the given-friction
+/// subproblem, which needs every level of the continuation, assembles them
+/// itself after the first is dropped). Meaningful only in a fresh process.
 pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
+    let entry = solver_entry(solver)?;
     let before = status_kb("VmRSS").ok_or_else(unread)?;
     let d = Discretization::new(scene, scene.finest())?;
     let assembly_peak_kb = peak_memory_kb().ok_or_else(unread)?;
     let problem_kb = status_kb("VmRSS")
         .ok_or_else(unread)?
         .saturating_sub(before);
-    drop(d);
-    let run = solve_scene(
-        scene,
-        &Settings::default(),
-        solver,
-        &mut contactlab_solvers::Silent,
-    )?;
+    let settings = Settings::default();
+    let silent = &mut contactlab_solvers::Silent;
+    let run = if entry.solves(Law::Coulomb) {
+        solve_assembled(scene, d, &settings, entry, silent)?
+    } else {
+        drop(d);
+        solve_scene(scene, &settings, solver, silent)?
+    };
     let diagnostic = |name: &str| {
         run.coulomb
             .solution
