@@ -77,7 +77,9 @@ pub enum Command {
     /// each; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
     /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle
     /// at 1/256, once each without the budget (about 2 h, 1.5 h of it the
-    /// paper's method at 1/256; --quick: seconds). Writes performance.csv,
+    /// paper's method at 1/256; --quick: seconds); and where the fastest
+    /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
+    /// --quick), each in a fresh process. Writes performance.csv,
     /// performance_goals.md and charts into --out.
     Bench(BenchArgs),
     /// The benchmark over the problem collection (the paper's problems over
