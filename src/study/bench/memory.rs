@@ -51,7 +51,7 @@ fn status_kb(field: &str) -> Option<u64> {
 }
 
 /// Peak resident memory of this process so far, in KiB (Linux).
-pub fn peak_memory_kb() -> Option<u64> {
+fn peak_memory_kb() -> Option<u64> {
     status_kb("VmHWM")
 }
 

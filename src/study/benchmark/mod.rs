@@ -23,7 +23,6 @@ use contactlab_solvers::registry::Entry;
 use serde::{Deserialize, Serialize};
 
 use crate::io::csv::{fixed, fixed_or_nan};
-use crate::mechanics::discretization::Discretization;
 use crate::mechanics::dofs::{DofExpansion, DofMap};
 use crate::mechanics::mesh::Mesh;
 use crate::mechanics::mesh_size::MeshSize;
@@ -184,34 +183,29 @@ pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<Planned>> {
 /// actually left at every tenth of the run; n^1.5 within 1.1-2.2×, and a
 /// count of runs (all alike) 3-7× short.
 pub fn expected_costs(plan: &[Planned]) -> Vec<f64> {
-    let mut unknowns: Vec<(MeshSize, f64)> = Vec::new();
+    let mut known = Vec::new();
     plan.iter()
-        .map(|(inst, ..)| {
-            let h = inst.scene.finest();
-            match unknowns.iter().find(|(k, _)| *k == h) {
-                Some(&(_, n)) => n,
-                None => {
-                    let n = DofMap::new(&Mesh::new(h)).n() as f64;
-                    unknowns.push((h, n));
-                    n
-                }
-            }
-        })
+        .map(|(inst, ..)| unknowns(inst.scene.finest(), &mut known) as f64)
         .collect()
+}
+
+/// The number of unknowns on mesh `h` (from the unknowns' map alone, no
+/// assembly), remembered in `known` for the meshes already asked.
+fn unknowns(h: MeshSize, known: &mut Vec<(MeshSize, usize)>) -> usize {
+    if let Some(&(_, n)) = known.iter().find(|(k, _)| *k == h) {
+        return n;
+    }
+    let n = DofMap::new(&Mesh::new(h)).n();
+    known.push((h, n));
+    n
 }
 
 /// Runs the trials of [`plan`] (the caller plans, to count and weigh them
 /// for its progress); returns each row beside its measured trial.
 pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(BenchmarkRow, Measured)>> {
     let mut out = Vec::with_capacity(plan.len());
-    let mut unknowns: Option<(String, usize)> = None;
+    let mut known = Vec::new();
     for (inst, t, target) in plan {
-        if unknowns.as_ref().is_none_or(|(id, _)| *id != inst.id) {
-            let n = Discretization::new(&inst.scene, inst.scene.finest())?
-                .problem
-                .n();
-            unknowns = Some((inst.id.clone(), n));
-        }
         let m = measure(&t, None, Keep::default())?;
         let tr = &m.trial;
         let claimed = tr.solver_status.is_converged();
@@ -219,7 +213,7 @@ pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(Benchma
             instance: inst.id.clone(),
             family: inst.family.into(),
             h: tr.h.clone(),
-            unknowns: unknowns.as_ref().map_or(0, |(_, n)| *n),
+            unknowns: unknowns(inst.scene.finest(), &mut known),
             friction_coefficient: inst.scene.friction,
             solver: tr.solver.clone(),
             target,
