@@ -24,7 +24,7 @@ pub mod solver;
 pub use conic::{ConicSettings, ConicSolver};
 pub use newton::{CondensedNewton, NewtonSettings};
 pub use observer::{Control, History, Limits, Observer, Progress, Silent};
-pub use problem::{ContactNode, ContactProblem, ProblemError, Scales};
+pub use problem::{ContactNode, ContactProblem, Mass, ProblemError, Scales};
 pub use relaxation::pointwise::Smoothing;
 pub use relaxation::{ProxUzawa, RelaxationSettings};
 pub use settings::Stopping;

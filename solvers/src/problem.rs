@@ -17,13 +17,14 @@
 //! mass matrix M gives the L2 norm of the displacement field in the same
 //! variables, for the proximal term of paper (15).
 
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::linalg::{max_abs, spmv};
+use crate::linalg::{max_abs, max_abs_if_finite, spmv, spmv_values_into};
 
 /// The unknowns of one contact node of Γ_K.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -138,13 +139,33 @@ impl Scales {
 
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
 
+/// The mass matrix M as a problem is given it.
+///
+/// An assembly that puts A and M on one pattern hands over M's values alone,
+/// so that the problem keeps one pattern: a second copy is about 230 MB at
+/// h = 1/1024, and writing it was a quarter of a 1/64 assembly's page faults.
+/// A matrix given on exactly A's pattern is kept the same way.
+#[derive(Clone, Debug)]
+pub enum Mass {
+    /// M's stored values in the order of A's stored entries.
+    OnStiffnessPattern(Vec<f64>),
+    /// M with a pattern of its own.
+    Matrix(CsrMatrix<f64>),
+}
+
+impl From<CsrMatrix<f64>> for Mass {
+    fn from(m: CsrMatrix<f64>) -> Self {
+        Mass::Matrix(m)
+    }
+}
+
 /// The discrete contact problem. It holds matrices and index sets, never a
 /// mesh.
 #[derive(Clone, Debug)]
 pub struct ContactProblem {
     a: CsrMatrix<f64>,
     f: Vec<f64>,
-    mass: CsrMatrix<f64>,
+    mass: Mass,
     contacts: Vec<ContactNode>,
     rigid_modes: Vec<Vec<f64>>,
     scales: Scales,
@@ -154,14 +175,22 @@ pub struct ContactProblem {
 impl ContactProblem {
     /// Checks dimensions, symmetry, index sets, finiteness, that each rigid
     /// mode z satisfies A z = 0, and that the scales are representable.
+    /// M is a matrix or its values on A's pattern ([`Mass`]); a matrix on
+    /// exactly A's pattern is kept as its values.
     pub fn new(
         a: CsrMatrix<f64>,
         f: Vec<f64>,
-        mass: CsrMatrix<f64>,
+        mass: impl Into<Mass>,
         contacts: Vec<ContactNode>,
         rigid_modes: Vec<Vec<f64>>,
     ) -> Result<Self, ProblemError> {
         let n = a.nrows();
+        let mass = match mass.into() {
+            Mass::Matrix(m) if m.pattern() == a.pattern() => {
+                Mass::OnStiffnessPattern(m.disassemble().2)
+            }
+            other => other,
+        };
         check_stiffness_and_mass(&a, &mass, n)?;
         if f.len() != n {
             return Err(ProblemError::Dimension {
@@ -238,9 +267,37 @@ impl ContactProblem {
         &self.f
     }
 
-    /// The consistent mass matrix M (L2 inner product of displacement fields).
-    pub fn mass(&self) -> &CsrMatrix<f64> {
-        &self.mass
+    /// The consistent mass matrix M (L2 inner product of displacement
+    /// fields). When M lives on A's pattern this builds the matrix, a copy of
+    /// A's pattern: for products use [`ContactProblem::mass_times_into`].
+    pub fn mass(&self) -> Cow<'_, CsrMatrix<f64>> {
+        match &self.mass {
+            Mass::Matrix(m) => Cow::Borrowed(m),
+            Mass::OnStiffnessPattern(values) => {
+                let pattern = self.a.pattern().clone();
+                Cow::Owned(
+                    CsrMatrix::try_from_pattern_and_values(pattern, values.clone())
+                        .expect("checked: one value per stored entry of A"),
+                )
+            }
+        }
+    }
+
+    /// M's stored values when M lives on A's pattern (in the order of A's
+    /// stored entries), so that A + ρM is a sum of values.
+    pub fn mass_on_stiffness_pattern(&self) -> Option<&[f64]> {
+        match &self.mass {
+            Mass::OnStiffnessPattern(values) => Some(values),
+            Mass::Matrix(_) => None,
+        }
+    }
+
+    /// y = M x into a caller's buffer, without building M.
+    pub fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
+        match &self.mass {
+            Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values, x, y),
+            Mass::Matrix(m) => crate::linalg::spmv_into(m, x, y),
+        }
     }
 
     /// Contact nodes of Γ_K in increasing x.
@@ -312,67 +369,77 @@ fn check_g(node: usize, value: f64) -> Result<(), ProblemError> {
     }
 }
 
-/// Checks that A and M are n × n, finite and symmetric. When they share a
-/// pattern (an assembly puts both on one), one pass over it checks both.
-fn check_stiffness_and_mass(
-    a: &CsrMatrix<f64>,
-    mass: &CsrMatrix<f64>,
-    n: usize,
-) -> Result<(), ProblemError> {
-    if a.pattern() == mass.pattern() {
-        check_square_symmetric([("A", a), ("M", mass)], n)
-    } else {
-        check_square_symmetric([("A", a)], n)?;
-        check_square_symmetric([("M", mass)], n)
+/// Checks that A and M are n × n, finite and symmetric. When M lives on A's
+/// pattern, one pass over it checks both.
+fn check_stiffness_and_mass(a: &CsrMatrix<f64>, mass: &Mass, n: usize) -> Result<(), ProblemError> {
+    match mass {
+        Mass::OnStiffnessPattern(m) => check_square_symmetric(a, [("A", a.values()), ("M", m)], n),
+        Mass::Matrix(m) => {
+            check_square_symmetric(a, [("A", a.values())], n)?;
+            check_square_symmetric(m, [("M", m.values())], n)
+        }
     }
 }
 
-/// Checks that each matrix, all on one pattern, is n × n, finite and
-/// symmetric to 1e-12 of its largest entry.
+/// Checks that each matrix, given as its values on `pattern` (one per stored
+/// entry), is n × n, finite and symmetric to 1e-12 of its largest entry.
 ///
-/// One pass over the pattern measures each matrix's largest entry, its
-/// largest asymmetry and whether it is finite; only when a matrix fails is
-/// the pattern walked again to name the first offending entry.
+/// A sequential pass measures each matrix's largest entry and whether it is
+/// finite. Then each entry above the diagonal is compared with its mirror:
+/// when every entry below the diagonal was met as such a mirror, that covers
+/// every pair, at half the random accesses of visiting every entry. Only
+/// when an entry below has no stored mirror above, or a matrix fails, is
+/// the whole pattern walked, the second time to name the first offending
+/// entry.
 fn check_square_symmetric<const K: usize>(
-    named: [(&'static str, &CsrMatrix<f64>); K],
+    pattern: &CsrMatrix<f64>,
+    named: [(&'static str, &[f64]); K],
     n: usize,
 ) -> Result<(), ProblemError> {
-    for (what, m) in &named {
-        for (dim, got) in [(n, m.nrows()), (n, m.ncols())] {
-            if dim != got {
-                return Err(ProblemError::Dimension {
-                    what,
-                    expected: dim,
-                    got,
-                });
-            }
-        }
-    }
-    let Some((_, first)) = named.first() else {
+    let Some(&(first, _)) = named.first() else {
         return Ok(());
     };
-    let (offsets, indices) = (first.row_offsets(), first.col_indices());
-    let values = named.map(|(_, m)| m.values());
-    let (mut scale, mut asymmetry, mut finite) = ([0.0f64; K], [0.0f64; K], [true; K]);
-    walk_mirrors(offsets, indices, |_, _, k, mirror| {
-        for m in 0..K {
-            let x = values[m][k];
-            finite[m] &= x.is_finite();
-            scale[m] = scale[m].max(x.abs());
-            let across = mirror.map_or(0.0, |c| values[m][c]);
-            asymmetry[m] = asymmetry[m].max((across - x).abs());
+    for (dim, got) in [(n, pattern.nrows()), (n, pattern.ncols())] {
+        if dim != got {
+            return Err(ProblemError::Dimension {
+                what: first,
+                expected: dim,
+                got,
+            });
         }
-        true
-    });
-    if let Some(m) = (0..K).find(|&m| !finite[m]) {
-        return Err(ProblemError::NonFinite { what: named[m].0 });
     }
+    for (what, values) in &named {
+        if values.len() != pattern.nnz() {
+            return Err(ProblemError::Dimension {
+                what,
+                expected: pattern.nnz(),
+                got: values.len(),
+            });
+        }
+    }
+    let (offsets, indices) = (pattern.row_offsets(), pattern.col_indices());
+    let values = named.map(|(_, v)| v);
+    let mut scale = [0.0f64; K];
+    for m in 0..K {
+        scale[m] =
+            max_abs_if_finite(values[m]).ok_or(ProblemError::NonFinite { what: named[m].0 })?;
+    }
+    let below: usize = (0..n)
+        .map(|row| {
+            let cols = &indices[offsets[row]..offsets[row + 1]];
+            cols.partition_point(|&col| col < row)
+        })
+        .sum();
     let tol = scale.map(|s| 1e-12 * s);
+    let (mut asymmetry, mirrored) = asymmetry(offsets, indices, &values, Triangle::Upper);
+    if mirrored < below {
+        asymmetry = self::asymmetry(offsets, indices, &values, Triangle::Both).0;
+    }
     if (0..K).all(|m| asymmetry[m] <= tol[m]) {
         return Ok(());
     }
     let mut offending = None;
-    walk_mirrors(offsets, indices, |row, col, k, mirror| {
+    walk_mirrors(offsets, indices, Triangle::Both, |row, col, k, mirror| {
         for m in 0..K {
             let across = mirror.map_or(0.0, |c| values[m][c]);
             if (across - values[m][k]).abs() > tol[m] {
@@ -389,15 +456,45 @@ fn check_square_symmetric<const K: usize>(
     Err(offending.expect("an asymmetry was measured, so an entry exceeds it"))
 }
 
-/// Visits each stored (row, col, position) in row order with the position of
-/// its mirror (col, row), if stored, until `visit` returns false. The mirror
-/// is found by a cursor per row that only moves forward: the rows visiting
-/// column `col` come in increasing order, and so do the columns of row
-/// `col`. One pass over the pattern, no search (a binary search per entry
-/// was a third of the set-up at h = 1/256).
+/// Each matrix's largest |x_ij − x_ji| over the entries of `which` (a
+/// missing mirror counts as 0), and how many of them had a stored mirror.
+fn asymmetry<const K: usize>(
+    offsets: &[usize],
+    indices: &[usize],
+    values: &[&[f64]; K],
+    which: Triangle,
+) -> ([f64; K], usize) {
+    let (mut asymmetry, mut mirrored) = ([0.0f64; K], 0);
+    walk_mirrors(offsets, indices, which, |_, _, k, mirror| {
+        mirrored += usize::from(mirror.is_some());
+        for m in 0..K {
+            let across = mirror.map_or(0.0, |c| values[m][c]);
+            asymmetry[m] = asymmetry[m].max((across - values[m][k]).abs());
+        }
+        true
+    });
+    (asymmetry, mirrored)
+}
+
+/// Which stored entries [`walk_mirrors`] visits.
+#[derive(Clone, Copy, PartialEq)]
+enum Triangle {
+    /// Those strictly above the diagonal.
+    Upper,
+    /// All of them.
+    Both,
+}
+
+/// Visits each stored (row, col, position) of `which` in row order with the
+/// position of its mirror (col, row), if stored, until `visit` returns
+/// false. The mirror is found by a cursor per row that only moves forward:
+/// the rows visiting column `col` come in increasing order, and so do the
+/// columns of row `col`. One pass over the pattern, no search (a binary
+/// search per entry was a third of the set-up at h = 1/256).
 fn walk_mirrors(
     offsets: &[usize],
     indices: &[usize],
+    which: Triangle,
     mut visit: impl FnMut(usize, usize, usize, Option<usize>) -> bool,
 ) {
     let n = offsets.len() - 1;
@@ -405,6 +502,9 @@ fn walk_mirrors(
     for row in 0..n {
         for k in offsets[row]..offsets[row + 1] {
             let col = indices[k];
+            if which == Triangle::Upper && col <= row {
+                continue;
+            }
             let end = offsets[col + 1];
             let mut c = cursor[col];
             while c < end && indices[c] < row {
@@ -444,6 +544,16 @@ mod symmetry_tests {
         }
     }
 
+    /// The check of one matrix on its own pattern.
+    fn check(what: &'static str, m: &CsrMatrix<f64>, n: usize) -> Result<(), ProblemError> {
+        check_square_symmetric(m, [(what, m.values())], n)
+    }
+
+    /// A's pattern with M's values.
+    fn on_a(m: &CsrMatrix<f64>) -> Mass {
+        Mass::OnStiffnessPattern(m.values().to_vec())
+    }
+
     #[test]
     fn a_symmetric_matrix_passes() {
         let m = csr(
@@ -457,23 +567,32 @@ mod symmetry_tests {
                 (3, 3, 1.0),
             ],
         );
-        assert!(check_square_symmetric([("A", &m)], 4).is_ok());
+        assert!(check("A", &m, 4).is_ok());
     }
 
     #[test]
     fn a_differing_mirror_is_named() {
         let m = csr(3, &[(0, 0, 1.0), (0, 2, 1.0), (2, 0, 1.5), (1, 1, 1.0)]);
-        assert_names(check_square_symmetric([("A", &m)], 3), "A", 0, 2);
+        assert_names(check("A", &m, 3), "A", 0, 2);
     }
 
     #[test]
     fn an_entry_without_a_stored_mirror_is_caught() {
         // (2, 1) is stored, (1, 2) is not: only the visit of row 2 sees it.
         let m = csr(3, &[(0, 0, 1.0), (1, 1, 1.0), (2, 1, 0.5), (2, 2, 1.0)]);
-        assert_names(check_square_symmetric([("M", &m)], 3), "M", 2, 1);
+        assert_names(check("M", &m, 3), "M", 2, 1);
         // A stored explicit zero mirrors a missing entry.
         let m = csr(3, &[(0, 0, 1.0), (1, 2, 0.0), (2, 2, 1.0)]);
-        assert!(check_square_symmetric([("M", &m)], 3).is_ok());
+        assert!(check("M", &m, 3).is_ok());
+        // Below the diagonal without a mirror: the walk over the upper
+        // triangle cannot meet it, the whole walk must.
+        let m = csr(3, &[(0, 0, 1.0), (2, 0, 0.0), (1, 1, 1.0), (2, 2, 1.0)]);
+        assert!(check("M", &m, 3).is_ok());
+        let m = csr(3, &[(0, 0, 1.0), (2, 0, 1e-3), (1, 1, 1.0), (2, 2, 1.0)]);
+        assert_names(check("M", &m, 3), "M", 2, 0);
+        // Above the diagonal without a mirror.
+        let m = csr(3, &[(0, 0, 1.0), (0, 2, 1e-3), (1, 1, 1.0), (2, 2, 1.0)]);
+        assert_names(check("M", &m, 3), "M", 0, 2);
     }
 
     #[test]
@@ -482,12 +601,63 @@ mod symmetry_tests {
         let a = csr(2, &entries);
         let mut m = a.clone();
         m.values_mut()[2] = 2.5; // (1, 0) of M only
-        assert!(check_stiffness_and_mass(&a, &a, 2).is_ok());
-        assert_names(check_stiffness_and_mass(&a, &m, 2), "M", 0, 1);
+        assert!(check_stiffness_and_mass(&a, &on_a(&a), 2).is_ok());
+        assert_names(check_stiffness_and_mass(&a, &on_a(&m), 2), "M", 0, 1);
+        // The same M with a pattern of its own.
+        assert_names(
+            check_stiffness_and_mass(&a, &Mass::Matrix(m.clone()), 2),
+            "M",
+            0,
+            1,
+        );
         m.values_mut()[2] = f64::NAN;
         assert!(matches!(
-            check_stiffness_and_mass(&a, &m, 2),
+            check_stiffness_and_mass(&a, &on_a(&m), 2),
             Err(ProblemError::NonFinite { what: "M" })
         ));
+        // Values on A's pattern must be one per stored entry.
+        let short = Mass::OnStiffnessPattern(vec![1.0; 3]);
+        assert!(matches!(
+            check_stiffness_and_mass(&a, &short, 2),
+            Err(ProblemError::Dimension {
+                what: "M",
+                expected: 4,
+                got: 3
+            })
+        ));
+    }
+
+    /// M given on A's pattern, or as a matrix on exactly that pattern (kept
+    /// as its values), or on a pattern of its own: `mass()` gives back the
+    /// same matrix and `mass_times_into` the same product either way.
+    #[test]
+    fn the_mass_acts_alike_however_it_is_given() {
+        let a = csr(2, &[(0, 0, 2.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 2.0)]);
+        let on_pattern = csr(2, &[(0, 0, 0.5), (0, 1, 0.25), (1, 0, 0.25), (1, 1, 0.5)]);
+        let own = csr(2, &[(0, 0, 0.5), (1, 1, 0.5)]);
+        let contact = ContactNode {
+            t: 0,
+            s: 1,
+            weight: 1.0,
+            g: 0.0,
+            coefficient: 0.0,
+        };
+        let problem = |m: Mass| {
+            ContactProblem::new(a.clone(), vec![1.0, 0.0], m, vec![contact], vec![]).unwrap()
+        };
+        let x = [3.0, -1.0];
+        for (m, shares) in [
+            (on_a(&on_pattern), true),
+            (Mass::Matrix(on_pattern.clone()), true),
+            (Mass::Matrix(own.clone()), false),
+        ] {
+            let expected = if shares { &on_pattern } else { &own };
+            let p = problem(m);
+            assert_eq!(p.mass_on_stiffness_pattern().is_some(), shares);
+            assert_eq!(p.mass().csr_data(), expected.csr_data());
+            let mut y = [0.0; 2];
+            p.mass_times_into(&x, &mut y);
+            assert_eq!(y.to_vec(), spmv(expected, &x));
+        }
     }
 }

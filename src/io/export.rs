@@ -86,7 +86,7 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
     let p = &d.problem;
     let n = p.n();
     write_atomic(&dir.join("A.mtx"), &mtx(&CooMatrix::from(p.a())))?;
-    write_atomic(&dir.join("M.mtx"), &mtx(&CooMatrix::from(p.mass())))?;
+    write_atomic(&dir.join("M.mtx"), &mtx(&CooMatrix::from(&*p.mass())))?;
     write_atomic(&dir.join("f.mtx"), &mtx(&dense(n, 1, |i, _| p.f()[i])))?;
     let modes = p.rigid_modes();
     write_atomic(

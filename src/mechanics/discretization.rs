@@ -1,7 +1,7 @@
 //! One scene on one mesh, turned into the algebraic given-friction subproblem,
 //! and the way back from its unknowns to both bodies' nodal displacements.
 
-use contactlab_solvers::{ContactNode, ContactProblem, ProblemError};
+use contactlab_solvers::{ContactNode, ContactProblem, Mass, ProblemError};
 use thiserror::Error;
 
 use crate::mechanics::assembly;
@@ -63,14 +63,20 @@ impl Discretization {
         let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
-        let problem =
-            ContactProblem::new(a, f, m, contacts, vec![rigid_mode]).map_err(|e| match e {
-                ProblemError::Scale { .. } => BuildError::Scales(e),
-                ProblemError::NonFinite { what: "A" } => BuildError::Overflow {
-                    young: scene.material.young,
-                },
-                other => BuildError::Problem(other),
-            })?;
+        let problem = ContactProblem::new(
+            a,
+            f,
+            Mass::OnStiffnessPattern(m),
+            contacts,
+            vec![rigid_mode],
+        )
+        .map_err(|e| match e {
+            ProblemError::Scale { .. } => BuildError::Scales(e),
+            ProblemError::NonFinite { what: "A" } => BuildError::Overflow {
+                young: scene.material.young,
+            },
+            other => BuildError::Problem(other),
+        })?;
         Ok(Self {
             mesh,
             dofs,

@@ -155,8 +155,9 @@ fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
             .max(0.0)
             .sqrt()
     };
+    let mass = p.mass();
     let (l2, energy) = (
-        norm(p.mass(), &ev) / norm(p.mass(), vf),
+        norm(&mass, &ev) / norm(&mass, vf),
         norm(p.a(), &ev) / norm(p.a(), vf),
     );
     // Coarse contact node i sits at reference contact node i·ratio.

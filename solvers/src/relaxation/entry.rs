@@ -164,12 +164,7 @@ pub const ENTRY: Entry = Entry {
 /// l = 1 and bounds g = ½ at every contact node so that every branch runs.
 pub fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
     let resolved = RelaxationSettings::default().resolve(problem);
-    let op = RelaxationOperator::new(
-        problem.a(),
-        problem.mass(),
-        resolved.proximal,
-        problem.contacts(),
-    );
+    let op = RelaxationOperator::new(problem, resolved.proximal);
     let matrix = op.h.clone();
     let l = vec![1.0; problem.contacts().len()];
     let wg: Vec<f64> = problem.contacts().iter().map(|c| 0.5 * c.weight).collect();

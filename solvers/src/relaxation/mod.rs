@@ -248,7 +248,7 @@ impl ProxUzawa {
             .as_ref()
             .is_none_or(|(id, r, _)| (*id, *r) != key);
         if stale {
-            let op = RelaxationOperator::new(problem.a(), problem.mass(), rho, problem.contacts());
+            let op = RelaxationOperator::new(problem, rho);
             self.cache = Some((key.0, key.1, op));
         }
         &self.cache.as_ref().expect("just filled").2
@@ -296,7 +296,7 @@ pub fn prox_uzawa(
         uzawa = k;
         // b = f + ρ M v^k: the proximal centre is the previous iterate.
         if rho != 0.0 {
-            crate::linalg::spmv_into(problem.mass(), &v, &mut mv);
+            problem.mass_times_into(&v, &mut mv);
             for ((bi, fi), mi) in b.iter_mut().zip(problem.f()).zip(&mv) {
                 *bi = fi + rho * mi;
             }

@@ -164,17 +164,19 @@ pub struct SweepData<'a> {
 }
 
 impl RelaxationOperator {
-    /// Prepares H = A + ρ M for problem data.
-    pub fn new(
-        a: &CsrMatrix<f64>,
-        m: &CsrMatrix<f64>,
-        rho: f64,
-        contacts: &[crate::ContactNode],
-    ) -> Self {
-        let h = if rho == 0.0 {
-            a.clone()
-        } else {
-            a + &(m * rho)
+    /// Prepares H = A + ρ M for a problem: on A's pattern when M lives there.
+    pub fn new(problem: &crate::ContactProblem, rho: f64) -> Self {
+        let (a, contacts) = (problem.a(), problem.contacts());
+        let h = match problem.mass_on_stiffness_pattern() {
+            _ if rho == 0.0 => a.clone(),
+            Some(m) => {
+                let mut h = a.clone();
+                for (h, m) in h.values_mut().iter_mut().zip(m) {
+                    *h += m * rho;
+                }
+                h
+            }
+            None => a + &(&*problem.mass() * rho),
         };
         let diag: Vec<f64> = (0..h.nrows())
             .map(|i| h.get_entry(i, i).map(|e| e.into_value()).unwrap_or(0.0))
