@@ -22,6 +22,8 @@ fn scene(k: u32) -> Scene {
 }
 
 fn bench(c: &mut Criterion) {
+    // The binary's allocator policy, so that these agree with `bench`.
+    contactlab::allocator::keep_freed_memory();
     faer::set_global_parallelism(faer::Par::Seq);
     let settings = Settings::default();
     let mut group = c.benchmark_group("discretization");

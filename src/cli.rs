@@ -344,6 +344,7 @@ pub struct BenchOneArgs {
 /// Parses the command line and runs it; errors are one line on stderr with a
 /// non-zero exit code.
 pub fn main() -> ExitCode {
+    crate::allocator::keep_freed_memory();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

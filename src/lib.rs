@@ -14,6 +14,7 @@
 //!
 //! The solvers of the algebraic subproblem live in `contactlab-solvers`.
 
+pub mod allocator;
 pub mod certificate;
 pub mod cli;
 pub mod commands;

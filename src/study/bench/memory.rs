@@ -64,9 +64,13 @@ pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
     let entry = solver_entry(solver)?;
+    crate::allocator::return_freed_memory();
     let before = status_kb("VmRSS").ok_or_else(unread)?;
     let d = Discretization::new(scene, scene.finest())?;
     let assembly_peak_kb = peak_memory_kb().ok_or_else(unread)?;
+    // The assembly's freed temporaries are kept by the allocator policy:
+    // return them, so that the resident size grows by the problem alone.
+    crate::allocator::return_freed_memory();
     let problem_kb = status_kb("VmRSS")
         .ok_or_else(unread)?
         .saturating_sub(before);
