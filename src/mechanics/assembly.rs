@@ -133,6 +133,9 @@ struct ElementTable<const K: usize> {
 
 impl<const K: usize> ElementTable<K> {
     fn new(mesh: &Mesh, tris: &[[usize; 3]], elements: [&ElementMatrix<'_>; K]) -> Self {
+        // Each node's coordinates once: a triangle's corners are then three
+        // loads, not three divisions to locate each node.
+        let coords: Vec<[f64; 2]> = (0..mesh.num_nodes()).map(|v| mesh.coords(v)).collect();
         // Shapes seen so far; looked up by scanning while they are few (this
         // mesh has two), by hashing beyond.
         let mut keys: Vec<[u64; 4]> = Vec::new();
@@ -141,7 +144,7 @@ impl<const K: usize> ElementTable<K> {
         let shape = tris
             .iter()
             .map(|tri| {
-                let p = tri.map(|node| mesh.coords(node));
+                let p = tri.map(|node| coords[node]);
                 let key = [
                     p[1][0] - p[0][0],
                     p[1][1] - p[0][1],
