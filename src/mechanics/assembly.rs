@@ -203,7 +203,20 @@ struct BlockSums<'a, D, const K: usize> {
     near: Vec<(usize, [[[f64; K]; 2]; 2])>,
 }
 
-impl<D: DofExpansion, const K: usize> BlockSums<'_, D, K> {
+impl<'a, D: DofExpansion, const K: usize> BlockSums<'a, D, K> {
+    /// The triangles around `node`, each with the node's corner in it and
+    /// its element matrices (decoding `node_triangles`' 3·e + corner).
+    fn around(
+        &self,
+        node: usize,
+    ) -> impl Iterator<Item = (&'a [usize; 3], usize, &'a [[[f64; 6]; 6]; K])> + use<'a, D, K> {
+        let (tris, table, lists) = (self.tris, self.table, self.node_triangles);
+        lists.of(node).iter().map(move |&around| {
+            let (e, corner) = (around / 3, around % 3);
+            (&tris[e], corner, &table.matrices[table.shape[e] as usize])
+        })
+    }
+
     /// The block's sums by nodes, for a block on one node: each triangle
     /// around it adds a 2 × 2 block per matrix to each of its three nodes,
     /// found among the few nodes met so far, and only then are the nodes'
@@ -218,11 +231,9 @@ impl<D: DofExpansion, const K: usize> BlockSums<'_, D, K> {
     fn by_nodes(&mut self, stamp: usize, node: usize, rows: BlockRows) -> bool {
         let BlockRows { k, ci } = rows;
         self.near.clear();
-        for &around in self.node_triangles.of(node) {
-            let (e, corner) = (around / 3, around % 3);
-            let ke = &self.table.matrices[self.table.shape[e] as usize];
+        for (tri, corner, ke) in self.around(node) {
             let rows = k.map(|k| 2 * corner + k);
-            for (q, &other) in self.tris[e].iter().enumerate() {
+            for (q, &other) in tri.iter().enumerate() {
                 let slot = match self.near.iter().position(|(m, _)| *m == other) {
                     Some(slot) => slot,
                     None => {
@@ -259,19 +270,12 @@ impl<D: DofExpansion, const K: usize> BlockSums<'_, D, K> {
     /// The block's sums by unknowns: for each of its components, the
     /// triangles around the component's node add their element rows into
     /// the unknowns of each corner's components, found through the marker.
-    fn by_unknowns(
-        &mut self,
-        index: usize,
-        parts: &[(usize, BlockRows)],
-    ) -> &mut Vec<(usize, [[f64; K]; 2])> {
+    fn by_unknowns(&mut self, index: usize, parts: &[(usize, BlockRows)]) {
         let stamp = self.marker.len() + index;
         self.found.clear();
         for &(node, BlockRows { k, ci }) in parts {
-            for &around in self.node_triangles.of(node) {
-                let (e, corner) = (around / 3, around % 3);
-                let tri = &self.tris[e];
+            for (tri, corner, ke) in self.around(node) {
                 let rows = k.map(|k| 2 * corner + k);
-                let ke = &self.table.matrices[self.table.shape[e] as usize];
                 for b in 0..6 {
                     for &(j, cj) in self.dofs.terms(tri[b / 2], b % 2).as_slice() {
                         let (seen, slot) = &mut self.marker[j];
@@ -291,7 +295,6 @@ impl<D: DofExpansion, const K: usize> BlockSums<'_, D, K> {
                 }
             }
         }
-        &mut self.found
     }
 }
 
@@ -409,15 +412,14 @@ fn assemble_rows<const K: usize>(
             };
             (c / 2, rows)
         }));
-        let found = match parts[..] {
-            [(node, rows)] if sum == Sum::ByNodesWherePossible && block.by_nodes(i, node, rows) => {
-                &mut block.found
-            }
-            _ => block.by_unknowns(i, &parts),
-        };
-        found.sort_unstable_by_key(|(j, _)| *j);
+        let by_nodes = matches!(parts[..], [(node, rows)]
+            if sum == Sum::ByNodesWherePossible && block.by_nodes(i, node, rows));
+        if !by_nodes {
+            block.by_unknowns(i, &parts);
+        }
+        block.found.sort_unstable_by_key(|(j, _)| *j);
         for r in 0..1 + usize::from(paired) {
-            for (j, sums) in found.iter() {
+            for (j, sums) in &block.found {
                 columns.push(*j);
                 for (v, acc) in values.iter_mut().zip(sums[r]) {
                     v.push(acc);
