@@ -191,12 +191,12 @@ struct BlockSums<'a, D, const K: usize> {
     tris: &'a [[usize; 3]],
     table: &'a ElementTable<K>,
     node_triangles: &'a Lists,
-    /// marker[j] = (stamp, slot): column j was met in the block with this
-    /// stamp (its index by nodes, n + its index by unknowns), and its sums
-    /// are found[slot].
+    /// marker[j] = (stamp, slot), for the sums by unknowns: column j was
+    /// met in the block with this stamp (the block's first unknown), and its
+    /// sums are found[slot].
     marker: Vec<(usize, u32)>,
-    /// The block's columns and, per column, both rows' sums (a single row
-    /// leaves the second at zero). A short list, so it stays in cache.
+    /// The block's columns, sorted, and per column both rows' sums (a single
+    /// row leaves the second at zero). A short list, so it stays in cache.
     found: Vec<(usize, [[f64; K]; 2])>,
     /// By nodes: the nodes around, each with its 2 × 2 block per matrix,
     /// `near[s].1[kc][r][m]` for the node's component kc and row r.
@@ -223,12 +223,13 @@ impl<'a, D: DofExpansion, const K: usize> BlockSums<'a, D, K> {
     /// components expanded into unknowns: per triangle three short searches
     /// instead of a marker per unknown, at about 0.8 × the time at 1/64.
     ///
-    /// Returns false when some unknown is met through two nodes: its sum
+    /// Returns false when some unknown is met through two nodes (it then
+    /// appears twice in the sorted list, so no marker is needed): its sum
     /// would then be grouped otherwise than by unknowns, so the caller sums
     /// the block by unknowns instead. Otherwise, with coefficients ±1 (all
     /// of this program's), the sums are those of [`BlockSums::by_unknowns`]
     /// bit for bit.
-    fn by_nodes(&mut self, stamp: usize, node: usize, rows: BlockRows) -> bool {
+    fn by_nodes(&mut self, node: usize, rows: BlockRows) -> bool {
         let BlockRows { k, ci } = rows;
         self.near.clear();
         for (tri, corner, ke) in self.around(node) {
@@ -251,27 +252,24 @@ impl<'a, D: DofExpansion, const K: usize> BlockSums<'a, D, K> {
             }
         }
         self.found.clear();
-        let mut once = true;
         for (other, acc) in &self.near {
             for (kc, acc) in acc.iter().enumerate() {
                 for &(j, cj) in self.dofs.terms(*other, kc).as_slice() {
-                    let (seen, _) = &mut self.marker[j];
-                    once &= *seen != stamp;
-                    *seen = stamp;
                     // + 0.0: an empty sum is +0, as summing by unknowns gives.
                     self.found
                         .push((j, acc.map(|row| row.map(|a| cj * a + 0.0))));
                 }
             }
         }
-        once
+        self.found.sort_unstable_by_key(|(j, _)| *j);
+        self.found.windows(2).all(|w| w[0].0 != w[1].0)
     }
 
     /// The block's sums by unknowns: for each of its components, the
     /// triangles around the component's node add their element rows into
-    /// the unknowns of each corner's components, found through the marker.
-    fn by_unknowns(&mut self, index: usize, parts: &[(usize, BlockRows)]) {
-        let stamp = self.marker.len() + index;
+    /// the unknowns of each corner's components, found through the marker;
+    /// `stamp` is the block's first unknown.
+    fn by_unknowns(&mut self, stamp: usize, parts: &[(usize, BlockRows)]) {
         self.found.clear();
         for &(node, BlockRows { k, ci }) in parts {
             for (tri, corner, ke) in self.around(node) {
@@ -295,6 +293,7 @@ impl<'a, D: DofExpansion, const K: usize> BlockSums<'a, D, K> {
                 }
             }
         }
+        self.found.sort_unstable_by_key(|(j, _)| *j);
     }
 }
 
@@ -413,11 +412,12 @@ fn assemble_rows<const K: usize>(
             (c / 2, rows)
         }));
         let by_nodes = matches!(parts[..], [(node, rows)]
-            if sum == Sum::ByNodesWherePossible && block.by_nodes(i, node, rows));
+            if sum == Sum::ByNodesWherePossible && block.by_nodes(node, rows));
         if !by_nodes {
             block.by_unknowns(i, &parts);
         }
-        block.found.sort_unstable_by_key(|(j, _)| *j);
+        // Each output array written in a loop of its own: one reservation
+        // per row, not a capacity check and a length store per entry.
         for r in 0..1 + usize::from(paired) {
             append(&mut columns, &block.found, |(j, _)| *j);
             for (m, v) in values.iter_mut().enumerate() {
@@ -432,8 +432,8 @@ fn assemble_rows<const K: usize>(
         row.windows(2).all(|w| w[0] < w[1]) && row.iter().all(|&j| j < n)
     }));
     // SAFETY: offsets grow from 0 to columns.len(), one per row; each row's
-    // columns are unknowns (< n), deduplicated by the marker and sorted
-    // above. Validating them again was 3 % of a 1/64 assembly; the
+    // columns are unknowns (< n), sorted and distinct (by the marker,
+    // or checked after the sums by nodes). Validating them again was 3 % of a 1/64 assembly; the
     // entry-by-entry test against the triplet assembly checks the pattern.
     let pattern =
         unsafe { SparsityPattern::from_offset_and_indices_unchecked(n, n, offsets, columns) };
@@ -540,8 +540,62 @@ pub fn load_vector(dofs: &impl DofExpansion, forces: &[[f64; 2]]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mechanics::dofs::DofMap;
+    use crate::mechanics::dofs::{DofMap, PhysicalDofs, Terms};
     use crate::mechanics::mesh_size::MeshSize;
+
+    /// Both sums, as pattern and values' bits.
+    fn both_sums(
+        mesh: &Mesh,
+        dofs: &impl DofExpansion,
+        only: Option<Body>,
+    ) -> [(SparsityPattern, Vec<Vec<u64>>); 2] {
+        let d = Material::default().elasticity_matrix();
+        let elements: [&ElementMatrix<'_>; 2] = [&|p| element_stiffness(p, &d), &element_mass];
+        [Sum::ByNodesWherePossible, Sum::ByUnknowns].map(|sum| {
+            let (pattern, values) = assemble_rows(mesh, dofs, only, elements, sum);
+            let bits = values
+                .iter()
+                .map(|v| v.iter().map(|x| x.to_bits()).collect());
+            (pattern, bits.collect())
+        })
+    }
+
+    /// Every component of node `b` is node `a`'s unknown: the nodes next to
+    /// both meet that unknown through two nodes.
+    struct Tied {
+        physical: PhysicalDofs,
+        a: usize,
+        b: usize,
+    }
+
+    impl DofExpansion for Tied {
+        fn n(&self) -> usize {
+            self.physical.n()
+        }
+
+        fn terms(&self, node: usize, k: usize) -> Terms {
+            let node = if node == self.b { self.a } else { node };
+            self.physical.terms(node, k)
+        }
+    }
+
+    /// A block whose nodes around meet one unknown through two nodes goes
+    /// back to the sums by unknowns: kept by nodes, its rows would hold that
+    /// column twice and the patterns would differ.
+    #[test]
+    fn an_unknown_met_through_two_nodes_is_summed_by_unknowns() {
+        let mesh = Mesh::new(MeshSize::from_level(2).unwrap());
+        let dofs = Tied {
+            physical: PhysicalDofs {
+                num_nodes: mesh.num_nodes(),
+            },
+            a: mesh.node(Body::Lower, 1, 1),
+            b: mesh.node(Body::Lower, 2, 1),
+        };
+        let [(p1, v1), (p2, v2)] = both_sums(&mesh, &dofs, None);
+        assert_eq!(p1, p2);
+        assert_eq!(v1, v2);
+    }
 
     /// Summing one-node blocks by nodes gives the sums by unknowns bit for
     /// bit (the sign of zero included) on the paper's meshes, both bodies
@@ -550,22 +604,13 @@ mod tests {
     /// back to the sums by unknowns would show here.
     #[test]
     fn sums_by_nodes_are_the_sums_by_unknowns_bit_for_bit() {
-        let material = Material::default();
-        let d = material.elasticity_matrix();
         for k in 1..=5 {
             let mesh = Mesh::new(MeshSize::from_level(k).unwrap());
             let dofs = DofMap::new(&mesh);
             for only in [None, Some(Body::Lower), Some(Body::Upper)] {
-                let elements: [&ElementMatrix<'_>; 2] =
-                    [&|p| element_stiffness(p, &d), &element_mass];
-                let (p1, v1) =
-                    assemble_rows(&mesh, &dofs, only, elements, Sum::ByNodesWherePossible);
-                let (p2, v2) = assemble_rows(&mesh, &dofs, only, elements, Sum::ByUnknowns);
+                let [(p1, v1), (p2, v2)] = both_sums(&mesh, &dofs, only);
                 assert_eq!(p1, p2, "k = {k}, {only:?}");
-                for (a, b) in v1.iter().zip(&v2) {
-                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                    assert_eq!(bits(a), bits(b), "k = {k}, {only:?}");
-                }
+                assert_eq!(v1, v2, "k = {k}, {only:?}");
             }
         }
     }
