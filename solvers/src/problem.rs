@@ -490,7 +490,10 @@ enum Triangle {
 /// false. The mirror is found by a cursor per row that only moves forward:
 /// the rows visiting column `col` come in increasing order, and so do the
 /// columns of row `col`. One pass over the pattern, no search (a binary
-/// search per entry was a third of the set-up at h = 1/256).
+/// search per entry was a third of the set-up at h = 1/256). Inlined, so
+/// that what `visit` accumulates stays in registers (a store and a load per
+/// entry otherwise).
+#[inline(always)]
 fn walk_mirrors(
     offsets: &[usize],
     indices: &[usize],
