@@ -432,9 +432,10 @@ fn assemble_rows<const K: usize>(
         row.windows(2).all(|w| w[0] < w[1]) && row.iter().all(|&j| j < n)
     }));
     // SAFETY: offsets grow from 0 to columns.len(), one per row; each row's
-    // columns are unknowns (< n), sorted and distinct (by the marker,
-    // or checked after the sums by nodes). Validating them again was 3 % of a 1/64 assembly; the
-    // entry-by-entry test against the triplet assembly checks the pattern.
+    // columns are unknowns (< n), sorted and distinct (by the marker, or
+    // checked after the sums by nodes). Validating them again was 3 % of a
+    // 1/64 assembly; the entry-by-entry test against the triplet assembly
+    // checks the pattern.
     let pattern =
         unsafe { SparsityPattern::from_offset_and_indices_unchecked(n, n, offsets, columns) };
     (pattern, values)
