@@ -20,15 +20,20 @@
 //! statement that the contact forces carry the whole applied load.
 //!
 //! Each condition's violation is dimensionless, in the problem's own scales
-//! ([`contactlab_solvers::Scales`]: displacement U, pressure P, load F), so
-//! the verdict does not change with the units: jumps and slips over U,
-//! pressures and tractions over P, nodal force residuals over P·w_max (the
-//! force a node carries at the mean pressure), the balance over the load
-//! the contact must carry (|zᵀf| for a rigid mode z: relative to the net
-//! load, not the gross one, so that a nearly balanced load, condition (13)
-//! barely holding, is still held to the load it leaves).
+//! ([`contactlab_solvers::Scales`]: displacement U, pressure P), so the
+//! verdict does not change with the units: jumps and slips over U = F/K
+//! (the gross load F over the stiffness: displacements follow the whole
+//! load), pressures and tractions over P = N/L, the mean pressure of the
+//! load N that the contact must carry (the net load along the rigid mode,
+//! not the gross load: a load nearly balanced by an upward one leaves
+//! contact forces of the size of the net load, and a wrong contact force
+//! must not hide in the scale of a load the contact does not carry), nodal
+//! force residuals over P·w_max (the force a node carries at that mean
+//! pressure), and the balance over the load along the rigid mode |zᵀf|.
 //! Complementarity-type conditions are measured in natural-map form
 //! (the smaller of the two quantities that may not both be nonzero).
+//! A value that is not finite, or a residual that overflows (inf − inf),
+//! is an infinite violation: every maximum here counts a NaN as infinite.
 
 use contactlab_solvers::{ContactProblem, Law, Solution, Status};
 use serde::{Deserialize, Serialize};
@@ -266,29 +271,31 @@ pub fn certify(
         };
         contact_force[c.t] += c.weight * pi;
         contact_force[c.s] -= c.weight * qi;
-        let max = |a: f64, b: f64| a.max(b);
-        out.nonpenetration = max(out.nonpenetration, t.max(0.0) / u);
-        out.pressure_sign = max(out.pressure_sign, (-pi).max(0.0) / pr);
-        out.complementarity = max(
-            out.complementarity,
-            (pi.max(0.0) / pr).min((-t).max(0.0) / u),
+        raise(&mut out.nonpenetration, t.max(0.0) / u);
+        raise(&mut out.pressure_sign, (-pi).max(0.0) / pr);
+        raise(
+            &mut out.complementarity,
+            smaller(pi.max(0.0) / pr, (-t).max(0.0) / u),
         );
-        out.friction_bound = max(out.friction_bound, (qi.abs() - g).max(0.0) / pr);
-        out.stick = max(out.stick, (sl.abs() / u).min((g - qi.abs()).max(0.0) / pr));
+        raise(&mut out.friction_bound, (qi.abs() - g).max(0.0) / pr);
+        raise(
+            &mut out.stick,
+            smaller(sl.abs() / u, (g - qi.abs()).max(0.0) / pr),
+        );
         if sl != 0.0 {
-            out.slip_direction = max(
-                out.slip_direction,
-                (sl.abs() / u).min((qi + g * sl.signum()).abs() / pr),
+            raise(
+                &mut out.slip_direction,
+                smaller(sl.abs() / u, (qi + g * sl.signum()).abs() / pr),
             );
         }
     }
-    out.stationarity = r
-        .iter()
-        .zip(&contact_force)
-        .fold(0.0f64, |a, (ri, ci)| a.max((ri + ci).abs()))
-        / (pr * w_max.max(f64::MIN_POSITIVE));
+    let node_force = pr * w_max.max(f64::MIN_POSITIVE);
+    for (ri, ci) in r.iter().zip(&contact_force) {
+        raise(&mut out.stationarity, (ri + ci).abs() / node_force);
+    }
     for z in problem.rigid_modes() {
-        // zᵀ(f − contact forces): the load the contact forces leave unbalanced.
+        // zᵀ(f − contact forces): the load the contact forces leave
+        // unbalanced, over the load zᵀf they must carry.
         let load: f64 = z.iter().zip(problem.f()).map(|(zk, fk)| zk * fk).sum();
         let unbalanced: f64 = z
             .iter()
@@ -302,10 +309,31 @@ pub fn certify(
             force * z.iter().fold(0.0f64, |a, x| a.max(x.abs()))
         };
         if scale > 0.0 {
-            out.force_balance = out.force_balance.max(unbalanced.abs() / scale);
+            raise(&mut out.force_balance, unbalanced.abs() / scale);
         }
     }
     out
+}
+
+/// Raises a violation to `x` if `x` is larger; a NaN (an overflow such as
+/// inf − inf in a residual) raises it to infinity. `f64::max` would drop
+/// the NaN and let the answer that produced it pass.
+fn raise(violation: &mut f64, x: f64) {
+    *violation = if x.is_nan() {
+        f64::INFINITY
+    } else {
+        violation.max(x)
+    };
+}
+
+/// The smaller of two measures of a complementarity pair (natural-map
+/// form); NaN if either is NaN, so that [`raise`] counts it as infinite.
+fn smaller(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.min(b)
+    }
 }
 
 impl Certificate {

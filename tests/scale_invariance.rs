@@ -1,5 +1,7 @@
 //! A result must not change with the units the user chose. Problem 1 with
-//! its loads × 1e-6 and × 1e6, and with E and the loads × 1e6 together, must
+//! its loads × 1e-6 and × 1e6, with E and the loads × 1e6 together, and at
+//! both ends of the sizes a scene may have (`MAGNITUDES`: loads near 1e50
+//! with E near 1e-50, the largest displacements, and the reverse), must
 //! give every registered solver (inside the Coulomb loop, and alone on the
 //! given-friction subproblem) the same status, the same iteration counts,
 //! the same zone, and the solution scaled exactly, within the certificate's
@@ -14,10 +16,12 @@ use contactlab::settings::Settings;
 use contactlab::solvers::{Law, Silent, Solution, registry};
 
 /// (name, load factor, E factor): displacements scale by load/E, pressures by load.
-const UNITS: [(&str, f64, f64); 3] = [
+const UNITS: [(&str, f64, f64); 5] = [
     ("loads × 1e-6", 1e-6, 1.0),
     ("loads × 1e6", 1e6, 1.0),
     ("E and loads × 1e6", 1e6, 1e6),
+    ("loads × 1e48, E × 1e-54", 1e48, 1e-54),
+    ("loads × 1e-48, E × 1e45", 1e-48, 1e45),
 ];
 
 fn scene(load: f64, young: f64) -> Scene {

@@ -310,6 +310,27 @@ pub struct NewtonOutcome {
     pub merit: Vec<f64>,
 }
 
+/// Whether the Newton direction `d` descends the merit Ψ = ½‖Φ‖² enough to
+/// be taken: ∇Ψᵀd ≤ −ρ‖d‖^p with ρ = 1e-10 and p = 2.1, the test of De Luca,
+/// Facchinei & Kanzow (1996, Math. Programming 75, eq. (13)); otherwise the
+/// step is −∇Ψ. `slope` is ∇Ψᵀd. The test is taken in the problem's units:
+/// the first `displacements` components of d (displacements) times κ, the
+/// others (forces) as they are, all over `scale` (the load ‖b̂‖∞), and the
+/// slope over scale², so that multiplying the loads, or the stiffness and
+/// the loads, by any factor changes no decision (with ‖d‖^2.1 in raw units,
+/// E = 73e-27 or loads × 1e100 turned every step into a gradient step).
+pub(crate) fn descends(slope: f64, d: &[f64], displacements: usize, kappa: f64, scale: f64) -> bool {
+    let size: f64 = d
+        .iter()
+        .enumerate()
+        .map(|(k, x)| {
+            let unit = if k < displacements { kappa * x } else { *x } / scale;
+            unit * unit
+        })
+        .sum();
+    slope / (scale * scale) <= -1e-10 * size.powf(1.05)
+}
+
 /// Semismooth Newton on the condensed KKT system from (y, λ, μ).
 #[allow(clippy::too_many_arguments)]
 pub fn semismooth_newton(
@@ -364,7 +385,7 @@ pub fn semismooth_newton(
         let slope = |d: &[f64]| d.iter().zip(&grad).map(|(a, b)| a * b).sum::<f64>();
         let dir = match newton {
             Some(d) if !settings.line_search => d,
-            Some(d) if slope(&d) <= -1e-10 * d.iter().map(|x| x * x).sum::<f64>().powf(1.05) => d,
+            Some(d) if descends(slope(&d), &d, 2 * m, kkt.kappa, scale) => d,
             _ => grad.iter().map(|x| -x).collect(),
         };
         let g0 = slope(&dir);

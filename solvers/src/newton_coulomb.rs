@@ -33,7 +33,7 @@ use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
 use crate::condensed::{Condensed, Kept, condense};
-use crate::newton::{billups_with_bound, fb};
+use crate::newton::{billups_with_bound, descends, fb};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
@@ -395,7 +395,7 @@ fn newton(
         let slope = |d: &[f64]| d.iter().zip(&grad).map(|(a, b)| a * b).sum::<f64>();
         let dir = match newton_dir {
             Some(d) if !settings.line_search => d,
-            Some(d) if slope(&d) <= -1e-10 * d.iter().map(|x| x * x).sum::<f64>().powf(1.05) => d,
+            Some(d) if descends(slope(&d), &d, 2 * sys.m(), sys.kappa, scale) => d,
             _ => grad.iter().map(|x| -x).collect(),
         };
         let g0 = slope(&dir);

@@ -70,9 +70,18 @@ pub enum ProblemError {
     #[error("{what} holds a non-finite value (NaN or infinity)")]
     NonFinite { what: &'static str },
     #[error(
-        "rigid mode {index} is not in the kernel of A: ‖A z‖∞ = {residual:.1e} > 1e-9·max A_ii·‖z‖∞"
+        "rigid mode {index} is not in the kernel of A: ‖A z‖∞/‖z‖∞ = {residual:.1e} > 1e-9·max A_ii"
     )]
     NotAKernel { index: usize, residual: f64 },
+    #[error(
+        "rigid mode {index} holds a non-finite value or is zero: give a nonzero kernel vector of A"
+    )]
+    BadRigidMode { index: usize },
+    #[error(
+        "the load along rigid mode {index} is {fraction:.1e} of the gross load Σ|f|, below {MIN_NET_LOAD_FRACTION:e}: \
+         the contact forces must carry it (condition (13)), and a load so nearly balanced cannot be certified in double precision"
+    )]
+    NetLoad { index: usize, fraction: f64 },
     #[error("the problem's {what} scale is {value:e}: {why}")]
     Scale {
         what: &'static str,
@@ -81,19 +90,37 @@ pub enum ProblemError {
     },
 }
 
+/// The smallest net load, relative to the gross load F = Σ|f_i|, that a
+/// problem with rigid modes may carry along each of them. The contact
+/// forces must balance the load along a rigid mode (paper condition (13));
+/// below this fraction the net load cannot be told from the rounding of the
+/// gross one at fine meshes, and contact pressures, which are of the size
+/// of the net load, cannot be certified in double precision (a relative
+/// error ε of the answer in the gross load's scale is ε·F/N in theirs).
+pub const MIN_NET_LOAD_FRACTION: f64 = 1e-8;
+
 /// The problem's own scales, from its data alone. Every stopping test of a
 /// solver in relative mode and every measure of the certificate is stated
 /// in them, so that multiplying the loads by a factor, or the stiffness and
 /// the loads together, changes no iteration count and no verdict.
 ///
-/// - force F = Σ_i |f_i| (for a traction load: ∫|P| ds, whatever the mesh);
+/// - force F = Σ_i |f_i|, the gross load (for a traction load: ∫|P| ds,
+///   whatever the mesh);
+/// - contact load N, the load the contact forces must carry: for each rigid
+///   mode z, |zᵀf| / ‖z‖∞ (the largest), since the contact forces balance the
+///   load along z; F when the problem has no rigid mode;
 /// - length L = Σ_i w_i (the length of Γ_K);
 /// - stiffness K = max_i A_ii;
-/// - pressure P = F/L (force per unit length of Γ_K);
-/// - displacement U = F/K.
+/// - pressure P = N/L (the mean contact pressure): measured in the net load
+///   and not the gross one, so that an answer cannot hide a wrong contact
+///   force in the scale of a load that the contact does not carry (a load
+///   nearly balanced by an upward one has contact forces of the size of the
+///   net load, not of the gross);
+/// - displacement U = F/K (displacements and gaps follow the whole load).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Scales {
     pub force: f64,
+    pub contact_load: f64,
     pub length: f64,
     pub stiffness: f64,
     pub pressure: f64,
@@ -101,9 +128,31 @@ pub struct Scales {
 }
 
 impl Scales {
-    fn of(a: &CsrMatrix<f64>, f: &[f64], contacts: &[ContactNode]) -> Result<Self, ProblemError> {
+    fn of(
+        a: &CsrMatrix<f64>,
+        f: &[f64],
+        contacts: &[ContactNode],
+        rigid_modes: &[Vec<f64>],
+    ) -> Result<Self, ProblemError> {
         let or_one = |x: f64| if x > 0.0 { x } else { 1.0 };
         let force = or_one(f.iter().map(|x| x.abs()).sum());
+        let mut contact_load = if rigid_modes.is_empty() {
+            force
+        } else {
+            f64::INFINITY
+        };
+        for (index, z) in rigid_modes.iter().enumerate() {
+            let size = max_abs(z);
+            let along: f64 = z.iter().zip(f).map(|(zk, fk)| (zk / size) * fk).sum();
+            let load = along.abs();
+            if !(load >= MIN_NET_LOAD_FRACTION * force) {
+                return Err(ProblemError::NetLoad {
+                    index,
+                    fraction: load / force,
+                });
+            }
+            contact_load = contact_load.min(load);
+        }
         let length = or_one(contacts.iter().map(|c| c.weight).sum());
         let stiffness = or_one(
             a.row_iter()
@@ -113,13 +162,15 @@ impl Scales {
         );
         let scales = Self {
             force,
+            contact_load,
             length,
             stiffness,
-            pressure: force / length,
+            pressure: contact_load / length,
             displacement: force / stiffness,
         };
         for (what, value) in [
             ("force", scales.force),
+            ("contact load", scales.contact_load),
             ("stiffness", scales.stiffness),
             ("pressure", scales.pressure),
             ("displacement", scales.displacement),
@@ -174,7 +225,9 @@ pub struct ContactProblem {
 
 impl ContactProblem {
     /// Checks dimensions, symmetry, index sets, finiteness, that each rigid
-    /// mode z satisfies A z = 0, and that the scales are representable.
+    /// mode z is finite, nonzero and satisfies A z = 0, that the load along
+    /// it is at least [`MIN_NET_LOAD_FRACTION`] of the gross load, and that
+    /// the scales are representable.
     /// M is a matrix or its values on A's pattern ([`Mass`]); a matrix on
     /// exactly A's pattern is kept as its values.
     pub fn new(
@@ -226,7 +279,6 @@ impl ContactProblem {
                 });
             }
         }
-        let scales = Scales::of(&a, &f, &contacts)?;
         for (index, z) in rigid_modes.iter().enumerate() {
             if z.len() != n {
                 return Err(ProblemError::Dimension {
@@ -235,9 +287,17 @@ impl ContactProblem {
                     got: z.len(),
                 });
             }
-            let residual = max_abs(&spmv(&a, z));
-            let bound = 1e-9 * scales.stiffness * max_abs(z);
-            if residual.is_nan() || residual > bound {
+            if !max_abs_if_finite(z).is_some_and(|m| m > 0.0) {
+                return Err(ProblemError::BadRigidMode { index });
+            }
+        }
+        let scales = Scales::of(&a, &f, &contacts, &rigid_modes)?;
+        for (index, z) in rigid_modes.iter().enumerate() {
+            // In units of z's largest entry, so that no product overflows.
+            let size = max_abs(z);
+            let unit: Vec<f64> = z.iter().map(|zk| zk / size).collect();
+            let residual = max_abs_if_finite(&spmv(&a, &unit)).unwrap_or(f64::INFINITY);
+            if !(residual <= 1e-9 * scales.stiffness) {
                 return Err(ProblemError::NotAKernel { index, residual });
             }
         }
@@ -627,6 +687,54 @@ mod symmetry_tests {
                 expected: 4,
                 got: 3
             })
+        ));
+    }
+
+    /// A rigid mode must be finite and nonzero (an inf entry or all zeros
+    /// once passed the kernel check, and the balance along it was never
+    /// measured), and the load along it must be a fraction of the gross
+    /// load that rounding cannot produce.
+    #[test]
+    fn rigid_modes_must_be_real_kernel_vectors_that_carry_a_load() {
+        // A = [[1, -1], [-1, 1]]: kernel (1, 1).
+        let a = csr(2, &[(0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0)]);
+        let m = csr(2, &[(0, 0, 1.0), (1, 1, 1.0)]);
+        let contact = ContactNode {
+            t: 0,
+            s: 1,
+            weight: 1.0,
+            g: 0.0,
+            coefficient: 0.0,
+        };
+        let problem = |f: Vec<f64>, z: Vec<f64>| {
+            ContactProblem::new(a.clone(), f, Mass::Matrix(m.clone()), vec![contact], vec![z])
+        };
+        let p = problem(vec![1.0, 2.0], vec![1.0, 1.0]).unwrap();
+        assert_eq!(p.scales().contact_load, 3.0);
+        assert_eq!(p.scales().pressure, 3.0);
+        assert_eq!(p.scales().force, 3.0);
+        // The net load, not the gross: (1 − 0.5)/1 along z.
+        let p = problem(vec![1.0, -0.5], vec![2.0, 2.0]).unwrap();
+        assert_eq!(p.scales().contact_load, 0.5);
+        assert_eq!(p.scales().force, 1.5);
+        for z in [vec![f64::INFINITY, 1.0], vec![0.0, 0.0], vec![f64::NAN, 1.0]] {
+            assert!(
+                matches!(
+                    problem(vec![1.0, 2.0], z.clone()),
+                    Err(ProblemError::BadRigidMode { index: 0 })
+                ),
+                "{z:?}"
+            );
+        }
+        // Huge but finite: checked in units of its largest entry.
+        assert!(problem(vec![1.0, 2.0], vec![1e308, 1e308]).is_ok());
+        assert!(matches!(
+            problem(vec![1.0, 2.0], vec![1e308, -1e308]),
+            Err(ProblemError::NotAKernel { .. })
+        ));
+        assert!(matches!(
+            problem(vec![1.0, -1.0 + 1e-12], vec![1.0, 1.0]),
+            Err(ProblemError::NetLoad { index: 0, .. })
         ));
     }
 
