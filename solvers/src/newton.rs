@@ -319,7 +319,13 @@ pub struct NewtonOutcome {
 /// slope over scale², so that multiplying the loads, or the stiffness and
 /// the loads, by any factor changes no decision (with ‖d‖^2.1 in raw units,
 /// E = 73e-27 or loads × 1e100 turned every step into a gradient step).
-pub(crate) fn descends(slope: f64, d: &[f64], displacements: usize, kappa: f64, scale: f64) -> bool {
+pub(crate) fn descends(
+    slope: f64,
+    d: &[f64],
+    displacements: usize,
+    kappa: f64,
+    scale: f64,
+) -> bool {
     let size: f64 = d
         .iter()
         .enumerate()

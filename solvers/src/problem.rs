@@ -145,7 +145,8 @@ impl Scales {
             let size = max_abs(z);
             let along: f64 = z.iter().zip(f).map(|(zk, fk)| (zk / size) * fk).sum();
             let load = along.abs();
-            if !(load >= MIN_NET_LOAD_FRACTION * force) {
+            // NaN (an overflow) fails too.
+            if load.is_nan() || load < MIN_NET_LOAD_FRACTION * force {
                 return Err(ProblemError::NetLoad {
                     index,
                     fraction: load / force,
@@ -297,7 +298,7 @@ impl ContactProblem {
             let size = max_abs(z);
             let unit: Vec<f64> = z.iter().map(|zk| zk / size).collect();
             let residual = max_abs_if_finite(&spmv(&a, &unit)).unwrap_or(f64::INFINITY);
-            if !(residual <= 1e-9 * scales.stiffness) {
+            if residual > 1e-9 * scales.stiffness {
                 return Err(ProblemError::NotAKernel { index, residual });
             }
         }
@@ -707,7 +708,13 @@ mod symmetry_tests {
             coefficient: 0.0,
         };
         let problem = |f: Vec<f64>, z: Vec<f64>| {
-            ContactProblem::new(a.clone(), f, Mass::Matrix(m.clone()), vec![contact], vec![z])
+            ContactProblem::new(
+                a.clone(),
+                f,
+                Mass::Matrix(m.clone()),
+                vec![contact],
+                vec![z],
+            )
         };
         let p = problem(vec![1.0, 2.0], vec![1.0, 1.0]).unwrap();
         assert_eq!(p.scales().contact_load, 3.0);
@@ -717,7 +724,11 @@ mod symmetry_tests {
         let p = problem(vec![1.0, -0.5], vec![2.0, 2.0]).unwrap();
         assert_eq!(p.scales().contact_load, 0.5);
         assert_eq!(p.scales().force, 1.5);
-        for z in [vec![f64::INFINITY, 1.0], vec![0.0, 0.0], vec![f64::NAN, 1.0]] {
+        for z in [
+            vec![f64::INFINITY, 1.0],
+            vec![0.0, 0.0],
+            vec![f64::NAN, 1.0],
+        ] {
             assert!(
                 matches!(
                     problem(vec![1.0, 2.0], z.clone()),

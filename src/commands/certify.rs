@@ -17,24 +17,16 @@ use crate::io::output::print;
 pub fn run(args: &CertifyArgs) -> Result<()> {
     let problem = import(&args.instance)?;
     let (n, m) = (problem.n(), problem.contacts().len());
-    let v = args.displacements.as_deref().map(read_vector).transpose()?;
-    let forces = args.forces.as_deref().map(read_forces).transpose()?;
-    if let Some(v) = &v
-        && v.len() != n
-    {
-        bail!(
-            "--displacements: {} values, the problem has {n} unknowns",
-            v.len()
-        );
-    }
-    if let Some((p, _)) = &forces
-        && p.len() != m
-    {
-        bail!(
-            "--forces: {} rows, the problem has {m} contact nodes",
-            p.len()
-        );
-    }
+    let v = args
+        .displacements
+        .as_deref()
+        .map(|path| read_vector(path, n))
+        .transpose()?;
+    let forces = args
+        .forces
+        .as_deref()
+        .map(|path| read_forces(path, m))
+        .transpose()?;
     let (v, p, q, how) = match (v, forces) {
         (Some(v), Some((p, q))) => (v, p, q, "displacements and contact forces as given"),
         (Some(v), None) => {

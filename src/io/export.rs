@@ -22,10 +22,12 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use contactlab_solvers::condensed::condense;
 use contactlab_solvers::{ContactNode, ContactProblem};
-use nalgebra_sparse::io::{load_coo_from_matrix_market_file, save_to_matrix_market_str};
+use nalgebra_sparse::io::save_to_matrix_market_str;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::{Deserialize, Serialize};
 
+use crate::io::guarded::{self, Lines};
+use crate::io::matrix_market::{self, Expect, Triplets};
 use crate::io::output::{json_bytes, write_atomic};
 use crate::mechanics::discretization::Discretization;
 use crate::mechanics::scene::Scene;
@@ -133,7 +135,7 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
         &mtx(&dense(m2, modes.len(), |i, j| on_contacts(&modes[j], i))),
     )?;
     let description = Description {
-        format: "contactlab instance, version 1",
+        format: FORMAT,
         statement: vec![
             "Given-friction (Tresca) subproblem, paper (10): minimize 1/2 v'A v - f'v + sum_i w_i g_i |v[s_i]| subject to v[t_i] <= 0 for every contact node i.",
             "Coulomb problem, paper (7)-(8): the same with g_i = coefficient_i * p_i, p_i the contact pressure of the solution itself.",
@@ -189,42 +191,111 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
     Ok(())
 }
 
-fn load(dir: &Path, name: &str) -> Result<CooMatrix<f64>> {
-    let path = dir.join(name);
-    load_coo_from_matrix_market_file::<f64, _>(&path)
-        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))
+/// What `problem.json` must say for the files beside it to be read.
+#[derive(Debug, Deserialize)]
+struct Declared {
+    format: String,
+    n: usize,
+    contact_nodes: usize,
+    rigid_modes: usize,
 }
 
-/// Reads an exported folder back into the algebraic problem.
+/// The format line of `problem.json` this version writes and reads.
+const FORMAT: &str = "contactlab instance, version 1";
+
+/// `problem.json` is at most this large (it holds the statement and the scene).
+const MAX_DESCRIPTION_BYTES: u64 = 16 << 20;
+
+/// The largest instance a file may declare: 1e9 unknowns (h = 1/4096 has
+/// 3.4e7), so that a declared size alone never asks for terabytes.
+const MAX_UNKNOWNS: usize = 1_000_000_000;
+
+/// Reads one matrix of an exported folder, of the size `problem.json`
+/// declares.
+fn load(dir: &Path, name: &str, rows: usize, cols: usize, what: &'static str) -> Result<Triplets> {
+    let expect = Expect {
+        rows: Some(rows),
+        cols: Some(cols),
+        what,
+    };
+    Ok(matrix_market::read(&dir.join(name), expect)?)
+}
+
+/// A sparse matrix from triplets (duplicates summed).
+fn csr(t: &Triplets) -> CsrMatrix<f64> {
+    let mut coo = CooMatrix::new(t.rows, t.cols);
+    for &(i, j, x) in &t.entries {
+        coo.push(i, j, x);
+    }
+    CsrMatrix::from(&coo)
+}
+
+/// Reads an exported folder back into the algebraic problem. `problem.json`
+/// is read first and every file is held to what it declares: n unknowns
+/// (A, M n × n, f n × 1), k rigid modes (n × k), m contact nodes (exactly m
+/// rows of `contact.csv`, node i on row i), before anything is allocated.
 pub fn import(dir: &Path) -> Result<ContactProblem> {
-    if !dir.join("A.mtx").is_file() {
+    let shown = dir.display();
+    let json_path = dir.join("problem.json");
+    if !json_path.is_file() {
+        bail!("{shown}: no problem.json; give a folder written by `contactlab export`");
+    }
+    let text = guarded::read_small_text(&json_path, MAX_DESCRIPTION_BYTES)
+        .map_err(|reason| anyhow::anyhow!("cannot read {}: {reason}", json_path.display()))?;
+    let declared: Declared = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: it does not state format, n, contact_nodes and rigid_modes",
+            json_path.display()
+        )
+    })?;
+    if declared.format != FORMAT {
         bail!(
-            "{}: no A.mtx; give a folder written by `contactlab export`",
-            dir.display()
+            "{}: format '{}' is not '{FORMAT}'; export the problem again with this version",
+            json_path.display(),
+            declared.format
         );
     }
-    let a = CsrMatrix::from(&load(dir, "A.mtx")?);
-    let mass = CsrMatrix::from(&load(dir, "M.mtx")?);
-    let column = |m: &CooMatrix<f64>, j: usize| -> Vec<f64> {
-        let mut v = vec![0.0; m.nrows()];
-        for (i, jj, x) in m.triplet_iter() {
-            if jj == j {
-                v[i] += x;
-            }
+    let (n, m, k) = (declared.n, declared.contact_nodes, declared.rigid_modes);
+    if n > MAX_UNKNOWNS || 2 * m > n || k > n {
+        bail!(
+            "{}: n = {n}, contact_nodes = {m}, rigid_modes = {k} cannot describe a problem (n at most {MAX_UNKNOWNS:e}, 2·contact_nodes and rigid_modes at most n)",
+            json_path.display()
+        );
+    }
+    let a = csr(&load(dir, "A.mtx", n, n, "A (the stiffness, n × n)")?);
+    let mass = csr(&load(dir, "M.mtx", n, n, "M (the mass matrix, n × n)")?);
+    let f = load(dir, "f.mtx", n, 1, "f (the load, n × 1)")?.column(0);
+    let modes = load(
+        dir,
+        "rigid_modes.mtx",
+        n,
+        k,
+        "the rigid modes (n × rigid_modes)",
+    )?;
+    let modes: Vec<Vec<f64>> = (0..k).map(|j| modes.column(j)).collect();
+    let contacts = read_contacts(&dir.join("contact.csv"), m)?;
+    ContactProblem::new(a, f, mass, contacts, modes)
+        .with_context(|| format!("{shown}: the files do not form a contact problem"))
+}
+
+/// Reads exactly `m` rows of `contact.csv`, node i on row i.
+fn read_contacts(path: &Path, m: usize) -> Result<Vec<ContactNode>> {
+    let shown = path.display();
+    let (file, _) =
+        guarded::open(path).map_err(|reason| anyhow::anyhow!("cannot read {shown}: {reason}"))?;
+    let mut contacts = Vec::with_capacity(m);
+    for (i, rec) in csv_reader(file).deserialize::<ContactRow>().enumerate() {
+        let c = rec.with_context(|| format!("{shown}: row {} does not parse", i + 1))?;
+        if i >= m {
+            bail!("{shown}: more than the {m} rows problem.json declares");
         }
-        v
-    };
-    let f = column(&load(dir, "f.mtx")?, 0);
-    let modes_coo = load(dir, "rigid_modes.mtx")?;
-    let modes: Vec<Vec<f64>> = (0..modes_coo.ncols())
-        .map(|j| column(&modes_coo, j))
-        .collect();
-    let path = dir.join("contact.csv");
-    let mut r =
-        csv::Reader::from_path(&path).with_context(|| format!("cannot read {}", path.display()))?;
-    let mut contacts = Vec::new();
-    for rec in r.deserialize::<ContactRow>() {
-        let c = rec.with_context(|| format!("{}: a row does not parse", path.display()))?;
+        if c.node != i {
+            bail!(
+                "{shown}: row {} is node {}, expected node {i} (rows in node order)",
+                i + 1,
+                c.node
+            );
+        }
         contacts.push(ContactNode {
             t: c.t,
             s: c.s,
@@ -233,41 +304,100 @@ pub fn import(dir: &Path) -> Result<ContactProblem> {
             coefficient: c.coefficient,
         });
     }
-    ContactProblem::new(a, f, mass, contacts, modes)
-        .with_context(|| format!("{}: the files do not form a contact problem", dir.display()))
+    if contacts.len() != m {
+        bail!(
+            "{shown}: {} rows, but problem.json declares {m} contact nodes",
+            contacts.len()
+        );
+    }
+    Ok(contacts)
 }
 
-/// Reads a vector: a Matrix Market file (`.mtx`, one column), or plain text
-/// with one number per line (lines starting with `#` or `%` skipped).
-pub fn read_vector(path: &Path) -> Result<Vec<f64>> {
-    if path.extension().is_some_and(|e| e == "mtx") {
-        let m = load_coo_from_matrix_market_file::<f64, _>(path)
-            .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
-        if m.ncols() != 1 {
-            bail!(
-                "{}: expected one column, found {}",
-                path.display(),
-                m.ncols()
-            );
-        }
-        let mut v = vec![0.0; m.nrows()];
-        for (i, _, x) in m.triplet_iter() {
-            v[i] += x;
-        }
-        return Ok(v);
+/// A CSV reader whose records may be at most [`guarded::MAX_LINE_BYTES`]
+/// long, so that a file without line breaks is refused, not held whole.
+fn csv_reader(file: std::fs::File) -> csv::Reader<impl std::io::Read> {
+    csv::ReaderBuilder::new()
+        .buffer_capacity(8 * 1024)
+        .from_reader(LineBounded::new(file))
+}
+
+/// A reader that fails once a line grows past [`guarded::MAX_LINE_BYTES`].
+struct LineBounded<R> {
+    inner: R,
+    run: usize,
+}
+
+impl<R> LineBounded<R> {
+    fn new(inner: R) -> Self {
+        Self { inner, run: 0 }
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    text.lines()
-        .map(str::trim)
-        .enumerate()
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with('%'))
-        .map(|(k, l)| {
-            l.parse::<f64>().with_context(|| {
-                format!("{}: line {} is not a number: '{l}'", path.display(), k + 1)
-            })
-        })
-        .collect()
+}
+
+impl<R: std::io::Read> std::io::Read for LineBounded<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let got = self.inner.read(buf)?;
+        for &b in &buf[..got] {
+            self.run = if b == b'\n' { 0 } else { self.run + 1 };
+            if self.run > guarded::MAX_LINE_BYTES {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("a line is longer than {} bytes", guarded::MAX_LINE_BYTES),
+                ));
+            }
+        }
+        Ok(got)
+    }
+}
+
+/// Reads the displacements of an `n`-unknown problem: a Matrix Market file
+/// (`.mtx`, n × 1, coordinate or array), or plain text with one number per
+/// line (blank lines and lines starting with `#` or `%` skipped).
+pub fn read_vector(path: &Path, n: usize) -> Result<Vec<f64>> {
+    if path.extension().is_some_and(|e| e == "mtx") {
+        let expect = Expect {
+            rows: Some(n),
+            cols: Some(1),
+            what: "--displacements (one value per unknown)",
+        };
+        return Ok(matrix_market::read(path, expect)?.column(0));
+    }
+    let shown = path.display();
+    let (mut lines, _) =
+        Lines::open(path).map_err(|reason| anyhow::anyhow!("cannot read {shown}: {reason}"))?;
+    let mut v = Vec::new();
+    while let Some((number, line)) = lines
+        .next_numbered()
+        .map_err(|r| anyhow::anyhow!("{shown}: {r}"))?
+    {
+        let l = line.trim();
+        if l.is_empty() || l.starts_with('#') || l.starts_with('%') {
+            continue;
+        }
+        let x = l
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .with_context(|| {
+                format!(
+                    "{shown}: line {number} is not a finite number: '{}'",
+                    l.chars()
+                        .take(40)
+                        .filter(|c| !c.is_control())
+                        .collect::<String>()
+                )
+            })?;
+        if v.len() == n {
+            bail!("--displacements {shown}: more than the problem's {n} values (line {number})");
+        }
+        v.push(x);
+    }
+    if v.len() != n {
+        bail!(
+            "--displacements {shown}: {} values, the problem has {n} unknowns",
+            v.len()
+        );
+    }
+    Ok(v)
 }
 
 /// One row of a contact-forces file.
@@ -277,23 +407,33 @@ pub struct ForceRow {
     pub friction_traction: f64,
 }
 
-/// Reads pressures and friction tractions per contact node (CSV with
-/// columns `pressure,friction_traction`, others ignored, in the order of
-/// `contact.csv`).
-pub fn read_forces(path: &Path) -> Result<(Vec<f64>, Vec<f64>)> {
-    let mut r =
-        csv::Reader::from_path(path).with_context(|| format!("cannot read {}", path.display()))?;
+/// Reads pressures and friction tractions of `m` contact nodes (CSV with
+/// columns `pressure,friction_traction`, others ignored, one row per node
+/// in the order of `contact.csv`).
+pub fn read_forces(path: &Path, m: usize) -> Result<(Vec<f64>, Vec<f64>)> {
+    let shown = path.display();
+    let (file, _) = guarded::open(path)
+        .map_err(|reason| anyhow::anyhow!("cannot read --forces {shown}: {reason}"))?;
     let mut p = Vec::new();
     let mut q = Vec::new();
-    for rec in r.deserialize::<ForceRow>() {
+    for (i, rec) in csv_reader(file).deserialize::<ForceRow>().enumerate() {
         let row = rec.with_context(|| {
             format!(
-                "{}: each row needs numbers in columns pressure and friction_traction",
-                path.display()
+                "--forces {shown}: row {} needs numbers in columns pressure and friction_traction",
+                i + 1
             )
         })?;
+        if i >= m {
+            bail!("--forces {shown}: more than the problem's {m} contact nodes");
+        }
         p.push(row.pressure);
         q.push(row.friction_traction);
+    }
+    if p.len() != m {
+        bail!(
+            "--forces {shown}: {} rows, the problem has {m} contact nodes",
+            p.len()
+        );
     }
     Ok((p, q))
 }

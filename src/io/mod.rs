@@ -4,8 +4,10 @@
 pub mod charts;
 pub mod csv;
 pub mod export;
+pub mod guarded;
 pub mod latex;
 pub mod manifest;
+pub mod matrix_market;
 pub mod output;
 pub mod run_folder;
 pub mod scene_file;

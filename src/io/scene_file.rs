@@ -2,7 +2,6 @@
 //! names the file, the place and what is wrong.
 
 use std::collections::BTreeMap;
-use std::io::Read;
 use std::path::Path;
 
 use contactlab_solvers::Stopping;
@@ -117,16 +116,11 @@ pub enum SceneFileError {
 /// Reads, parses and validates a scene file.
 pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
     let shown = path.display().to_string();
-    let bytes = read_small_file(path).map_err(|reason| SceneFileError::Read {
-        path: shown.clone(),
-        reason,
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| SceneFileError::Read {
-        path: shown.clone(),
-        reason: format!(
-            "it is not UTF-8 text (invalid byte at offset {})",
-            e.utf8_error().valid_up_to()
-        ),
+    let text = crate::io::guarded::read_small_text(path, MAX_SCENE_BYTES).map_err(|reason| {
+        SceneFileError::Read {
+            path: shown.clone(),
+            reason,
+        }
     })?;
     let (scene, settings) = parse(&text)
         .map_err(|(line, column, message)| SceneFileError::Parse {
@@ -151,47 +145,6 @@ pub fn load(path: &Path) -> Result<(Scene, Settings), SceneFileError> {
             message,
         })?;
     Ok((scene, settings))
-}
-
-/// Reads a regular file of at most [`MAX_SCENE_BYTES`]: a FIFO would block
-/// forever and a device such as /dev/zero would be read until memory runs out.
-pub fn read_small_file(path: &Path) -> Result<Vec<u8>, String> {
-    let not_regular = "it is not a regular file (a directory, FIFO or device); give a .toml file";
-    // Ask before opening: opening a FIFO for reading blocks until a writer comes.
-    if !std::fs::metadata(path)
-        .map_err(|e| e.to_string())?
-        .is_file()
-    {
-        return Err(not_regular.into());
-    }
-    let mut options = std::fs::OpenOptions::new();
-    options.read(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(libc::O_NONBLOCK);
-    }
-    let file = options.open(path).map_err(|e| e.to_string())?;
-    let meta = file.metadata().map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        return Err(not_regular.into());
-    }
-    if meta.len() > MAX_SCENE_BYTES {
-        return Err(format!(
-            "it has {} bytes, more than a scene file's limit of {MAX_SCENE_BYTES}",
-            meta.len()
-        ));
-    }
-    let mut bytes = Vec::new();
-    file.take(MAX_SCENE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| e.to_string())?;
-    if bytes.len() as u64 > MAX_SCENE_BYTES {
-        return Err(format!(
-            "it holds more than a scene file's limit of {MAX_SCENE_BYTES} bytes"
-        ));
-    }
-    Ok(bytes)
 }
 
 /// Parses scene text; on error gives (line, column, one-line message).
