@@ -45,6 +45,25 @@ use serde::{Deserialize, Serialize};
 /// about 3e-4 of the load unbalanced on problem 1 at h = 1/64).
 pub const DEFAULT_TOLERANCE: f64 = 1e-5;
 
+/// The largest tolerance the certificate may be given, wherever it is set
+/// (a scene file, `--certify-tol`, `certify --tolerance`, benchmark
+/// targets): a violation of 1 % of the load is already a wrong answer, and
+/// a tolerance of 1e300 switched the certificate off (contact force 0
+/// against a load of 20 was `converged`).
+pub const MAX_TOLERANCE: f64 = 1e-2;
+
+/// Checks a certificate tolerance: in (0, [`MAX_TOLERANCE`]].
+pub fn check_tolerance(t: f64) -> Result<f64, String> {
+    if t > 0.0 && t <= MAX_TOLERANCE {
+        Ok(t)
+    } else {
+        Err(format!(
+            "{} is invalid: the certificate's tolerance must lie in (0, {MAX_TOLERANCE:e}] (default {DEFAULT_TOLERANCE:e})",
+            crate::mechanics::scene::Shown::shown(&t)
+        ))
+    }
+}
+
 /// The conditions a solution must satisfy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

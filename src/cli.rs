@@ -286,20 +286,29 @@ pub struct BenchmarkMergeArgs {
     pub out: PathBuf,
 }
 
+/// The longest time limit a run may be given: a week.
+pub const MAX_SECONDS: f64 = 7.0 * 24.0 * 3600.0;
+
 fn positive_seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-        _ => Err(format!("'{s}': give a positive number of seconds, e.g. 20")),
+        Ok(x) if x > 0.0 && x <= MAX_SECONDS => Ok(x),
+        _ => Err(format!(
+            "'{s}': give a positive number of seconds up to a week ({MAX_SECONDS}), e.g. 20"
+        )),
     }
 }
 
 fn positive_tolerance(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 && x < 1.0 => Ok(x),
-        _ => Err(format!(
-            "'{s}': give a tolerance between 0 and 1, e.g. 1e-6"
-        )),
-    }
+    let t = s
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| format!("'{s}': give a tolerance such as 1e-6"))?;
+    crate::certificate::check_tolerance(t).map_err(|_| {
+        format!(
+            "give a tolerance in (0, {:e}]",
+            crate::certificate::MAX_TOLERANCE
+        )
+    })
 }
 
 #[derive(Debug, Args)]

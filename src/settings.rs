@@ -14,7 +14,7 @@ use contactlab_solvers::settings::{Stopping, from_tree, to_tree};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::certificate::DEFAULT_TOLERANCE;
+use crate::certificate::{DEFAULT_TOLERANCE, check_tolerance};
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point::CoulombSettings;
 
@@ -144,14 +144,11 @@ impl Settings {
                 return Ok(());
             }
             "certificate.tolerance" => {
-                self.certificate.tolerance = match text.trim().parse::<f64>() {
-                    Ok(t) if t.is_finite() && t > 0.0 => t,
-                    _ => {
-                        return Err(format!(
-                            "certificate.tolerance = '{text}' is invalid: give a positive number"
-                        ));
-                    }
-                };
+                let t = text.trim().parse::<f64>().map_err(|_| {
+                    format!("certificate.tolerance = '{text}' is invalid: give a number")
+                })?;
+                self.certificate.tolerance =
+                    check_tolerance(t).map_err(|m| format!("certificate.tolerance = {m}"))?;
                 return Ok(());
             }
             _ => {}
@@ -232,12 +229,8 @@ impl Settings {
         for e in registry::solvers() {
             self.build(e)?;
         }
-        let t = self.certificate.tolerance;
-        if !(t.is_finite() && t > 0.0) {
-            return Err(format!(
-                "certificate.tolerance = {t} is invalid: it must be a positive number (default {DEFAULT_TOLERANCE:e})"
-            ));
-        }
+        check_tolerance(self.certificate.tolerance)
+            .map_err(|m| format!("certificate.tolerance = {m}"))?;
         Ok(())
     }
 

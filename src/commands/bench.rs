@@ -22,8 +22,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         spec.runs = r as usize;
     }
     if let Some(b) = args.budget {
-        if !(b.is_finite() && b > 0.0) {
-            bail!("--budget = {b} is invalid: give a positive number of seconds");
+        if !(b > 0.0 && b <= crate::cli::MAX_SECONDS) {
+            bail!(
+                "--budget = {} is invalid: give a positive number of seconds up to a week ({})",
+                crate::mechanics::scene::Shown::shown(&b),
+                crate::cli::MAX_SECONDS
+            );
         }
         spec.budget = b;
     }

@@ -32,7 +32,7 @@ impl<'a> Budget<'a> {
         Self {
             work_stage: entry.work_stage,
             max_work,
-            deadline: seconds.map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0))),
+            deadline: seconds.and_then(deadline_after),
             work: 0,
             inner: Some(inner),
         }
@@ -43,7 +43,7 @@ impl<'a> Budget<'a> {
         Budget {
             work_stage: entry.work_stage,
             max_work,
-            deadline: seconds.map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0))),
+            deadline: seconds.and_then(deadline_after),
             work: 0,
             inner: None,
         }
@@ -53,6 +53,15 @@ impl<'a> Budget<'a> {
     pub fn work(&self) -> usize {
         self.work
     }
+}
+
+/// The instant `seconds` from now, or None (no deadline) when it lies
+/// beyond what the clock can represent: `Duration::from_secs_f64` panics
+/// past about 1.8e19 s and `Instant + Duration` past the clock's range.
+fn deadline_after(seconds: f64) -> Option<Instant> {
+    Duration::try_from_secs_f64(seconds.max(0.0))
+        .ok()
+        .and_then(|d| Instant::now().checked_add(d))
 }
 
 impl Observer for Budget<'_> {
@@ -94,5 +103,19 @@ impl Observer for Budget<'_> {
                 (a, b) => a.or(b),
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::deadline_after;
+
+    #[test]
+    fn a_deadline_past_the_clock_is_no_deadline_not_a_panic() {
+        for s in [1e19, 1e20, 1e300, f64::INFINITY, f64::NAN] {
+            let _ = deadline_after(s);
+        }
+        assert!(deadline_after(1e300).is_none());
+        assert!(deadline_after(10.0).is_some());
     }
 }

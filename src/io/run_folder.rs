@@ -5,10 +5,16 @@
 //! interrupted run leaves the previous run untouched; two runs at once leave
 //! the one that finished last, never a mix.
 //!
-//! A folder that exists, is not empty and was not written by contactlab is
-//! refused: it is replaced whole, so it must be ours.
+//! A folder that exists, is not empty and does not carry contactlab's own
+//! mark ([`MARKER`], with its exact content) is refused: it is replaced
+//! whole, so it must be ours. (Any `manifest.json` used to count as the
+//! mark, and `solve --out` into a browser extension's folder deleted its
+//! `background.js`.)
+//!
+//! The swap is made under a lock on the parent folder itself, held only
+//! for the swap, so that no lock file is left beside the run.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
@@ -17,6 +23,9 @@ use crate::io::output::write_new;
 
 /// The file that marks a folder as a contactlab run (it is replaced whole).
 pub const MARKER: &str = ".contactlab-run";
+
+/// The marker's content, checked byte for byte.
+const MARK: &[u8] = b"written by contactlab\n";
 
 /// A run being written.
 pub struct RunFolder {
@@ -30,6 +39,7 @@ impl RunFolder {
     /// creates the staging folder beside it (so that an unwritable place
     /// fails at once, before any computation).
     pub fn create(target: &Path) -> Result<Self> {
+        let target = &normalized(target)?;
         let shown = target.display();
         let name = target
             .file_name()
@@ -64,7 +74,7 @@ impl RunFolder {
             staging,
             committed: false,
         };
-        write_new(&folder.staging.join(MARKER), b"written by contactlab\n")
+        write_new(&folder.staging.join(MARKER), MARK)
             .with_context(|| format!("--out {shown}: the output folder cannot be written"))?;
         Ok(folder)
     }
@@ -81,33 +91,38 @@ impl RunFolder {
 
     /// Puts the finished run in place of whatever the target held.
     pub fn commit(mut self) -> Result<PathBuf> {
-        let lock = lock_file(&self.target)?;
+        let parent = match self.target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let lock = File::open(&parent)
+            .with_context(|| format!("cannot open {} to lock it", parent.display()))?;
         lock.lock()
-            .with_context(|| format!("cannot lock {}", self.target.display()))?;
+            .with_context(|| format!("cannot lock {}", parent.display()))?;
         check_replaceable(&self.target)?;
+        let mut old = None;
         if self.target.exists() {
-            match exchange(&self.staging, &self.target) {
-                Ok(()) => {}
-                Err(_) => {
-                    // No atomic exchange here: move the old run aside first.
-                    let old = self.staging.with_extension("old");
-                    std::fs::rename(&self.target, &old)
-                        .with_context(|| format!("cannot replace {}", self.target.display()))?;
-                    std::fs::rename(&self.staging, &self.target).with_context(|| {
-                        format!("cannot move the run to {}", self.target.display())
-                    })?;
-                    let _ = std::fs::remove_dir_all(&old);
-                    self.committed = true;
-                    return Ok(self.target.clone());
-                }
+            if exchange(&self.staging, &self.target).is_ok() {
+                // The staging path now holds the previous run.
+                old = Some(self.staging.clone());
+            } else {
+                // No atomic exchange here: move the old run aside first.
+                let aside = self.staging.with_extension("old");
+                std::fs::rename(&self.target, &aside)
+                    .with_context(|| format!("cannot replace {}", self.target.display()))?;
+                std::fs::rename(&self.staging, &self.target)
+                    .with_context(|| format!("cannot move the run to {}", self.target.display()))?;
+                old = Some(aside);
             }
-            // The staging path now holds the previous run.
-            let _ = std::fs::remove_dir_all(&self.staging);
         } else {
             std::fs::rename(&self.staging, &self.target)
                 .with_context(|| format!("cannot move the run to {}", self.target.display()))?;
         }
         self.committed = true;
+        drop(lock);
+        if let Some(old) = old {
+            let _ = std::fs::remove_dir_all(old);
+        }
         Ok(self.target.clone())
     }
 }
@@ -120,8 +135,25 @@ impl Drop for RunFolder {
     }
 }
 
+/// The target with `.` components dropped (`newdir/.` is `newdir`, which
+/// the final rename can replace), refused if it ends in `..` or is a root.
+fn normalized(target: &Path) -> Result<PathBuf> {
+    use std::path::Component;
+    let kept: PathBuf = target
+        .components()
+        .filter(|c| !matches!(c, Component::CurDir))
+        .collect();
+    match kept.components().next_back() {
+        Some(Component::Normal(_)) => Ok(kept),
+        _ => bail!(
+            "--out {}: give a folder name, not a root, `.` or `..`",
+            target.display()
+        ),
+    }
+}
+
 /// A target may be replaced if it does not exist, is an empty folder, or
-/// holds a contactlab run (its marker, or the manifest of older runs).
+/// carries contactlab's mark (the marker file with its exact content).
 fn check_replaceable(target: &Path) -> Result<()> {
     let shown = target.display();
     let meta = match std::fs::symlink_metadata(target) {
@@ -134,33 +166,15 @@ fn check_replaceable(target: &Path) -> Result<()> {
     let mut entries = std::fs::read_dir(target)
         .with_context(|| format!("--out {shown}: cannot read the existing folder"))?;
     let empty = entries.next().is_none();
-    let ours = target.join(MARKER).is_file() || target.join("manifest.json").is_file();
+    let ours = crate::io::guarded::read_small(&target.join(MARKER), MARK.len() as u64)
+        .is_ok_and(|bytes| bytes == MARK);
     if empty || ours {
         Ok(())
     } else {
         bail!(
-            "--out {shown} is a folder that contactlab did not write (each run replaces its output folder whole); choose a new or empty folder"
+            "--out {shown} is a folder that contactlab did not write (it lacks contactlab's {MARKER} mark, and each run replaces its output folder whole); choose a new or empty folder"
         )
     }
-}
-
-/// The lock file beside `target`, opened without following a symbolic link.
-fn lock_file(target: &Path) -> Result<File> {
-    let name = target
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let path = target.with_file_name(format!(".{name}.lock"));
-    let mut options = OpenOptions::new();
-    options.create(true).truncate(false).write(true);
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(libc::O_NOFOLLOW);
-    }
-    options
-        .open(&path)
-        .with_context(|| format!("cannot open the lock file {}", path.display()))
 }
 
 /// Swaps two directories atomically (Linux `renameat2` with
