@@ -51,7 +51,6 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
                 "solvers": spec.solvers.iter().map(|e| e.name).collect::<Vec<_>>(),
             }
         }),
-        folder.target(),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
     let report = views::report(&rows);

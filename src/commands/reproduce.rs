@@ -41,7 +41,6 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             "solvers": contactlab_solvers::registry::names(),
             "wall_seconds": seconds,
         }),
-        folder.target(),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
     let text = readme::render(&spec, &manifest, &outputs, seconds)?;

@@ -1,8 +1,6 @@
 //! `manifest.json`: what produced a results directory (commit, compiler,
 //! machine, date, command line, every setting).
 
-use std::process::Command;
-
 use serde::Serialize;
 
 use crate::settings::Settings;
@@ -11,8 +9,10 @@ use crate::settings::Settings;
 pub struct Manifest {
     pub command: Vec<String>,
     pub contactlab_version: &'static str,
+    /// The commit the binary was built from.
     pub git_commit: String,
-    /// Whether the working tree had uncommitted changes.
+    /// Whether the tracked sources had uncommitted changes when the binary
+    /// was built.
     pub git_dirty: Option<bool>,
     pub rustc: &'static str,
     pub cpu: String,
@@ -25,45 +25,29 @@ pub struct Manifest {
     pub run: serde_json::Value,
 }
 
-/// A git command's output in the working directory, if it succeeds.
-fn git(args: &[&str]) -> Option<String> {
-    Command::new("git")
-        .args(args)
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+/// The commit this binary was built from (`unknown` if it was not built
+/// in a git checkout), recorded by the build script.
+pub fn git_commit() -> String {
+    env!("CONTACTLAB_GIT_COMMIT").to_string()
 }
 
-/// The commit of the source this binary runs from (`unknown` outside a git
-/// checkout).
-pub fn git_commit() -> String {
-    git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into())
+/// Whether the tracked sources (results/ aside) differed from that commit
+/// when this binary was built; None if unknown.
+pub fn git_dirty() -> Option<bool> {
+    match env!("CONTACTLAB_GIT_DIRTY") {
+        "true" => Some(true),
+        "false" => Some(false),
+        _ => None,
+    }
 }
 
 impl Manifest {
-    /// `out`: the results directory, left out of the dirty check (it is
-    /// being rewritten).
-    pub fn collect(settings: &Settings, run: serde_json::Value, out: &std::path::Path) -> Self {
+    pub fn collect(settings: &Settings, run: serde_json::Value) -> Self {
         Self {
             command: std::env::args().collect(),
             contactlab_version: env!("CARGO_PKG_VERSION"),
             git_commit: git_commit(),
-            git_dirty: {
-                let mut args = vec![
-                    "status".to_string(),
-                    "--porcelain".into(),
-                    "--untracked-files=no".into(),
-                ];
-                if out.is_relative() {
-                    args.extend([
-                        "--".into(),
-                        ".".into(),
-                        format!(":(exclude){}", out.display()),
-                    ]);
-                }
-                git(&args.iter().map(String::as_str).collect::<Vec<_>>()).map(|s| !s.is_empty())
-            },
+            git_dirty: git_dirty(),
             rustc: env!("CONTACTLAB_RUSTC_VERSION"),
             cpu: cpu_model(),
             cores: std::thread::available_parallelism()

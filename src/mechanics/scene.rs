@@ -181,6 +181,20 @@ impl Scene {
     /// load, so that rounding cannot decide it (−5 on [3/5, 4/5] and 1 on
     /// [0, 1] sum to −4.4e-16, not 0).
     pub fn validate(&self) -> Result<(), SceneError> {
+        if let Some(c) = self.name.chars().find(|&c| !printable(c)) {
+            return Err(invalid(
+                "name",
+                format!("with U+{:04X}", c as u32),
+                "a scene's name is printed and written into every output: give printable text without control or bidirectional-override characters",
+            ));
+        }
+        if self.name.trim().is_empty() || self.name.chars().count() > MAX_NAME_CHARS {
+            return Err(invalid(
+                "name",
+                format!("of {} characters", self.name.chars().count()),
+                &format!("give a name of 1 to {MAX_NAME_CHARS} characters"),
+            ));
+        }
         let m = &self.material;
         if !(m.young >= MAGNITUDES.0 && m.young <= MAGNITUDES.1) {
             return Err(invalid(
@@ -275,6 +289,20 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// The longest scene name.
+pub const MAX_NAME_CHARS: usize = 200;
+
+/// Whether `c` may appear in a scene's name: not a control character (NUL,
+/// a newline, an escape) and not one that reorders text when printed
+/// (U+202E turns a terminal's line around).
+fn printable(c: char) -> bool {
+    !c.is_control()
+        && !matches!(
+            c,
+            '\u{200E}' | '\u{200F}' | '\u{061C}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}'
+        )
 }
 
 /// A coordinate given as a number or as a fraction string such as "1/3".
@@ -416,5 +444,14 @@ mod tests {
         bad(|s| s.loads[0].to = 1.5, "loads[0].to");
         bad(|s| s.loads[0].from = 0.5, "loads[0].to");
         bad(|s| s.levels.reverse(), "levels");
+        bad(|s| s.name = "a\u{0}b".into(), "name");
+        bad(|s| s.name = "two\nlines".into(), "name");
+        bad(|s| s.name = "abc\u{202E}fed".into(), "name");
+        bad(|s| s.name = "\u{1b}[31mred".into(), "name");
+        bad(|s| s.name = String::new(), "name");
+        bad(|s| s.name = "x".repeat(201), "name");
+        let mut s = Scene::paper_problem(1).unwrap();
+        s.name = "задача 1 (𝓕 = 0.5)".into();
+        s.validate().unwrap();
     }
 }
