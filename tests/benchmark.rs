@@ -9,6 +9,7 @@ use contactlab::settings::Settings;
 use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo};
 use contactlab::solvers::settings::{Validate, from_tree, parse_positive, to_tree};
 use contactlab::solvers::{ContactProblem, Law, Observer, Solution, Solver, Start, Status};
+use contactlab::study::benchmark::merge::{read_csv, read_shards};
 use contactlab::study::benchmark::views::{self, summaries};
 use contactlab::study::benchmark::{self, BenchmarkRow, BenchmarkSpec};
 
@@ -42,6 +43,31 @@ fn contactlab(args: &[&str]) {
         "{args:?}: {}",
         String::from_utf8_lossy(&o.stderr)
     );
+}
+
+/// Runs a command that must fail with one line naming `expected`.
+fn refused(args: &[&str], expected: &str) {
+    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{args:?}: exit code 0");
+    assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
+    assert!(
+        stderr.contains(expected),
+        "{args:?}: '{expected}' not in {stderr}"
+    );
+}
+
+/// A copy of shard folder `from` as `to`, with `benchmark.csv` edited.
+fn edited(from: &Path, to: &Path, edit: impl Fn(String) -> String) {
+    std::fs::create_dir(to).unwrap();
+    for f in ["manifest.json", "benchmark.csv"] {
+        std::fs::copy(from.join(f), to.join(f)).unwrap();
+    }
+    let csv = std::fs::read_to_string(to.join("benchmark.csv")).unwrap();
+    std::fs::write(to.join("benchmark.csv"), edit(csv)).unwrap();
 }
 
 fn header(path: &Path) -> Vec<String> {
@@ -97,7 +123,7 @@ fn quick_benchmark_writes_every_file_and_shards_merge_to_the_whole() {
     contactlab(&["benchmark", "--quick", "--shard", "1/2", "--out", &s("a")]);
     contactlab(&["benchmark", "--quick", "--shard", "2/2", "--out", &s("b")]);
     contactlab(&["benchmark-merge", &s("a"), &s("b"), "--out", &s("merged")]);
-    let rows = |d: &str| views::read_rows(&[p(d)]).unwrap();
+    let rows = |d: &str| read_csv(&p(d)).unwrap();
     let (a, b) = (rows("a"), rows("b"));
     assert!(!a.is_empty() && !b.is_empty());
     assert!(
@@ -111,8 +137,103 @@ fn quick_benchmark_writes_every_file_and_shards_merge_to_the_whole() {
             .join("charts/benchmark_profile_1e-4.svg")
             .is_file()
     );
-    // A shard merged twice is refused.
-    assert!(views::read_rows(&[p("a"), p("a")]).is_err());
+    // A merged folder is one whole run: it merges alone.
+    assert_eq!(
+        outcomes(&read_shards(&[p("merged")]).unwrap()),
+        outcomes(&rows("whole"))
+    );
+    // What does not make one whole run is refused, with one line.
+    let merge = |dirs: &[&str], expected: &str| {
+        let mut args = vec!["benchmark-merge".to_string()];
+        args.extend(dirs.iter().map(|d| s(d)));
+        args.extend(["--out".to_string(), s("never")]);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused(&args, expected);
+        assert!(!p("never").exists());
+    };
+    merge(&["a", "a"], "given twice");
+    merge(&["a"], "shards 2/2 are missing");
+    merge(&["a", "whole"], "different runs");
+    contactlab(&[
+        "benchmark",
+        "--quick",
+        "--shard",
+        "2/2",
+        "--time-limit",
+        "4",
+        "--out",
+        &s("b4"),
+    ]);
+    merge(&["a", "b4"], "different runs");
+    contactlab(&[
+        "benchmark",
+        "--quick",
+        "--shard",
+        "2/2",
+        "--targets",
+        "1e-4",
+        "--out",
+        &s("b1"),
+    ]);
+    merge(&["a", "b1"], "different runs");
+    // Rows that a run does not write.
+    let b = p("b");
+    edited(&b, &p("empty"), |csv| {
+        csv.lines().next().unwrap().to_string() + "\n"
+    });
+    merge(&["a", "empty"], "plans");
+    edited(&b, &p("short"), |csv| {
+        let lines: Vec<&str> = csv.lines().collect();
+        lines[..lines.len() - 1].join("\n") + "\n"
+    });
+    merge(&["a", "short"], "plans");
+    let failed_row = |csv: &str| {
+        csv.lines()
+            .position(|l| l.contains(",inaccurate,") || l.contains(",max_iterations,"))
+            .expect("a quick run has a failed row")
+    };
+    edited(&b, &p("liar"), |csv| {
+        let k = failed_row(&csv);
+        let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+        lines[k] = lines[k].replacen(",false,", ",true,", 1);
+        lines.join("\n") + "\n"
+    });
+    merge(&["a", "liar"], "success = true");
+    edited(&b, &p("nan"), |csv| {
+        let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+        let row = lines[1].clone();
+        let fields: Vec<&str> = row.split(',').collect();
+        // seconds is the 14th column; an empty field reads as NaN.
+        let mut f: Vec<String> = fields.iter().map(|x| x.to_string()).collect();
+        f[13] = "-1".into();
+        lines[1] = f.join(",");
+        lines.join("\n") + "\n"
+    });
+    merge(&["a", "nan"], "seconds = -1");
+    // A shard beyond the collection, and a certificate tolerance that the
+    // benchmark would not use.
+    refused(
+        &[
+            "benchmark",
+            "--quick",
+            "--shard",
+            "7/7",
+            "--out",
+            &s("never"),
+        ],
+        "has 6 instances",
+    );
+    refused(
+        &[
+            "benchmark",
+            "--quick",
+            "--certify-tol",
+            "1e-6",
+            "--out",
+            &s("never"),
+        ],
+        "--certify-tol does not apply",
+    );
 }
 
 /// A solver that claims convergence with no contact force at all: a wrong

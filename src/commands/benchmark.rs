@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 
 use crate::cli::{BenchmarkArgs, BenchmarkMergeArgs};
 use crate::commands::{StudyProgress, solver_list};
@@ -17,6 +17,11 @@ use crate::study::report::write_all;
 use crate::study::runner::{Measured, write_trials};
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
+    if args.settings.certificate_tolerance.is_some() {
+        bail!(
+            "--certify-tol does not apply to the benchmark: each run is certified at its target accuracy; give --targets instead"
+        );
+    }
     let settings = args.settings.resolve()?;
     let solvers = solver_list(&args.solvers)?;
     args.settings.check_used_by(&solvers)?;
@@ -72,10 +77,12 @@ pub fn write_run(dir: &Path, rows: &[BenchmarkRow], measured: &[Measured]) -> Re
 }
 
 pub fn merge(args: &BenchmarkMergeArgs) -> Result<()> {
-    let rows = views::read_rows(&args.shards)?;
+    let rows = benchmark::merge::read_shards(&args.shards)?;
+    let manifest = benchmark::merge::merged_manifest(&args.shards)?;
     let folder = RunFolder::create(&args.out)?;
     let dir = folder.path();
     write_atomic(&dir.join("benchmark.csv"), &to_csv(&rows, &[])?)?;
+    write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
     let charts = views::write(dir, &rows)?;
     write_all(&dir.join("charts"), &charts)?;
     let report = views::report(&rows);

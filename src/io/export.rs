@@ -284,7 +284,10 @@ fn read_contacts(path: &Path, m: usize) -> Result<Vec<ContactNode>> {
     let (file, _) =
         guarded::open(path).map_err(|reason| anyhow::anyhow!("cannot read {shown}: {reason}"))?;
     let mut contacts = Vec::with_capacity(m);
-    for (i, rec) in csv_reader(file).deserialize::<ContactRow>().enumerate() {
+    for (i, rec) in guarded::csv_reader(file)
+        .deserialize::<ContactRow>()
+        .enumerate()
+    {
         let c = rec.with_context(|| format!("{shown}: row {} does not parse", i + 1))?;
         if i >= m {
             bail!("{shown}: more than the {m} rows problem.json declares");
@@ -311,42 +314,6 @@ fn read_contacts(path: &Path, m: usize) -> Result<Vec<ContactNode>> {
         );
     }
     Ok(contacts)
-}
-
-/// A CSV reader whose records may be at most [`guarded::MAX_LINE_BYTES`]
-/// long, so that a file without line breaks is refused, not held whole.
-fn csv_reader(file: std::fs::File) -> csv::Reader<impl std::io::Read> {
-    csv::ReaderBuilder::new()
-        .buffer_capacity(8 * 1024)
-        .from_reader(LineBounded::new(file))
-}
-
-/// A reader that fails once a line grows past [`guarded::MAX_LINE_BYTES`].
-struct LineBounded<R> {
-    inner: R,
-    run: usize,
-}
-
-impl<R> LineBounded<R> {
-    fn new(inner: R) -> Self {
-        Self { inner, run: 0 }
-    }
-}
-
-impl<R: std::io::Read> std::io::Read for LineBounded<R> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let got = self.inner.read(buf)?;
-        for &b in &buf[..got] {
-            self.run = if b == b'\n' { 0 } else { self.run + 1 };
-            if self.run > guarded::MAX_LINE_BYTES {
-                return Err(std::io::Error::new(
-                    std::io::ErrorKind::InvalidData,
-                    format!("a line is longer than {} bytes", guarded::MAX_LINE_BYTES),
-                ));
-            }
-        }
-        Ok(got)
-    }
 }
 
 /// Reads the displacements of an `n`-unknown problem: a Matrix Market file
@@ -416,7 +383,10 @@ pub fn read_forces(path: &Path, m: usize) -> Result<(Vec<f64>, Vec<f64>)> {
         .map_err(|reason| anyhow::anyhow!("cannot read --forces {shown}: {reason}"))?;
     let mut p = Vec::new();
     let mut q = Vec::new();
-    for (i, rec) in csv_reader(file).deserialize::<ForceRow>().enumerate() {
+    for (i, rec) in guarded::csv_reader(file)
+        .deserialize::<ForceRow>()
+        .enumerate()
+    {
         let row = rec.with_context(|| {
             format!(
                 "--forces {shown}: row {} needs numbers in columns pressure and friction_traction",

@@ -147,6 +147,42 @@ impl<R: BufRead> Lines<R> {
     }
 }
 
+/// A CSV reader whose records may be at most [`MAX_LINE_BYTES`]
+/// long, so that a file without line breaks is refused, not held whole.
+pub fn csv_reader(file: std::fs::File) -> csv::Reader<impl std::io::Read> {
+    csv::ReaderBuilder::new()
+        .buffer_capacity(8 * 1024)
+        .from_reader(LineBounded::new(file))
+}
+
+/// A reader that fails once a line grows past [`MAX_LINE_BYTES`].
+struct LineBounded<R> {
+    inner: R,
+    run: usize,
+}
+
+impl<R> LineBounded<R> {
+    fn new(inner: R) -> Self {
+        Self { inner, run: 0 }
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for LineBounded<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let got = self.inner.read(buf)?;
+        for &b in &buf[..got] {
+            self.run = if b == b'\n' { 0 } else { self.run + 1 };
+            if self.run > MAX_LINE_BYTES {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("a line is longer than {} bytes", MAX_LINE_BYTES),
+                ));
+            }
+        }
+        Ok(got)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -15,6 +15,7 @@
 //! instance from the K-th, and [`views`] reads any set of shards' rows.
 
 pub mod collection;
+pub mod merge;
 pub mod views;
 
 use anyhow::Result;
@@ -37,7 +38,7 @@ pub const STUDY: &str = "benchmark";
 
 /// Which part of the collection a run covers: every `of`-th instance from
 /// the `index`-th (1-based, as `--shard K/N` is written).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
     pub index: usize,
     pub of: usize,
@@ -152,7 +153,19 @@ pub type Planned = (Instance, TrialSpec, f64);
 
 pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<Planned>> {
     let mut out = Vec::new();
-    for (i, inst) in collection(spec.quick)?.into_iter().enumerate() {
+    let instances = collection(spec.quick)?;
+    if spec.shard.of > instances.len() {
+        anyhow::bail!(
+            "--shard {}/{}: the {}collection has {} instances, so shards beyond the {}th would be empty; use at most {} shards",
+            spec.shard.index,
+            spec.shard.of,
+            if spec.quick { "quick " } else { "" },
+            instances.len(),
+            instances.len(),
+            instances.len()
+        );
+    }
+    for (i, inst) in instances.into_iter().enumerate() {
         if !spec.shard.contains(i) {
             continue;
         }

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use serde::Serialize;
 
 use crate::io::charts::{Chart, Series};
@@ -39,44 +39,6 @@ pub struct Summary {
     /// The same over the best solver's (1: the best).
     #[serde(serialize_with = "fixed")]
     pub relative_to_best: f64,
-}
-
-/// Reads the rows of `benchmark.csv` in each folder (shards), and checks
-/// that no (instance, solver, target) appears twice.
-pub fn read_rows(dirs: &[impl AsRef<Path>]) -> Result<Vec<BenchmarkRow>> {
-    let mut rows: Vec<BenchmarkRow> = Vec::new();
-    for d in dirs {
-        let path = d.as_ref().join("benchmark.csv");
-        let mut r = csv::Reader::from_path(&path).with_context(|| {
-            format!(
-                "cannot read {} (a folder written by `contactlab benchmark`?)",
-                path.display()
-            )
-        })?;
-        for rec in r.deserialize() {
-            rows.push(rec.with_context(|| format!("{}: a row does not parse", path.display()))?);
-        }
-    }
-    let mut keys: Vec<(String, String, String)> = rows
-        .iter()
-        .map(|r| {
-            (
-                r.instance.clone(),
-                r.solver.clone(),
-                format!("{:e}", r.target),
-            )
-        })
-        .collect();
-    keys.sort();
-    if let Some(w) = keys.windows(2).find(|w| w[0] == w[1]) {
-        bail!(
-            "instance {} with {} at target {} appears in two shards: merge each shard once",
-            w[0].0,
-            w[0].1,
-            w[0].2
-        );
-    }
-    Ok(rows)
 }
 
 fn targets(rows: &[BenchmarkRow]) -> Vec<f64> {
