@@ -43,6 +43,17 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
     let unknown_key = format!("{GOOD}colour = \"red\"\n");
     let bad_setting = format!("{GOOD}[solver.relaxation]\nr = -1.0\n");
     let bad_level = format!("levels = [\"1/3\"]\n{GOOD}");
+    // A certificate switched off by its tolerance, with a fixed point that
+    // stops at once.
+    let no_certificate =
+        format!("{GOOD}[coulomb]\nepsilon = 1e10\n[certificate]\ntolerance = 1e300\n");
+    // Condition (13) decided by rounding: -5 on [3/5, 4/5] and 1 on [0, 1]
+    // balance exactly, summed as -4.4e-16.
+    let balanced = "name = \"x\"\n[[loads]]\nfrom = \"3/5\"\nto = \"4/5\"\np2 = -5.0\n[[loads]]\nfrom = 0.0\nto = 1.0\np2 = 1.0\n";
+    let huge_load = GOOD.replace("-60.0", "-1e308");
+    let name_nul = GOOD.replace("name = \"x\"", "name = \"a\\u0000b\"");
+    let name_newline = GOOD.replace("name = \"x\"", "name = \"a\\nb\"");
+    let name_rlo = GOOD.replace("name = \"x\"", "name = \"abc\\u202Efed\"");
     let cases: Vec<(Input<'_>, &str)> = vec![
         (
             Input::Args(&["info", "--problem", "4"]),
@@ -258,6 +269,60 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
         (Input::Scene(bad_setting.as_bytes(), &[]), "relaxation.r"),
         (Input::Scene(bad_level.as_bytes(), &[]), "power-of-two"),
         (Input::Scene(b"", &[]), "missing field"),
+        (
+            Input::Scene(no_certificate.as_bytes(), &["--solver", "relaxation"]),
+            "certificate.tolerance = 1e300 is invalid",
+        ),
+        (
+            Input::Args(&[
+                "solve",
+                "--problem",
+                "1",
+                "--h",
+                "1/8",
+                "--certify-tol",
+                "1e300",
+            ]),
+            "--certify-tol",
+        ),
+        (Input::Scene(balanced.as_bytes(), &[]), "nearly balance"),
+        (Input::Scene(huge_load.as_bytes(), &[]), "loads[0].p2"),
+        (Input::Scene(name_nul.as_bytes(), &[]), "U+0000"),
+        (Input::Scene(name_newline.as_bytes(), &[]), "U+000A"),
+        (Input::Scene(name_rlo.as_bytes(), &[]), "U+202E"),
+        (
+            Input::Args(&[
+                "benchmark",
+                "--quick",
+                "--time-limit",
+                "1e19",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
+            "--time-limit",
+        ),
+        (
+            Input::Args(&[
+                "benchmark",
+                "--quick",
+                "--time-limit",
+                "1e20",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
+            "--time-limit",
+        ),
+        (
+            Input::Args(&[
+                "bench",
+                "--quick",
+                "--budget",
+                "1e19",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]),
+            "--budget",
+        ),
     ];
     for (input, expected) in &cases {
         let o = run(input, dir.path());

@@ -413,3 +413,94 @@ fn a_huge_load_is_solved_not_called_unbounded() {
         "{stdout}"
     );
 }
+
+/// Only a folder with contactlab's own mark is replaced: a folder holding a
+/// manifest.json of someone else's (a browser extension) lost its
+/// background.js to `solve --out`. A run leaves no lock file beside its
+/// folder, and `--out newdir/.` is the folder newdir.
+#[test]
+fn only_contactlabs_own_folders_are_replaced_and_nothing_is_left_beside_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let webext = dir.path().join("webext");
+    std::fs::create_dir(&webext).unwrap();
+    std::fs::write(webext.join("manifest.json"), b"{\"manifest_version\": 3}").unwrap();
+    std::fs::write(webext.join("background.js"), b"chrome.runtime").unwrap();
+    let o = contactlab()
+        .args(SOLVE)
+        .arg("--out")
+        .arg(&webext)
+        .output()
+        .unwrap();
+    one_line_error(&o, "--out a folder with a manifest.json", "did not write");
+    assert_eq!(
+        std::fs::read(webext.join("background.js")).unwrap(),
+        b"chrome.runtime"
+    );
+    // A marker with other content is not the mark.
+    std::fs::write(webext.join(".contactlab-run"), b"not ours").unwrap();
+    let o = contactlab()
+        .args(SOLVE)
+        .arg("--out")
+        .arg(&webext)
+        .output()
+        .unwrap();
+    one_line_error(&o, "--out a folder with a forged marker", "did not write");
+    assert!(webext.join("background.js").is_file());
+    // newdir/. is newdir; twice, so that the second replaces the first.
+    let here = dir.path().join("runs");
+    std::fs::create_dir(&here).unwrap();
+    for _ in 0..2 {
+        let o = contactlab()
+            .args(SOLVE)
+            .arg("--out")
+            .arg(here.join("newdir").join("."))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let left: Vec<String> = std::fs::read_dir(&here)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(left, ["newdir"], "only the run, no lock or staging file");
+    assert!(here.join("newdir/summary.json").is_file());
+}
+
+/// The commit recorded is the one the binary was built from, not the HEAD
+/// of whatever repository the user runs it in.
+#[test]
+fn provenance_is_the_binarys_commit_wherever_it_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let git = |args: &[&str]| {
+        Command::new("git")
+            .args(args)
+            .current_dir(dir.path())
+            .env("GIT_AUTHOR_NAME", "x")
+            .env("GIT_AUTHOR_EMAIL", "x@x")
+            .env("GIT_COMMITTER_NAME", "x")
+            .env("GIT_COMMITTER_EMAIL", "x@x")
+            .output()
+            .unwrap()
+    };
+    git(&["init", "-q"]);
+    std::fs::write(dir.path().join("a"), b"a").unwrap();
+    git(&["add", "a"]);
+    git(&["commit", "-qm", "other"]);
+    let other = String::from_utf8_lossy(&git(&["rev-parse", "HEAD"]).stdout)
+        .trim()
+        .to_string();
+    let o = contactlab()
+        .current_dir(dir.path())
+        .args(SOLVE)
+        .args(["--out", "run"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("run/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let recorded = summary["git_commit"].as_str().unwrap();
+    assert_eq!(recorded, contactlab::io::manifest::git_commit());
+    assert_ne!(recorded, other);
+}

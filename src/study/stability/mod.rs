@@ -22,6 +22,7 @@ use serde::Serialize;
 use serde_json::Value;
 
 use crate::io::csv::{fixed, fixed_opt};
+use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
@@ -220,6 +221,16 @@ pub fn run(
             map.trials.push(refused);
             let mut bypass = t.unchecked();
             bypass.group = "refused_check_bypassed".into();
+            // A load that balances to rounding is refused by the algebraic
+            // problem's own check too (its net load is no scale to measure
+            // the contact in): recorded as refused, not solved.
+            if let Err(e) = Discretization::new_unchecked(&scene, spec.h) {
+                let mut refused = Trial::not_run(&bypass, Status::NotRun, e.to_string());
+                refused.class = Class::Refused.as_str().into();
+                refused.reason = format!("the algebraic problem's check: {e}");
+                map.trials.push(refused);
+                continue;
+            }
             one(&mut map, bypass, Context::default())?;
         }
     }
