@@ -280,11 +280,20 @@ pub fn import(dir: &Path) -> Result<ContactProblem> {
 
 /// Reads exactly `m` rows of `contact.csv`, node i on row i.
 fn read_contacts(path: &Path, m: usize) -> Result<Vec<ContactNode>> {
-    let shown = path.display();
-    let (file, _) =
-        guarded::open(path).map_err(|reason| anyhow::anyhow!("cannot read {shown}: {reason}"))?;
+    let (file, _) = guarded::open(path)
+        .map_err(|reason| anyhow::anyhow!("cannot read {}: {reason}", path.display()))?;
+    contacts_from(file, m, &path.display().to_string())
+}
+
+/// The rows of a `contact.csv` read from `source` (named `shown` in
+/// messages): exactly `m`, node i on row i.
+pub fn contacts_from(
+    source: impl std::io::Read,
+    m: usize,
+    shown: &str,
+) -> Result<Vec<ContactNode>> {
     let mut contacts = Vec::with_capacity(m);
-    for (i, rec) in guarded::csv_reader(file)
+    for (i, rec) in guarded::csv_reader(source)
         .deserialize::<ContactRow>()
         .enumerate()
     {
@@ -378,30 +387,40 @@ pub struct ForceRow {
 /// columns `pressure,friction_traction`, others ignored, one row per node
 /// in the order of `contact.csv`).
 pub fn read_forces(path: &Path, m: usize) -> Result<(Vec<f64>, Vec<f64>)> {
-    let shown = path.display();
-    let (file, _) = guarded::open(path)
-        .map_err(|reason| anyhow::anyhow!("cannot read --forces {shown}: {reason}"))?;
+    let shown = format!("--forces {}", path.display());
+    let (file, _) =
+        guarded::open(path).map_err(|reason| anyhow::anyhow!("cannot read {shown}: {reason}"))?;
+    forces_from(file, m, &shown)
+}
+
+/// The forces of `m` contact nodes read from `source` (named `shown` in
+/// messages).
+pub fn forces_from(
+    source: impl std::io::Read,
+    m: usize,
+    shown: &str,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let mut p = Vec::new();
     let mut q = Vec::new();
-    for (i, rec) in guarded::csv_reader(file)
+    for (i, rec) in guarded::csv_reader(source)
         .deserialize::<ForceRow>()
         .enumerate()
     {
         let row = rec.with_context(|| {
             format!(
-                "--forces {shown}: row {} needs numbers in columns pressure and friction_traction",
+                "{shown}: row {} needs numbers in columns pressure and friction_traction",
                 i + 1
             )
         })?;
         if i >= m {
-            bail!("--forces {shown}: more than the problem's {m} contact nodes");
+            bail!("{shown}: more than the problem's {m} contact nodes");
         }
         p.push(row.pressure);
         q.push(row.friction_traction);
     }
     if p.len() != m {
         bail!(
-            "--forces {shown}: {} rows, the problem has {m} contact nodes",
+            "{shown}: {} rows, the problem has {m} contact nodes",
             p.len()
         );
     }

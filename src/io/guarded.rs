@@ -149,10 +149,10 @@ impl<R: BufRead> Lines<R> {
 
 /// A CSV reader whose records may be at most [`MAX_LINE_BYTES`]
 /// long, so that a file without line breaks is refused, not held whole.
-pub fn csv_reader(file: std::fs::File) -> csv::Reader<impl std::io::Read> {
+pub fn csv_reader<R: Read>(source: R) -> csv::Reader<impl Read> {
     csv::ReaderBuilder::new()
         .buffer_capacity(8 * 1024)
-        .from_reader(LineBounded::new(file))
+        .from_reader(LineBounded::new(source))
 }
 
 /// A reader that fails once a line grows past [`MAX_LINE_BYTES`].

@@ -46,6 +46,11 @@ pub struct Scene {
 /// an objective of NaN, loads × 1e150 once made the Newton solvers fail).
 pub const MAGNITUDES: (f64, f64) = (1e-50, 1e50);
 
+/// The largest friction coefficient a scene may have: physical
+/// coefficients are below about 2 and the stability map studies up to 64;
+/// at 1e300 the bound 𝓕p overflowed.
+pub const MAX_FRICTION: f64 = 1e3;
+
 /// The paper's friction coefficient.
 pub fn default_friction() -> f64 {
     0.5
@@ -213,13 +218,16 @@ impl Scene {
                 "Poisson's ratio must lie in (-1, 0.5) (the paper: 0.34)",
             ));
         }
-        if !(self.friction.is_finite() && self.friction >= 0.0)
-            || (self.friction != 0.0 && !self.friction.is_normal())
+        if !(self.friction == 0.0
+            || (self.friction >= MAGNITUDES.0 && self.friction <= MAX_FRICTION))
         {
             return Err(invalid(
                 "friction (--friction)",
                 self.friction,
-                "the friction coefficient must be a number ≥ 0 (the paper: 0.5; 0 is frictionless)",
+                &format!(
+                    "the friction coefficient must be 0 (frictionless) or lie in [{:e}, {MAX_FRICTION:e}] (the paper: 0.5; the stability map goes to 64)",
+                    MAGNITUDES.0
+                ),
             ));
         }
         if self.loads.is_empty() {

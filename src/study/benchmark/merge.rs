@@ -77,14 +77,17 @@ pub fn read_csv(dir: &Path) -> Result<Vec<BenchmarkRow>> {
             path.display()
         )
     })?;
+    rows_from(file, &path.display().to_string())
+}
+
+/// The rows of a `benchmark.csv` read from `source` (named `shown`).
+pub fn rows_from(source: impl std::io::Read, shown: &str) -> Result<Vec<BenchmarkRow>> {
     let mut rows = Vec::new();
-    for (i, rec) in guarded::csv_reader(file)
+    for (i, rec) in guarded::csv_reader(source)
         .deserialize::<BenchmarkRow>()
         .enumerate()
     {
-        rows.push(
-            rec.with_context(|| format!("{}: row {} does not parse", path.display(), i + 1))?,
-        );
+        rows.push(rec.with_context(|| format!("{shown}: row {} does not parse", i + 1))?);
     }
     Ok(rows)
 }
