@@ -2,6 +2,8 @@
 //! columns; two shards merged give the runs of the whole; and a solver that
 //! claims success on a wrong answer is counted as a failure and listed.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -47,17 +49,8 @@ fn contactlab(args: &[&str]) {
 
 /// Runs a command that must fail with one line naming `expected`.
 fn refused(args: &[&str], expected: &str) {
-    let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args(args)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{args:?}: exit code 0");
-    assert_eq!(stderr.trim().lines().count(), 1, "{args:?}: {stderr}");
-    assert!(
-        stderr.contains(expected),
-        "{args:?}: '{expected}' not in {stderr}"
-    );
+    let o = common::contactlab().args(args).output().unwrap();
+    common::one_line_error(&o, &args.join(" "), expected);
 }
 
 /// A copy of shard folder `from` as `to`, with `benchmark.csv` edited.

@@ -6,44 +6,12 @@
 //! panic, a hang or a mix of two runs.
 
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
-fn contactlab() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_contactlab"))
-}
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
-/// Runs with a deadline: a hang is a failure, not a stuck test.
-fn run_with_deadline(mut cmd: Command, seconds: u64) -> Output {
-    let mut child = cmd
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > Duration::from_secs(seconds) {
-            let _ = child.kill();
-            panic!("{cmd:?} did not finish within {seconds} s");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-fn one_line_error(o: &Output, what: &str, expected: &str) {
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{what}: exit code 0");
-    assert!(!stderr.contains("panicked"), "{what}: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{what}: not one line: {stderr}");
-    assert!(
-        stderr.contains(expected),
-        "{what}: '{expected}' not in {stderr}"
-    );
-}
+use common::{contactlab, one_line_error, run_with_deadline};
 
 const SOLVE: [&str; 5] = ["solve", "--problem", "1", "--h", "1/8"];
 

@@ -6,8 +6,11 @@
 //! never a panic, an abort on a huge allocation, or a hang.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+mod common;
+
+use std::process::{Command, Output};
+
+use common::{contactlab, one_line_error, run_with_deadline};
 
 use contactlab::coulomb::driver::solve_scene;
 use contactlab::mechanics::mesh_size::MeshSize;
@@ -15,38 +18,11 @@ use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::Silent;
 
-/// Runs with a deadline: a hang is a failure, not a stuck test.
+/// Runs contactlab with `args` and a deadline.
 fn run(args: &[&str]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("{args:?} did not finish within 30 s");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-fn one_line_error(o: &Output, what: &str, expected: &str) {
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{what}: exit code 0");
-    assert!(!stderr.contains("panicked"), "{what}: {stderr}");
-    assert!(!stderr.contains("memory allocation"), "{what}: {stderr}");
-    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "{what}: not one line: {stderr}");
-    assert!(
-        stderr.contains(expected),
-        "{what}: '{expected}' not in {stderr}"
-    );
+    let mut cmd = contactlab();
+    cmd.args(args);
+    run_with_deadline(cmd, 30)
 }
 
 struct Fixture {

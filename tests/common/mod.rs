@@ -1,0 +1,47 @@
+//! What the command-line tests share: the binary, a run with a deadline
+//! (a hang is a failure, not a stuck test), and the shape every refusal
+//! must have (one line on stderr, a non-zero exit, no panic).
+#![allow(dead_code)]
+
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// The contactlab binary under test.
+pub fn contactlab() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_contactlab"))
+}
+
+/// Runs `cmd`, failing the test if it takes more than `seconds`.
+pub fn run_with_deadline(mut cmd: Command, seconds: u64) -> Output {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > Duration::from_secs(seconds) {
+            let _ = child.kill();
+            panic!("{cmd:?} did not finish within {seconds} s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// A refusal: a non-zero exit and one line on stderr that names `expected`,
+/// with no panic and no failed allocation.
+pub fn one_line_error(o: &Output, what: &str, expected: &str) {
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{what}: exit code 0");
+    assert!(!stderr.contains("panicked"), "{what}: {stderr}");
+    assert!(!stderr.contains("memory allocation"), "{what}: {stderr}");
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{what}: not one line: {stderr}");
+    assert!(
+        stderr.contains(expected),
+        "{what}: '{expected}' not in {stderr}"
+    );
+}
