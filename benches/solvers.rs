@@ -9,7 +9,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::linalg::SparseCholesky;
+use contactlab::solvers::numerics::linalg::SparseCholesky;
 use contactlab::solvers::{Silent, registry};
 use contactlab::study::bench::pinned;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};

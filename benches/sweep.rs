@@ -6,7 +6,7 @@
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
-use contactlab::solvers::linalg::spmv_into;
+use contactlab::solvers::numerics::linalg::spmv_into;
 use contactlab::solvers::registry;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;

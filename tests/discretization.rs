@@ -8,7 +8,7 @@ use contactlab::mechanics::material::{Material, PlaneModel};
 use contactlab::mechanics::mesh::{Body, Mesh};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, SceneError, Traction};
-use contactlab::solvers::linalg::{SparseCholesky, kernel_dimension, max_abs, spmv};
+use contactlab::solvers::numerics::linalg::{SparseCholesky, kernel_dimension, max_abs, spmv};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 fn h(k: u32) -> MeshSize {

@@ -8,7 +8,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
-use contactlab::solvers::newton::{NewtonSettings, semismooth_newton};
+use contactlab::solvers::newton::tresca::{NewtonSettings, semismooth_newton};
 use contactlab::solvers::{
     CondensedNewton, ContactNode, ContactProblem, Law, Silent, Solver, Status,
 };

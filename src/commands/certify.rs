@@ -2,12 +2,12 @@
 //! for a problem written by `contactlab export`. The answer is the
 //! displacements (contact forces then follow from stationarity at the
 //! contact rows), the contact forces per node (displacements then follow
-//! from the elastic response, [`contactlab_solvers::dual::displacements_from_forces`]),
+//! from the elastic response, [`contactlab_solvers::reduction::dual::displacements_from_forces`]),
 //! or both. An answer that fails is a non-zero exit.
 
 use anyhow::{Result, bail};
 use contactlab_solvers::Law;
-use contactlab_solvers::dual::displacements_from_forces;
+use contactlab_solvers::reduction::dual::displacements_from_forces;
 
 use crate::certificate::certify;
 use crate::cli::CertifyArgs;

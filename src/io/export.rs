@@ -20,7 +20,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use contactlab_solvers::condensed::condense;
+use contactlab_solvers::reduction::condensed::condense;
 use contactlab_solvers::{ContactNode, ContactProblem};
 use nalgebra_sparse::io::save_to_matrix_market_str;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};

@@ -147,7 +147,7 @@ fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
     let vf = &reference.coulomb.solution.v;
     let p = &df.problem;
     let norm = |m, v: &[f64]| {
-        let mv = crate::solvers::linalg::spmv(m, v);
+        let mv = crate::solvers::numerics::linalg::spmv(m, v);
         v.iter()
             .zip(&mv)
             .map(|(a, b)| a * b)

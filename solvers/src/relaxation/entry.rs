@@ -3,8 +3,8 @@
 
 use super::pointwise::{self, RelaxationOperator, SweepData};
 use super::{ProxUzawa, RelaxationSettings};
+use crate::entry::{Accuracy, Entry, InnerKernel, Knob, Role, StageInfo, Variation};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, InnerKernel, Knob, Role, StageInfo, Variation};
 use crate::settings::{from_tree, parse_positive, parse_scalar, to_tree};
 use crate::solver::Law;
 

@@ -207,7 +207,7 @@ impl RelaxationOperator {
         for j in 0..v.len() {
             let (lo, hi) = (offsets[j], offsets[j + 1]);
             // SAFETY: a CsrMatrix keeps its column indices below ncols = v.len().
-            let sum = unsafe { crate::linalg::row_dot(&cols[lo..hi], &vals[lo..hi], v) };
+            let sum = unsafe { crate::numerics::linalg::row_dot(&cols[lo..hi], &vals[lo..hi], v) };
             let a = self.diag[j];
             let old = v[j];
             // Gradient of the quadratic part without the diagonal term.
@@ -277,14 +277,6 @@ mod tests {
         0.5 * (lo + hi)
     }
 
-    /// Deterministic pseudo-random numbers in [0, 1) (no dependency).
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
-
     fn check(x: f64, f: &impl Fn(f64) -> f64, brute: f64, what: &str) {
         // The closed form must be at least as good as brute force and close to it.
         let scale = 1.0 + brute.abs();
@@ -300,17 +292,17 @@ mod tests {
 
     #[test]
     fn jump_minimizer_matches_brute_force_on_random_data() {
-        let mut s = 7u64;
+        let mut s = crate::numerics::random::Lcg::new(7);
         for case in 0..2000 {
-            let a = 0.1 + 10.0 * lcg(&mut s);
-            let c = 20.0 * (lcg(&mut s) - 0.5);
-            let w = 0.01 + lcg(&mut s);
+            let a = 0.1 + 10.0 * s.uniform();
+            let c = 20.0 * (s.uniform() - 0.5);
+            let w = 0.01 + s.uniform();
             let l = if case % 3 == 0 {
                 0.0
             } else {
-                30.0 * lcg(&mut s)
+                30.0 * s.uniform()
             };
-            let r = 10f64.powf(-2.0 + 6.0 * lcg(&mut s));
+            let r = 10f64.powf(-2.0 + 6.0 * s.uniform());
             let f = |x: f64| 0.5 * a * x * x + c * x + w / (2.0 * r) * (l + r * x).max(0.0).powi(2);
             let x = minimize_jump(a, c, w, l, r);
             let bound = 10.0 * (c.abs() + w * l + 1.0) / a;
@@ -340,16 +332,16 @@ mod tests {
 
     #[test]
     fn slip_minimizers_match_brute_force_on_random_data() {
-        let mut s = 11u64;
+        let mut s = crate::numerics::random::Lcg::new(11);
         for case in 0..2000 {
-            let a = 0.1 + 10.0 * lcg(&mut s);
-            let c = 20.0 * (lcg(&mut s) - 0.5);
+            let a = 0.1 + 10.0 * s.uniform();
+            let c = 20.0 * (s.uniform() - 0.5);
             let wg = if case % 5 == 0 {
                 0.0
             } else {
-                10.0 * lcg(&mut s)
+                10.0 * s.uniform()
             };
-            let delta = 10f64.powf(-4.0 + 3.0 * lcg(&mut s));
+            let delta = 10f64.powf(-4.0 + 3.0 * s.uniform());
             let bound = 10.0 * (c.abs() + wg + 1.0) / a;
             let exact = |x: f64| 0.5 * a * x * x + c * x + wg * x.abs();
             check(

@@ -26,7 +26,7 @@ pub fn contact_residual(
     let (u, p) = (s.displacement, s.pressure);
     let contacts = problem.contacts();
     let w_max = contacts.iter().fold(0.0f64, |m, c| m.max(c.weight));
-    crate::linalg::spmv_into(problem.a(), v, r);
+    crate::numerics::linalg::spmv_into(problem.a(), v, r);
     for (ri, fi) in r.iter_mut().zip(problem.f()) {
         *ri -= fi;
     }

@@ -14,7 +14,7 @@ pub mod memory;
 use std::time::Instant;
 
 use anyhow::Result;
-use contactlab_solvers::linalg::{SparseCholesky, spmv_into};
+use contactlab_solvers::numerics::linalg::{SparseCholesky, spmv_into};
 use contactlab_solvers::{Law, registry};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::Serialize;

@@ -4,7 +4,7 @@
 //! frictional contact in multibody codes).
 //!
 //! The given-friction subproblem's dual, with the semicoercive mode kept
-//! exactly ([`crate::dual`]): the forces r = (λ_i, ν_i) minimize
+//! exactly ([`crate::reduction::dual`]): the forces r = (λ_i, ν_i) minimize
 //!
 //! ```text
 //! D(r) = ½ (b̂ − r)ᵀ M (b̂ − r)   over  λ_i ≥ 0, |ν_i| ≤ G_i,  ẑᵀ(b̂ − r) = 0,
@@ -24,12 +24,12 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::{Condensed, Ending, Kept, condense};
-use crate::dual::DualOperator;
-use crate::nsgs::monotone_root;
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
+use crate::reduction::dual::DualOperator;
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };

@@ -4,7 +4,7 @@
 //!
 //! On the contact unknowns y = (t_i, s_i) the condensed equations are
 //! S y = b̂ − r, with r = (λ_i at t_i, −μ_i at s_i) the nodal contact and
-//! friction forces (see [`crate::condensed`]). The usual "local" form
+//! friction forces (see [`crate::reduction::condensed`]). The usual "local" form
 //! y = W(b̂ − r), W = S⁻¹ (the Delassus operator), does not exist here: the
 //! upper body's vertical translation z_C (the rigid mode on the contact
 //! unknowns: t_i = −1, s_i = 0) is in the kernel of S and moves every jump at
@@ -26,8 +26,8 @@
 use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, Side};
 
-use crate::condensed::Condensed;
 use crate::problem::ContactProblem;
+use crate::reduction::condensed::Condensed;
 
 /// The contact problem in the contact forces (2m unknowns r, plus β).
 pub struct DualOperator {
@@ -185,7 +185,7 @@ pub fn displacements_from_forces(
             q.len()
         ));
     }
-    let condensed = crate::condensed::condense(problem)?;
+    let condensed = crate::reduction::condensed::condense(problem)?;
     let op = DualOperator::new(problem, &condensed)?;
     let r: Vec<f64> = problem
         .contacts()

@@ -11,7 +11,7 @@
 //! with φ the Fischer-Burmeister function and the Billups box function for
 //! the friction (Fischer 1992, Billups 1995; the natural-map / FB form of the
 //! Coulomb problem of Acary, Brémond & Huber 2018, section 3), on the contact
-//! unknowns after the condensation (reused from [`crate::condensed`]). The
+//! unknowns after the condensation (reused from [`crate::reduction::condensed`]). The
 //! Jacobian holds ∂Φ_F/∂λ = 𝓕 ∂Φ_F/∂G, the coupling the successive
 //! approximations leave out; it is assembled densely (4m × 4m) and solved by
 //! LU with partial pivoting.
@@ -32,11 +32,13 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::{Condensed, Kept, condense};
-use crate::newton::{billups_with_bound, descends, fb};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::numerics::globalization::{Units, armijo, direction, merit};
+use crate::numerics::ncp::{billups, fb};
+use crate::numerics::random::Lcg;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::reduction::condensed::{Condensed, Kept, condense};
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -209,7 +211,7 @@ impl System<'_> {
             phi[2 * i + 1] -= mu[i];
             phi[2 * m + i] = fb(lam[i], -self.kappa * y[2 * i]).0;
             let g = self.coefficient[i] * lam[i].max(0.0);
-            phi[3 * m + i] = billups_with_bound(mu[i], self.kappa * y[2 * i + 1], g).0;
+            phi[3 * m + i] = billups(mu[i], self.kappa * y[2 * i + 1], g).0;
         }
         phi
     }
@@ -221,7 +223,7 @@ impl System<'_> {
         let (y, lam, mu) = (&x[..2 * m], x[2 * m + i], x[3 * m + i]);
         let (_, a, b) = fb(lam, -self.kappa * y[2 * i]);
         let g = self.coefficient[i] * lam.max(0.0);
-        let (_, dmu, df, dg) = billups_with_bound(mu, self.kappa * y[2 * i + 1], g);
+        let (_, dmu, df, dg) = billups(mu, self.kappa * y[2 * i + 1], g);
         NodeDerivatives {
             n_lam: a,
             n_t: -self.kappa * b,
@@ -337,11 +339,7 @@ struct NodeDerivatives {
 }
 
 fn norm_inf(x: &[f64]) -> f64 {
-    x.iter().fold(0.0f64, |a, v| a.max(v.abs()))
-}
-
-fn merit(phi: &[f64]) -> f64 {
-    0.5 * phi.iter().map(|v| v * v).sum::<f64>()
+    crate::numerics::linalg::max_abs(x)
 }
 
 /// The outcome of the Newton iteration.
@@ -358,10 +356,11 @@ fn newton(
     sys: &System<'_>,
     mut x: Vec<f64>,
     settings: &NewtonCoulombSettings,
-    scale: f64,
+    units: &Units,
     observer: &mut dyn Observer,
     t0: Instant,
 ) -> Outcome {
+    let scale = units.scale;
     let mut phi = sys.residual(&x);
     let mut psi = merit(&phi);
     let finish = |x, status, detail, steps, jacobian| Outcome {
@@ -392,26 +391,19 @@ fn newton(
             return finish(x, Status::Converged, detail, step - 1, j);
         }
         let (newton_dir, grad) = sys.direction(&x, &phi);
-        let slope = |d: &[f64]| d.iter().zip(&grad).map(|(a, b)| a * b).sum::<f64>();
-        let dir = match newton_dir {
-            Some(d) if !settings.line_search => d,
-            Some(d) if descends(slope(&d), &d, 2 * sys.m(), sys.kappa, scale) => d,
-            _ => grad.iter().map(|x| -x).collect(),
+        let (dir, slope) = direction(newton_dir, &grad, units, settings.line_search);
+        let trial = |alpha: f64| {
+            let x1: Vec<f64> = x.iter().zip(&dir).map(|(a, d)| a + alpha * d).collect();
+            let phi1 = sys.residual(&x1);
+            (merit(&phi1), (x1, phi1))
         };
-        let g0 = slope(&dir);
-        let mut alpha = 1.0;
-        loop {
-            let trial: Vec<f64> = x.iter().zip(&dir).map(|(a, d)| a + alpha * d).collect();
-            let phi1 = sys.residual(&trial);
-            let psi1 = merit(&phi1);
-            if !settings.line_search || (psi1.is_finite() && psi1 <= psi + 1e-4 * alpha * g0) {
-                x = trial;
+        match armijo(psi, slope, settings.line_search, trial) {
+            Some((psi1, (x1, phi1))) => {
+                x = x1;
                 phi = phi1;
                 psi = psi1;
-                break;
             }
-            alpha *= 0.5;
-            if alpha < 1e-14 {
+            None => {
                 let detail = format!(
                     "line search failed at Newton step {step} (residual {r:.2e}): a stationary point of the merit that is not a solution"
                 );
@@ -476,15 +468,11 @@ fn closed_start(b: &[f64], m: usize) -> Vec<f64> {
     x
 }
 
-/// Multiplies every force by (1 + p·u), u pseudo-random in [−1, 1].
+/// Multiplies every force by (1 + p·u), u pseudo-random in [−1, 1).
 fn perturb(x: &mut [f64], m: usize, p: f64, seed: u64) {
-    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    let mut random = Lcg::new(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
     for v in &mut x[2 * m..] {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let u = (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0;
-        *v *= 1.0 + p * u;
+        *v *= 1.0 + p * random.symmetric();
     }
 }
 
@@ -512,18 +500,13 @@ impl Solver for NewtonCoulomb {
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let kappa = {
-            let d =
-                (0..2 * m).map(|k| condensed.s[(k, k)].abs()).sum::<f64>() / (2 * m).max(1) as f64;
-            if d > 0.0 { d } else { 1.0 }
-        };
-        let scale = norm_inf(&condensed.b).max(f64::MIN_POSITIVE);
+        let units = Units::of_condensed(&condensed.s, &condensed.b);
         let coefficient: Vec<f64> = contacts.iter().map(|c| c.coefficient).collect();
         let sys = System {
             s: &condensed.s,
             b: &condensed.b,
             coefficient: &coefficient,
-            kappa,
+            kappa: units.kappa,
         };
         let mut x = match start {
             Some(st) if st.v.len() == n && st.pressure.len() == m => {
@@ -550,7 +533,7 @@ impl Solver for NewtonCoulomb {
                 &frictionless,
                 x.clone(),
                 &self.settings,
-                scale,
+                &units,
                 &mut crate::observer::Silent,
                 t1,
             );
@@ -562,7 +545,7 @@ impl Solver for NewtonCoulomb {
         if self.settings.perturbation > 0.0 {
             perturb(&mut x, m, self.settings.perturbation, self.settings.seed);
         }
-        let out = newton(&sys, x, &self.settings, scale, observer, t1);
+        let out = newton(&sys, x, &self.settings, &units, observer, t1);
         let mut diagnostics = condensed.memory_diagnostics().to_vec();
         if let Some(j) = &out.jacobian
             && let Ok(sv) = j.singular_values()
@@ -600,5 +583,5 @@ impl Solver for NewtonCoulomb {
 }
 
 #[cfg(test)]
-#[path = "newton_coulomb_tests.rs"]
+#[path = "coulomb_tests.rs"]
 mod tests;

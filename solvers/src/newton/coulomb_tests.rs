@@ -6,13 +6,8 @@ use super::*;
 /// node: open, closed and sticking, closed and slipping (λ > 0 so the
 /// ∂Φ_F/∂λ coupling is present).
 fn state(m: usize) -> (Mat<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-    let mut seed = 7u64;
-    let mut rand = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut random = crate::numerics::random::Lcg::new(7);
+    let mut rand = move || random.symmetric();
     let b = Mat::from_fn(2 * m, 2 * m, |_, _| rand());
     let mut s = b.transpose() * &b;
     for k in 0..2 * m {

@@ -24,7 +24,13 @@ use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::linalg::{max_abs, max_abs_if_finite, spmv, spmv_values_into};
+use crate::numerics::linalg::{max_abs, max_abs_if_finite, spmv, spmv_values_into};
+
+mod scales;
+mod symmetry;
+
+pub use scales::{MIN_NET_LOAD_FRACTION, Scales};
+use symmetry::check_stiffness_and_mass;
 
 /// The unknowns of one contact node of Γ_K.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -88,105 +94,6 @@ pub enum ProblemError {
         value: f64,
         why: &'static str,
     },
-}
-
-/// The smallest net load, relative to the gross load F = Σ|f_i|, that a
-/// problem with rigid modes may carry along each of them. The contact
-/// forces must balance the load along a rigid mode (paper condition (13));
-/// below this fraction the net load cannot be told from the rounding of the
-/// gross one at fine meshes, and contact pressures, which are of the size
-/// of the net load, cannot be certified in double precision (a relative
-/// error ε of the answer in the gross load's scale is ε·F/N in theirs).
-pub const MIN_NET_LOAD_FRACTION: f64 = 1e-8;
-
-/// The problem's own scales, from its data alone. Every stopping test of a
-/// solver in relative mode and every measure of the certificate is stated
-/// in them, so that multiplying the loads by a factor, or the stiffness and
-/// the loads together, changes no iteration count and no verdict.
-///
-/// - force F = Σ_i |f_i|, the gross load (for a traction load: ∫|P| ds,
-///   whatever the mesh);
-/// - contact load N, the load the contact forces must carry: for each rigid
-///   mode z, |zᵀf| / ‖z‖∞ (the largest), since the contact forces balance the
-///   load along z; F when the problem has no rigid mode;
-/// - length L = Σ_i w_i (the length of Γ_K);
-/// - stiffness K = max_i A_ii;
-/// - pressure P = N/L (the mean contact pressure): measured in the net load
-///   and not the gross one, so that an answer cannot hide a wrong contact
-///   force in the scale of a load that the contact does not carry (a load
-///   nearly balanced by an upward one has contact forces of the size of the
-///   net load, not of the gross);
-/// - displacement U = F/K (displacements and gaps follow the whole load).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Scales {
-    pub force: f64,
-    pub contact_load: f64,
-    pub length: f64,
-    pub stiffness: f64,
-    pub pressure: f64,
-    pub displacement: f64,
-}
-
-impl Scales {
-    fn of(
-        a: &CsrMatrix<f64>,
-        f: &[f64],
-        contacts: &[ContactNode],
-        rigid_modes: &[Vec<f64>],
-    ) -> Result<Self, ProblemError> {
-        let or_one = |x: f64| if x > 0.0 { x } else { 1.0 };
-        let force = or_one(f.iter().map(|x| x.abs()).sum());
-        let mut contact_load = if rigid_modes.is_empty() {
-            force
-        } else {
-            f64::INFINITY
-        };
-        for (index, z) in rigid_modes.iter().enumerate() {
-            let size = max_abs(z);
-            let along: f64 = z.iter().zip(f).map(|(zk, fk)| (zk / size) * fk).sum();
-            let load = along.abs();
-            // NaN (an overflow) fails too.
-            if load.is_nan() || load < MIN_NET_LOAD_FRACTION * force {
-                return Err(ProblemError::NetLoad {
-                    index,
-                    fraction: load / force,
-                });
-            }
-            contact_load = contact_load.min(load);
-        }
-        let length = or_one(contacts.iter().map(|c| c.weight).sum());
-        let stiffness = or_one(
-            a.row_iter()
-                .enumerate()
-                .filter_map(|(i, row)| row.get_entry(i).map(|e| e.into_value().abs()))
-                .fold(0.0, f64::max),
-        );
-        let scales = Self {
-            force,
-            contact_load,
-            length,
-            stiffness,
-            pressure: contact_load / length,
-            displacement: force / stiffness,
-        };
-        for (what, value) in [
-            ("force", scales.force),
-            ("contact load", scales.contact_load),
-            ("stiffness", scales.stiffness),
-            ("pressure", scales.pressure),
-            ("displacement", scales.displacement),
-        ] {
-            if !(value.is_finite() && value.is_normal()) {
-                return Err(ProblemError::Scale {
-                    what,
-                    value,
-                    why: "it over- or underflows in double precision; \
-                          the loads and the stiffness are too far apart in magnitude",
-                });
-            }
-        }
-        Ok(scales)
-    }
 }
 
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
@@ -357,7 +264,7 @@ impl ContactProblem {
     pub fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
         match &self.mass {
             Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values, x, y),
-            Mass::Matrix(m) => crate::linalg::spmv_into(m, x, y),
+            Mass::Matrix(m) => crate::numerics::linalg::spmv_into(m, x, y),
         }
     }
 
@@ -430,161 +337,8 @@ fn check_g(node: usize, value: f64) -> Result<(), ProblemError> {
     }
 }
 
-/// Checks that A and M are n × n, finite and symmetric. When M lives on A's
-/// pattern, one pass over it checks both.
-fn check_stiffness_and_mass(a: &CsrMatrix<f64>, mass: &Mass, n: usize) -> Result<(), ProblemError> {
-    match mass {
-        Mass::OnStiffnessPattern(m) => check_square_symmetric(a, [("A", a.values()), ("M", m)], n),
-        Mass::Matrix(m) => {
-            check_square_symmetric(a, [("A", a.values())], n)?;
-            check_square_symmetric(m, [("M", m.values())], n)
-        }
-    }
-}
-
-/// Checks that each matrix, given as its values on `pattern` (one per stored
-/// entry), is n × n, finite and symmetric to 1e-12 of its largest entry.
-///
-/// A sequential pass measures each matrix's largest entry and whether it is
-/// finite. Then each entry above the diagonal is compared with its mirror:
-/// when every entry below the diagonal was met as such a mirror, that covers
-/// every pair, at half the random accesses of visiting every entry. Only
-/// when an entry below has no stored mirror above, or a matrix fails, is
-/// the whole pattern walked, the second time to name the first offending
-/// entry.
-fn check_square_symmetric<const K: usize>(
-    pattern: &CsrMatrix<f64>,
-    named: [(&'static str, &[f64]); K],
-    n: usize,
-) -> Result<(), ProblemError> {
-    let Some(&(first, _)) = named.first() else {
-        return Ok(());
-    };
-    for (dim, got) in [(n, pattern.nrows()), (n, pattern.ncols())] {
-        if dim != got {
-            return Err(ProblemError::Dimension {
-                what: first,
-                expected: dim,
-                got,
-            });
-        }
-    }
-    for (what, values) in &named {
-        if values.len() != pattern.nnz() {
-            return Err(ProblemError::Dimension {
-                what,
-                expected: pattern.nnz(),
-                got: values.len(),
-            });
-        }
-    }
-    let (offsets, indices) = (pattern.row_offsets(), pattern.col_indices());
-    let values = named.map(|(_, v)| v);
-    let mut scale = [0.0f64; K];
-    for m in 0..K {
-        scale[m] =
-            max_abs_if_finite(values[m]).ok_or(ProblemError::NonFinite { what: named[m].0 })?;
-    }
-    let below: usize = (0..n)
-        .map(|row| {
-            let cols = &indices[offsets[row]..offsets[row + 1]];
-            cols.partition_point(|&col| col < row)
-        })
-        .sum();
-    let tol = scale.map(|s| 1e-12 * s);
-    let (mut asymmetry, mirrored) = asymmetry(offsets, indices, &values, Triangle::Upper);
-    if mirrored < below {
-        asymmetry = self::asymmetry(offsets, indices, &values, Triangle::Both).0;
-    }
-    if (0..K).all(|m| asymmetry[m] <= tol[m]) {
-        return Ok(());
-    }
-    let mut offending = None;
-    walk_mirrors(offsets, indices, Triangle::Both, |row, col, k, mirror| {
-        for m in 0..K {
-            let across = mirror.map_or(0.0, |c| values[m][c]);
-            if (across - values[m][k]).abs() > tol[m] {
-                offending = Some(ProblemError::NotSymmetric {
-                    what: named[m].0,
-                    row,
-                    col,
-                });
-                return false;
-            }
-        }
-        true
-    });
-    Err(offending.expect("an asymmetry was measured, so an entry exceeds it"))
-}
-
-/// Each matrix's largest |x_ij − x_ji| over the entries of `which` (a
-/// missing mirror counts as 0), and how many of them had a stored mirror.
-fn asymmetry<const K: usize>(
-    offsets: &[usize],
-    indices: &[usize],
-    values: &[&[f64]; K],
-    which: Triangle,
-) -> ([f64; K], usize) {
-    let (mut asymmetry, mut mirrored) = ([0.0f64; K], 0);
-    walk_mirrors(offsets, indices, which, |_, _, k, mirror| {
-        mirrored += usize::from(mirror.is_some());
-        for m in 0..K {
-            let across = mirror.map_or(0.0, |c| values[m][c]);
-            asymmetry[m] = asymmetry[m].max((across - values[m][k]).abs());
-        }
-        true
-    });
-    (asymmetry, mirrored)
-}
-
-/// Which stored entries [`walk_mirrors`] visits.
-#[derive(Clone, Copy, PartialEq)]
-enum Triangle {
-    /// Those strictly above the diagonal.
-    Upper,
-    /// All of them.
-    Both,
-}
-
-/// Visits each stored (row, col, position) of `which` in row order with the
-/// position of its mirror (col, row), if stored, until `visit` returns
-/// false. The mirror is found by a cursor per row that only moves forward:
-/// the rows visiting column `col` come in increasing order, and so do the
-/// columns of row `col`. One pass over the pattern, no search (a binary
-/// search per entry was a third of the set-up at h = 1/256). Inlined, so
-/// that what `visit` accumulates stays in registers (a store and a load per
-/// entry otherwise).
-#[inline(always)]
-fn walk_mirrors(
-    offsets: &[usize],
-    indices: &[usize],
-    which: Triangle,
-    mut visit: impl FnMut(usize, usize, usize, Option<usize>) -> bool,
-) {
-    let n = offsets.len() - 1;
-    let mut cursor = offsets[..n].to_vec();
-    for row in 0..n {
-        for k in offsets[row]..offsets[row + 1] {
-            let col = indices[k];
-            if which == Triangle::Upper && col <= row {
-                continue;
-            }
-            let end = offsets[col + 1];
-            let mut c = cursor[col];
-            while c < end && indices[c] < row {
-                c += 1;
-            }
-            cursor[col] = c;
-            let mirror = (c < end && indices[c] == row).then_some(c);
-            if !visit(row, col, k, mirror) {
-                return;
-            }
-        }
-    }
-}
-
 #[cfg(test)]
-mod symmetry_tests {
+mod tests {
     use super::*;
     use nalgebra_sparse::CooMatrix;
 
@@ -596,99 +350,9 @@ mod symmetry_tests {
         CsrMatrix::from(&coo)
     }
 
-    /// The check must fail naming matrix `what` and entry (row, col).
-    fn assert_names(result: Result<(), ProblemError>, what: &str, row: usize, col: usize) {
-        match result {
-            Err(ProblemError::NotSymmetric {
-                what: w,
-                row: r,
-                col: c,
-            }) if (w, r, c) == (what, row, col) => {}
-            other => panic!("expected {what}'s ({row}, {col}) to be named, got {other:?}"),
-        }
-    }
-
-    /// The check of one matrix on its own pattern.
-    fn check(what: &'static str, m: &CsrMatrix<f64>, n: usize) -> Result<(), ProblemError> {
-        check_square_symmetric(m, [(what, m.values())], n)
-    }
-
     /// A's pattern with M's values.
     fn on_a(m: &CsrMatrix<f64>) -> Mass {
         Mass::OnStiffnessPattern(m.values().to_vec())
-    }
-
-    #[test]
-    fn a_symmetric_matrix_passes() {
-        let m = csr(
-            4,
-            &[
-                (0, 0, 2.0),
-                (0, 3, -1.0),
-                (3, 0, -1.0),
-                (1, 2, 5.0),
-                (2, 1, 5.0),
-                (3, 3, 1.0),
-            ],
-        );
-        assert!(check("A", &m, 4).is_ok());
-    }
-
-    #[test]
-    fn a_differing_mirror_is_named() {
-        let m = csr(3, &[(0, 0, 1.0), (0, 2, 1.0), (2, 0, 1.5), (1, 1, 1.0)]);
-        assert_names(check("A", &m, 3), "A", 0, 2);
-    }
-
-    #[test]
-    fn an_entry_without_a_stored_mirror_is_caught() {
-        // (2, 1) is stored, (1, 2) is not: only the visit of row 2 sees it.
-        let m = csr(3, &[(0, 0, 1.0), (1, 1, 1.0), (2, 1, 0.5), (2, 2, 1.0)]);
-        assert_names(check("M", &m, 3), "M", 2, 1);
-        // A stored explicit zero mirrors a missing entry.
-        let m = csr(3, &[(0, 0, 1.0), (1, 2, 0.0), (2, 2, 1.0)]);
-        assert!(check("M", &m, 3).is_ok());
-        // Below the diagonal without a mirror: the walk over the upper
-        // triangle cannot meet it, the whole walk must.
-        let m = csr(3, &[(0, 0, 1.0), (2, 0, 0.0), (1, 1, 1.0), (2, 2, 1.0)]);
-        assert!(check("M", &m, 3).is_ok());
-        let m = csr(3, &[(0, 0, 1.0), (2, 0, 1e-3), (1, 1, 1.0), (2, 2, 1.0)]);
-        assert_names(check("M", &m, 3), "M", 2, 0);
-        // Above the diagonal without a mirror.
-        let m = csr(3, &[(0, 0, 1.0), (0, 2, 1e-3), (1, 1, 1.0), (2, 2, 1.0)]);
-        assert_names(check("M", &m, 3), "M", 0, 2);
-    }
-
-    #[test]
-    fn a_pair_on_one_pattern_names_the_matrix_that_fails() {
-        let entries = [(0, 0, 1.0), (0, 1, 2.0), (1, 0, 2.0), (1, 1, 1.0)];
-        let a = csr(2, &entries);
-        let mut m = a.clone();
-        m.values_mut()[2] = 2.5; // (1, 0) of M only
-        assert!(check_stiffness_and_mass(&a, &on_a(&a), 2).is_ok());
-        assert_names(check_stiffness_and_mass(&a, &on_a(&m), 2), "M", 0, 1);
-        // The same M with a pattern of its own.
-        assert_names(
-            check_stiffness_and_mass(&a, &Mass::Matrix(m.clone()), 2),
-            "M",
-            0,
-            1,
-        );
-        m.values_mut()[2] = f64::NAN;
-        assert!(matches!(
-            check_stiffness_and_mass(&a, &on_a(&m), 2),
-            Err(ProblemError::NonFinite { what: "M" })
-        ));
-        // Values on A's pattern must be one per stored entry.
-        let short = Mass::OnStiffnessPattern(vec![1.0; 3]);
-        assert!(matches!(
-            check_stiffness_and_mass(&a, &short, 2),
-            Err(ProblemError::Dimension {
-                what: "M",
-                expected: 4,
-                got: 3
-            })
-        ));
     }
 
     /// A rigid mode must be finite and nonzero (an inf entry or all zeros

@@ -20,7 +20,7 @@
 //!
 //! With `condense` the same program is written in the contact unknowns
 //! y = (t_i, s_i) alone, A and f replaced by the Schur complement S and the
-//! reduced load b̂ of [`crate::condensed`] (static condensation: exact, one
+//! reduced load b̂ of [`crate::reduction::condensed`] (static condensation: exact, one
 //! sparse factorization kept across calls), and v recovered from y. Clarabel
 //! then factors KKT systems of order 6m instead of n + 4m.
 
@@ -33,10 +33,10 @@ use clarabel::solver::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::{Condensed, Ending, Kept, condense};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
 use crate::observer::{Limits, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -183,7 +183,7 @@ pub const ENTRY_FAER: Entry = Entry {
 
 /// The registry entry of the oracle on the condensed problem: the interior
 /// unknowns eliminated exactly by one sparse Cholesky factorization (kept
-/// across the friction iterations, see [`crate::condensed`]); Clarabel then
+/// across the friction iterations, see [`crate::reduction::condensed`]); Clarabel then
 /// solves the subproblem in the 2m contact unknowns, with the dense Schur
 /// complement as its quadratic form and its KKT systems factored by faer.
 /// The cone of each node is given as two half-planes: measured on problem 1

@@ -25,10 +25,12 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::{Condensed, Kept, condense};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::numerics::globalization::{Units, armijo, direction, merit};
+use crate::numerics::ncp::{billups, fb};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::reduction::condensed::{Condensed, Kept, condense};
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -119,37 +121,6 @@ impl Validate for NewtonSettings {
     }
 }
 
-/// φ(a, b) = a + b − √(a² + b²) and an element (∂a, ∂b) of its generalized gradient.
-#[inline]
-pub fn fb(a: f64, b: f64) -> (f64, f64, f64) {
-    let r = a.hypot(b);
-    if r == 0.0 {
-        let d = 1.0 - std::f64::consts::FRAC_1_SQRT_2;
-        (0.0, d, d)
-    } else {
-        (a + b - r, 1.0 - a / r, 1.0 - b / r)
-    }
-}
-
-/// The Billups function of the box [−G, G] for μ with F = κ s, and its
-/// partial derivatives (∂μ, ∂F).
-#[inline]
-fn billups(mu: f64, f: f64, g: f64) -> (f64, f64, f64) {
-    let (v, dmu, df, _) = billups_with_bound(mu, f, g);
-    (v, dmu, df)
-}
-
-/// The Billups function of the box [−G, G] and its partial derivatives
-/// (∂μ, ∂F, ∂G): for the Coulomb problem, where G = 𝓕λ is an unknown.
-#[inline]
-pub fn billups_with_bound(mu: f64, f: f64, g: f64) -> (f64, f64, f64, f64) {
-    let (inner, ia, ib) = fb(g - mu, -f);
-    let (outer, oa, ob) = fb(mu + g, -inner);
-    // ∂inner/∂μ = −ia, ∂inner/∂F = −ib, ∂inner/∂G = ia; outer's second
-    // argument is −inner.
-    (outer, oa + ob * ia, ob * ib, oa - ob * ia)
-}
-
 /// The state of the Newton iteration: unknowns, residuals and derivatives.
 struct Kkt<'a> {
     s: &'a Mat<f64>,
@@ -191,15 +162,11 @@ impl Kkt<'_> {
             let (v, a, b) = fb(lam[i], -self.kappa * y[2 * i]);
             phi[2 * m + i] = v;
             dn.push((a, b));
-            let (v, c, d) = billups(mu[i], self.kappa * y[2 * i + 1], self.g[i]);
+            let (v, c, d, _) = billups(mu[i], self.kappa * y[2 * i + 1], self.g[i]);
             phi[3 * m + i] = v;
             df.push((c, d));
         }
         Eval { phi, dn, df }
-    }
-
-    fn merit(e: &Eval) -> f64 {
-        0.5 * e.phi.iter().map(|x| x * x).sum::<f64>()
     }
 
     /// ∇Ψ = Jᵀ Φ, in the order (y, λ, μ).
@@ -310,33 +277,6 @@ pub struct NewtonOutcome {
     pub merit: Vec<f64>,
 }
 
-/// Whether the Newton direction `d` descends the merit Ψ = ½‖Φ‖² enough to
-/// be taken: ∇Ψᵀd ≤ −ρ‖d‖^p with ρ = 1e-10 and p = 2.1, the test of De Luca,
-/// Facchinei & Kanzow (1996, Math. Programming 75, eq. (13)); otherwise the
-/// step is −∇Ψ. `slope` is ∇Ψᵀd. The test is taken in the problem's units:
-/// the first `displacements` components of d (displacements) times κ, the
-/// others (forces) as they are, all over `scale` (the load ‖b̂‖∞), and the
-/// slope over scale², so that multiplying the loads, or the stiffness and
-/// the loads, by any factor changes no decision (with ‖d‖^2.1 in raw units,
-/// E = 73e-27 or loads × 1e100 turned every step into a gradient step).
-pub(crate) fn descends(
-    slope: f64,
-    d: &[f64],
-    displacements: usize,
-    kappa: f64,
-    scale: f64,
-) -> bool {
-    let size: f64 = d
-        .iter()
-        .enumerate()
-        .map(|(k, x)| {
-            let unit = if k < displacements { kappa * x } else { *x } / scale;
-            unit * unit
-        })
-        .sum();
-    slope / (scale * scale) <= -1e-10 * size.powf(1.05)
-}
-
 /// Semismooth Newton on the condensed KKT system from (y, λ, μ).
 #[allow(clippy::too_many_arguments)]
 pub fn semismooth_newton(
@@ -348,22 +288,19 @@ pub fn semismooth_newton(
     observer: &mut dyn Observer,
 ) -> NewtonOutcome {
     let m = g.len();
-    let diag_mean = (0..2 * m).map(|k| s[(k, k)].abs()).sum::<f64>() / (2 * m).max(1) as f64;
+    let units = Units::of_condensed(s, b);
     let kkt = Kkt {
         s,
         b,
         g,
-        kappa: if diag_mean > 0.0 { diag_mean } else { 1.0 },
+        kappa: units.kappa,
     };
-    let scale = b
-        .iter()
-        .fold(0.0f64, |a, x| a.max(x.abs()))
-        .max(f64::MIN_POSITIVE);
+    let scale = units.scale;
     let (mut y, mut lam, mut mu) = start;
     let t0 = Instant::now();
     let mut e = kkt.eval(&y, &lam, &mu);
-    let mut psi = Kkt::merit(&e);
-    let mut merit = Vec::new();
+    let mut psi = merit(&e.phi);
+    let mut merits = Vec::new();
     let residual = |e: &Eval| e.phi.iter().fold(0.0f64, |a, x| a.max(x.abs())) / scale;
     for step in 1..=settings.max_iter {
         let r = residual(&e);
@@ -375,7 +312,7 @@ pub fn semismooth_newton(
                 Status::NonFinite,
                 format!("non-finite residual at Newton step {step}"),
                 step - 1,
-                merit,
+                merits,
             );
         }
         if r <= settings.tolerance {
@@ -384,63 +321,48 @@ pub fn semismooth_newton(
                 settings.tolerance,
                 step - 1
             );
-            return finish(y, lam, mu, Status::Converged, detail, step - 1, merit);
+            return finish(y, lam, mu, Status::Converged, detail, step - 1, merits);
         }
         let grad = kkt.gradient(&e);
-        let newton = kkt.newton_direction(&e);
-        let slope = |d: &[f64]| d.iter().zip(&grad).map(|(a, b)| a * b).sum::<f64>();
-        let dir = match newton {
-            Some(d) if !settings.line_search => d,
-            Some(d) if descends(slope(&d), &d, 2 * m, kkt.kappa, scale) => d,
-            _ => grad.iter().map(|x| -x).collect(),
-        };
-        let g0 = slope(&dir);
-        let mut alpha = 1.0;
-        let (mut y1, mut l1, mut m1);
-        loop {
-            y1 = y
-                .iter()
-                .zip(&dir[..2 * m])
-                .map(|(a, d)| a + alpha * d)
-                .collect::<Vec<_>>();
-            l1 = lam
-                .iter()
-                .zip(&dir[2 * m..3 * m])
-                .map(|(a, d)| a + alpha * d)
-                .collect::<Vec<_>>();
-            m1 = mu
-                .iter()
-                .zip(&dir[3 * m..])
-                .map(|(a, d)| a + alpha * d)
-                .collect::<Vec<_>>();
+        let (dir, slope) = direction(
+            kkt.newton_direction(&e),
+            &grad,
+            &units,
+            settings.line_search,
+        );
+        let trial = |alpha: f64| {
+            let along = |x: &[f64], d: &[f64]| -> Vec<f64> {
+                x.iter().zip(d).map(|(a, d)| a + alpha * d).collect()
+            };
+            let (y1, l1, m1) = (
+                along(&y, &dir[..2 * m]),
+                along(&lam, &dir[2 * m..3 * m]),
+                along(&mu, &dir[3 * m..]),
+            );
             let e1 = kkt.eval(&y1, &l1, &m1);
-            let psi1 = Kkt::merit(&e1);
-            if !settings.line_search || (psi1.is_finite() && psi1 <= psi + 1e-4 * alpha * g0) {
-                e = e1;
-                psi = psi1;
-                break;
-            }
-            alpha *= 0.5;
-            if alpha < 1e-14 {
-                let detail = format!(
-                    "line search failed at Newton step {step} (residual {:.2e})",
-                    residual(&e)
-                );
-                return finish(
-                    y,
-                    lam,
-                    mu,
-                    Status::InsufficientProgress,
-                    detail,
-                    step,
-                    merit,
-                );
-            }
-        }
+            (merit(&e1.phi), (y1, l1, m1, e1))
+        };
+        let Some((psi1, (y1, l1, m1, e1))) = armijo(psi, slope, settings.line_search, trial) else {
+            let detail = format!(
+                "line search failed at Newton step {step} (residual {:.2e})",
+                residual(&e)
+            );
+            return finish(
+                y,
+                lam,
+                mu,
+                Status::InsufficientProgress,
+                detail,
+                step,
+                merits,
+            );
+        };
+        e = e1;
+        psi = psi1;
         y = y1;
         lam = l1;
         mu = m1;
-        merit.push(psi);
+        merits.push(psi);
         let control = observer.observe(&Progress {
             stage: "newton",
             iteration: step,
@@ -452,7 +374,7 @@ pub fn semismooth_newton(
                 "stopped by the harness after {step} Newton steps (residual {:.2e})",
                 residual(&e)
             );
-            return finish(y, lam, mu, status, detail, step, merit);
+            return finish(y, lam, mu, status, detail, step, merits);
         }
     }
     let r = residual(&e);
@@ -468,7 +390,7 @@ pub fn semismooth_newton(
             Status::Converged,
             detail,
             settings.max_iter,
-            merit,
+            merits,
         );
     }
     let detail = format!(
@@ -482,7 +404,7 @@ pub fn semismooth_newton(
         Status::MaxIterations,
         detail,
         settings.max_iter,
-        merit,
+        merits,
     )
 }
 

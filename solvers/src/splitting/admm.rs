@@ -31,10 +31,10 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::{Condensed, Ending, Kept, condense};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };

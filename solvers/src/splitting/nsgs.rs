@@ -4,7 +4,7 @@
 //! nodes' forces fixed, on the condensed operator.
 //!
 //! With r_i = (λ_i, ν_i) the node's normal force and ν_i = −μ_i its friction
-//! force (see [`crate::dual`]), the local problem at node i is
+//! force (see [`crate::reduction::dual`]), the local problem at node i is
 //!
 //! ```text
 //! (t_i, s_i) = q_i − W_ii r_i,   λ_i ≥ 0, t_i ≤ 0, λ_i t_i = 0,
@@ -15,7 +15,7 @@
 //! 𝓕_i λ_i (Coulomb: the method solves the Coulomb problem itself). It is
 //! solved exactly by trying its six cases (closed or open × stick, slip
 //! forward or slip backward) in closed form. The semicoercive mode is kept
-//! exactly ([`crate::dual`]): after each sweep the translation β solves its
+//! exactly ([`crate::reduction::dual`]): after each sweep the translation β solves its
 //! own equation, the equilibrium of the contact forces with the load, with
 //! every node answering locally (a one-dimensional monotone root, found by
 //! bisection).
@@ -24,11 +24,12 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::condensed::{Condensed, Ending, Kept, condense};
-use crate::dual::DualOperator;
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::registry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
+use crate::reduction::dual::DualOperator;
 use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
@@ -350,62 +351,6 @@ impl Solver for Nsgs {
     }
 }
 
-/// A root of a nonincreasing function near `x0`: bracketed by doubling
-/// steps from `step`, then bisected to the last bit. None if no sign change
-/// is found.
-pub fn monotone_root(f: impl Fn(f64) -> f64, x0: f64, step: f64) -> Option<f64> {
-    let f0 = f(x0);
-    if f0 == 0.0 {
-        return Some(x0);
-    }
-    // f nonincreasing: f0 > 0 → the root is to the right.
-    let dir = if f0 > 0.0 { 1.0 } else { -1.0 };
-    let mut step = step.abs().max(f64::MIN_POSITIVE);
-    let (mut lo, mut hi) = (x0, x0);
-    let mut found = false;
-    for _ in 0..200 {
-        let x = x0 + dir * step;
-        if f(x) * f0 <= 0.0 {
-            if dir > 0.0 {
-                hi = x;
-            } else {
-                lo = x;
-            }
-            found = true;
-            break;
-        }
-        if dir > 0.0 {
-            lo = x;
-        } else {
-            hi = x;
-        }
-        step *= 2.0;
-    }
-    if !found {
-        return None;
-    }
-    // Invariant: the sign of f changes between lo and hi.
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        let fm = f(mid);
-        if fm == 0.0 {
-            return Some(mid);
-        }
-        if (fm > 0.0) == (dir > 0.0) {
-            // Same side as x0.
-            if dir > 0.0 { lo = mid } else { hi = mid }
-        } else if dir > 0.0 {
-            hi = mid
-        } else {
-            lo = mid
-        }
-    }
-    Some(0.5 * (lo + hi))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -429,13 +374,8 @@ mod tests {
     #[test]
     fn the_local_solve_satisfies_the_law_in_every_case() {
         let w = [[2.0, 0.3], [0.3, 1.0]];
-        let mut state = 3u64;
-        let mut rnd = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
-        };
+        let mut random = crate::numerics::random::Lcg::new(3);
+        let mut rnd = || 2.0 * random.symmetric();
         for _ in 0..2000 {
             let q = [rnd(), rnd()];
             for bound in [Bound::Given(rnd().abs()), Bound::Coulomb(rnd().abs() * 0.8)] {
@@ -443,14 +383,5 @@ mod tests {
                 assert!(holds(w, q, r, bound), "q = {q:?}, {bound:?}: r = {r:?}");
             }
         }
-    }
-
-    #[test]
-    fn monotone_roots_are_found_on_either_side() {
-        let f = |x: f64| 3.0 - x;
-        assert!((monotone_root(f, 0.0, 0.1).unwrap() - 3.0).abs() < 1e-12);
-        assert!((monotone_root(f, 10.0, 0.1).unwrap() - 3.0).abs() < 1e-12);
-        let flat = |_x: f64| 1.0;
-        assert!(monotone_root(flat, 0.0, 1.0).is_none());
     }
 }
