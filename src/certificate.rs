@@ -35,7 +35,7 @@
 //! A value that is not finite, or a residual that overflows (inf − inf),
 //! is an infinite violation: every maximum here counts a NaN as infinite.
 
-use contactlab_solvers::{ContactProblem, Law, Solution, Status};
+use contactlab_solvers::{ContactProblem, Friction, Law, Solution, Status};
 use serde::{Deserialize, Serialize};
 
 /// Default tolerance: every condition's violation at most this. At 1e-5 the
@@ -213,16 +213,16 @@ impl Certificate {
     }
 }
 
-/// Checks a solver's answer against `problem` under `law`.
+/// Checks a solver's answer against `problem` under `friction`.
 pub fn certify_solution(
     problem: &ContactProblem,
-    law: Law,
+    friction: Friction<'_>,
     s: &Solution,
     tolerance: f64,
 ) -> Certificate {
     certify(
         problem,
-        law,
+        friction,
         &s.v,
         &s.pressure,
         &s.friction_traction,
@@ -230,12 +230,13 @@ pub fn certify_solution(
     )
 }
 
-/// Checks (v, p, q) against `problem` under `law` (for the given-friction
-/// law, at the problem's bounds g). Sizes that do not fit the problem, and
-/// any non-finite value, give infinite violations.
+/// Checks (v, p, q) against `problem` under `friction` (the given-friction
+/// law at its bound g, or the Coulomb law at g = 𝓕p). Sizes that do not
+/// fit the problem (the answer's or the bound's), and any non-finite value,
+/// give infinite violations.
 pub fn certify(
     problem: &ContactProblem,
-    law: Law,
+    friction: Friction<'_>,
     v: &[f64],
     p: &[f64],
     q: &[f64],
@@ -245,7 +246,7 @@ pub fn certify(
     let m = contacts.len();
     let inf = f64::INFINITY;
     let mut out = Certificate {
-        law,
+        law: friction.law(),
         nonpenetration: 0.0,
         pressure_sign: 0.0,
         complementarity: 0.0,
@@ -260,6 +261,7 @@ pub fn certify(
     if v.len() != problem.n()
         || p.len() != m
         || q.len() != m
+        || friction.check(problem).is_err()
         || !(finite(v) && finite(p) && finite(q))
     {
         for c in Condition::ALL {
@@ -284,10 +286,7 @@ pub fn certify(
     let mut contact_force = vec![0.0; problem.n()];
     for (i, c) in contacts.iter().enumerate() {
         let (t, sl, pi, qi) = (v[c.t], v[c.s], p[i], q[i]);
-        let g = match law {
-            Law::GivenFriction => c.g,
-            Law::Coulomb => c.coefficient * pi.max(0.0),
-        };
+        let g = friction.bound(i, c.coefficient, pi);
         contact_force[c.t] += c.weight * pi;
         contact_force[c.s] -= c.weight * qi;
         raise(&mut out.nonpenetration, t.max(0.0) / u);

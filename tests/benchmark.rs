@@ -10,7 +10,9 @@ use std::process::Command;
 use contactlab::settings::Settings;
 use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo};
 use contactlab::solvers::settings::{Validate, from_tree, parse_positive, to_tree};
-use contactlab::solvers::{ContactProblem, Law, Observer, Solution, Solver, Start, Status};
+use contactlab::solvers::{
+    ContactProblem, Friction, Law, Observer, Solution, Solver, Start, Status,
+};
 use contactlab::study::benchmark::merge::{read_csv, read_shards};
 use contactlab::study::benchmark::views::{self, summaries};
 use contactlab::study::benchmark::{self, BenchmarkRow, BenchmarkSpec};
@@ -237,7 +239,7 @@ impl Solver for Liar {
     fn solve(
         &mut self,
         p: &ContactProblem,
-        _law: Law,
+        _friction: Friction<'_>,
         _s: Option<Start<'_>>,
         _o: &mut dyn Observer,
     ) -> Solution {

@@ -26,7 +26,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
-use contactlab::solvers::{ContactNode, ContactProblem, Law, Mass, Silent};
+use contactlab::solvers::{ContactNode, ContactProblem, Friction, Law, Mass, Silent};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use proptest::prelude::*;
 
@@ -105,7 +105,6 @@ fn built(nodes: &[Node], extra: &[(usize, f64)]) -> (ContactProblem, Vec<f64>, V
             t: 2 * i,
             s: 2 * i + 1,
             weight: c.weight,
-            g: c.g,
             coefficient: c.g,
         })
         .collect();
@@ -130,7 +129,12 @@ fn built(nodes: &[Node], extra: &[(usize, f64)]) -> (ContactProblem, Vec<f64>, V
 /// The certificate of the built answer: the conditions it fails.
 fn failing(nodes: &[Node], extra: &[(usize, f64)], law: Law) -> Vec<Condition> {
     let (problem, v, p, q) = built(nodes, extra);
-    let c = certify(&problem, law, &v, &p, &q, DEFAULT_TOLERANCE);
+    let g: Vec<f64> = nodes.iter().map(|c| c.g).collect();
+    let friction = match law {
+        Law::GivenFriction => Friction::Given(&g),
+        Law::Coulomb => Friction::Coulomb,
+    };
+    let c = certify(&problem, friction, &v, &p, &q, DEFAULT_TOLERANCE);
     let mut bad = c.failing();
     bad.sort_by_key(|c| c.as_str());
     bad
@@ -324,7 +328,7 @@ enum Wrong {
 
 fn certify_p1(v: &[f64], p: &[f64], q: &[f64]) -> (bool, f64) {
     let t = problem_1();
-    let c = certify(&t.d.problem, Law::Coulomb, v, p, q, DEFAULT_TOLERANCE);
+    let c = certify(&t.d.problem, Friction::Coulomb, v, p, q, DEFAULT_TOLERANCE);
     (c.passed(), c.residual())
 }
 

@@ -11,7 +11,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::{Law, Silent, registry};
+use contactlab::solvers::{Friction, Silent, registry};
 
 fn certify(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_contactlab"))
@@ -35,7 +35,7 @@ fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
     let d = Discretization::new(&scene, scene.finest()).unwrap();
     export(&inst, &scene, &d).unwrap();
     // The same problem, to the last bit.
-    let p = import(&inst).unwrap();
+    let p = import(&inst).unwrap().problem;
     assert_eq!(p.n(), d.problem.n());
     assert_eq!(p.f(), d.problem.f());
     assert_eq!(p.contacts(), d.problem.contacts());
@@ -45,7 +45,7 @@ fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
     // Solve the read-back problem (as another code would) and certify.
     let entry = registry::by_name("newton-coulomb").unwrap();
     let mut solver = Settings::default().build(entry).unwrap();
-    let s = solver.solve(&p, Law::Coulomb, None, &mut Silent);
+    let s = solver.solve(&p, Friction::Coulomb, None, &mut Silent);
     assert!(s.status.is_converged(), "{}", s.detail);
     let v_file = dir.path().join("v.txt");
     std::fs::write(&v_file, lines(&s.v)).unwrap();

@@ -10,7 +10,7 @@ use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
 use contactlab::solvers::newton::tresca::{NewtonSettings, semismooth_newton};
 use contactlab::solvers::{
-    CondensedNewton, ContactNode, ContactProblem, Law, Silent, Solver, Status,
+    CondensedNewton, ContactNode, ContactProblem, Friction, Silent, Solver, Status,
 };
 use contactlab::study::agreement::agreement;
 use faer::Mat;
@@ -35,7 +35,7 @@ fn agrees_with_the_oracle_on_the_same_subproblem_and_on_the_coulomb_problem() {
         let (_, fast, _) =
             solve_given_friction(&scene, &Settings::default(), "newton", &g, &mut Silent).unwrap();
         assert_eq!(fast.status, Status::Converged, "{}", fast.detail);
-        let a = agreement(&d, &fast, &reference);
+        let a = agreement(&d, &g, &fast, &reference);
         assert!(
             a.displacement_max <= 1e-6 && a.pressure_max <= 1e-4,
             "problem {problem}: {a:?}"
@@ -45,7 +45,7 @@ fn agrees_with_the_oracle_on_the_same_subproblem_and_on_the_coulomb_problem() {
         let cert = |s: &contactlab::solvers::Solution| {
             certify(
                 &d.problem,
-                Law::GivenFriction,
+                Friction::Given(&g),
                 &s.v,
                 &s.pressure,
                 &s.friction_traction,
@@ -68,6 +68,7 @@ fn agrees_with_the_oracle_on_the_same_subproblem_and_on_the_coulomb_problem() {
         );
         let a = agreement(
             &slow.discretization,
+            &slow.coulomb.g,
             &fast.coulomb.solution,
             &slow.coulomb.solution,
         );
@@ -217,7 +218,9 @@ fn terminates_with_a_status_under_the_stress_conditions() {
         p1: 0.0,
     });
     let d = Discretization::new_unchecked(&up, MeshSize::from_level(4).unwrap()).unwrap();
-    let sol = CondensedNewton::default().solve(&d.problem, Law::GivenFriction, None, &mut Silent);
+    let zero = vec![0.0; d.problem.contacts().len()];
+    let sol =
+        CondensedNewton::default().solve(&d.problem, Friction::Given(&zero), None, &mut Silent);
     assert!(
         !sol.status.is_converged(),
         "{:?}: {}",
@@ -240,12 +243,11 @@ fn a_problem_it_cannot_condense_gets_a_numerical_error_status() {
             t: 1,
             s: 2,
             weight: 1.0,
-            g: 0.0,
             coefficient: 0.0,
         }],
         vec![],
     )
     .unwrap();
-    let sol = CondensedNewton::default().solve(&p, Law::GivenFriction, None, &mut Silent);
+    let sol = CondensedNewton::default().solve(&p, Friction::Given(&[0.0]), None, &mut Silent);
     assert_eq!(sol.status, Status::NumericalError, "{}", sol.detail);
 }

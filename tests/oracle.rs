@@ -9,7 +9,7 @@ use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{
-    ConicSettings, ConicSolver, ContactNode, ContactProblem, Law, Silent, Solver, Status,
+    ConicSettings, ConicSolver, ContactNode, ContactProblem, Friction, Law, Silent, Solver, Status,
 };
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
@@ -115,7 +115,8 @@ fn friction_narrows_the_separation_zone() {
 }
 
 /// A 2-unknown given-friction problem: v = (t, s), A = [[a, b], [b, c]].
-fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> ContactProblem {
+/// The problem and its given friction bound.
+fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> (ContactProblem, Vec<f64>) {
     let mut coo = CooMatrix::new(2, 2);
     for (i, j, v) in [(0, 0, a), (0, 1, b), (1, 0, b), (1, 1, c)] {
         coo.push(i, j, v);
@@ -129,21 +130,21 @@ fn two_unknowns(a: f64, b: f64, c: f64, f: [f64; 2], w: f64, g: f64) -> ContactP
             t: 0,
             s: 1,
             weight: w,
-            g,
             coefficient: 0.0,
         }],
         vec![],
     )
+    .map(|p| (p, vec![g]))
     .unwrap()
 }
 
-fn oracle(p: &ContactProblem) -> (Vec<f64>, f64, f64) {
+fn oracle((p, g): &(ContactProblem, Vec<f64>)) -> (Vec<f64>, f64, f64) {
     let s =
-        ConicSolver::new(ConicSettings::default()).solve(p, Law::GivenFriction, None, &mut Silent);
+        ConicSolver::new(ConicSettings::default()).solve(p, Friction::Given(g), None, &mut Silent);
     assert!(s.status.is_converged(), "{}", s.detail);
     let r = certify(
         p,
-        Law::GivenFriction,
+        Friction::Given(g),
         &s.v,
         &s.pressure,
         &s.friction_traction,
@@ -190,20 +191,14 @@ fn closed_form_two_unknown_problems_in_each_regime() {
 
 #[test]
 fn the_certificate_detects_each_kind_of_violation() {
-    let problem = two_unknowns(4.0, 1.0, 3.0, [2.0, 2.5], 0.5, 2.0);
+    let (problem, g) = two_unknowns(4.0, 1.0, 3.0, [2.0, 2.5], 0.5, 2.0);
+    let given = Friction::Given(&g);
     let s = (2.5 - 1.0) / 3.0;
     let exact = (vec![0.0, s], vec![(2.0 - s) / 0.5], vec![-2.0]);
-    let c = certify(
-        &problem,
-        Law::GivenFriction,
-        &exact.0,
-        &exact.1,
-        &exact.2,
-        1e-12,
-    );
+    let c = certify(&problem, given, &exact.0, &exact.1, &exact.2, 1e-12);
     assert!(c.residual() < 1e-14, "{c:?}");
     let bad = |v: Vec<f64>, p: f64, q: f64, condition: Condition| {
-        let c = certify(&problem, Law::GivenFriction, &v, &[p], &[q], 1e-6);
+        let c = certify(&problem, given, &v, &[p], &[q], 1e-6);
         assert!(!c.passed(), "{condition:?} not detected: {c:?}");
         assert!(c.get(condition) > 1e-3, "{condition:?}: {c:?}");
         assert!(c.failing().contains(&condition));
@@ -216,17 +211,10 @@ fn the_certificate_detects_each_kind_of_violation() {
     bad(vec![0.0, s], p, 2.0, Condition::SlipDirection); // traction with the slip
     bad(vec![0.0, s], p, -1.0, Condition::Stick); // slipping below the bound
     bad(vec![0.0, s], p * 1.1, -2.0, Condition::Stationarity);
-    let c = certify(
-        &problem,
-        Law::GivenFriction,
-        &[f64::NAN, s],
-        &[p],
-        &[-2.0],
-        1e-6,
-    );
+    let c = certify(&problem, given, &[f64::NAN, s], &[p], &[-2.0], 1e-6);
     assert!(c.residual().is_infinite() && !c.passed());
     // A claim of convergence that fails becomes `inaccurate`; other claims stand.
-    let c = certify(&problem, Law::GivenFriction, &[0.0, s], &[p], &[-1.0], 1e-6);
+    let c = certify(&problem, given, &[0.0, s], &[p], &[-1.0], 1e-6);
     assert_eq!(c.verdict(Status::Converged), Status::Inaccurate);
     assert_eq!(c.verdict(Status::MaxIterations), Status::MaxIterations);
 }
@@ -237,11 +225,12 @@ fn the_coulomb_certificate_is_taken_at_the_bound_of_the_solutions_own_pressure()
     // pressure p it produces: it satisfies the Coulomb law for 𝓕 = g/p and
     // fails it for 𝓕 = 1.25 g/p (there it slips below the bound 𝓕p).
     let (a, b, c, w, g, ft, fs) = (4.0, 1.0, 3.0, 0.5, 2.0, 2.0, 2.5);
-    let problem = two_unknowns(a, b, c, [ft, fs], w, g);
+    let (problem, _) = two_unknowns(a, b, c, [ft, fs], w, g);
     let s = (fs - w * g) / c;
     let p = (ft - b * s) / w;
     let (v, q) = (vec![0.0, s], -g);
-    let coulomb = |problem: &ContactProblem| certify(problem, Law::Coulomb, &v, &[p], &[q], 1e-9);
+    let coulomb =
+        |problem: &ContactProblem| certify(problem, Friction::Coulomb, &v, &[p], &[q], 1e-9);
     let with_coefficient = |f: f64| {
         let mut contacts = problem.contacts().to_vec();
         contacts[0].coefficient = f;
@@ -264,7 +253,7 @@ fn the_coulomb_certificate_is_taken_at_the_bound_of_the_solutions_own_pressure()
     assert!(
         certify(
             &with_coefficient(1.25 * g / p),
-            Law::GivenFriction,
+            Friction::Given(&[g]),
             &v,
             &[p],
             &[q],
@@ -291,7 +280,8 @@ fn an_unbounded_problem_is_not_reported_solved() {
         d.problem.rigid_modes().to_vec(),
     )
     .unwrap();
-    let s = ConicSolver::default().solve(&p, Law::GivenFriction, None, &mut Silent);
+    let zero = vec![0.0; p.contacts().len()];
+    let s = ConicSolver::default().solve(&p, Friction::Given(&zero), None, &mut Silent);
     assert!(
         !s.status.is_converged(),
         "status {:?}: {}",

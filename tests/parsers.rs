@@ -107,8 +107,8 @@ proptest! {
     fn csv_files_edited_at_random(file in 0usize..3, e in edits()) {
         let name = ["contact.csv", "forces.csv", "benchmark.csv"][file];
         let data = apply(seed("csv", name), &e);
-        if let Ok(c) = contacts_from(&data[..], 3, "contact.csv") {
-            prop_assert_eq!(c.len(), 3);
+        if let Ok((c, g)) = contacts_from(&data[..], 3, "contact.csv") {
+            prop_assert_eq!((c.len(), g.len()), (3, 3));
         }
         if let Ok((p, q)) = forces_from(&data[..], 5, "forces.csv") {
             prop_assert_eq!((p.len(), q.len()), (5, 5));
@@ -127,7 +127,8 @@ proptest! {
         let data = apply(seed("instance", "p1_h2"), &e);
         let dir = tempfile::tempdir().unwrap();
         write_instance(dir.path(), &data);
-        if let Ok(p) = import(dir.path()) {
+        if let Ok(instance) = import(dir.path()) {
+            let p = instance.problem;
             prop_assert!(p.n() > 0 && p.scales().pressure.is_normal());
         }
     }
@@ -177,10 +178,11 @@ fn the_seeds_read() {
     assert_eq!((t.rows, t.cols), (17, 17));
     let dir = tempfile::tempdir().unwrap();
     write_instance(dir.path(), &seed("instance", "p1_h2"));
-    assert_eq!(import(dir.path()).unwrap().n(), 17);
+    assert_eq!(import(dir.path()).unwrap().problem.n(), 17);
     assert_eq!(
         contacts_from(&seed("csv", "contact.csv")[..], 3, "contact.csv")
             .unwrap()
+            .0
             .len(),
         3
     );

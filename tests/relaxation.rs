@@ -13,7 +13,7 @@ use contactlab::coulomb::driver::{Run, solve_scene};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::{Law, Silent, Smoothing, Status};
+use contactlab::solvers::{Friction, Silent, Smoothing, Status};
 use contactlab::study::agreement::agreement;
 use serde_json::Value;
 
@@ -51,7 +51,7 @@ fn same_given_friction_problem_agrees_with_the_oracle() {
             let (_, relaxed, _) =
                 solve_given_friction(&scene, &tight(), "relaxation", &g, &mut Silent).unwrap();
             assert_eq!(relaxed.status, Status::Converged, "{}", relaxed.detail);
-            let a = agreement(&d, &relaxed, &reference);
+            let a = agreement(&d, &g, &relaxed, &reference);
             let what = format!("problem {problem}, h = 1/{}: {a:?}", 1 << k);
             assert!(a.displacement_max <= DISPLACEMENT_TOL, "{what}");
             assert!(a.pressure_max <= PRESSURE_TOL, "{what}");
@@ -59,7 +59,7 @@ fn same_given_friction_problem_agrees_with_the_oracle() {
             for s in [&relaxed, &reference] {
                 let c = certify(
                     &d.problem,
-                    Law::GivenFriction,
+                    Friction::Given(&g),
                     &s.v,
                     &s.pressure,
                     &s.friction_traction,
@@ -91,6 +91,7 @@ fn whole_coulomb_problem_agrees_with_the_oracles_coulomb_solution() {
         let relaxed = coulomb(&scene, &tight(), "relaxation");
         let a = agreement(
             &oracle.discretization,
+            &oracle.coulomb.g,
             &relaxed.coulomb.solution,
             &oracle.coulomb.solution,
         );
@@ -149,6 +150,7 @@ fn proximal_term_changes_nothing_measurable_at_the_papers_penalty() {
     assert!((a - b).abs() <= 0.01 * a, "sweeps with {a}, without {b}");
     let agree = agreement(
         &with.discretization,
+        &with.coulomb.g,
         &without.coulomb.solution,
         &with.coulomb.solution,
     );
@@ -194,7 +196,12 @@ fn exact_and_smoothed_slip_minimizers_reach_the_same_solution() {
         .unwrap();
     let a = coulomb(&scene, &exact, "relaxation");
     let b = coulomb(&scene, &tight(), "relaxation");
-    let agree = agreement(&a.discretization, &b.coulomb.solution, &a.coulomb.solution);
+    let agree = agreement(
+        &a.discretization,
+        &a.coulomb.g,
+        &b.coulomb.solution,
+        &a.coulomb.solution,
+    );
     assert!(
         agree.displacement_max < 1e-6 && agree.pressure_max < 1e-5,
         "{agree:?}"
@@ -224,7 +231,7 @@ fn the_certified_stopping_rule_reaches_its_tolerance_at_every_h() {
                 solve_given_friction(&scene, settings, "relaxation", &g, &mut Silent).unwrap();
             let c = certify(
                 &d.problem,
-                Law::GivenFriction,
+                Friction::Given(&g),
                 &s.v,
                 &s.pressure,
                 &s.friction_traction,

@@ -13,7 +13,7 @@ use contactlab::coulomb::driver::{Run, solve_given_friction, solve_scene};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::{Law, Silent, Solution, registry};
+use contactlab::solvers::{Friction, Law, Silent, Solution, registry};
 
 /// (name, load factor, E factor): displacements scale by load/E, pressures by load.
 const UNITS: [(&str, f64, f64); 5] = [
@@ -159,7 +159,7 @@ fn every_solver_alone_gives_the_same_answer_in_any_units() {
                     .unwrap();
             let c = certify(
                 &d.problem,
-                Law::GivenFriction,
+                Friction::Given(&gs),
                 &s.v,
                 &s.pressure,
                 &s.friction_traction,

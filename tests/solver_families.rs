@@ -158,6 +158,7 @@ fn the_direct_coulomb_solver_and_the_fixed_point_agree() {
     let fixed = solve_scene(&scene, &tight, "newton", &mut Silent).unwrap();
     let a = agreement(
         &direct.discretization,
+        &direct.coulomb.g,
         &fixed.coulomb.solution,
         &direct.coulomb.solution,
     );
@@ -177,6 +178,7 @@ fn the_direct_coulomb_solver_and_the_fixed_point_agree() {
     let predicted = last.change * q / (1.0 - q) / scene.friction / p_max;
     let measured = agreement(
         &direct.discretization,
+        &direct.coulomb.g,
         &paper.coulomb.solution,
         &direct.coulomb.solution,
     )

@@ -5,7 +5,7 @@
 use contactlab::io::csv::to_csv;
 use contactlab::settings::Settings;
 use contactlab::solvers::{
-    ContactNode, ContactProblem, Law, ProxUzawa, RelaxationSettings, Silent, Solver, Status,
+    ContactNode, ContactProblem, Friction, ProxUzawa, RelaxationSettings, Silent, Solver, Status,
     registry,
 };
 use contactlab::study::reference::References;
@@ -136,7 +136,6 @@ fn a_non_finite_iterate_stops_the_relaxation_with_that_status() {
             t: 0,
             s: 2,
             weight: 1.0,
-            g: 0.0,
             coefficient: 0.0,
         }],
         vec![],
@@ -144,7 +143,7 @@ fn a_non_finite_iterate_stops_the_relaxation_with_that_status() {
     .unwrap();
     let s = ProxUzawa::new(RelaxationSettings::default()).solve(
         &p,
-        Law::GivenFriction,
+        Friction::Given(&[0.0]),
         None,
         &mut Silent,
     );

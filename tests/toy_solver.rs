@@ -15,8 +15,8 @@ use contactlab::solvers::settings::{
     Validate, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use contactlab::solvers::{
-    ContactProblem, Control, Iterations, Law, Observer, Progress, Solution, Solver, Start, Status,
-    Timing,
+    ContactProblem, Control, Friction, Iterations, Law, Observer, Progress, Solution, Solver,
+    Start, Status, Timing,
 };
 use contactlab::study::reference::References;
 use contactlab::study::report::sweep_charts;
@@ -54,19 +54,15 @@ impl Solver for Toy {
     fn solve(
         &mut self,
         p: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         _start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
-        let (n, m) = (p.n(), p.contacts().len());
-        if law != Law::GivenFriction {
-            return Solution::failed(
-                n,
-                m,
-                Status::NotRun,
-                "the toy solves the given-friction subproblem",
-            );
-        }
+        let n = p.n();
+        let g = match Solution::given_bound(p, friction, Ok(())) {
+            Ok(g) => g,
+            Err(refused) => return *refused,
+        };
         let (offsets, cols, vals) = p.a().csr_data();
         let grad = |v: &[f64]| -> Vec<f64> {
             (0..n)
@@ -88,9 +84,9 @@ impl Solver for Toy {
             .fold(0.0f64, f64::max);
         let alpha = 1.0 / l;
         let prox = |v: &mut [f64]| {
-            for c in p.contacts() {
+            for (c, g) in p.contacts().iter().zip(g) {
                 v[c.t] = v[c.t].min(0.0);
-                let k = alpha * c.weight * c.g;
+                let k = alpha * c.weight * g;
                 v[c.s] = v[c.s].signum() * (v[c.s].abs() - k).max(0.0);
             }
         };
@@ -138,7 +134,8 @@ impl Solver for Toy {
         let friction_traction = p
             .contacts()
             .iter()
-            .map(|c| (r[c.s] / c.weight).clamp(-c.g, c.g))
+            .zip(g)
+            .map(|(c, &g)| (r[c.s] / c.weight).clamp(-g, g))
             .collect();
         Solution {
             v,

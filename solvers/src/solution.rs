@@ -2,7 +2,7 @@
 //! Coulomb problem alike.
 
 use crate::problem::ContactProblem;
-use crate::solver::Law;
+use crate::solver::{Friction, Law};
 use serde::{Deserialize, Serialize};
 
 /// How a solve ended. A solver's own [`Status::Converged`] is only its claim:
@@ -126,16 +126,18 @@ impl Solution {
         }
     }
 
-    /// The checks a solve starts with: `law` is one of the solver's `laws`
-    /// and its settings passed validation (`valid`). The refusal, with
-    /// status [`Status::NotRun`], if not.
+    /// The checks a solve starts with: the law of `friction` is one of the
+    /// solver's `laws`, its bound fits the problem, and the solver's
+    /// settings passed validation (`valid`). The refusal, with status
+    /// [`Status::NotRun`], if not.
     pub fn refusal(
         problem: &ContactProblem,
         laws: &[Law],
-        law: Law,
+        friction: Friction<'_>,
         valid: Result<(), String>,
     ) -> Option<Self> {
         let (n, m) = (problem.n(), problem.contacts().len());
+        let law = friction.law();
         if !laws.contains(&law) {
             let names: Vec<&str> = laws.iter().map(|l| l.as_str()).collect();
             return Some(Self::failed(
@@ -149,7 +151,28 @@ impl Solution {
                 ),
             ));
         }
-        valid.err().map(|e| Self::failed(n, m, Status::NotRun, e))
+        friction
+            .check(problem)
+            .and(valid)
+            .err()
+            .map(|e| Self::failed(n, m, Status::NotRun, e))
+    }
+
+    /// For a solver of the given-friction subproblem alone: the bound g of
+    /// `friction`, or the refusal ([`Solution::refusal`]).
+    pub fn given_bound<'a>(
+        problem: &ContactProblem,
+        friction: Friction<'a>,
+        valid: Result<(), String>,
+    ) -> Result<&'a [f64], Box<Self>> {
+        match (
+            Self::refusal(problem, &[Law::GivenFriction], friction, valid),
+            friction,
+        ) {
+            (Some(refused), _) => Err(Box::new(refused)),
+            (None, Friction::Given(g)) => Ok(g),
+            (None, Friction::Coulomb) => unreachable!("refused above: not the given-friction law"),
+        }
     }
 
     /// True when every number in the solution is finite.

@@ -27,6 +27,59 @@ impl Law {
     }
 }
 
+/// The friction law of one solve with its data. The problem itself never
+/// changes between solves: the friction bound of the given-friction
+/// subproblem is an argument, so that a solver, the certificate and a
+/// report of one solve all read the same g.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Friction<'a> {
+    /// The given-friction (Tresca) subproblem, paper (10), with the bound
+    /// g_i ≥ 0 (force per unit length of Γ_K) at each contact node.
+    Given(&'a [f64]),
+    /// The static Coulomb problem, paper (7)-(8): the bound 𝓕_i p_i of the
+    /// solution's own pressures.
+    Coulomb,
+}
+
+impl Friction<'_> {
+    pub fn law(&self) -> Law {
+        match self {
+            Friction::Given(_) => Law::GivenFriction,
+            Friction::Coulomb => Law::Coulomb,
+        }
+    }
+
+    /// The bound at contact node i for pressure p: g_i, or 𝓕_i p⁺.
+    pub fn bound(&self, i: usize, coefficient: f64, pressure: f64) -> f64 {
+        match self {
+            Friction::Given(g) => g[i],
+            Friction::Coulomb => coefficient * pressure.max(0.0),
+        }
+    }
+
+    /// Checks a given bound against `problem`: one finite g_i ≥ 0 per
+    /// contact node.
+    pub fn check(&self, problem: &ContactProblem) -> Result<(), String> {
+        let Friction::Given(g) = self else {
+            return Ok(());
+        };
+        let m = problem.contacts().len();
+        if g.len() != m {
+            return Err(format!(
+                "the friction bound has {} values, the problem {m} contact nodes",
+                g.len()
+            ));
+        }
+        match g.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            Some(i) => Err(format!(
+                "the friction bound at contact node {i} is {}, not a finite number ≥ 0",
+                g[i]
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
 /// A starting point: unknowns and contact pressures (per contact node).
 /// Solvers that cannot warm-start ignore it.
 #[derive(Clone, Copy, Debug)]
@@ -40,14 +93,16 @@ pub struct Start<'a> {
 /// `&mut self` lets a solver keep work that depends only on A and M (a
 /// factorization, a Schur complement) across calls with the same
 /// [`ContactProblem::operator_id`], such as the steps of the Coulomb
-/// fixed point, which change only the friction bound g.
+/// fixed point, which change only the friction bound g they are given.
 pub trait Solver {
-    /// Solves `problem` under `law`; never panics on a bad problem, reports a
-    /// status. A law the solver does not treat gives [`crate::Status::NotRun`].
+    /// Solves `problem` under the law `friction` names, with its bound;
+    /// never panics on a bad problem, reports a status. A law the solver does
+    /// not treat, or a bound that does not fit the problem, gives
+    /// [`crate::Status::NotRun`].
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution;

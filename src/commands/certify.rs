@@ -6,7 +6,7 @@
 //! or both. An answer that fails is a non-zero exit.
 
 use anyhow::{Result, bail};
-use contactlab_solvers::Law;
+use contactlab_solvers::Friction;
 use contactlab_solvers::reduction::dual::displacements_from_forces;
 
 use crate::certificate::certify;
@@ -15,7 +15,8 @@ use crate::io::export::{import, read_forces, read_vector};
 use crate::io::output::print;
 
 pub fn run(args: &CertifyArgs) -> Result<()> {
-    let problem = import(&args.instance)?;
+    let instance = import(&args.instance)?;
+    let problem = &instance.problem;
     let (n, m) = (problem.n(), problem.contacts().len());
     let v = args
         .displacements
@@ -56,7 +57,7 @@ pub fn run(args: &CertifyArgs) -> Result<()> {
             )
         }
         (None, Some((p, q))) => {
-            let v = displacements_from_forces(&problem, &p, &q).map_err(anyhow::Error::msg)?;
+            let v = displacements_from_forces(problem, &p, &q).map_err(anyhow::Error::msg)?;
             (
                 v,
                 p,
@@ -66,12 +67,13 @@ pub fn run(args: &CertifyArgs) -> Result<()> {
         }
         (None, None) => bail!("no answer given: add --displacements FILE and/or --forces FILE"),
     };
-    let law = if args.given_friction {
-        Law::GivenFriction
+    let friction = if args.given_friction {
+        Friction::Given(&instance.g)
     } else {
-        Law::Coulomb
+        Friction::Coulomb
     };
-    let c = certify(&problem, law, &v, &p, &q, args.tolerance);
+    let law = friction.law();
+    let c = certify(problem, friction, &v, &p, &q, args.tolerance);
     let mut text = format!(
         "instance {} ({n} unknowns, {m} contact nodes), law {}: {how}\n",
         args.instance.display(),

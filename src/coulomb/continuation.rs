@@ -12,7 +12,7 @@
 //!   ones warm-start on the finest level.
 
 use contactlab_solvers::{
-    ContactProblem, Iterations, Law, Observer, Solution, Solver, Start, Status, Timing,
+    ContactProblem, Friction, Iterations, Observer, Solution, Solver, Start, Timing,
 };
 use serde::{Deserialize, Serialize};
 
@@ -55,7 +55,7 @@ pub struct LevelCount {
 
 /// The given-friction step by mesh continuation over `levels` (coarse to fine).
 pub struct Continuation<'a> {
-    levels: Vec<Discretization>,
+    levels: &'a [Discretization],
     solver: &'a mut dyn Solver,
     schedule: Schedule,
     last: Option<Solution>,
@@ -64,7 +64,7 @@ pub struct Continuation<'a> {
 
 impl<'a> Continuation<'a> {
     pub fn new(
-        levels: Vec<Discretization>,
+        levels: &'a [Discretization],
         solver: &'a mut dyn Solver,
         schedule: Schedule,
     ) -> Self {
@@ -118,18 +118,10 @@ impl GivenFrictionStep for Continuation<'_> {
         let mut timing = Timing::default();
         for idx in first..=top {
             let g_level = self.levels[idx].transfer_contact(&self.levels[top], g);
-            let level = &mut self.levels[idx];
-            if let Err(e) = level.problem.set_friction_bound(&g_level) {
-                return Solution::failed(
-                    level.problem.n(),
-                    g_level.len(),
-                    Status::NonFinite,
-                    e.to_string(),
-                );
-            }
+            let level = &self.levels[idx];
             let mut s = self.solver.solve(
                 &level.problem,
-                Law::GivenFriction,
+                Friction::Given(&g_level),
                 Some(Start {
                     v: &v,
                     pressure: &l,

@@ -4,7 +4,7 @@
 
 use anyhow::{Context, Result, bail};
 use contactlab_solvers::registry::{self, Entry};
-use contactlab_solvers::{Law, Observer, Solution, Status};
+use contactlab_solvers::{Friction, Law, Observer, Solution, Status};
 use serde::Serialize;
 
 use crate::certificate::{Certificate, certify_solution};
@@ -21,7 +21,7 @@ use crate::settings::Settings;
 pub struct Run {
     pub scene: Scene,
     pub solver: &'static str,
-    /// The finest level's discretization, with g set to the last bound used.
+    /// The finest level's discretization.
     pub discretization: Discretization,
     /// The solver's answer and its own claim (`coulomb.status`).
     pub coulomb: CoulombSolution,
@@ -64,18 +64,24 @@ pub fn with_step<T>(
     }
     let mut inner = settings.build(entry).map_err(anyhow::Error::msg)?;
     if entry.warm_starts && scene.levels.len() > 1 {
-        let levels = scene
+        let mut levels = scene
             .levels
             .iter()
             .map(|&h| Discretization::new(scene, h))
             .collect::<Result<Vec<_>, _>>()?;
-        let mut step = Continuation::new(levels, inner.as_mut(), settings.schedule);
-        let out = work(&mut step, settings);
-        Ok((out, step.finest().clone(), Some(step.counts.clone()), entry))
+        let (out, counts) = {
+            let mut step = Continuation::new(&levels, inner.as_mut(), settings.schedule);
+            let out = work(&mut step, settings);
+            (out, step.counts.clone())
+        };
+        let finest = levels.pop().context("a scene has at least one level")?;
+        Ok((out, finest, Some(counts), entry))
     } else {
         let finest = Discretization::new(scene, scene.finest())?;
-        let mut step = SingleLevel::new(finest.problem.clone(), inner.as_mut());
-        let out = work(&mut step, settings);
+        let out = {
+            let mut step = SingleLevel::new(&finest.problem, inner.as_mut());
+            work(&mut step, settings)
+        };
         Ok((out, finest, None, entry))
     }
 }
@@ -142,7 +148,7 @@ pub fn solve_assembled(
     settings.validate().map_err(anyhow::Error::msg)?;
     let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
     let t = std::time::Instant::now();
-    let solution = solver.solve(&finest.problem, Law::Coulomb, None, observer);
+    let solution = solver.solve(&finest.problem, Friction::Coulomb, None, observer);
     let seconds = t.elapsed().as_secs_f64();
     let g: Vec<f64> = finest
         .problem
@@ -181,19 +187,15 @@ pub fn solve_assembled(
 pub fn report(
     scene: Scene,
     solver: &'static str,
-    mut discretization: Discretization,
+    discretization: Discretization,
     coulomb: CoulombSolution,
     levels: Vec<LevelCount>,
     settings: &Settings,
 ) -> Run {
-    discretization
-        .problem
-        .set_friction_bound(&coulomb.g)
-        .expect("the fixed point keeps g finite and ≥ 0");
     let s = &coulomb.solution;
     let certificate = certify_solution(
         &discretization.problem,
-        Law::Coulomb,
+        Friction::Coulomb,
         s,
         settings.certificate.tolerance,
     );
@@ -208,9 +210,9 @@ pub fn report(
         );
     }
     let s = &coulomb.solution;
-    let profile = contact_profile(&discretization, s, status);
+    let profile = contact_profile(&discretization, s, &coulomb.g, status);
     let separation = separation_of(&discretization, s);
-    let objective = discretization.problem.objective(&s.v);
+    let objective = discretization.problem.objective(&s.v, &coulomb.g);
     Run {
         scene,
         solver,
@@ -236,7 +238,7 @@ pub fn solve_given_friction(
     g: &[f64],
     observer: &mut dyn Observer,
 ) -> Result<(Discretization, Solution, Vec<LevelCount>)> {
-    let (solution, mut finest, counts, _) = with_step(scene, settings, solver, |step, _| {
+    let (solution, finest, counts, _) = with_step(scene, settings, solver, |step, _| {
         step.solve_step(g, observer)
     })?;
     let counts = counts.unwrap_or_else(|| {
@@ -248,7 +250,6 @@ pub fn solve_given_friction(
             seconds: solution.timing.total(),
         }]
     });
-    finest.problem.set_friction_bound(g)?;
     Ok((finest, solution, counts))
 }
 

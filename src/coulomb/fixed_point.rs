@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use contactlab_solvers::settings::{Stopping, Validate, at_least_one};
 use contactlab_solvers::{
-    ContactProblem, Control, Iterations, Law, Observer, Progress, Solution, Solver, Start, Status,
+    ContactProblem, Control, Friction, Iterations, Observer, Progress, Solution, Solver, Start,
+    Status,
 };
 use serde::{Deserialize, Serialize};
 
@@ -306,13 +307,13 @@ pub fn friction_fixed_point(
 /// The given-friction step on one mesh with one solver, warm-started from the
 /// previous step where the solver can use it.
 pub struct SingleLevel<'a> {
-    pub problem: ContactProblem,
+    pub problem: &'a ContactProblem,
     pub solver: &'a mut dyn Solver,
     last: Option<Solution>,
 }
 
 impl<'a> SingleLevel<'a> {
-    pub fn new(problem: ContactProblem, solver: &'a mut dyn Solver) -> Self {
+    pub fn new(problem: &'a ContactProblem, solver: &'a mut dyn Solver) -> Self {
         Self {
             problem,
             solver,
@@ -323,20 +324,17 @@ impl<'a> SingleLevel<'a> {
 
 impl GivenFrictionStep for SingleLevel<'_> {
     fn problem(&self) -> &ContactProblem {
-        &self.problem
+        self.problem
     }
 
     fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution {
-        if let Err(e) = self.problem.set_friction_bound(g) {
-            return Solution::failed(self.problem.n(), g.len(), Status::NonFinite, e.to_string());
-        }
         let start = self.last.as_ref().map(|s| Start {
             v: &s.v,
             pressure: &s.pressure,
         });
         let solution = self
             .solver
-            .solve(&self.problem, Law::GivenFriction, start, observer);
+            .solve(self.problem, Friction::Given(g), start, observer);
         self.last = Some(solution.clone());
         solution
     }
@@ -363,7 +361,6 @@ mod tests {
                 t: 2 * i,
                 s: 2 * i + 1,
                 weight: 1.0,
-                g: 0.0,
                 coefficient: 0.5,
             })
             .collect();

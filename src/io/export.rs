@@ -21,7 +21,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use contactlab_solvers::reduction::condensed::condense;
-use contactlab_solvers::{ContactNode, ContactProblem};
+use contactlab_solvers::{ContactNode, ContactProblem, Friction};
 use nalgebra_sparse::io::save_to_matrix_market_str;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::{Deserialize, Serialize};
@@ -106,7 +106,7 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
             t: c.t,
             s: c.s,
             weight: c.weight,
-            g: c.g,
+            g: 0.0,
             coefficient: c.coefficient,
         })
         .collect();
@@ -234,7 +234,7 @@ fn csr(t: &Triplets) -> CsrMatrix<f64> {
 /// is read first and every file is held to what it declares: n unknowns
 /// (A, M n × n, f n × 1), k rigid modes (n × k), m contact nodes (exactly m
 /// rows of `contact.csv`, node i on row i), before anything is allocated.
-pub fn import(dir: &Path) -> Result<ContactProblem> {
+pub fn import(dir: &Path) -> Result<Instance> {
     let shown = dir.display();
     let json_path = dir.join("problem.json");
     if !json_path.is_file() {
@@ -273,26 +273,39 @@ pub fn import(dir: &Path) -> Result<ContactProblem> {
         "the rigid modes (n × rigid_modes)",
     )?;
     let modes: Vec<Vec<f64>> = (0..k).map(|j| modes.column(j)).collect();
-    let contacts = read_contacts(&dir.join("contact.csv"), m)?;
-    ContactProblem::new(a, f, mass, contacts, modes)
-        .with_context(|| format!("{shown}: the files do not form a contact problem"))
+    let (contacts, g) = read_contacts(&dir.join("contact.csv"), m)?;
+    let problem = ContactProblem::new(a, f, mass, contacts, modes)
+        .with_context(|| format!("{shown}: the files do not form a contact problem"))?;
+    Friction::Given(&g)
+        .check(&problem)
+        .map_err(|e| anyhow::anyhow!("{shown}: contact.csv's column g: {e}"))?;
+    Ok(Instance { problem, g })
+}
+
+/// An exported problem read back: the problem, and the friction bound g of
+/// its given-friction subproblem (`contact.csv`'s column g).
+pub struct Instance {
+    pub problem: ContactProblem,
+    pub g: Vec<f64>,
 }
 
 /// Reads exactly `m` rows of `contact.csv`, node i on row i.
-fn read_contacts(path: &Path, m: usize) -> Result<Vec<ContactNode>> {
+fn read_contacts(path: &Path, m: usize) -> Result<(Vec<ContactNode>, Vec<f64>)> {
     let (file, _) = guarded::open(path)
         .map_err(|reason| anyhow::anyhow!("cannot read {}: {reason}", path.display()))?;
     contacts_from(file, m, &path.display().to_string())
 }
 
 /// The rows of a `contact.csv` read from `source` (named `shown` in
-/// messages): exactly `m`, node i on row i.
+/// messages): exactly `m`, node i on row i; the contact nodes and the
+/// friction bound g.
 pub fn contacts_from(
     source: impl std::io::Read,
     m: usize,
     shown: &str,
-) -> Result<Vec<ContactNode>> {
+) -> Result<(Vec<ContactNode>, Vec<f64>)> {
     let mut contacts = Vec::with_capacity(m);
+    let mut g = Vec::with_capacity(m);
     for (i, rec) in guarded::csv_reader(source)
         .deserialize::<ContactRow>()
         .enumerate()
@@ -312,9 +325,9 @@ pub fn contacts_from(
             t: c.t,
             s: c.s,
             weight: c.weight,
-            g: c.g,
             coefficient: c.coefficient,
         });
+        g.push(c.g);
     }
     if contacts.len() != m {
         bail!(
@@ -322,7 +335,7 @@ pub fn contacts_from(
             contacts.len()
         );
     }
-    Ok(contacts)
+    Ok((contacts, g))
 }
 
 /// Reads the displacements of an `n`-unknown problem: a Matrix Market file

@@ -101,11 +101,16 @@ pub const PROFILE_COLUMNS: [&str; 12] = [
     "status",
 ];
 
-/// The profile along Γ_K in increasing x, marked with the run's status.
-pub fn contact_profile(d: &Discretization, solution: &Solution, status: Status) -> Vec<ProfileRow> {
+/// The profile along Γ_K in increasing x at the friction bound `g` (one
+/// per contact node), marked with the run's status.
+pub fn contact_profile(
+    d: &Discretization,
+    solution: &Solution,
+    g: &[f64],
+    status: Status,
+) -> Vec<ProfileRow> {
     let u = d.displacements(&solution.v);
     let tol = SEPARATION_TOL * largest_displacement(d, solution);
-    let nodes = d.problem.contacts();
     d.dofs
         .contacts()
         .iter()
@@ -120,7 +125,7 @@ pub fn contact_profile(d: &Discretization, solution: &Solution, status: Status) 
             slip: solution.v[c.s],
             pressure: solution.pressure[i],
             friction_traction: solution.friction_traction[i],
-            g: nodes[i].g,
+            g: g[i],
             state: ContactState::of(solution.v[c.t], solution.v[c.s], tol),
             status,
         })

@@ -195,7 +195,6 @@ fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs], coefficient: f64) -> Vec
             s: c.s,
             // Trapezoid rule on Γ_K: h inside, h/2 at both ends.
             weight: if i == 0 || i == last { h / 2.0 } else { h },
-            g: 0.0,
             coefficient,
         })
         .collect()

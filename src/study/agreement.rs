@@ -44,8 +44,9 @@ fn rel(num: f64, den: f64) -> f64 {
     if den > 0.0 { num / den } else { num }
 }
 
-/// How far `s` is from `reference`, both solutions of `d.problem`.
-pub fn agreement(d: &Discretization, s: &Solution, reference: &Solution) -> Agreement {
+/// How far `s` is from `reference`, both solutions of `d.problem` (the
+/// objective taken at the reference's bound `g`).
+pub fn agreement(d: &Discretization, g: &[f64], s: &Solution, reference: &Solution) -> Agreement {
     let flat =
         |sol: &Solution| -> Vec<f64> { d.displacements(&sol.v).into_iter().flatten().collect() };
     let (u, u_ref) = (flat(s), flat(reference));
@@ -75,8 +76,8 @@ pub fn agreement(d: &Discretization, s: &Solution, reference: &Solution) -> Agre
     } else {
         l2(&reference.pressure)
     };
-    let j = d.problem.objective(&s.v);
-    let j_ref = d.problem.objective(&reference.v);
+    let j = d.problem.objective(&s.v, g);
+    let j_ref = d.problem.objective(&reference.v, g);
     Agreement {
         displacement_max: rel(max_abs(&du), max_abs(&u_ref)),
         displacement_l2: rel(l2(&du), l2(&u_ref)),

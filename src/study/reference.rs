@@ -10,7 +10,7 @@
 
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};
-use contactlab_solvers::{Law, Solution, Status};
+use contactlab_solvers::{Friction, Law, Solution, Status};
 use serde::Serialize;
 use serde_json::Value;
 
@@ -125,7 +125,7 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
         let (d, solution, _) = solve_given_friction(scene, &settings, e.name, &g, &mut budget)?;
         let certificate = certify_solution(
             &d.problem,
-            Law::GivenFriction,
+            Friction::Given(&g),
             &solution,
             base.certificate.tolerance,
         );

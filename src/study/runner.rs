@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use contactlab_solvers::{Control, Law, Observer, Progress, Silent, Solution};
+use contactlab_solvers::{Control, Friction, Law, Observer, Progress, Silent, Solution};
 
 use crate::certificate::certify_solution;
 use crate::coulomb::budget::Budget;
@@ -39,7 +39,9 @@ pub struct Measured {
     /// Work per mesh level.
     pub levels: Vec<LevelCount>,
     pub history: Vec<Progress>,
-    pub solution: Option<(Discretization, Solution)>,
+    /// The finest level's discretization, the solution and the friction
+    /// bound it was certified at (kept only when asked).
+    pub solution: Option<(Discretization, Solution, Vec<f64>)>,
 }
 
 /// Keeps the stages a convergence history wants: the fixed point's and
@@ -66,6 +68,8 @@ impl Observer for Recorder {
 struct Solved {
     discretization: Discretization,
     solution: Solution,
+    /// The friction bound of the answer: the given g, or 𝓕p (Coulomb).
+    bound: Vec<f64>,
     certificate: crate::certificate::Certificate,
     /// The certified status, and the solver's (or the fixed point's) claim.
     status: contactlab_solvers::Status,
@@ -105,6 +109,7 @@ fn solve_once(
                 setup,
                 detail: run.coulomb.detail,
                 discretization: run.discretization,
+                bound: run.coulomb.g,
                 solution: run.coulomb.solution,
             })
         }
@@ -128,7 +133,7 @@ fn solve_once(
             let work = budget.work();
             let certificate = certify_solution(
                 &d.problem,
-                Law::GivenFriction,
+                Friction::Given(&reference.g),
                 &solution,
                 spec.settings.certificate.tolerance,
             );
@@ -144,6 +149,7 @@ fn solve_once(
                 setup: solution.timing.setup,
                 detail: solution.detail.clone(),
                 discretization: d,
+                bound: reference.g.clone(),
                 solution,
             })
         }
@@ -160,12 +166,17 @@ fn solve_unchecked(spec: &TrialSpec, budget: &mut Budget<'_>) -> Result<Solved> 
         .map_err(anyhow::Error::msg)?;
     let t = Instant::now();
     // One solve of the law the trial names, on the finest level: no fixed
-    // point (a solver of the subproblem at the discretization's g).
-    let solution = solver.solve(&d.problem, spec.law, None, budget);
+    // point (a solver of the subproblem at g = 0).
+    let zero = vec![0.0; d.problem.contacts().len()];
+    let friction = match spec.law {
+        Law::GivenFriction => Friction::Given(&zero),
+        Law::Coulomb => Friction::Coulomb,
+    };
+    let solution = solver.solve(&d.problem, friction, None, budget);
     let seconds = t.elapsed().as_secs_f64();
     let certificate = certify_solution(
         &d.problem,
-        spec.law,
+        friction,
         &solution,
         spec.settings.certificate.tolerance,
     );
@@ -181,6 +192,7 @@ fn solve_unchecked(spec: &TrialSpec, budget: &mut Budget<'_>) -> Result<Solved> 
         setup: solution.timing.setup,
         detail: solution.detail.clone(),
         discretization: d,
+        bound: zero,
         solution,
     })
 }
@@ -211,12 +223,19 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
     let against: Option<(&str, Agreement)> = reference.and_then(|r| match spec.law {
         Law::Coulomb => Some((
             r.solver,
-            agreement(&r.coulomb.discretization, s, &r.coulomb.coulomb.solution),
+            agreement(
+                &r.coulomb.discretization,
+                &r.g,
+                s,
+                &r.coulomb.coulomb.solution,
+            ),
         )),
-        Law::GivenFriction => r
-            .given_friction
-            .as_ref()
-            .map(|g| (g.solver, agreement(&g.discretization, s, &g.solution))),
+        Law::GivenFriction => r.given_friction.as_ref().map(|gf| {
+            (
+                gf.solver,
+                agreement(&gf.discretization, &r.g, s, &gf.solution),
+            )
+        }),
     });
     let separation = separation_of(&solved.discretization, s);
     let mut trial = Trial::not_run(spec, solved.status, solved.detail.clone());
@@ -267,7 +286,7 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
         history: recorder.events,
         solution: keep
             .solution
-            .then_some((solved.discretization, solved.solution)),
+            .then_some((solved.discretization, solved.solution, solved.bound)),
     })
 }
 

@@ -41,7 +41,7 @@ use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Law, Solver, Start};
 
 /// The registry entry of the conic oracle.
 pub const ENTRY: Entry = Entry {
@@ -387,14 +387,15 @@ impl Solver for ConicSolver {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         _start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, m) = (problem.n(), problem.contacts().len());
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, Ok(())) {
-            return refused;
-        }
+        let g = match Solution::given_bound(problem, friction, Ok(())) {
+            Ok(g) => g,
+            Err(refused) => return *refused,
+        };
         let t0 = Instant::now();
         if self.settings.condense {
             let condensed = match self
@@ -412,6 +413,7 @@ impl Solver for ConicSolver {
                     .collect(),
                 load: &condensed.b,
                 contact: (0..m).map(|i| (2 * i, 2 * i + 1)).collect(),
+                bound: g,
             };
             let answer = match program.solve(&self.settings, problem, t0, observer) {
                 Ok(a) => a,
@@ -437,6 +439,7 @@ impl Solver for ConicSolver {
                 .collect(),
             load: problem.f(),
             contact: contacts.iter().map(|c| (c.t, c.s)).collect(),
+            bound: g,
         };
         let answer = match program.solve(&self.settings, problem, t0, observer) {
             Ok(a) => a,
@@ -478,6 +481,8 @@ struct Program<'a> {
     load: &'a [f64],
     /// The positions of (t_i, s_i) in u, per contact node.
     contact: Vec<(usize, usize)>,
+    /// The given friction bound g_i per contact node.
+    bound: &'a [f64],
 }
 
 /// What Clarabel returned, back in the problem's units.
@@ -490,7 +495,7 @@ struct Answer {
 
 impl Program<'_> {
     /// Writes the program for Clarabel in the problem's scales (u = U û,
-    /// objective over F·U, g from `problem`), solves it and scales back.
+    /// objective over F·U, g the bound given), solves it and scales back.
     fn solve(
         self,
         settings: &ConicSettings,
@@ -516,7 +521,12 @@ impl Program<'_> {
             .collect();
         let p = csc_from_triplets(n + m, n + m, p_trip);
         let mut q: Vec<f64> = self.load.iter().map(|f| -f / force).collect();
-        q.extend(contacts.iter().map(|c| c.weight * c.g / force));
+        q.extend(
+            contacts
+                .iter()
+                .zip(self.bound)
+                .map(|(c, g)| c.weight * g / force),
+        );
         // Rows 0..m: t_i + slack = 0 (slack ≥ 0). SOC: rows m+2i, m+2i+1:
         // −(z_i, s_i) + slack = 0 in SOC(2). QP: s_i − z_i + slack = 0 and
         // −s_i − z_i + slack = 0, slacks ≥ 0.

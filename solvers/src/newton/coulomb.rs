@@ -43,7 +43,7 @@ use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Law, Solver, Start};
 
 /// The registry entry of the direct Coulomb solver.
 pub const ENTRY: Entry = Entry {
@@ -480,13 +480,14 @@ impl Solver for NewtonCoulomb {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        if let Some(refused) =
+            Solution::refusal(problem, ENTRY.laws, friction, self.settings.validate())
         {
             return refused;
         }

@@ -35,7 +35,7 @@ use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Law, Solver, Start};
 
 /// The registry entry of the condensed semismooth Newton solver.
 pub const ENTRY: Entry = Entry {
@@ -449,16 +449,16 @@ impl Solver for CondensedNewton {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
-        {
-            return refused;
-        }
+        let bound = match Solution::given_bound(problem, friction, self.settings.validate()) {
+            Ok(g) => g,
+            Err(refused) => return *refused,
+        };
         let t0 = Instant::now();
         let condensed = match self
             .cache
@@ -469,7 +469,11 @@ impl Solver for CondensedNewton {
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let g: Vec<f64> = contacts.iter().map(|c| c.weight * c.g).collect();
+        let g: Vec<f64> = contacts
+            .iter()
+            .zip(bound)
+            .map(|(c, g)| c.weight * g)
+            .collect();
         // Start: the given iterate, or all contacts closed and sticking (y = 0)
         // with the forces that hold that state.
         let y0: Vec<f64> = match start {

@@ -41,9 +41,6 @@ pub struct ContactNode {
     pub s: usize,
     /// Trapezoid weight `w_i` (h inside Γ_K, h/2 at its ends).
     pub weight: f64,
-    /// Given friction bound `g_i ≥ 0` per unit length (𝓕 times a pressure)
-    /// of the given-friction subproblem.
-    pub g: f64,
     /// Coulomb friction coefficient 𝓕_i ≥ 0 of the Coulomb problem.
     pub coefficient: f64,
 }
@@ -69,8 +66,6 @@ pub enum ProblemError {
     DuplicateIndex { node: usize, index: usize },
     #[error("contact node {node}: weight {value} must be positive and finite")]
     BadWeight { node: usize, value: f64 },
-    #[error("contact node {node}: friction bound g = {value} must be finite and ≥ 0")]
-    BadFrictionBound { node: usize, value: f64 },
     #[error("contact node {node}: friction coefficient {value} must be finite and ≥ 0")]
     BadCoefficient { node: usize, value: f64 },
     #[error("{what} holds a non-finite value (NaN or infinity)")]
@@ -179,7 +174,6 @@ impl ContactProblem {
                     value: c.weight,
                 });
             }
-            check_g(node, c.g)?;
             if !(c.coefficient.is_finite() && c.coefficient >= 0.0) {
                 return Err(ProblemError::BadCoefficient {
                     node,
@@ -291,49 +285,19 @@ impl ContactProblem {
         self.operator_id
     }
 
-    /// Sets the friction bounds g_i (one per contact node, each finite and ≥ 0):
-    /// the step g^{m+1} = 𝓕 p(u^m) of the successive approximations, paper (9).
-    pub fn set_friction_bound(&mut self, g: &[f64]) -> Result<(), ProblemError> {
-        if g.len() != self.contacts.len() {
-            return Err(ProblemError::Dimension {
-                what: "friction bound g",
-                expected: self.contacts.len(),
-                got: g.len(),
-            });
-        }
-        for (node, &value) in g.iter().enumerate() {
-            check_g(node, value)?;
-        }
-        for (c, &value) in self.contacts.iter_mut().zip(g) {
-            c.g = value;
-        }
-        Ok(())
-    }
-
-    /// The friction bounds g_i.
-    pub fn friction_bound(&self) -> Vec<f64> {
-        self.contacts.iter().map(|c| c.g).collect()
-    }
-
-    /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i| of paper (10).
-    pub fn objective(&self, v: &[f64]) -> f64 {
+    /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i| of paper (10) at the
+    /// bound g (one per contact node).
+    pub fn objective(&self, v: &[f64], g: &[f64]) -> f64 {
         let av = spmv(&self.a, v);
         let quad: f64 = v.iter().zip(&av).map(|(x, y)| x * y).sum::<f64>() * 0.5;
         let lin: f64 = v.iter().zip(&self.f).map(|(x, y)| x * y).sum();
         let fric: f64 = self
             .contacts
             .iter()
-            .map(|c| c.weight * c.g * v[c.s].abs())
+            .zip(g)
+            .map(|(c, g)| c.weight * g * v[c.s].abs())
             .sum();
         quad - lin + fric
-    }
-}
-
-fn check_g(node: usize, value: f64) -> Result<(), ProblemError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(ProblemError::BadFrictionBound { node, value })
     }
 }
 
@@ -368,7 +332,6 @@ mod tests {
             t: 0,
             s: 1,
             weight: 1.0,
-            g: 0.0,
             coefficient: 0.0,
         };
         let problem = |f: Vec<f64>, z: Vec<f64>| {
@@ -425,7 +388,6 @@ mod tests {
             t: 0,
             s: 1,
             weight: 1.0,
-            g: 0.0,
             coefficient: 0.0,
         };
         let problem = |m: Mass| {

@@ -31,7 +31,7 @@ use crate::observer::{Control, Observer, Progress};
 use crate::problem::{ContactNode, ContactProblem};
 use crate::settings::{Stopping, Validate, at_least_one, positive};
 use crate::solution::{Iterations, Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Solver, Start};
 use pointwise::{RelaxationOperator, Smoothing, SweepData};
 
 /// The paper's finest mesh, 1/64: its sweep threshold is 1e-4·ε·(1/64)
@@ -260,6 +260,7 @@ impl ProxUzawa {
 pub fn prox_uzawa(
     op: &RelaxationOperator,
     problem: &ContactProblem,
+    g: &[f64],
     resolved: &Resolved,
     settings: &RelaxationSettings,
     start: Option<Start<'_>>,
@@ -277,7 +278,7 @@ pub fn prox_uzawa(
         Some(s) if s.pressure.len() == m => s.pressure.iter().map(|p| p.max(0.0)).collect(),
         _ => vec![0.0; m],
     };
-    let wg: Vec<f64> = contacts.iter().map(|c| c.weight * c.g).collect();
+    let wg: Vec<f64> = contacts.iter().zip(g).map(|(c, g)| c.weight * g).collect();
     let rho = resolved.proximal;
     let mut b = problem.f().to_vec();
     let mut mv = vec![0.0; n];
@@ -336,8 +337,9 @@ pub fn prox_uzawa(
             }
             if certified && sweeps.is_multiple_of(settings.check_every) {
                 uzawa_update(&l, &v, contacts, resolved.r, &mut l_next);
-                friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
-                let residual = residual::contact_residual(problem, &v, &l_next, &q, &mut scratch);
+                friction_traction(op, &v, &b, contacts, g, resolved.smoothing, &mut q);
+                let residual =
+                    residual::contact_residual(problem, g, &v, &l_next, &q, &mut scratch);
                 if residual <= settings.target {
                     reached = Some(residual);
                     break;
@@ -384,8 +386,8 @@ pub fn prox_uzawa(
             break;
         }
         if certified {
-            friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
-            let residual = residual::contact_residual(problem, &v, &l, &q, &mut scratch);
+            friction_traction(op, &v, &b, contacts, g, resolved.smoothing, &mut q);
+            let residual = residual::contact_residual(problem, g, &v, &l, &q, &mut scratch);
             if residual <= settings.target {
                 status = Status::Converged;
                 detail = format!(
@@ -414,7 +416,7 @@ pub fn prox_uzawa(
             break;
         }
     }
-    friction_traction(op, &v, &b, contacts, resolved.smoothing, &mut q);
+    friction_traction(op, &v, &b, contacts, g, resolved.smoothing, &mut q);
     let friction_traction = q;
     Solution {
         v,
@@ -449,11 +451,11 @@ fn friction_traction(
     v: &[f64],
     b: &[f64],
     contacts: &[ContactNode],
+    bound: &[f64],
     smoothing: Smoothing,
     out: &mut [f64],
 ) {
-    for (o, c) in out.iter_mut().zip(contacts) {
-        let g = c.g;
+    for ((o, c), &g) in out.iter_mut().zip(contacts).zip(bound) {
         *o = match smoothing {
             Smoothing::Huber { delta } => -g * (v[c.s] / delta).clamp(-1.0, 1.0),
             Smoothing::Exact => (op.gradient_at(v, b, c.s) / c.weight).clamp(-g, g),
@@ -465,20 +467,20 @@ impl Solver for ProxUzawa {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
-        {
-            return refused;
-        }
+        let g = match Solution::given_bound(problem, friction, self.settings.validate()) {
+            Ok(g) => g,
+            Err(refused) => return *refused,
+        };
         let t0 = Instant::now();
         let settings = self.settings.clone();
         let resolved = settings.resolve(problem);
         let op = self.operator(problem, resolved.proximal);
         let setup = t0.elapsed().as_secs_f64();
-        let mut out = prox_uzawa(op, problem, &resolved, &settings, start, observer);
+        let mut out = prox_uzawa(op, problem, g, &resolved, &settings, start, observer);
         out.timing.setup = setup;
         out
     }

@@ -17,6 +17,7 @@ use crate::problem::ContactProblem;
 /// scratch of length n (no allocation).
 pub fn contact_residual(
     problem: &ContactProblem,
+    bound: &[f64],
     v: &[f64],
     l: &[f64],
     q: &[f64],
@@ -31,10 +32,10 @@ pub fn contact_residual(
         *ri -= fi;
     }
     let mut law = 0.0f64;
-    for ((c, &li), &qi) in contacts.iter().zip(l).zip(q) {
+    for (((c, &li), &qi), &g) in contacts.iter().zip(l).zip(q).zip(bound) {
         r[c.t] += c.weight * li;
         r[c.s] -= c.weight * qi;
-        let (t, slip, g) = (v[c.t], v[c.s], c.g);
+        let (t, slip) = (v[c.t], v[c.s]);
         let sticks = (slip.abs() / u).min((g - qi.abs()).max(0.0) / p);
         let slides = if slip != 0.0 {
             (slip.abs() / u).min((qi + g * slip.signum()).abs() / p)

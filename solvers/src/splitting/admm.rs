@@ -39,7 +39,7 @@ use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use crate::solution::{Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Law, Solver, Start};
 
 /// The registry entry of ADMM.
 pub const ENTRY: Entry = Entry {
@@ -147,16 +147,16 @@ impl Solver for Admm {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         _start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
-        {
-            return refused;
-        }
+        let bound = match Solution::given_bound(problem, friction, self.settings.validate()) {
+            Ok(g) => g,
+            Err(refused) => return *refused,
+        };
         let t0 = Instant::now();
         let factor = self.settings.rho_factor;
         let kept = self
@@ -191,7 +191,7 @@ impl Solver for Admm {
                 v.min(0.0)
             } else {
                 let c = &contacts[k / 2];
-                let kappa = c.weight * c.g / rho;
+                let kappa = c.weight * bound[k / 2] / rho;
                 v.signum() * (v.abs() - kappa).max(0.0)
             }
         };

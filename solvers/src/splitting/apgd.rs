@@ -34,7 +34,7 @@ use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use crate::solution::{Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Law, Solver, Start};
 
 /// The registry entry of APGD.
 pub const ENTRY: Entry = Entry {
@@ -201,16 +201,16 @@ impl Solver for Apgd {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         _start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
-        {
-            return refused;
-        }
+        let bound = match Solution::given_bound(problem, friction, self.settings.validate()) {
+            Ok(g) => g,
+            Err(refused) => return *refused,
+        };
         let t0 = Instant::now();
         let (condensed, op, l) = match self.cache.get_or_build(problem.operator_id(), || {
             let c = condense(problem)?;
@@ -223,7 +223,11 @@ impl Solver for Apgd {
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let g: Vec<f64> = contacts.iter().map(|c| c.weight * c.g).collect();
+        let g: Vec<f64> = contacts
+            .iter()
+            .zip(bound)
+            .map(|(c, g)| c.weight * g)
+            .collect();
         let z = op.z.as_deref();
         // The equilibrium ẑᵀ r = ẑᵀ b̂.
         let c = z.map_or(0.0, |z| z.iter().zip(&op.b).map(|(a, b)| a * b).sum());

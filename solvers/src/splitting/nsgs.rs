@@ -34,7 +34,7 @@ use crate::settings::{
     Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
 };
 use crate::solution::{Solution, Status, Timing};
-use crate::solver::{Law, Solver, Start};
+use crate::solver::{Friction, Law, Solver, Start};
 
 /// The registry entry of nonsmooth Gauss-Seidel.
 pub const ENTRY: Entry = Entry {
@@ -228,13 +228,14 @@ impl Solver for Nsgs {
     fn solve(
         &mut self,
         problem: &ContactProblem,
-        law: Law,
+        friction: Friction<'_>,
         _start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
-        if let Some(refused) = Solution::refusal(problem, ENTRY.laws, law, self.settings.validate())
+        if let Some(refused) =
+            Solution::refusal(problem, ENTRY.laws, friction, self.settings.validate())
         {
             return refused;
         }
@@ -251,9 +252,10 @@ impl Solver for Nsgs {
         let t1 = Instant::now();
         let bounds: Vec<Bound> = contacts
             .iter()
-            .map(|c| match law {
-                Law::GivenFriction => Bound::Given(c.weight * c.g),
-                Law::Coulomb => Bound::Coulomb(c.coefficient),
+            .enumerate()
+            .map(|(i, c)| match friction {
+                Friction::Given(g) => Bound::Given(c.weight * g[i]),
+                Friction::Coulomb => Bound::Coulomb(c.coefficient),
             })
             .collect();
         let scales = problem.scales();

@@ -270,7 +270,7 @@ pub fn run(
             let profile = |m: &Measured| {
                 m.solution
                     .as_ref()
-                    .map(|(d, s)| contact_profile(d, s, m.trial.status))
+                    .map(|(d, s, g)| contact_profile(d, s, g, m.trial.status))
                     .unwrap_or_default()
             };
             let (pw, pwo) = (profile(with), profile(w));

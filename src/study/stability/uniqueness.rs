@@ -142,8 +142,8 @@ pub fn run(
             let mut spread: Option<f64> = None;
             for (i, a) in good.iter().enumerate() {
                 for b in &good[i + 1..] {
-                    if let (Some((d, sa)), Some((_, sb))) = (&a.solution, &b.solution) {
-                        let p = agreement(d, sa, sb).pressure_max;
+                    if let (Some((d, sa, _)), Some((_, sb, g))) = (&a.solution, &b.solution) {
+                        let p = agreement(d, g, sa, sb).pressure_max;
                         spread = Some(spread.map_or(p, |s| s.max(p)));
                     }
                 }
@@ -157,7 +157,7 @@ pub fn run(
                 .collect();
             let fp_difference = match (&fp, good.first()) {
                 (Some(fp), Some(g)) if fp.trial.certified() => match (&fp.solution, &g.solution) {
-                    (Some((d, a)), Some((_, b))) => Some(agreement(d, a, b).pressure_max),
+                    (Some((d, a, _)), Some((_, b, g))) => Some(agreement(d, g, a, b).pressure_max),
                     _ => None,
                 },
                 _ => None,
