@@ -10,13 +10,13 @@ use std::collections::BTreeMap;
 
 use contactlab_solvers::Solver;
 use contactlab_solvers::registry::{self, Entry};
-use contactlab_solvers::settings::{Stopping, from_tree, to_tree};
+use contactlab_solvers::settings::{Knob, Stopping, from_tree, to_tree};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::certificate::{DEFAULT_TOLERANCE, check_tolerance};
 use crate::coulomb::continuation::Schedule;
-use crate::coulomb::fixed_point::CoulombSettings;
+use crate::coulomb::fixed_point::{self, CoulombSettings};
 
 /// The certificate's settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -153,14 +153,16 @@ impl Settings {
             }
             _ => {}
         }
-        let knob = path
-            .split_once('.')
-            .and_then(|(owner, key)| registry::by_name(owner).and_then(|e| e.knob(key)));
-        let value = match knob {
-            Some(k) => (k.parse)(text),
-            None => contactlab_solvers::settings::parse_scalar(text),
-        }
-        .map_err(|m| format!("{path} = '{text}' is invalid: {m}"))?;
+        let value = match knob_of(path) {
+            Some((k, defaults)) => k.parse(text).map_err(|m| {
+                format!(
+                    "{path} = '{text}' is invalid: {m} (default {})",
+                    k.default_text(defaults)
+                )
+            }),
+            None => contactlab_solvers::settings::parse_scalar(text)
+                .map_err(|m| format!("{path} = '{text}' is invalid: {m}")),
+        }?;
         self.set(path, value)
     }
 
@@ -223,11 +225,13 @@ impl Settings {
         (entry.build)(&self.solver_tree(entry)).map_err(|e| named(entry.name, e))
     }
 
-    /// Checks every setting: the fixed point's, each solver's, the certificate's.
+    /// Checks every setting: the fixed point's, each solver's (against its
+    /// knobs' kinds, without building it), the certificate's.
     pub fn validate(&self) -> Result<(), String> {
         self.coulomb()?;
         for e in registry::solvers() {
-            self.build(e)?;
+            e.check(&self.solver_tree(e))
+                .map_err(|m| named(e.name, m))?;
         }
         check_tolerance(self.certificate.tolerance)
             .map_err(|m| format!("certificate.tolerance = {m}"))?;
@@ -256,6 +260,19 @@ impl Settings {
             "changed": self.overrides,
         })
     }
+}
+
+/// The knob at `path` (`coulomb.NAME` or `SOLVER.KNOB`) and its owner's
+/// defaults, if there is one.
+type Defaults = fn(Stopping) -> Value;
+fn knob_of(path: &str) -> Option<(&'static Knob, Defaults)> {
+    let (owner, key) = path.split_once('.')?;
+    if owner == COULOMB {
+        let knob = fixed_point::KNOBS.iter().find(|k| k.name == key)?;
+        return Some((knob, fixed_point::default_tree));
+    }
+    let entry = registry::by_name(owner)?;
+    Some((entry.knob(key)?, entry.defaults))
 }
 
 /// A solver setting's path for examples in messages: the first knob of the

@@ -9,7 +9,7 @@ use std::process::Command;
 
 use contactlab::settings::Settings;
 use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo};
-use contactlab::solvers::settings::{Validate, from_tree, parse_positive, to_tree};
+use contactlab::solvers::settings::{Kind, Validate, from_tree, to_tree};
 use contactlab::solvers::{
     ContactProblem, Friction, Law, Observer, Solution, Solver, Start, Status,
 };
@@ -265,7 +265,7 @@ static LIAR: Entry = Entry {
         name: "tolerance",
         fields: &["tolerance"],
         help: "ignored",
-        parse: parse_positive,
+        kind: Kind::Positive,
     }],
     defaults: |_| to_tree(&LiarSettings { tolerance: 1e-10 }),
     build: |tree| {
@@ -274,17 +274,11 @@ static LIAR: Entry = Entry {
     },
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-6],
         reference: 1e-10,
         exact: false,
     },
     role: Role::Other,
-    sweeps: &[],
-    stress: &[],
-    study_work: 10,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 #[derive(serde::Serialize, serde::Deserialize)]

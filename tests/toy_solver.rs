@@ -2,22 +2,23 @@
 //! proximal-gradient solver (FISTA, Beck & Teboulle 2009, on the primal
 //! given-friction problem), defined here and registered at run time, flows
 //! through the settings, the command line's flags, the comparison, the
-//! sweeps, the work-precision chart and the stability map without any other
-//! file knowing its name.
+//! work-precision chart and the stability map without any other file
+//! knowing its name. The studies study it by their default plan; one line
+//! on the study side (`plans::register`) gives it a stress condition of
+//! its own.
 
 use clap::CommandFactory;
 use contactlab::cli::Cli;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo, Variation};
-use contactlab::solvers::settings::{
-    Validate, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use contactlab::solvers::registry::{self, Accuracy, Entry, Knob, Role, StageInfo};
+use contactlab::solvers::settings::{Kind, Validate, from_tree, to_tree};
 use contactlab::solvers::{
     ContactProblem, Control, Friction, Iterations, Law, Observer, Progress, Solution, Solver,
     Start, Status, Timing,
 };
+use contactlab::study::plans::{self, Plan, Variation};
 use contactlab::study::reference::References;
 use contactlab::study::report::sweep_charts;
 use contactlab::study::stability::{StabilitySpec, run as stability};
@@ -44,7 +45,7 @@ impl Default for ToySettings {
 
 impl Validate for ToySettings {
     fn validate(&self) -> Result<(), String> {
-        positive("toy.tolerance", self.tolerance, "default 1e-10")
+        TOY.check(&to_tree(self))
     }
 }
 
@@ -169,39 +170,25 @@ static TOY: Entry = Entry {
         Knob {
             name: "tolerance",
             fields: &["tolerance"],
-            help: "stop when max|Δv| ≤ tolerance·U [default 1e-10]",
-            parse: parse_positive,
+            help: "stop when max|Δv| ≤ tolerance·U",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_iter",
             fields: &["max_iter"],
-            help: "step cap [default 200000]",
-            parse: parse_scalar,
+            help: "step cap",
+            kind: Kind::Count,
         },
     ],
     defaults: |_| to_tree(&ToySettings::default()),
     build: |tree| Ok(Box::new(Toy(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-6, 1e-8, 1e-10],
         reference: 1e-12,
         exact: false,
     },
     role: Role::Other,
-    sweeps: &[Variation {
-        knob: "tolerance",
-        values: &["1e-6", "1e-10"],
-        quick: &["1e-6", "1e-10"],
-    }],
-    stress: &[Variation {
-        knob: "max_iter",
-        values: &["10"],
-        quick: &["10"],
-    }],
-    study_work: 2_000_000,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 fn register() {
@@ -285,7 +272,19 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         .find(|(n, _)| n.starts_with("work_precision"))
         .expect("a work-precision chart");
     assert!(wp.1.series.iter().any(|s| s.name == "toy"));
-    // The stability map: its defaults and its stress condition.
+    // The stability map: at its defaults, and, once the studies are given a
+    // plan for it (one more line, on the study side), its stress condition.
+    plans::register(
+        "toy",
+        Plan {
+            stress: &[Variation {
+                knob: "max_iter",
+                values: &["10"],
+                quick: &["10"],
+            }],
+            ..plans::DEFAULT
+        },
+    );
     let mut quick = StabilitySpec::quick();
     quick.friction_values = vec![0.5];
     quick.load_totals = vec![];

@@ -8,7 +8,8 @@ use nalgebra_sparse::CsrMatrix;
 use serde_json::Value;
 
 use crate::problem::ContactProblem;
-use crate::settings::Stopping;
+pub use crate::settings::Knob;
+use crate::settings::{Stopping, check_tree};
 use crate::solver::{Law, Solver};
 
 /// What a solver is to this testbed.
@@ -20,16 +21,6 @@ pub enum Role {
     Oracle,
     /// Any other solver.
     Other,
-}
-
-/// Values of one knob that a study runs through, one at a time around the
-/// defaults (as the command line would write them).
-#[derive(Clone, Copy, Debug)]
-pub struct Variation {
-    pub knob: &'static str,
-    pub values: &'static [&'static str],
-    /// A shorter list for quick runs (tests).
-    pub quick: &'static [&'static str],
 }
 
 /// One iteration of a solver's inner loop, ready to be timed against one
@@ -50,27 +41,11 @@ pub struct StageInfo {
     pub history: bool,
 }
 
-/// A setting reachable by path (`name.knob`) from scene files, `--set` and
-/// a command-line flag `--name-knob`.
-#[derive(Clone, Copy, Debug)]
-pub struct Knob {
-    /// The knob's name within the solver's settings.
-    pub name: &'static str,
-    /// The settings fields it sets: itself, or several for a shorthand
-    /// (Clarabel's `tol` sets its three tolerances).
-    pub fields: &'static [&'static str],
-    pub help: &'static str,
-    /// Parses a command-line value.
-    pub parse: fn(&str) -> Result<Value, String>,
-}
-
 /// The knob that trades time for accuracy (work-precision diagrams,
 /// benchmarks at a target accuracy, references).
 #[derive(Clone, Copy, Debug)]
 pub struct Accuracy {
     pub knob: &'static str,
-    /// Values a work-precision diagram runs through, loose to tight.
-    pub values: &'static [f64],
     /// The value for the most accurate solve it offers (a reference).
     pub reference: f64,
     /// Whether its answers can serve as a reference at all (exact solvers:
@@ -79,7 +54,9 @@ pub struct Accuracy {
     pub exact: bool,
 }
 
-/// A registered solver.
+/// A registered solver: what it is. How the studies study it (which
+/// settings they sweep, the stress conditions, the work caps) is the
+/// studies' business, keyed by the solver's name.
 pub struct Entry {
     pub name: &'static str,
     pub about: &'static str,
@@ -95,29 +72,15 @@ pub struct Entry {
     /// The stage whose events count as its work (for budgets and "slow").
     pub work_stage: &'static str,
     pub knobs: &'static [Knob],
-    /// The settings tree for a stopping mode.
+    /// The settings tree for a stopping mode: its settings struct's defaults.
     pub defaults: fn(Stopping) -> Value,
-    /// Builds the solver from a settings tree (unknown fields and ranges are
-    /// errors that name the field).
+    /// Builds the solver from a settings tree (unknown fields and values
+    /// that its knobs' kinds refuse are errors that name the field).
     pub build: fn(&Value) -> Result<Box<dyn Solver>, String>,
     pub accuracy: Accuracy,
     pub role: Role,
-    /// One-factor sweeps of the Coulomb problem (parameter studies).
-    pub sweeps: &'static [Variation],
-    /// Stress conditions of the stability map.
-    pub stress: &'static [Variation],
-    /// Work (events of its work stage, over a whole Coulomb solve) after
-    /// which a study stops it: a count, so that a study's results do not
-    /// depend on the machine's speed.
-    pub study_work: usize,
     /// Its inner iteration for the speed benchmark (None: it has none).
     pub kernel: Option<fn(&ContactProblem) -> InnerKernel>,
-    /// Other starting points, each a set of settings (path within the
-    /// solver, value): a study runs them all to see whether the solver
-    /// finds one solution or several.
-    pub restarts: &'static [&'static [(&'static str, &'static str)]],
-    /// Settings that make it report diagnostics (e.g. a condition number).
-    pub diagnose: &'static [(&'static str, &'static str)],
 }
 
 impl Entry {
@@ -132,5 +95,15 @@ impl Entry {
 
     pub fn stage(&self, name: &str) -> Option<&'static StageInfo> {
         self.stages.iter().find(|s| s.name == name)
+    }
+
+    /// A knob's help with its default: `what it does [default 1e-10]`.
+    pub fn help(&self, knob: &Knob) -> String {
+        knob.help_with_default(self.defaults)
+    }
+
+    /// Checks a settings tree against the knobs' kinds (see [`check_tree`]).
+    pub fn check(&self, tree: &Value) -> Result<(), String> {
+        check_tree(self.name, self.knobs, self.defaults, tree)
     }
 }

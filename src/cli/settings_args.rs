@@ -9,6 +9,7 @@ use contactlab_solvers::registry::{self, Knob};
 use serde_json::Value;
 
 use crate::coulomb::continuation::Schedule;
+use crate::coulomb::fixed_point;
 use crate::settings::Settings;
 
 /// Which solvers' knobs a command offers as flags.
@@ -63,6 +64,15 @@ const SCHEDULE: &str = "schedule";
 const CERTIFY_TOL: &str = "certify-tol";
 const SET: &str = "set";
 
+/// The default of the fixed point's setting `name`, as help shows it.
+fn coulomb_default(name: &str) -> String {
+    fixed_point::KNOBS
+        .iter()
+        .find(|k| k.name == name)
+        .map(|k| k.default_text(fixed_point::default_tree))
+        .unwrap_or_default()
+}
+
 /// The flag of a solver's knob: `--relaxation-r`, `--clarabel-max-iter`.
 pub fn knob_flag(solver: &str, knob: &Knob) -> String {
     format!("{solver}-{}", knob.name.replace('_', "-"))
@@ -99,14 +109,20 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .value_name("EPS")
                     .allow_hyphen_values(true)
                     .value_parser(number::<f64>(EPSILON, "give a positive number"))
-                    .help("The paper's ε for every loop that uses one: the friction fixed point (coulomb.epsilon) and every solver setting named epsilon [default: 1e-7 / 1e-6 relative; paper 1e-4]"),
+                    .help(format!(
+                        "The paper's ε for every loop that uses one: the friction fixed point (coulomb.epsilon [default {}]) and every solver setting named epsilon",
+                        coulomb_default("epsilon")
+                    )),
             )
             .arg(
                 Arg::new(MAX_FRICTION)
                     .long(MAX_FRICTION)
                     .value_name("N")
                     .allow_hyphen_values(true)
-                    .help("Cap on friction iterations, coulomb.max_iterations [default: 50]"),
+                    .help(format!(
+                        "Cap on friction iterations, coulomb.max_iterations [default {}]",
+                        coulomb_default("max_iterations")
+                    )),
             )
             .arg(
                 Arg::new(CERTIFY_TOL)
@@ -147,7 +163,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                         .value_name("VALUE")
                         .allow_hyphen_values(true)
                         .help_heading(format!("Settings of {}", e.name))
-                        .help(k.help),
+                        .help(e.help(k)),
                 );
             }
         }

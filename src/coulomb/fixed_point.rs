@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use contactlab_solvers::settings::{Stopping, Validate, at_least_one};
+use contactlab_solvers::settings::{Kind, Knob, Stopping, Validate, check_tree, to_tree};
 use contactlab_solvers::{
     ContactProblem, Control, Friction, Iterations, Observer, Progress, Solution, Solver, Start,
     Status,
@@ -72,15 +72,37 @@ impl CoulombSettings {
     }
 }
 
+/// The fixed point's settings as knobs (`coulomb.NAME`): what they do and
+/// the values they take; their defaults are [`CoulombSettings::defaults`].
+pub const KNOBS: &[Knob] = &[
+    Knob {
+        name: "epsilon",
+        fields: &["epsilon"],
+        help: "the friction tolerance: stop when max|Δg| ≤ ε·𝓕·P (relative) or ≤ ε (paper)",
+        kind: Kind::Positive,
+    },
+    Knob {
+        name: "max_iterations",
+        fields: &["max_iterations"],
+        help: "cap on friction iterations (given-friction solves)",
+        kind: Kind::Count,
+    },
+    Knob {
+        name: "stall_window",
+        fields: &["stall_window"],
+        help: "stop as not contracting when max|Δg| has not fallen over this many iterations (0: never)",
+        kind: Kind::Whole,
+    },
+];
+
+/// The fixed point's settings tree in a stopping mode.
+pub fn default_tree(stopping: Stopping) -> serde_json::Value {
+    to_tree(&CoulombSettings::defaults(stopping))
+}
+
 impl Validate for CoulombSettings {
     fn validate(&self) -> Result<(), String> {
-        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
-            return Err(format!(
-                "coulomb.epsilon = {} is invalid: the friction tolerance must be a positive number (default 1e-7; the paper: 1e-4)",
-                self.epsilon
-            ));
-        }
-        at_least_one("coulomb.max_iterations", self.max_iterations, 50)
+        check_tree("coulomb", KNOBS, default_tree, &to_tree(self))
     }
 }
 

@@ -19,6 +19,7 @@ use contactlab_solvers::registry::{self, Entry};
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::plans;
 use crate::study::reference::References;
 use crate::study::runner::{Keep, Measured, measure_all};
 use crate::study::trial::TrialSpec;
@@ -71,7 +72,7 @@ impl Default for SweepSpec {
 
 /// The work cap of `entry` in a study scaled by `scale`.
 pub fn work_cap(entry: &Entry, scale: f64) -> Option<usize> {
-    Some(((entry.study_work as f64) * scale).ceil().max(1.0) as usize)
+    Some(((plans::plan(entry).work as f64) * scale).ceil().max(1.0) as usize)
 }
 
 /// Expands a spec into trials.
@@ -86,8 +87,9 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
                 let trial = |group: String, law| {
                     TrialSpec::new(STUDY, group, &scene, entry, law, base).with_work(cap)
                 };
+                let study = plans::plan(entry);
                 if spec.variations {
-                    for v in entry.sweeps {
+                    for v in study.sweeps {
                         let values = if spec.quick { v.quick } else { v.values };
                         let path = format!("{}.{}", entry.name, v.knob);
                         for value in values {
@@ -105,7 +107,7 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
                 let stride = if spec.quick { 2 } else { 1 };
                 let path = format!("{}.{}", entry.name, entry.accuracy.knob);
                 if spec.work_precision && entry.solves(Law::GivenFriction) {
-                    for value in entry.accuracy.values.iter().step_by(stride) {
+                    for value in study.accuracy_values(entry).iter().step_by(stride) {
                         out.push(
                             trial(WORK_PRECISION.into(), Law::GivenFriction)
                                 .varying(&path, &format!("{value:e}"))?
@@ -116,7 +118,7 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
                 if spec.work_precision {
                     let coulomb = || trial(WORK_PRECISION_COULOMB.into(), Law::Coulomb);
                     if entry.solves(Law::Coulomb) {
-                        for value in entry.accuracy.values.iter().step_by(stride) {
+                        for value in study.accuracy_values(entry).iter().step_by(stride) {
                             out.push(
                                 coulomb()
                                     .varying(&path, &format!("{value:e}"))?

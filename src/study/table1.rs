@@ -74,7 +74,7 @@ pub fn plan(
             s.schedule = schedule;
             out.push(
                 TrialSpec::new(STUDY, schedule.to_string(), &scene, entry, Law::Coulomb, &s)
-                    .with_work(Some(entry.study_work * 20)),
+                    .with_work(Some(crate::study::plans::plan(entry).work * 20)),
             );
         }
     }

@@ -33,15 +33,16 @@ use clarabel::solver::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::observer::{Limits, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
-use crate::settings::{
-    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
+
+/// The progress stage of one interior point (its unit of work).
+pub const INTERIOR_POINT: &str = "interior_point";
 
 /// The registry entry of the conic oracle.
 pub const ENTRY: Entry = Entry {
@@ -51,92 +52,70 @@ pub const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     stages: &[StageInfo {
-        name: "interior_point",
+        name: INTERIOR_POINT,
         about: "one interior-point iteration; residual max(primal, dual residual, gap)",
         history: true,
     }],
-    work_stage: "interior_point",
+    work_stage: INTERIOR_POINT,
     knobs: &[
         Knob {
             name: "tol",
             fields: &["tol_gap_abs", "tol_gap_rel", "tol_feas"],
-            help: "gap and feasibility tolerance (sets tol_gap_abs, tol_gap_rel, tol_feas) [default 1e-10]",
-            parse: parse_positive,
+            help: "gap and feasibility tolerance (sets tol_gap_abs, tol_gap_rel, tol_feas)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_iter",
             fields: &["max_iter"],
-            help: "interior-point iteration cap [default 200]",
-            parse: parse_scalar,
+            help: "interior-point iteration cap",
+            kind: Kind::Count,
         },
         Knob {
             name: "equilibrate",
             fields: &["equilibrate"],
-            help: "Clarabel's Ruiz equilibration of the data (true/false) [default true]",
-            parse: parse_scalar,
+            help: "Clarabel's Ruiz equilibration of the data (true/false)",
+            kind: Kind::Flag,
         },
         Knob {
             name: "scale_unknowns",
             fields: &["scale_unknowns"],
-            help: "write the problem in its own scales, v/U and the objective over F·U (true/false) [default true]",
-            parse: parse_scalar,
+            help: "write the problem in its own scales, v/U and the objective over F·U (true/false)",
+            kind: Kind::Flag,
         },
         Knob {
             name: "verbose",
             fields: &["verbose"],
-            help: "Clarabel's own iteration log, to stdout (true/false) [default false]",
-            parse: parse_scalar,
+            help: "Clarabel's own iteration log, to stdout (true/false)",
+            kind: Kind::Flag,
         },
         Knob {
             name: "formulation",
             fields: &["formulation"],
-            help: "the friction cone as `soc` (second-order cones) or `qp` (two half-planes) [default: soc; clarabel-qp, clarabel-condensed: qp]",
-            parse: parse_scalar,
+            help: "the friction cone as `soc` (second-order cones) or `qp` (two half-planes)",
+            kind: Kind::Word(&["soc", "qp"]),
         },
         Knob {
             name: "linear_solver",
             fields: &["linear_solver"],
-            help: "Clarabel's sparse LDLᵀ: `qdldl` or `faer` (one thread) [default: qdldl; clarabel-faer, clarabel-condensed: faer]",
-            parse: parse_scalar,
+            help: "Clarabel's sparse LDLᵀ: `qdldl` or `faer` (one thread)",
+            kind: Kind::Word(&["qdldl", "faer"]),
         },
         Knob {
             name: "condense",
             fields: &["condense"],
-            help: "give Clarabel the problem condensed onto the contact unknowns (true/false) [default: false; clarabel-condensed: true]",
-            parse: parse_scalar,
+            help: "give Clarabel the problem condensed onto the contact unknowns (true/false)",
+            kind: Kind::Flag,
         },
     ],
     defaults: |_| to_tree(&ConicSettings::default()),
     build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tol",
-        values: &[1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12],
         reference: 1e-10,
         exact: true,
     },
     role: Role::Oracle,
-    sweeps: &[],
-    stress: &[
-        Variation {
-            knob: "tol",
-            values: &["1e-4", "1e-6", "1e-8", "1e-10", "1e-12", "1e-14"],
-            quick: &["1e-4", "1e-10", "1e-14"],
-        },
-        Variation {
-            knob: "equilibrate",
-            values: &["false"],
-            quick: &["false"],
-        },
-        Variation {
-            knob: "scale_unknowns",
-            values: &["false"],
-            quick: &["false"],
-        },
-    ],
-    study_work: 2000,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 /// The registry entry of the oracle in its second formulation: in two
@@ -154,11 +133,6 @@ pub const ENTRY_QP: Entry = Entry {
         })
     },
     role: Role::Other,
-    stress: &[Variation {
-        knob: "tol",
-        values: &["1e-4", "1e-6", "1e-8", "1e-12", "1e-14"],
-        quick: &["1e-14"],
-    }],
     ..ENTRY
 };
 
@@ -177,7 +151,6 @@ pub const ENTRY_FAER: Entry = Entry {
         })
     },
     role: Role::Other,
-    stress: &[],
     ..ENTRY
 };
 
@@ -205,7 +178,6 @@ pub const ENTRY_CONDENSED: Entry = Entry {
         })
     },
     role: Role::Other,
-    stress: &[],
     ..ENTRY
 };
 
@@ -319,15 +291,9 @@ impl ConicSettings {
 }
 
 impl Validate for ConicSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("tol_gap_abs", self.tol_gap_abs),
-            ("tol_gap_rel", self.tol_gap_rel),
-            ("tol_feas", self.tol_feas),
-        ] {
-            positive(&format!("clarabel.{name}"), v, "e.g. 1e-10")?;
-        }
-        at_least_one("clarabel.max_iter", self.max_iter as usize, 200)
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -559,13 +525,13 @@ impl Program<'_> {
         let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, clarabel_settings)
             .map_err(|e| format!("Clarabel set-up failed: {e}"))?;
         let history: Arc<Mutex<Vec<Progress>>> = Arc::default();
-        if observer.wants("interior_point") {
+        if observer.wants(INTERIOR_POINT) {
             let sink = Arc::clone(&history);
             let started = Instant::now();
             solver.set_termination_callback(move |info: &clarabel::solver::DefaultInfo<f64>| {
                 if let Ok(mut h) = sink.lock() {
                     h.push(Progress {
-                        stage: "interior_point",
+                        stage: INTERIOR_POINT,
                         iteration: info.iterations as usize,
                         residual: info
                             .res_primal

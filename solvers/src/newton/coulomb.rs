@@ -32,18 +32,19 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::ncp::{billups, fb};
 use crate::numerics::random::Lcg;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Kept, condense};
-use crate::settings::{
-    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
+
+/// The progress stage of one newton step (its unit of work).
+pub const NEWTON_STEP: &str = "newton_step";
 
 /// The registry entry of the direct Coulomb solver.
 pub const ENTRY: Entry = Entry {
@@ -53,83 +54,64 @@ pub const ENTRY: Entry = Entry {
     laws: &[Law::Coulomb],
     warm_starts: false,
     stages: &[StageInfo {
-        name: "newton_step",
+        name: NEWTON_STEP,
         about: "one Newton step on the Coulomb system; residual max|Φ| / ‖b̂‖∞",
         history: true,
     }],
-    work_stage: "newton_step",
+    work_stage: NEWTON_STEP,
     knobs: &[
         Knob {
             name: "tolerance",
             fields: &["tolerance"],
-            help: "stop when max|Φ| ≤ tolerance·‖b̂‖∞ (relative) [default 1e-12]",
-            parse: parse_positive,
+            help: "stop when max|Φ| ≤ tolerance·‖b̂‖∞ (relative)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_iter",
             fields: &["max_iter"],
-            help: "cap on Newton steps [default 500]",
-            parse: parse_scalar,
+            help: "cap on Newton steps",
+            kind: Kind::Count,
         },
         Knob {
             name: "line_search",
             fields: &["line_search"],
-            help: "Armijo line search on the merit (true/false) [default true]",
-            parse: parse_scalar,
+            help: "Armijo line search on the merit (true/false)",
+            kind: Kind::Flag,
         },
         Knob {
             name: "start",
             fields: &["start"],
-            help: "starting point: `closed` (y = 0, sticking) or `frictionless` (the frictionless solution) [default closed]",
-            parse: parse_scalar,
+            help: "starting point: `closed` (y = 0, sticking) or `frictionless` (the frictionless solution)",
+            kind: Kind::Word(&["closed", "frictionless"]),
         },
         Knob {
             name: "perturbation",
             fields: &["perturbation"],
-            help: "perturb the starting forces by this relative amount (pseudo-random, see seed) [default 0]",
-            parse: parse_scalar,
+            help: "perturb the starting forces by this relative amount (pseudo-random, see seed)",
+            kind: Kind::Fraction,
         },
         Knob {
             name: "seed",
             fields: &["seed"],
-            help: "seed of the perturbation [default 1]",
-            parse: parse_scalar,
+            help: "seed of the perturbation",
+            kind: Kind::Whole,
         },
         Knob {
             name: "condition",
             fields: &["condition"],
-            help: "report the condition number of the final Newton matrix (true/false; an SVD) [default false]",
-            parse: parse_scalar,
+            help: "report the condition number of the final Newton matrix (true/false; an SVD)",
+            kind: Kind::Flag,
         },
     ],
     defaults: |_| to_tree(&NewtonCoulombSettings::default()),
     build: |tree| Ok(Box::new(NewtonCoulomb::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
         reference: 1e-13,
         exact: true,
     },
     role: Role::Other,
-    sweeps: &[],
-    stress: &[Variation {
-        knob: "line_search",
-        values: &["false"],
-        quick: &["false"],
-    }],
-    study_work: 5000,
     kernel: None,
-    restarts: &[
-        &[("start", "frictionless")],
-        &[("perturbation", "0.5"), ("seed", "1")],
-        &[("perturbation", "0.5"), ("seed", "2")],
-        &[
-            ("start", "frictionless"),
-            ("perturbation", "0.5"),
-            ("seed", "3"),
-        ],
-    ],
-    diagnose: &[("condition", "true")],
 };
 
 /// Where the Newton iteration starts.
@@ -170,16 +152,9 @@ impl Default for NewtonCoulombSettings {
 }
 
 impl Validate for NewtonCoulombSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        positive("newton-coulomb.tolerance", self.tolerance, "default 1e-12")?;
-        at_least_one("newton-coulomb.max_iter", self.max_iter, 500)?;
-        if !(self.perturbation.is_finite() && (0.0..1.0).contains(&self.perturbation)) {
-            return Err(format!(
-                "newton-coulomb.perturbation = {} is invalid: give a relative amount in [0, 1)",
-                self.perturbation
-            ));
-        }
-        Ok(())
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -412,7 +387,7 @@ fn newton(
             }
         }
         let control = observer.observe(&Progress {
-            stage: "newton_step",
+            stage: NEWTON_STEP,
             iteration: step,
             residual: norm_inf(&phi) / scale,
             seconds: t0.elapsed().as_secs_f64(),

@@ -25,70 +25,61 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::ncp::{billups, fb};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Kept, condense};
-use crate::settings::{
-    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
+/// The progress stage of one newton (its unit of work).
+pub const NEWTON_STEP: &str = "newton";
+
 /// The registry entry of the condensed semismooth Newton solver.
 pub const ENTRY: Entry = Entry {
-    name: "newton",
+    name: NEWTON_STEP,
     about: "fast exact solver: condensation onto the contact unknowns (sparse Cholesky once), semismooth Newton with line search",
     source: "Fischer (1992) and Billups (1995) NCP/box functions; De Luca, Facchinei & Kanzow (1996) globalization on the merit ½‖Φ‖²",
     laws: &[Law::GivenFriction],
     warm_starts: false,
     stages: &[StageInfo {
-        name: "newton",
+        name: NEWTON_STEP,
         about: "one Newton step; residual max|Φ| / ‖b̂‖∞ (condensed KKT system)",
         history: true,
     }],
-    work_stage: "newton",
+    work_stage: NEWTON_STEP,
     knobs: &[
         Knob {
             name: "tolerance",
             fields: &["tolerance"],
-            help: "stop when max|Φ| ≤ tolerance·‖b̂‖∞ (relative) [default 1e-12]",
-            parse: parse_positive,
+            help: "stop when max|Φ| ≤ tolerance·‖b̂‖∞ (relative)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_iter",
             fields: &["max_iter"],
-            help: "cap on Newton steps per solve [default 200]",
-            parse: parse_scalar,
+            help: "cap on Newton steps per solve",
+            kind: Kind::Count,
         },
         Knob {
             name: "line_search",
             fields: &["line_search"],
-            help: "Armijo line search on the merit (true/false; false: plain full steps) [default true]",
-            parse: parse_scalar,
+            help: "Armijo line search on the merit (true/false; false: plain full steps)",
+            kind: Kind::Flag,
         },
     ],
     defaults: |_| to_tree(&NewtonSettings::default()),
     build: |tree| Ok(Box::new(CondensedNewton::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
         reference: 1e-13,
         exact: true,
     },
     role: Role::Other,
-    sweeps: &[],
-    stress: &[Variation {
-        knob: "line_search",
-        values: &["false"],
-        quick: &["false"],
-    }],
-    study_work: 5000,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 /// Settings of the condensed semismooth Newton solver. The same in both
@@ -115,9 +106,9 @@ impl Default for NewtonSettings {
 }
 
 impl Validate for NewtonSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        positive("newton.tolerance", self.tolerance, "default 1e-12")?;
-        at_least_one("newton.max_iter", self.max_iter, 200)
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -364,7 +355,7 @@ pub fn semismooth_newton(
         mu = m1;
         merits.push(psi);
         let control = observer.observe(&Progress {
-            stage: "newton",
+            stage: NEWTON_STEP,
             iteration: step,
             residual: residual(&e),
             seconds: t0.elapsed().as_secs_f64(),

@@ -3,9 +3,9 @@
 
 use super::pointwise::{self, RelaxationOperator, SweepData};
 use super::{ProxUzawa, RelaxationSettings};
-use crate::entry::{Accuracy, Entry, InnerKernel, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, InnerKernel, Knob, Role, StageInfo};
 use crate::problem::ContactProblem;
-use crate::settings::{from_tree, parse_positive, parse_scalar, to_tree};
+use crate::settings::{Kind, from_tree, to_tree};
 use crate::solver::Law;
 
 /// The knob of the certified stopping rule (a tolerance in the
@@ -18,6 +18,11 @@ pub const OVER_RELAXATION_KNOB: &str = "omega";
 /// one stated value for every mesh, not tuned per mesh.
 pub const STUDIED_OMEGA: f64 = 1.5;
 
+/// The progress stage of one Uzawa iteration (14).
+pub const UZAWA: &str = "uzawa";
+/// The progress stage of one pointwise relaxation sweep (the unit of work).
+pub const SWEEP: &str = "sweep";
+
 /// The registry entry of the paper's method.
 pub const ENTRY: Entry = Entry {
     name: "relaxation",
@@ -27,137 +32,88 @@ pub const ENTRY: Entry = Entry {
     warm_starts: true,
     stages: &[
         StageInfo {
-            name: "uzawa",
+            name: UZAWA,
             about: "one Uzawa iteration (14); residual max|Δl|",
             history: true,
         },
         StageInfo {
-            name: "sweep",
+            name: SWEEP,
             about: "one pointwise relaxation sweep; residual max|Δv|",
             history: false,
         },
     ],
-    work_stage: "sweep",
+    work_stage: SWEEP,
     knobs: &[
         Knob {
             name: "r",
             fields: &["r"],
-            help: "penalty r of the modified Lagrangian; relative: in units of K/L [default 1e7; paper: 1e12]",
-            parse: parse_positive,
+            help: "penalty r of the modified Lagrangian; relative: in units of K/L",
+            kind: Kind::Positive,
         },
         Knob {
             name: "epsilon",
             fields: &["epsilon"],
-            help: "Uzawa stops when max|Δl| ≤ ε (relative: ε·P) [default 1e-6; paper: 1e-4]",
-            parse: parse_positive,
+            help: "Uzawa stops when max|Δl| ≤ ε (relative: ε·P)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "sweep_factor",
             fields: &["sweep_factor"],
-            help: "sweeps stop when max|Δv| ≤ factor·ε·U·h/L (relative) or ≤ factor·ε/64 (paper) [default 1; paper: 1e-4]",
-            parse: parse_positive,
+            help: "sweeps stop when max|Δv| ≤ factor·ε·U·h/L (relative) or ≤ factor·ε/64 (paper)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "proximal",
             fields: &["proximal"],
-            help: "weight ρ of (ρ/2)‖v − v^k‖²_L2, 0 turns it off; relative: in units of K/L² [default 1e-5; paper: 1]",
-            parse: parse_scalar,
+            help: "weight ρ of (ρ/2)‖v − v^k‖²_L2, 0 turns it off; relative: in units of K/L²",
+            kind: Kind::NonNegative,
         },
         Knob {
             name: "smoothing",
             fields: &["smoothing"],
-            help: "|s| along slip coordinates: `exact` (soft thresholding) or a Huber width δ; relative: in units of U [default 1e-7; paper: 1e-10]",
-            parse: pointwise::parse_smoothing,
+            help: "|s| along slip coordinates: `exact` (soft thresholding) or a Huber width δ; relative: in units of U",
+            kind: pointwise::SMOOTHING,
         },
         Knob {
             name: OVER_RELAXATION_KNOB,
             fields: &["omega"],
-            help: "over-relaxation ω of the free coordinates in each sweep, in (0, 2); 1 is the paper's Gauss–Seidel [default 1]",
-            parse: parse_positive,
+            help: "over-relaxation ω of the free coordinates in each sweep, in (0, 2); 1 is the paper's Gauss–Seidel",
+            kind: Kind::Between(0.0, 2.0),
         },
         Knob {
             name: CERTIFIED_STOP_KNOB,
             fields: &["target"],
-            help: "certified stopping: stop when the contact law's and stationarity's largest violation in the problem's scales (the certificate's measure) is ≤ target, checked after every Uzawa step and every check_every sweeps; 0: the paper's rules on max|Δl| and max|Δv| [default 0]",
-            parse: parse_scalar,
+            help: "certified stopping: stop when the contact law's and stationarity's largest violation in the problem's scales (the certificate's measure) is ≤ target, checked after every Uzawa step and every check_every sweeps; 0: the paper's rules on max|Δl| and max|Δv|",
+            kind: Kind::NonNegative,
         },
         Knob {
             name: "check_every",
             fields: &["check_every"],
-            help: "sweeps between two checks of the certified stopping rule (each costs about half a sweep) [default 10]",
-            parse: parse_scalar,
+            help: "sweeps between two checks of the certified stopping rule (each costs about half a sweep)",
+            kind: Kind::Count,
         },
         Knob {
             name: "max_uzawa",
             fields: &["max_uzawa"],
-            help: "cap on Uzawa iterations per solve [default 1000]",
-            parse: parse_scalar,
+            help: "cap on Uzawa iterations per solve",
+            kind: Kind::Count,
         },
         Knob {
             name: "max_sweeps",
             fields: &["max_sweeps"],
-            help: "cap on sweeps per Uzawa iteration [default 2000000]",
-            parse: parse_scalar,
+            help: "cap on sweeps per Uzawa iteration",
+            kind: Kind::Count,
         },
     ],
     defaults: |stopping| to_tree(&RelaxationSettings::defaults(stopping)),
     build: |tree| Ok(Box::new(ProxUzawa::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "epsilon",
-        values: &[1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
         reference: 1e-10,
         exact: false,
     },
     role: Role::PapersMethod,
-    sweeps: &[
-        Variation {
-            knob: "r",
-            values: &[
-                "1e-3", "1e-2", "1e-1", "1", "1e1", "1e3", "1e5", "1e7", "1e9", "1e11",
-            ],
-            quick: &["1e-1", "1e3", "1e7"],
-        },
-        Variation {
-            knob: "epsilon",
-            values: &["1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8"],
-            quick: &["1e-2", "1e-4", "1e-6"],
-        },
-        Variation {
-            knob: "smoothing",
-            values: &["exact", "1e-3", "1e-5", "1e-7", "1e-9"],
-            quick: &["exact", "1e-3"],
-        },
-    ],
-    stress: &[
-        Variation {
-            knob: "r",
-            values: &[
-                "1e-8", "1e-6", "1e-4", "1e-2", "1", "1e2", "1e4", "1e6", "1e8", "1e10",
-            ],
-            quick: &["1e-8", "1e7"],
-        },
-        Variation {
-            knob: "epsilon",
-            values: &[
-                "1e-2", "1e-3", "1e-4", "1e-5", "1e-6", "1e-7", "1e-8", "1e-9", "1e-10",
-            ],
-            quick: &["1e-6", "1e-15"],
-        },
-        Variation {
-            knob: "smoothing",
-            values: &["exact", "1e-2", "1e-4", "1e-6", "1e-8", "1e-10"],
-            quick: &["exact", "1e-2"],
-        },
-        Variation {
-            knob: "proximal",
-            values: &["0", "1e-5"],
-            quick: &["0"],
-        },
-    ],
-    study_work: 2_000_000,
     kernel: Some(sweep_kernel),
-    restarts: &[],
-    diagnose: &[],
 };
 
 /// One relaxation sweep at the default relative settings, with multipliers
@@ -171,7 +127,7 @@ pub fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
     let b = problem.f().to_vec();
     let mut v = vec![0.0; problem.n()];
     InnerKernel {
-        name: "sweep",
+        name: SWEEP,
         matrix,
         step: Box::new(move || {
             let data = SweepData {

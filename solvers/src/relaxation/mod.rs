@@ -21,7 +21,9 @@ mod entry;
 pub mod pointwise;
 pub mod residual;
 
-pub use entry::{CERTIFIED_STOP_KNOB, ENTRY, OVER_RELAXATION_KNOB, STUDIED_OMEGA, sweep_kernel};
+pub use entry::{
+    CERTIFIED_STOP_KNOB, ENTRY, OVER_RELAXATION_KNOB, STUDIED_OMEGA, SWEEP, UZAWA, sweep_kernel,
+};
 
 use std::time::Instant;
 
@@ -29,7 +31,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::{ContactNode, ContactProblem};
-use crate::settings::{Stopping, Validate, at_least_one, positive};
+use crate::settings::{Stopping, Validate, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Solver, Start};
 use pointwise::{RelaxationOperator, Smoothing, SweepData};
@@ -185,43 +187,9 @@ impl RelaxationSettings {
 }
 
 impl Validate for RelaxationSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        let hint = |paper: &str, relative: &str| match self.stopping {
-            Stopping::Paper => format!("the paper: {paper}"),
-            Stopping::Relative => format!("default {relative}"),
-        };
-        positive("relaxation.r", self.r, &hint("1e12", "1e7"))?;
-        positive("relaxation.epsilon", self.epsilon, &hint("1e-4", "1e-6"))?;
-        positive(
-            "relaxation.sweep_factor",
-            self.sweep_factor,
-            &hint("1e-4", "1"),
-        )?;
-        if !(self.proximal.is_finite() && self.proximal >= 0.0) {
-            return Err(format!(
-                "relaxation.proximal = {} is invalid: the proximal weight must be ≥ 0 ({}; 0 is off)",
-                self.proximal,
-                hint("1", "1e-5")
-            ));
-        }
-        if let Smoothing::Huber { delta } = self.smoothing {
-            positive("relaxation.smoothing", delta, "a Huber width, or `exact`")?;
-        }
-        if !(self.omega > 0.0 && self.omega < 2.0) {
-            return Err(format!(
-                "relaxation.omega = {} is invalid: over-relaxation needs 0 < ω < 2 (1 is the paper's Gauss–Seidel)",
-                self.omega
-            ));
-        }
-        if !(self.target.is_finite() && self.target >= 0.0) {
-            return Err(format!(
-                "relaxation.target = {} is invalid: a tolerance ≥ 0 in the certificate's measure, e.g. 1e-6 (0: the paper's rules)",
-                self.target
-            ));
-        }
-        at_least_one("relaxation.check_every", self.check_every, 10)?;
-        at_least_one("relaxation.max_uzawa", self.max_uzawa, 1000)?;
-        at_least_one("relaxation.max_sweeps", self.max_sweeps, 2_000_000)
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -283,7 +251,7 @@ pub fn prox_uzawa(
     let mut b = problem.f().to_vec();
     let mut mv = vec![0.0; n];
     let mut sweep_tol = resolved.sweep_tolerance;
-    let want_sweeps = observer.wants("sweep");
+    let want_sweeps = observer.wants(SWEEP);
     // The certified rule's scratch: the multipliers the next Uzawa step would
     // make, the friction traction, the stationarity residual.
     let certified = settings.target > 0.0;
@@ -317,7 +285,7 @@ pub fn prox_uzawa(
             sweeps += 1;
             if want_sweeps {
                 let control = observer.observe(&Progress {
-                    stage: "sweep",
+                    stage: SWEEP,
                     iteration: q_sweep,
                     residual: change,
                     seconds: t0.elapsed().as_secs_f64(),
@@ -375,7 +343,7 @@ pub fn prox_uzawa(
             .fold(0.0f64, |d, (a, b)| d.max((a - b).abs()));
         l.copy_from_slice(&l_next);
         let control = observer.observe(&Progress {
-            stage: "uzawa",
+            stage: UZAWA,
             iteration: k,
             residual: dl,
             seconds: t0.elapsed().as_secs_f64(),

@@ -73,10 +73,26 @@ pub fn parse_smoothing(text: &str) -> Result<serde_json::Value, String> {
     if t.eq_ignore_ascii_case("exact") {
         return Ok("exact".into());
     }
-    crate::settings::parse_positive(t).map_err(|_| {
+    crate::settings::Kind::Positive.parse(t).map_err(|_| {
         format!("'{text}' is neither `exact` nor a positive Huber width such as 1e-10")
     })
 }
+
+/// Whether a settings value is a smoothing: `exact`, or a Huber width > 0.
+fn is_smoothing(value: &serde_json::Value) -> bool {
+    match serde_json::from_value::<Smoothing>(value.clone()) {
+        Ok(Smoothing::Exact) => true,
+        Ok(Smoothing::Huber { delta }) => delta.is_finite() && delta > 0.0,
+        Err(_) => false,
+    }
+}
+
+/// The kind of the `smoothing` setting.
+pub const SMOOTHING: crate::settings::Kind = crate::settings::Kind::Custom {
+    describe: "`exact` or a Huber width > 0",
+    parse: parse_smoothing,
+    check: is_smoothing,
+};
 
 impl Smoothing {
     /// Stable name for tables: `exact` or `huber(δ)`.

@@ -31,15 +31,16 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
-use crate::settings::{
-    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
+
+/// The progress stage of one admm step (its unit of work).
+pub const STEP: &str = "admm_step";
 
 /// The registry entry of ADMM.
 pub const ENTRY: Entry = Entry {
@@ -49,54 +50,40 @@ pub const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     stages: &[StageInfo {
-        name: "admm_step",
+        name: STEP,
         about: "one ADMM step; residual max(primal ‖y − z‖∞/U, dual ρ‖Δz‖∞/(P·w))",
         history: true,
     }],
-    work_stage: "admm_step",
+    work_stage: STEP,
     knobs: &[
         Knob {
             name: "tolerance",
             fields: &["tolerance"],
-            help: "stop when both ADMM residuals are below tolerance (relative) [default 1e-10]",
-            parse: parse_positive,
+            help: "stop when both ADMM residuals are below tolerance (relative)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "rho_factor",
             fields: &["rho_factor"],
-            help: "penalty ρ as a multiple of the mean diagonal of S [default 1]",
-            parse: parse_positive,
+            help: "penalty ρ as a multiple of the mean diagonal of S",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_iter",
             fields: &["max_iter"],
-            help: "cap on steps per solve [default 1000000]",
-            parse: parse_scalar,
+            help: "cap on steps per solve",
+            kind: Kind::Count,
         },
     ],
     defaults: |_| to_tree(&AdmmSettings::default()),
     build: |tree| Ok(Box::new(Admm::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
         reference: 1e-13,
         exact: false,
     },
     role: Role::Other,
-    sweeps: &[Variation {
-        knob: "rho_factor",
-        values: &["0.01", "0.1", "1", "10", "100"],
-        quick: &["0.1", "10"],
-    }],
-    stress: &[Variation {
-        knob: "rho_factor",
-        values: &["1e-4", "1e4"],
-        quick: &["1e4"],
-    }],
-    study_work: 2_000_000,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 /// Settings of ADMM (relative in both stopping modes).
@@ -119,10 +106,9 @@ impl Default for AdmmSettings {
 }
 
 impl Validate for AdmmSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        positive("admm.tolerance", self.tolerance, "default 1e-10")?;
-        positive("admm.rho_factor", self.rho_factor, "default 1")?;
-        at_least_one("admm.max_iter", self.max_iter, 1_000_000)
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -247,7 +233,7 @@ impl Solver for Admm {
             };
             let residual = primal.max(dual).max(equilibrium);
             let control = observer.observe(&Progress {
-                stage: "admm_step",
+                stage: STEP,
                 iteration: k,
                 residual,
                 seconds: t1.elapsed().as_secs_f64(),

@@ -24,17 +24,18 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
 use crate::reduction::dual::DualOperator;
-use crate::settings::{
-    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
+
+/// The progress stage of one apgd step (its unit of work).
+pub const STEP: &str = "apgd_step";
 
 /// The registry entry of APGD.
 pub const ENTRY: Entry = Entry {
@@ -44,50 +45,40 @@ pub const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     stages: &[StageInfo {
-        name: "apgd_step",
+        name: STEP,
         about: "one accelerated projected gradient step; residual: the natural map of the contact law in the problem's scales (every tenth step)",
         history: true,
     }],
-    work_stage: "apgd_step",
+    work_stage: STEP,
     knobs: &[
         Knob {
             name: "tolerance",
             fields: &["tolerance"],
-            help: "stop when the natural-map residual of the contact law, in the problem's scales, is below tolerance [default 1e-10]",
-            parse: parse_positive,
+            help: "stop when the natural-map residual of the contact law, in the problem's scales, is below tolerance",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_iter",
             fields: &["max_iter"],
-            help: "cap on steps per solve [default 1000000]",
-            parse: parse_scalar,
+            help: "cap on steps per solve",
+            kind: Kind::Count,
         },
         Knob {
             name: "restart",
             fields: &["restart"],
-            help: "adaptive restart of the momentum (true/false) [default true]",
-            parse: parse_scalar,
+            help: "adaptive restart of the momentum (true/false)",
+            kind: Kind::Flag,
         },
     ],
     defaults: |_| to_tree(&ApgdSettings::default()),
     build: |tree| Ok(Box::new(Apgd::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
         reference: 1e-13,
         exact: false,
     },
     role: Role::Other,
-    sweeps: &[],
-    stress: &[Variation {
-        knob: "restart",
-        values: &["false"],
-        quick: &["false"],
-    }],
-    study_work: 2_000_000,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 /// Settings of APGD (relative in both stopping modes).
@@ -110,9 +101,9 @@ impl Default for ApgdSettings {
 }
 
 impl Validate for ApgdSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        positive("apgd.tolerance", self.tolerance, "default 1e-10")?;
-        at_least_one("apgd.max_iter", self.max_iter, 1_000_000)
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -307,7 +298,7 @@ impl Solver for Apgd {
             let finite = next.iter().all(|x| x.is_finite());
             std::mem::swap(&mut r, &mut next);
             let control = observer.observe(&Progress {
-                stage: "apgd_step",
+                stage: STEP,
                 iteration: k,
                 residual: if residual.is_finite() {
                     residual / force

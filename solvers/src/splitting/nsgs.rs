@@ -24,17 +24,18 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo, Variation};
+use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
 use crate::reduction::dual::DualOperator;
-use crate::settings::{
-    Validate, at_least_one, from_tree, parse_positive, parse_scalar, positive, to_tree,
-};
+use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
+
+/// The progress stage of one nsgs sweep (its unit of work).
+pub const SWEEP: &str = "nsgs_sweep";
 
 /// The registry entry of nonsmooth Gauss-Seidel.
 pub const ENTRY: Entry = Entry {
@@ -44,44 +45,34 @@ pub const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction, Law::Coulomb],
     warm_starts: false,
     stages: &[StageInfo {
-        name: "nsgs_sweep",
+        name: SWEEP,
         about: "one sweep over the contact nodes; residual max|Δr| over the nodal force scale",
         history: true,
     }],
-    work_stage: "nsgs_sweep",
+    work_stage: SWEEP,
     knobs: &[
         Knob {
             name: "tolerance",
             fields: &["tolerance"],
-            help: "stop when a sweep changes no force by more than tolerance·P·w (relative) [default 1e-10]",
-            parse: parse_positive,
+            help: "stop when a sweep changes no force by more than tolerance·P·w (relative)",
+            kind: Kind::Positive,
         },
         Knob {
             name: "max_sweeps",
             fields: &["max_sweeps"],
-            help: "cap on sweeps [default 100000]",
-            parse: parse_scalar,
+            help: "cap on sweeps",
+            kind: Kind::Count,
         },
     ],
     defaults: |_| to_tree(&NsgsSettings::default()),
     build: |tree| Ok(Box::new(Nsgs::new(from_tree(tree)?))),
     accuracy: Accuracy {
         knob: "tolerance",
-        values: &[1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
         reference: 1e-13,
         exact: false,
     },
     role: Role::Other,
-    sweeps: &[],
-    stress: &[Variation {
-        knob: "tolerance",
-        values: &["1e-2", "1e-14"],
-        quick: &["1e-14"],
-    }],
-    study_work: 200_000,
     kernel: None,
-    restarts: &[],
-    diagnose: &[],
 };
 
 /// Settings of nonsmooth Gauss-Seidel (the same in both stopping modes:
@@ -103,9 +94,9 @@ impl Default for NsgsSettings {
 }
 
 impl Validate for NsgsSettings {
+    /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
-        positive("nsgs.tolerance", self.tolerance, "default 1e-10")?;
-        at_least_one("nsgs.max_sweeps", self.max_sweeps, 100_000)
+        ENTRY.check(&to_tree(self))
     }
 }
 
@@ -312,7 +303,7 @@ impl Solver for Nsgs {
             }
             let residual = change / (scales.pressure * w_max);
             let control = observer.observe(&Progress {
-                stage: "nsgs_sweep",
+                stage: SWEEP,
                 iteration: sweep,
                 residual,
                 seconds: t1.elapsed().as_secs_f64(),

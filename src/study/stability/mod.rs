@@ -178,7 +178,7 @@ pub fn run(
         };
         let default = one(&mut map, trial("default"), solvable)?;
         let default_work = Some(default.trial.work).filter(|_| default.trial.certified());
-        for v in entry.stress {
+        for v in crate::study::plans::plan(entry).stress {
             let path = format!("{}.{}", entry.name, v.knob);
             for value in if spec.quick { v.quick } else { v.values } {
                 let cx = Context {

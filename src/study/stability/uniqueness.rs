@@ -17,6 +17,7 @@ use crate::io::csv::{fixed, fixed_opt};
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::agreement::agreement;
+use crate::study::plans::plan;
 use crate::study::reference::References;
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::stability::STUDY;
@@ -73,7 +74,7 @@ pub fn run(
 ) -> Result<(Vec<Measured>, Vec<UniquenessRow>)> {
     let direct: Vec<&'static Entry> = registry::solvers()
         .into_iter()
-        .filter(|e| e.solves(Law::Coulomb) && !e.restarts.is_empty())
+        .filter(|e| e.solves(Law::Coulomb) && !plan(e).restarts.is_empty())
         .collect();
     let keep = Keep {
         history: false,
@@ -112,11 +113,11 @@ pub fn run(
         for &e in &direct {
             let mut answers: Vec<Measured> = Vec::new();
             let mut starts: Vec<Vec<(&str, &str)>> = vec![Vec::new()];
-            starts.extend(e.restarts.iter().map(|r| r.to_vec()));
+            starts.extend(plan(e).restarts.iter().map(|r| r.to_vec()));
             for (k, start) in starts.iter().enumerate() {
                 let mut t = TrialSpec::new(STUDY, "uniqueness", &sc, e, Law::Coulomb, settings)
                     .with_work(work_cap(e, work_scale));
-                for (knob, value) in start.iter().chain(e.diagnose) {
+                for (knob, value) in start.iter().chain(plan(e).diagnose) {
                     t.settings
                         .set_text(&format!("{}.{knob}", e.name), value)
                         .map_err(anyhow::Error::msg)?;
