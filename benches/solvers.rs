@@ -3,14 +3,13 @@
 //! (`contactlab bench` measures the same things quickly up to h = 1/256 and
 //! writes results/performance.csv.)
 
-use contactlab::coulomb::driver::solve_given_friction;
-use contactlab::coulomb::driver::solve_scene;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
+use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::numerics::linalg::SparseCholesky;
-use contactlab::solvers::{Silent, registry};
+use contactlab::solvers::{Friction, Silent, registry};
 use contactlab::study::bench::pinned;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -56,10 +55,16 @@ fn bench(c: &mut Criterion) {
     for k in [4u32, 5] {
         let s = scene(k);
         let label = MeshSize::from_level(k).unwrap().to_string();
-        let g = solve_scene(&s, &settings, "newton", &mut Silent)
-            .unwrap()
-            .coulomb
-            .g;
+        let g = solve_scene(
+            &s,
+            Friction::Coulomb,
+            solver_entry("newton").unwrap(),
+            &settings,
+            &mut Silent,
+        )
+        .unwrap()
+        .outcome
+        .bound;
         for entry in registry::solvers() {
             group.bench_with_input(
                 BenchmarkId::new(format!("given_friction/{}", entry.name), &label),
@@ -67,10 +72,17 @@ fn bench(c: &mut Criterion) {
                 |b, _| {
                     b.iter(|| {
                         black_box(
-                            solve_given_friction(&s, &settings, entry.name, &g, &mut Silent)
-                                .unwrap()
-                                .1
-                                .status,
+                            solve_scene(
+                                &s,
+                                Friction::Given(&g),
+                                solver_entry(entry.name).unwrap(),
+                                &settings,
+                                &mut Silent,
+                            )
+                            .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+                            .unwrap()
+                            .1
+                            .status,
                         )
                     })
                 },
@@ -81,10 +93,16 @@ fn bench(c: &mut Criterion) {
                 |b, _| {
                     b.iter(|| {
                         black_box(
-                            solve_scene(&s, &settings, entry.name, &mut Silent)
-                                .unwrap()
-                                .coulomb
-                                .status,
+                            solve_scene(
+                                &s,
+                                Friction::Coulomb,
+                                solver_entry(entry.name).unwrap(),
+                                &settings,
+                                &mut Silent,
+                            )
+                            .unwrap()
+                            .outcome
+                            .claim,
                         )
                     })
                 },

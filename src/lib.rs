@@ -22,6 +22,7 @@ pub mod coulomb;
 pub mod io;
 pub mod mechanics;
 pub mod settings;
+pub mod solve;
 pub mod study;
 
 pub use contactlab_solvers as solvers;

@@ -20,12 +20,12 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 use contactlab::certificate::{Condition, DEFAULT_TOLERANCE, certify};
-use contactlab::coulomb::driver::solve_scene;
 use contactlab::io::export::export;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
+use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::{ContactNode, ContactProblem, Friction, Law, Mass, Silent};
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use proptest::prelude::*;
@@ -274,11 +274,18 @@ struct Truth {
 
 fn truth(k: u32) -> Truth {
     let scene = Scene::paper_problem_to(k, MeshSize::from_level(3).unwrap()).unwrap();
-    let run = solve_scene(&scene, &Settings::default(), "newton-coulomb", &mut Silent).unwrap();
-    assert!(run.status.is_converged(), "{}", run.coulomb.detail);
-    let s = run.coulomb.solution;
+    let run = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton-coulomb").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap();
+    assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
+    let s = run.outcome.solution;
     Truth {
-        d: run.discretization,
+        d: run.finest,
         v: s.v,
         p: s.pressure,
         q: s.friction_traction,
@@ -544,9 +551,16 @@ fn a_nearly_balanced_load_holds_the_contact_to_the_net_load() {
     scene.name = "nearly balanced".into();
     let d = Discretization::new(&scene, scene.finest()).unwrap();
     export(&inst, &scene, &d).unwrap();
-    let run = solve_scene(&scene, &Settings::default(), "newton-coulomb", &mut Silent).unwrap();
-    assert!(run.status.is_converged(), "{}", run.coulomb.detail);
-    let s = &run.coulomb.solution;
+    let run = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton-coulomb").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap();
+    assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
+    let s = &run.outcome.solution;
     let x = d.contact_x();
     let m = x.len();
     let f_file = dir.path().join("forces.csv");

@@ -12,11 +12,11 @@ use std::process::{Command, Output};
 
 use common::{contactlab, one_line_error, run_with_deadline};
 
-use contactlab::coulomb::driver::solve_scene;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::Silent;
+use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solvers::{Friction, Silent};
 
 /// Runs contactlab with `args` and a deadline.
 fn run(args: &[&str]) -> Output {
@@ -53,8 +53,15 @@ fn fixture() -> Fixture {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let scene = Scene::paper_problem_to(1, MeshSize::from_level(3).unwrap()).unwrap();
-    let run = solve_scene(&scene, &Settings::default(), "newton-coulomb", &mut Silent).unwrap();
-    let sol = run.coulomb.solution;
+    let run = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton-coulomb").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap();
+    let sol = run.outcome.solution;
     let v = root.join("v.txt");
     std::fs::write(
         &v,

@@ -2,12 +2,11 @@
 //! every stress condition.
 
 use contactlab::certificate::certify;
-use contactlab::coulomb::driver::solve_given_friction;
-use contactlab::coulomb::driver::solve_scene;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
+use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::newton::tresca::{NewtonSettings, semismooth_newton};
 use contactlab::solvers::{
     CondensedNewton, ContactNode, ContactProblem, Friction, Silent, Solver, Status,
@@ -27,13 +26,33 @@ fn scene(problem: u32, k: u32) -> Scene {
 fn agrees_with_the_oracle_on_the_same_subproblem_and_on_the_coulomb_problem() {
     for problem in [1, 2, 3] {
         let scene = scene(problem, 5);
-        let oracle = solve_scene(&scene, &Settings::default(), "clarabel", &mut Silent).unwrap();
-        let g = oracle.coulomb.g.clone();
-        let (d, reference, _) =
-            solve_given_friction(&scene, &Settings::default(), "clarabel", &g, &mut Silent)
-                .unwrap();
-        let (_, fast, _) =
-            solve_given_friction(&scene, &Settings::default(), "newton", &g, &mut Silent).unwrap();
+        let oracle = solve_scene(
+            &scene,
+            Friction::Coulomb,
+            solver_entry("clarabel").unwrap(),
+            &Settings::default(),
+            &mut Silent,
+        )
+        .unwrap();
+        let g = oracle.outcome.bound.clone();
+        let (d, reference, _) = solve_scene(
+            &scene,
+            Friction::Given(&g),
+            solver_entry("clarabel").unwrap(),
+            &Settings::default(),
+            &mut Silent,
+        )
+        .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+        .unwrap();
+        let (_, fast, _) = solve_scene(
+            &scene,
+            Friction::Given(&g),
+            solver_entry("newton").unwrap(),
+            &Settings::default(),
+            &mut Silent,
+        )
+        .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+        .unwrap();
         assert_eq!(fast.status, Status::Converged, "{}", fast.detail);
         let a = agreement(&d, &g, &fast, &reference);
         assert!(
@@ -59,25 +78,39 @@ fn agrees_with_the_oracle_on_the_same_subproblem_and_on_the_coulomb_problem() {
         );
         // The whole Coulomb problem.
         let tight = Settings::default();
-        let fast = solve_scene(&scene, &tight, "newton", &mut Silent).unwrap();
-        let slow = solve_scene(&scene, &tight, "clarabel", &mut Silent).unwrap();
-        assert!(
-            fast.coulomb.status.is_converged(),
-            "{}",
-            fast.coulomb.detail
-        );
+        let fast = solve_scene(
+            &scene,
+            Friction::Coulomb,
+            solver_entry("newton").unwrap(),
+            &tight,
+            &mut Silent,
+        )
+        .unwrap();
+        let slow = solve_scene(
+            &scene,
+            Friction::Coulomb,
+            solver_entry("clarabel").unwrap(),
+            &tight,
+            &mut Silent,
+        )
+        .unwrap();
+        assert!(fast.outcome.claim.is_converged(), "{}", fast.outcome.detail);
         let a = agreement(
-            &slow.discretization,
-            &slow.coulomb.g,
-            &fast.coulomb.solution,
-            &slow.coulomb.solution,
+            &slow.finest,
+            &slow.outcome.bound,
+            &fast.outcome.solution,
+            &slow.outcome.solution,
         );
         assert!(
             a.displacement_max <= 1e-6 && a.pressure_max <= 1e-4,
             "Coulomb problem {problem}: {a:?}"
         );
-        assert_eq!(fast.status, Status::Converged);
-        assert!(fast.certificate.residual() < 1e-7, "{:?}", fast.certificate);
+        assert_eq!(fast.outcome.status, Status::Converged);
+        assert!(
+            fast.outcome.certificate.residual() < 1e-7,
+            "{:?}",
+            fast.outcome.certificate
+        );
     }
 }
 
@@ -177,16 +210,23 @@ fn terminates_with_a_status_under_the_stress_conditions() {
     let mut s = Settings::default();
     s.set("coulomb.max_iterations", Value::from(200u64))
         .unwrap();
-    let run = solve_scene(&high, &s, "newton", &mut Silent).unwrap();
+    let run = solve_scene(
+        &high,
+        Friction::Coulomb,
+        solver_entry("newton").unwrap(),
+        &s,
+        &mut Silent,
+    )
+    .unwrap();
     assert_eq!(
-        run.coulomb.status,
+        run.outcome.claim,
         Status::InsufficientProgress,
         "{}",
-        run.coulomb.detail
+        run.outcome.detail
     );
     assert!(
-        run.coulomb
-            .history
+        run.outcome
+            .history()
             .iter()
             .all(|h| h.status == Status::Converged)
     );
@@ -198,14 +238,21 @@ fn terminates_with_a_status_under_the_stress_conditions() {
         p2: 3.0 * (20.0 - 2e-6),
         p1: 0.0,
     });
-    let run = solve_scene(&near, &Settings::default(), "newton", &mut Silent).unwrap();
-    assert!(run.coulomb.status.is_converged(), "{}", run.coulomb.detail);
+    let run = solve_scene(
+        &near,
+        Friction::Coulomb,
+        solver_entry("newton").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap();
+    assert!(run.outcome.claim.is_converged(), "{}", run.outcome.detail);
     let total: f64 = run
-        .discretization
+        .finest
         .problem
         .contacts()
         .iter()
-        .zip(&run.coulomb.solution.pressure)
+        .zip(&run.outcome.solution.pressure)
         .map(|(c, p)| c.weight * p)
         .sum();
     assert!((total - 2e-6).abs() < 1e-9, "contact force {total}");

@@ -3,11 +3,11 @@
 //! answers.
 
 use contactlab::certificate::{Condition, certify};
-use contactlab::coulomb::driver::{Run, solve_scene};
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
+use contactlab::solve::{Solved, solve_scene, solver_entry};
 use contactlab::solvers::{
     ConicSettings, ConicSolver, ContactNode, ContactProblem, Friction, Law, Silent, Solver, Status,
 };
@@ -17,11 +17,18 @@ use nalgebra_sparse::{CooMatrix, CsrMatrix};
 /// tolerance (1e-10), on the problem written in its own scales.
 const ORACLE_CERTIFICATE: f64 = 1e-6;
 
-fn solve(problem: u32, k: u32, friction: f64) -> Run {
+fn solve(problem: u32, k: u32, friction: f64) -> Solved {
     let mut scene = Scene::paper_problem(problem).unwrap();
     scene.set_finest(MeshSize::from_level(k).unwrap());
     scene.friction = friction;
-    solve_scene(&scene, &Settings::default(), "clarabel", &mut Silent).unwrap()
+    solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("clarabel").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap()
 }
 
 #[test]
@@ -29,8 +36,13 @@ fn the_coulomb_law_holds_for_every_problem_with_and_without_friction() {
     for problem in [1, 2, 3] {
         for friction in [0.0, 0.5] {
             let run = solve(problem, 4, friction);
-            assert_eq!(run.status, Status::Converged, "{}", run.coulomb.detail);
-            let c = run.certificate;
+            assert_eq!(
+                run.outcome.status,
+                Status::Converged,
+                "{}",
+                run.outcome.detail
+            );
+            let c = run.outcome.certificate;
             assert_eq!(c.law, Law::Coulomb);
             assert!(
                 c.residual() < ORACLE_CERTIFICATE,
@@ -46,9 +58,9 @@ fn contact_forces_carry_the_whole_applied_load() {
     for (problem, load) in [(1, 20.0), (2, 40.0), (3, 60.0)] {
         for friction in [0.0, 0.5] {
             let run = solve(problem, 4, friction);
-            let s = &run.coulomb.solution;
+            let s = &run.outcome.solution;
             let total: f64 = run
-                .discretization
+                .finest
                 .problem
                 .contacts()
                 .iter()
@@ -59,7 +71,7 @@ fn contact_forces_carry_the_whole_applied_load() {
                 (total - load).abs() <= 1e-8 * load,
                 "problem {problem}: {total} vs {load}"
             );
-            assert_eq!(run.discretization.total_load, -load);
+            assert_eq!(run.finest.total_load, -load);
         }
     }
 }
@@ -67,15 +79,15 @@ fn contact_forces_carry_the_whole_applied_load() {
 #[test]
 fn frictionless_limit_has_no_friction_and_stops_after_one_step() {
     let run = solve(1, 4, 0.0);
-    assert_eq!(run.coulomb.history.len(), 1);
-    assert!(run.coulomb.status.is_converged());
+    assert_eq!(run.outcome.history().len(), 1);
+    assert!(run.outcome.claim.is_converged());
     let scale = run
-        .coulomb
+        .outcome
         .solution
         .pressure
         .iter()
         .fold(0.0f64, |m, p| m.max(*p));
-    for q in &run.coulomb.solution.friction_traction {
+    for q in &run.outcome.solution.friction_traction {
         assert!(q.abs() <= 1e-9 * scale, "friction traction {q} with 𝓕 = 0");
     }
 }
@@ -84,19 +96,19 @@ fn frictionless_limit_has_no_friction_and_stops_after_one_step() {
 fn problem_3_stays_closed_and_problems_1_and_2_open_near_x_equal_1() {
     let closed = solve(3, 4, 0.5);
     assert!(
-        closed.separation.intervals.is_empty(),
+        closed.separation().intervals.is_empty(),
         "{:?}",
-        closed.separation
+        closed.separation()
     );
     for problem in [1, 2] {
         let run = solve(problem, 4, 0.5);
-        let zones = &run.separation.intervals;
+        let zones = &run.separation().intervals;
         assert_eq!(zones.len(), 1, "{zones:?}");
         let [a, b] = zones[0];
         assert_eq!(b, 1.0);
         assert!(a > 0.5 && a < 1.0, "{zones:?}");
         // Inside the open zone the pressure vanishes; outside, the jump does.
-        for row in &run.profile {
+        for row in &run.profile() {
             if row.x > a + 1e-9 {
                 assert!(row.pressure <= 1e-6 * 60.0, "{row:?}");
             } else if row.x < a - 1e-9 {
@@ -109,8 +121,8 @@ fn problem_3_stays_closed_and_problems_1_and_2_open_near_x_equal_1() {
 #[test]
 fn friction_narrows_the_separation_zone() {
     // Paper, figures 3-4: with friction the bodies separate on less of Γ_K.
-    let without = solve(1, 5, 0.0).separation.fraction;
-    let with = solve(1, 5, 0.5).separation.fraction;
+    let without = solve(1, 5, 0.0).separation().fraction;
+    let with = solve(1, 5, 0.5).separation().fraction;
     assert!(with < without, "{with} vs {without}");
 }
 

@@ -8,11 +8,10 @@
 
 use contactlab::certificate::certify;
 use contactlab::coulomb::continuation::Schedule;
-use contactlab::coulomb::driver::solve_given_friction;
-use contactlab::coulomb::driver::{Run, solve_scene};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
+use contactlab::solve::{Solved, solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Silent, Smoothing, Status};
 use contactlab::study::agreement::agreement;
 use serde_json::Value;
@@ -41,15 +40,34 @@ fn same_given_friction_problem_agrees_with_the_oracle() {
         for problem in [1, 2, 3] {
             let scene = scene(problem, k);
             // The real operating point: g of the oracle's Coulomb solution.
-            let oracle =
-                solve_scene(&scene, &Settings::default(), "clarabel", &mut Silent).unwrap();
-            let g = oracle.coulomb.g.clone();
+            let oracle = solve_scene(
+                &scene,
+                Friction::Coulomb,
+                solver_entry("clarabel").unwrap(),
+                &Settings::default(),
+                &mut Silent,
+            )
+            .unwrap();
+            let g = oracle.outcome.bound.clone();
             assert!(g.iter().any(|&x| x > 0.0));
-            let (d, reference, _) =
-                solve_given_friction(&scene, &Settings::default(), "clarabel", &g, &mut Silent)
-                    .unwrap();
-            let (_, relaxed, _) =
-                solve_given_friction(&scene, &tight(), "relaxation", &g, &mut Silent).unwrap();
+            let (d, reference, _) = solve_scene(
+                &scene,
+                Friction::Given(&g),
+                solver_entry("clarabel").unwrap(),
+                &Settings::default(),
+                &mut Silent,
+            )
+            .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+            .unwrap();
+            let (_, relaxed, _) = solve_scene(
+                &scene,
+                Friction::Given(&g),
+                solver_entry("relaxation").unwrap(),
+                &tight(),
+                &mut Silent,
+            )
+            .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+            .unwrap();
             assert_eq!(relaxed.status, Status::Converged, "{}", relaxed.detail);
             let a = agreement(&d, &g, &relaxed, &reference);
             let what = format!("problem {problem}, h = 1/{}: {a:?}", 1 << k);
@@ -71,14 +89,21 @@ fn same_given_friction_problem_agrees_with_the_oracle() {
     }
 }
 
-fn coulomb(scene: &Scene, settings: &Settings, solver: &str) -> Run {
-    let run = solve_scene(scene, settings, solver, &mut Silent).unwrap();
+fn coulomb(scene: &Scene, settings: &Settings, solver: &str) -> Solved {
+    let run = solve_scene(
+        scene,
+        Friction::Coulomb,
+        solver_entry(solver).unwrap(),
+        settings,
+        &mut Silent,
+    )
+    .unwrap();
     assert_eq!(
-        run.status,
+        run.outcome.status,
         Status::Converged,
         "{solver}: {} ({})",
-        run.coulomb.detail,
-        run.certificate.summary()
+        run.outcome.detail,
+        run.outcome.certificate.summary()
     );
     run
 }
@@ -90,22 +115,22 @@ fn whole_coulomb_problem_agrees_with_the_oracles_coulomb_solution() {
         let oracle = coulomb(&scene, &Settings::default(), "clarabel");
         let relaxed = coulomb(&scene, &tight(), "relaxation");
         let a = agreement(
-            &oracle.discretization,
-            &oracle.coulomb.g,
-            &relaxed.coulomb.solution,
-            &oracle.coulomb.solution,
+            &oracle.finest,
+            &oracle.outcome.bound,
+            &relaxed.outcome.solution,
+            &oracle.outcome.solution,
         );
         let what = format!("problem {problem}: {a:?}");
         assert!(a.displacement_max <= DISPLACEMENT_TOL, "{what}");
         assert!(a.pressure_max <= PRESSURE_TOL, "{what}");
         assert!(
-            relaxed.certificate.passed(),
+            relaxed.outcome.certificate.passed(),
             "{what}: {:?}",
-            relaxed.certificate
+            relaxed.outcome.certificate
         );
         assert_eq!(
-            relaxed.separation.intervals.len(),
-            oracle.separation.intervals.len()
+            relaxed.separation().intervals.len(),
+            oracle.separation().intervals.len()
         );
     }
 }
@@ -114,21 +139,35 @@ fn whole_coulomb_problem_agrees_with_the_oracles_coulomb_solution() {
 fn schedules_visit_the_levels_as_documented() {
     // Revisit: every friction iteration runs every level (at least one Uzawa
     // iteration each). Finest-only: coarse levels in the first one only.
-    let run = solve_scene(&scene(1, 5), &Settings::paper(), "relaxation", &mut Silent).unwrap();
-    assert_eq!(run.levels.len(), 3);
-    let mpp = run.coulomb.history.len();
-    for level in &run.levels {
+    let run = solve_scene(
+        &scene(1, 5),
+        Friction::Coulomb,
+        solver_entry("relaxation").unwrap(),
+        &Settings::paper(),
+        &mut Silent,
+    )
+    .unwrap();
+    assert_eq!(run.outcome.levels.len(), 3);
+    let mpp = run.outcome.history().len();
+    for level in &run.outcome.levels {
         assert_eq!(level.visits, mpp);
         assert!(level.uzawa >= mpp, "{level:?}");
     }
     let mut finest_only = Settings::paper();
     finest_only.schedule = Schedule::FinestOnly;
-    let run = solve_scene(&scene(1, 5), &finest_only, "relaxation", &mut Silent).unwrap();
+    let run = solve_scene(
+        &scene(1, 5),
+        Friction::Coulomb,
+        solver_entry("relaxation").unwrap(),
+        &finest_only,
+        &mut Silent,
+    )
+    .unwrap();
     assert_eq!(
-        run.levels[0].visits, 1,
+        run.outcome.levels[0].visits, 1,
         "coarse levels only in the first friction iteration"
     );
-    assert_eq!(run.levels[2].visits, run.coulomb.history.len());
+    assert_eq!(run.outcome.levels[2].visits, run.outcome.history().len());
 }
 
 #[test]
@@ -139,20 +178,34 @@ fn proximal_term_changes_nothing_measurable_at_the_papers_penalty() {
     // is tiny beside the stiffness (~E): with and without it the method
     // converges to the same solution with the same work (within 1%).
     let scene = scene(1, 4);
-    let with = solve_scene(&scene, &Settings::paper(), "relaxation", &mut Silent).unwrap();
+    let with = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("relaxation").unwrap(),
+        &Settings::paper(),
+        &mut Silent,
+    )
+    .unwrap();
     let mut off = Settings::paper();
     off.set("relaxation.proximal", Value::from(0.0)).unwrap();
-    let without = solve_scene(&scene, &off, "relaxation", &mut Silent).unwrap();
+    let without = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("relaxation").unwrap(),
+        &off,
+        &mut Silent,
+    )
+    .unwrap();
     let (a, b) = (
-        with.coulomb.total_iterations().inner as f64,
-        without.coulomb.total_iterations().inner as f64,
+        with.outcome.work.inner as f64,
+        without.outcome.work.inner as f64,
     );
     assert!((a - b).abs() <= 0.01 * a, "sweeps with {a}, without {b}");
     let agree = agreement(
-        &with.discretization,
-        &with.coulomb.g,
-        &without.coulomb.solution,
-        &with.coulomb.solution,
+        &with.finest,
+        &with.outcome.bound,
+        &without.outcome.solution,
+        &with.outcome.solution,
     );
     assert!(
         agree.displacement_max < 1e-6 && agree.pressure_max < 1e-6,
@@ -165,22 +218,36 @@ fn a_cap_reached_is_a_status_reported_on_the_finest_level() {
     let scene = scene(1, 4);
     let mut s = Settings::default();
     s.set("relaxation.max_sweeps", Value::from(50u64)).unwrap(); // far too few at h = 1/8 already
-    let run = solve_scene(&scene, &s, "relaxation", &mut Silent).unwrap();
-    assert_eq!(run.coulomb.status, Status::MaxIterations);
+    let run = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("relaxation").unwrap(),
+        &s,
+        &mut Silent,
+    )
+    .unwrap();
+    assert_eq!(run.outcome.claim, Status::MaxIterations);
     assert!(
-        run.coulomb.detail.contains("sweep cap"),
+        run.outcome.detail.contains("sweep cap"),
         "{}",
-        run.coulomb.detail
+        run.outcome.detail
     );
-    assert_eq!(run.coulomb.solution.v.len(), run.discretization.problem.n());
+    assert_eq!(run.outcome.solution.v.len(), run.finest.problem.n());
     let mut s = Settings::default();
     s.set("relaxation.max_uzawa", Value::from(1u64)).unwrap();
-    let run = solve_scene(&scene, &s, "relaxation", &mut Silent).unwrap();
-    assert_eq!(run.coulomb.status, Status::MaxIterations);
+    let run = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("relaxation").unwrap(),
+        &s,
+        &mut Silent,
+    )
+    .unwrap();
+    assert_eq!(run.outcome.claim, Status::MaxIterations);
     assert!(
-        run.coulomb.detail.contains("Uzawa iteration cap"),
+        run.outcome.detail.contains("Uzawa iteration cap"),
         "{}",
-        run.coulomb.detail
+        run.outcome.detail
     );
 }
 
@@ -197,10 +264,10 @@ fn exact_and_smoothed_slip_minimizers_reach_the_same_solution() {
     let a = coulomb(&scene, &exact, "relaxation");
     let b = coulomb(&scene, &tight(), "relaxation");
     let agree = agreement(
-        &a.discretization,
-        &a.coulomb.g,
-        &b.coulomb.solution,
-        &a.coulomb.solution,
+        &a.finest,
+        &a.outcome.bound,
+        &b.outcome.solution,
+        &a.outcome.solution,
     );
     assert!(
         agree.displacement_max < 1e-6 && agree.pressure_max < 1e-5,
@@ -217,8 +284,15 @@ fn the_certified_stopping_rule_reaches_its_tolerance_at_every_h() {
     const TARGET: f64 = 1e-6;
     for k in [4, 6] {
         let scene = scene(1, k);
-        let exact = solve_scene(&scene, &Settings::default(), "newton", &mut Silent).unwrap();
-        let g = exact.coulomb.g.clone();
+        let exact = solve_scene(
+            &scene,
+            Friction::Coulomb,
+            solver_entry("newton").unwrap(),
+            &Settings::default(),
+            &mut Silent,
+        )
+        .unwrap();
+        let g = exact.outcome.bound.clone();
         let loose = |target: f64, omega: f64| {
             let mut s = Settings::default();
             s.set("relaxation.epsilon", Value::from(1e-2)).unwrap();
@@ -227,8 +301,15 @@ fn the_certified_stopping_rule_reaches_its_tolerance_at_every_h() {
             s
         };
         let certificate = |settings: &Settings| {
-            let (d, s, _) =
-                solve_given_friction(&scene, settings, "relaxation", &g, &mut Silent).unwrap();
+            let (d, s, _) = solve_scene(
+                &scene,
+                Friction::Given(&g),
+                solver_entry("relaxation").unwrap(),
+                settings,
+                &mut Silent,
+            )
+            .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+            .unwrap();
             let c = certify(
                 &d.problem,
                 Friction::Given(&g),

@@ -9,10 +9,10 @@
 //! × c leave displacements alone and scale pressures by c.
 
 use contactlab::certificate::certify;
-use contactlab::coulomb::driver::{Run, solve_given_friction, solve_scene};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
+use contactlab::solve::{Solved, solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Law, Silent, Solution, registry};
 
 /// (name, load factor, E factor): displacements scale by load/E, pressures by load.
@@ -84,32 +84,35 @@ fn every_solver_inside_the_coulomb_loop_gives_the_same_answer_in_any_units() {
     let tol = settings.certificate.tolerance;
     for entry in registry::solvers() {
         let run = |load, young| {
-            solve_scene(&scene(load, young), &settings, entry.name, &mut Silent).unwrap()
+            solve_scene(
+                &scene(load, young),
+                Friction::Coulomb,
+                solver_entry(entry.name).unwrap(),
+                &settings,
+                &mut Silent,
+            )
+            .unwrap()
         };
-        let base: Run = run(1.0, 1.0);
+        let base: Solved = run(1.0, 1.0);
         assert!(
-            base.status.is_converged(),
+            base.outcome.status.is_converged(),
             "{}: {}",
             entry.name,
-            base.coulomb.detail
+            base.outcome.detail
         );
         for (units, load, young) in UNITS {
             let other = run(load, young);
             let what = format!("{} with {units}", entry.name);
-            assert_eq!(other.status, base.status, "{what}");
+            assert_eq!(other.outcome.status, base.outcome.status, "{what}");
             assert_eq!(
-                other.coulomb.history.len(),
-                base.coulomb.history.len(),
+                other.outcome.history().len(),
+                base.outcome.history().len(),
                 "{what}: friction iterations"
             );
-            assert_eq!(
-                other.coulomb.total_iterations(),
-                base.coulomb.total_iterations(),
-                "{what}: iterations"
-            );
+            assert_eq!(other.outcome.work, base.outcome.work, "{what}: iterations");
             // The same separated nodes: the same intervals, their interpolated
             // ends within 1e-6 of Γ_K (a node is 1/16 away).
-            let (a, b) = (&base.separation.intervals, &other.separation.intervals);
+            let (a, b) = (&base.separation().intervals, &other.separation().intervals);
             assert_eq!(a.len(), b.len(), "{what}: zone {a:?} vs {b:?}");
             for (x, y) in a.iter().zip(b) {
                 assert!(
@@ -119,16 +122,16 @@ fn every_solver_inside_the_coulomb_loop_gives_the_same_answer_in_any_units() {
             }
             same_answer(
                 &what,
-                &base.coulomb.solution,
-                &other.coulomb.solution,
+                &base.outcome.solution,
+                &other.outcome.solution,
                 load / young,
                 load,
                 tol,
             );
             assert!(
-                other.certificate.passed(),
+                other.outcome.certificate.passed(),
                 "{what}: {:?}",
-                other.certificate
+                other.outcome.certificate
             );
         }
     }
@@ -141,22 +144,29 @@ fn every_solver_alone_gives_the_same_answer_in_any_units() {
     // The operating point: g = 𝓕p of a certified Coulomb answer, scaled with the units.
     let g = solve_scene(
         &scene(1.0, 1.0),
+        Friction::Coulomb,
+        solver_entry(registry::solvers()[0].name).unwrap(),
         &settings,
-        registry::solvers()[0].name,
         &mut Silent,
     )
     .unwrap()
-    .coulomb
-    .g;
+    .outcome
+    .bound;
     for entry in registry::solvers()
         .iter()
         .filter(|e| e.solves(Law::GivenFriction))
     {
         let solve = |load: f64, young| {
             let gs: Vec<f64> = g.iter().map(|x| x * load).collect();
-            let (d, s, _) =
-                solve_given_friction(&scene(load, young), &settings, entry.name, &gs, &mut Silent)
-                    .unwrap();
+            let (d, s, _) = solve_scene(
+                &scene(load, young),
+                Friction::Given(&gs),
+                solver_entry(entry.name).unwrap(),
+                &settings,
+                &mut Silent,
+            )
+            .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+            .unwrap();
             let c = certify(
                 &d.problem,
                 Friction::Given(&gs),

@@ -5,11 +5,11 @@
 //! difference at the paper's ε is the size its stopping rule predicts; the
 //! dual methods carry exactly the applied load.
 
-use contactlab::coulomb::driver::{solve_given_friction, solve_scene};
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solvers::{Law, Silent, registry};
+use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solvers::{Friction, Law, Silent, registry};
 use contactlab::study::agreement::agreement;
 use contactlab::study::compare;
 use contactlab::study::reference::References;
@@ -60,7 +60,7 @@ fn check_all_agree(scene: &Scene, references: &mut References) -> Vec<Measured> 
     )
     .unwrap();
     let reference = references.all().next().expect("a reference is earned");
-    assert!(reference.coulomb.certificate.passed());
+    assert!(reference.coulomb.outcome.certificate.passed());
     for m in &measured {
         let t = &m.trial;
         let what = format!("{} on {} ({})", t.solver, t.scene, t.law.as_str());
@@ -92,8 +92,8 @@ fn every_solver_agrees_in_each_contact_regime() {
         // interior-point answer carries roundoff jumps ~1e-10 of it).
         let reference = references.all().next().unwrap();
         let (d, s) = (
-            &reference.coulomb.discretization,
-            &reference.coulomb.coulomb.solution,
+            &reference.coulomb.finest,
+            &reference.coulomb.outcome.solution,
         );
         let u = s.v.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let nodes: Vec<(f64, f64, f64, f64)> = d
@@ -150,37 +150,62 @@ fn every_solver_agrees_on_the_papers_problems() {
 #[test]
 fn the_direct_coulomb_solver_and_the_fixed_point_agree() {
     let scene = at(Scene::paper_problem(1).unwrap(), 5);
-    let direct = solve_scene(&scene, &Settings::default(), "newton-coulomb", &mut Silent).unwrap();
-    assert!(direct.status.is_converged(), "{}", direct.coulomb.detail);
+    let direct = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton-coulomb").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap();
+    assert!(
+        direct.outcome.status.is_converged(),
+        "{}",
+        direct.outcome.detail
+    );
     // The fixed point with a tight ε: the same solution.
     let mut tight = Settings::default();
     tight.set_text("coulomb.epsilon", "1e-12").unwrap();
-    let fixed = solve_scene(&scene, &tight, "newton", &mut Silent).unwrap();
+    let fixed = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton").unwrap(),
+        &tight,
+        &mut Silent,
+    )
+    .unwrap();
     let a = agreement(
-        &direct.discretization,
-        &direct.coulomb.g,
-        &fixed.coulomb.solution,
-        &direct.coulomb.solution,
+        &direct.finest,
+        &direct.outcome.bound,
+        &fixed.outcome.solution,
+        &direct.outcome.solution,
     );
     assert!(a.pressure_max < 1e-9 && a.displacement_max < 1e-9, "{a:?}");
     // At the paper's ε the fixed point stops with max|Δg| ≤ 1e-4: its error
     // in g is about the last change times q/(1 − q) (q the contraction), so
     // its pressure error about that over 𝓕.
-    let paper = solve_scene(&scene, &Settings::paper(), "newton", &mut Silent).unwrap();
-    let last = paper.coulomb.history.last().unwrap();
+    let paper = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton").unwrap(),
+        &Settings::paper(),
+        &mut Silent,
+    )
+    .unwrap();
+    let last = paper.outcome.history().last().unwrap();
     let q = last.contraction.unwrap();
     let p_max = direct
-        .coulomb
+        .outcome
         .solution
         .pressure
         .iter()
         .fold(0.0f64, |m, p| m.max(*p));
     let predicted = last.change * q / (1.0 - q) / scene.friction / p_max;
     let measured = agreement(
-        &direct.discretization,
-        &direct.coulomb.g,
-        &paper.coulomb.solution,
-        &direct.coulomb.solution,
+        &direct.finest,
+        &direct.outcome.bound,
+        &paper.outcome.solution,
+        &direct.outcome.solution,
     )
     .pressure_max;
     assert!(
@@ -194,12 +219,26 @@ fn the_dual_methods_carry_exactly_the_applied_load() {
     // At h = 1/64, the operating point of a certified Coulomb answer.
     let scene = at(Scene::paper_problem(1).unwrap(), 6);
     let settings = Settings::default();
-    let g = solve_scene(&scene, &settings, "newton", &mut Silent)
-        .unwrap()
-        .coulomb
-        .g;
+    let g = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry("newton").unwrap(),
+        &settings,
+        &mut Silent,
+    )
+    .unwrap()
+    .outcome
+    .bound;
     for solver in ["nsgs", "apgd"] {
-        let (d, s, _) = solve_given_friction(&scene, &settings, solver, &g, &mut Silent).unwrap();
+        let (d, s, _) = solve_scene(
+            &scene,
+            Friction::Given(&g),
+            solver_entry(solver).unwrap(),
+            &settings,
+            &mut Silent,
+        )
+        .map(|x| (x.finest, x.outcome.solution, x.outcome.levels))
+        .unwrap();
         assert!(s.status.is_converged(), "{solver}: {}", s.detail);
         let carried: f64 = d
             .problem

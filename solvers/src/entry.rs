@@ -57,6 +57,7 @@ pub struct Accuracy {
 /// A registered solver: what it is. How the studies study it (which
 /// settings they sweep, the stress conditions, the work caps) is the
 /// studies' business, keyed by the solver's name.
+#[derive(Debug)]
 pub struct Entry {
     pub name: &'static str,
     pub about: &'static str,

@@ -200,7 +200,7 @@ pub fn solver_list(names: &[String]) -> Result<Vec<&'static Entry>> {
     }
     names
         .iter()
-        .map(|n| crate::coulomb::driver::solver_entry(n))
+        .map(|n| crate::solve::solver_entry(n))
         .collect()
 }
 

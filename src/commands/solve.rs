@@ -3,22 +3,24 @@
 //! printed; an answer that is not certified is a non-zero exit.
 
 use anyhow::{Context, Result, bail};
-use contactlab_solvers::Status;
 use contactlab_solvers::registry::{self, Role};
+use contactlab_solvers::{Friction, Status};
 
 use crate::cli::SolveArgs;
 use crate::commands::LogObserver;
-use crate::coulomb::driver::{Summary, solve_scene};
 use crate::io::csv::to_csv;
+use crate::io::manifest::git_commit;
 use crate::io::output::{json_bytes, log, print, write_atomic};
 use crate::io::run_folder::RunFolder;
 use crate::mechanics::contact_zone::PROFILE_COLUMNS;
+use crate::solve::summary::Summary;
+use crate::solve::{solve_scene, solver_entry};
 
 pub fn run(args: &SolveArgs) -> Result<()> {
     let (scene, base) = args.scene.load()?;
     let settings = args.settings.resolve_on(base)?;
     let solver = match &args.solver {
-        Some(name) => crate::coulomb::driver::solver_entry(name)?,
+        Some(name) => solver_entry(name)?,
         None => registry::with_role(Role::Oracle).context("no oracle is registered")?,
     };
     args.settings.check_used_by(&[solver])?;
@@ -29,19 +31,25 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         scene.finest(),
         solver.name
     ));
-    let run = solve_scene(&scene, &settings, solver.name, &mut LogObserver)?;
-    let summary = run.summary(&settings);
+    let solved = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver,
+        &settings,
+        &mut LogObserver,
+    )?;
+    let summary = Summary::of(&solved, &scene, &settings, git_commit());
     let mut report = summary_text(&summary);
     if let Some(folder) = folder {
         let dir = folder.path().to_path_buf();
         write_atomic(
             &dir.join("profile.csv"),
-            &to_csv(&run.profile, &PROFILE_COLUMNS)?,
+            &to_csv(&solved.profile(), &PROFILE_COLUMNS)?,
         )?;
         write_atomic(&dir.join("summary.json"), &json_bytes(&summary)?)?;
         if args.vtu {
             let text =
-                crate::io::vtu::vtu(&run.discretization, &scene.material, &run.coulomb.solution);
+                crate::io::vtu::vtu(&solved.finest, &scene.material, &solved.outcome.solution);
             write_atomic(&dir.join("field.vtu"), text.as_bytes())?;
         }
         let target = folder.commit()?;
@@ -53,19 +61,16 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         );
     }
     print(&report)?;
-    if run.status == Status::Inaccurate {
+    let o = &solved.outcome;
+    if o.status == Status::Inaccurate {
         bail!(
             "the answer is inaccurate: {} claims convergence but the certificate {}",
-            run.solver,
-            run.certificate.summary()
+            solver.name,
+            o.certificate.summary()
         );
     }
-    if !run.status.is_converged() {
-        bail!(
-            "the solve did not converge: {} ({})",
-            run.status,
-            run.coulomb.detail
-        );
+    if !o.status.is_converged() {
+        bail!("the solve did not converge: {} ({})", o.status, o.detail);
     }
     Ok(())
 }

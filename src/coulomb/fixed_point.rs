@@ -118,7 +118,7 @@ pub trait GivenFrictionStep {
 /// How the fixed point ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Outcome {
+pub enum Ending {
     /// max|Δg| reached the tolerance.
     Converged,
     /// max|Δg| did not fall over the stall window.
@@ -135,16 +135,16 @@ pub enum Outcome {
     Direct,
 }
 
-impl Outcome {
+impl Ending {
     pub fn as_str(self) -> &'static str {
         match self {
-            Outcome::Converged => "converged",
-            Outcome::NotContracting => "not_contracting",
-            Outcome::IterationCap => "iteration_cap",
-            Outcome::InnerFailed => "inner_failed",
-            Outcome::NonFinite => "non_finite",
-            Outcome::Stopped => "stopped",
-            Outcome::Direct => "direct",
+            Ending::Converged => "converged",
+            Ending::NotContracting => "not_contracting",
+            Ending::IterationCap => "iteration_cap",
+            Ending::InnerFailed => "inner_failed",
+            Ending::NonFinite => "non_finite",
+            Ending::Stopped => "stopped",
+            Ending::Direct => "direct",
         }
     }
 }
@@ -176,7 +176,7 @@ pub struct CoulombSolution {
     /// The solver's claim: converged only if every step converged and the
     /// fixed point reached its tolerance.
     pub status: Status,
-    pub outcome: Outcome,
+    pub ending: Ending,
     pub detail: String,
     pub seconds: f64,
 }
@@ -240,13 +240,13 @@ pub fn friction_fixed_point(
             residual: change,
             seconds: start.elapsed().as_secs_f64(),
         });
-        let finish = |status, outcome, detail: String, solution: Solution, g: Vec<f64>, history| {
+        let finish = |status, ending, detail: String, solution: Solution, g: Vec<f64>, history| {
             CoulombSolution {
                 solution,
                 g,
                 history,
                 status,
-                outcome,
+                ending,
                 detail,
                 seconds: start.elapsed().as_secs_f64(),
             }
@@ -258,7 +258,7 @@ pub fn friction_fixed_point(
             );
             return finish(
                 solution.status,
-                Outcome::InnerFailed,
+                Ending::InnerFailed,
                 detail,
                 solution,
                 g,
@@ -269,7 +269,7 @@ pub fn friction_fixed_point(
             let detail = format!("friction step {m}: the new friction bound is not finite");
             return finish(
                 Status::NonFinite,
-                Outcome::NonFinite,
+                Ending::NonFinite,
                 detail,
                 solution,
                 g,
@@ -281,7 +281,7 @@ pub fn friction_fixed_point(
                 format!("max|Δg| = {change:.3e} ≤ {tolerance:.3e} after {m} friction iterations");
             return finish(
                 Status::Converged,
-                Outcome::Converged,
+                Ending::Converged,
                 detail,
                 solution,
                 g,
@@ -290,7 +290,7 @@ pub fn friction_fixed_point(
         }
         if let Control::Stop(status) = control {
             let detail = format!("stopped by the harness after {m} friction iterations");
-            return finish(status, Outcome::Stopped, detail, solution, g, history);
+            return finish(status, Ending::Stopped, detail, solution, g, history);
         }
         let w = settings.stall_window;
         if w > 0 && m > w && change >= history[m - 1 - w].change {
@@ -300,7 +300,7 @@ pub fn friction_fixed_point(
             );
             return finish(
                 Status::InsufficientProgress,
-                Outcome::NotContracting,
+                Ending::NotContracting,
                 detail,
                 solution,
                 g,
@@ -313,7 +313,7 @@ pub fn friction_fixed_point(
             );
             return finish(
                 Status::MaxIterations,
-                Outcome::IterationCap,
+                Ending::IterationCap,
                 detail,
                 solution,
                 g,
@@ -425,7 +425,7 @@ mod tests {
             ..CoulombSettings::defaults(Stopping::Paper)
         };
         let out = friction_fixed_point(&mut step, &s, &mut Silent);
-        assert_eq!(out.outcome, Outcome::Converged);
+        assert_eq!(out.ending, Ending::Converged);
         assert_eq!(out.status, Status::Converged);
         // Fixed point g = 𝓕 (p0 + k g) ⇒ g = 𝓕 p0 / (1 − 𝓕 k).
         for (g, p0) in out.g.iter().zip([10.0, 20.0]) {
@@ -447,7 +447,7 @@ mod tests {
         };
         let out = friction_fixed_point(&mut step, &s, &mut Silent);
         assert_eq!(out.status, Status::MaxIterations);
-        assert_eq!(out.outcome, Outcome::IterationCap);
+        assert_eq!(out.ending, Ending::IterationCap);
         assert_eq!(out.history.len(), 7);
         assert!(out.history.last().unwrap().contraction.unwrap() > 1.0);
         // With stall detection it stops as soon as W steps bring no decrease.
@@ -459,7 +459,7 @@ mod tests {
         };
         let out = friction_fixed_point(&mut step, &s, &mut Silent);
         assert_eq!(out.status, Status::InsufficientProgress);
-        assert_eq!(out.outcome, Outcome::NotContracting);
+        assert_eq!(out.ending, Ending::NotContracting);
         assert_eq!(out.history.len(), 4, "{}", out.detail);
     }
 }

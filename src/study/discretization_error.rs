@@ -18,13 +18,13 @@
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use crate::coulomb::driver::{Run, solve_scene};
 use crate::io::charts::{Chart, Series};
 use crate::io::csv::fixed;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::solvers::{Law, Silent, registry};
+use crate::solve::{Solved, solve_scene, solver_entry};
+use crate::solvers::{Friction, Law, Silent, registry};
 
 /// Which problems, on which meshes, against which reference mesh.
 #[derive(Clone, Debug, Serialize)]
@@ -118,23 +118,29 @@ fn solver(spec: &ErrorSpec) -> Result<&'static str> {
         .context("no registered solver solves the Coulomb law directly")
 }
 
-fn solve(problem: u32, h: MeshSize, solver: &str, settings: &Settings) -> Result<Run> {
+fn solve(problem: u32, h: MeshSize, solver: &str, settings: &Settings) -> Result<Solved> {
     let scene = Scene::paper_problem_to(problem, h)?;
-    solve_scene(&scene, settings, solver, &mut Silent)
+    solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry(solver)?,
+        settings,
+        &mut Silent,
+    )
 }
 
-fn zone_start(run: &Run) -> f64 {
-    run.separation
+fn zone_start(run: &Solved) -> f64 {
+    run.separation()
         .intervals
         .first()
         .map_or(f64::NAN, |iv| iv[0])
 }
 
 /// The errors of `coarse` against `reference` for `problem`, without rates.
-fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
-    let (dc, df) = (&coarse.discretization, &reference.discretization);
-    let uc = dc.displacements(&coarse.coulomb.solution.v);
-    let uf = df.displacements(&reference.coulomb.solution.v);
+fn errors(problem: u32, coarse: &Solved, reference: &Solved) -> ErrorRow {
+    let (dc, df) = (&coarse.finest, &reference.finest);
+    let uc = dc.displacements(&coarse.outcome.solution.v);
+    let uf = df.displacements(&reference.outcome.solution.v);
     let e: Vec<[f64; 2]> = (0..df.mesh.num_nodes())
         .map(|node| {
             let (body, _, _) = df.mesh.locate(node);
@@ -144,7 +150,7 @@ fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
         })
         .collect();
     let ev = df.dofs.from_physical(&e);
-    let vf = &reference.coulomb.solution.v;
+    let vf = &reference.outcome.solution.v;
     let p = &df.problem;
     let norm = |m, v: &[f64]| {
         let mv = crate::solvers::numerics::linalg::spmv(m, v);
@@ -161,14 +167,16 @@ fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
         norm(p.a(), &ev) / norm(p.a(), vf),
     );
     // Coarse contact node i sits at reference contact node i·ratio.
-    let ratio = 1usize << (reference.discretization.h().level() - dc.h().level());
-    let pf: Vec<f64> = reference.profile.iter().map(|r| r.pressure).collect();
+    let ratio = 1usize << (df.h().level() - dc.h().level());
+    let pf: Vec<f64> = reference.outcome.solution.pressure.clone();
     let p_max = pf.iter().fold(0.0f64, |m, x| m.max(*x));
     let pressure_error = coarse
-        .profile
+        .outcome
+        .solution
+        .pressure
         .iter()
         .enumerate()
-        .map(|(i, r)| (r.pressure - pf[i * ratio]).abs())
+        .map(|(i, p)| (p - pf[i * ratio]).abs())
         .fold(0.0f64, f64::max)
         / p_max;
     let (start, start_ref) = (zone_start(coarse), zone_start(reference));
@@ -176,15 +184,15 @@ fn errors(problem: u32, coarse: &Run, reference: &Run) -> ErrorRow {
         problem,
         h: dc.h().to_string(),
         reference_h: df.h().to_string(),
-        solver: coarse.solver.to_string(),
-        status: coarse.status.as_str().to_string(),
-        certificate: coarse.certificate.residual(),
+        solver: coarse.outcome.solver.name.to_string(),
+        status: coarse.outcome.status.as_str().to_string(),
+        certificate: coarse.outcome.certificate.residual(),
         l2_error: l2,
         energy_error: energy,
         pressure_error,
         zone_start: start,
         zone_start_error: (start - start_ref).abs(),
-        separated_fraction: coarse.separation.fraction,
+        separated_fraction: coarse.separation().fraction,
         l2_rate: f64::NAN,
         energy_rate: f64::NAN,
         pressure_rate: f64::NAN,
@@ -203,10 +211,10 @@ pub fn run(spec: &ErrorSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<
         ));
         let reference = solve(problem, spec.reference, solver, settings)?;
         anyhow::ensure!(
-            reference.certificate.passed(),
+            reference.outcome.certificate.passed(),
             "the reference of problem {problem} at h = {} is not certified: {}",
             spec.reference,
-            reference.certificate.summary()
+            reference.outcome.certificate.summary()
         );
         let mut previous: Option<ErrorRow> = None;
         for &h in &spec.meshes {

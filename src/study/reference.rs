@@ -10,17 +10,14 @@
 
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};
-use contactlab_solvers::{Friction, Law, Solution, Status};
+use contactlab_solvers::{Friction, Law, Silent, Status};
 use serde::Serialize;
 use serde_json::Value;
 
-use crate::certificate::{Certificate, certify_solution};
-use crate::coulomb::budget::Budget;
-use crate::coulomb::driver::{Run, solve_given_friction, solve_scene};
 use crate::io::csv::fixed;
-use crate::mechanics::discretization::Discretization;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::solve::{Assembled, Caps, Outcome, Solved, solve};
 
 /// The fixed point's relative tolerance for reference solves.
 pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-11;
@@ -47,9 +44,7 @@ pub struct Candidate {
 /// The reference answer of the subproblem at the reference's g.
 pub struct GivenFrictionReference {
     pub solver: &'static str,
-    pub discretization: Discretization,
-    pub solution: Solution,
-    pub certificate: Certificate,
+    pub outcome: Outcome,
 }
 
 /// The references of one scene on one mesh.
@@ -57,7 +52,7 @@ pub struct Reference {
     pub scene: Scene,
     /// The Coulomb problem's reference and who earned it.
     pub solver: &'static str,
-    pub coulomb: Run,
+    pub coulomb: Solved,
     /// g = 𝓕p of the Coulomb reference: the given-friction trials' bound.
     pub g: Vec<f64>,
     pub given_friction: Option<GivenFrictionReference>,
@@ -91,63 +86,57 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
         .into_iter()
         .filter(|e| e.accuracy.exact)
         .collect();
+    let caps = Caps {
+        work: None,
+        seconds: Some(seconds),
+    };
     let mut candidates = Vec::new();
-    let mut best: Option<(&'static Entry, Run)> = None;
+    let mut best: Option<(&'static Entry, Solved)> = None;
     for &entry in &exact {
         let settings = reference_settings(entry, base)?;
-        let mut budget = Budget::silent(entry, None, Some(seconds));
-        let run = solve_scene(scene, &settings, entry.name, &mut budget)?;
-        candidates.push(Candidate {
-            scene: scene.name.clone(),
-            h: scene.finest().to_string(),
-            law: Law::Coulomb,
-            solver: entry.name.into(),
-            status: run.status,
-            certificate: run.certificate.residual(),
-            chosen: false,
-        });
+        let problem = Assembled::for_solver(scene, entry)?;
+        let outcome = solve(
+            &problem,
+            Friction::Coulomb,
+            entry,
+            &settings,
+            caps,
+            &mut Silent,
+        )?;
+        candidates.push(candidate(scene, Law::Coulomb, entry, &outcome));
         let better = best
             .as_ref()
-            .is_none_or(|(_, b)| run.certificate.residual() < b.certificate.residual());
-        if run.status == Status::Converged && better {
-            best = Some((entry, run));
+            .is_none_or(|(_, b)| outcome.certificate.residual() < b.outcome.certificate.residual());
+        if outcome.status == Status::Converged && better {
+            let finest = problem.into_finest();
+            best = Some((entry, Solved { finest, outcome }));
         }
     }
     let Some((entry, coulomb)) = best else {
         return Ok(None);
     };
     mark_chosen(&mut candidates, Law::Coulomb, entry.name);
-    let g = coulomb.coulomb.g.clone();
+    let g = coulomb.outcome.bound.clone();
     let mut gf_best: Option<GivenFrictionReference> = None;
     for &e in exact.iter().filter(|e| e.solves(Law::GivenFriction)) {
         let settings = reference_settings(e, base)?;
-        let mut budget = Budget::silent(e, None, Some(seconds));
-        let (d, solution, _) = solve_given_friction(scene, &settings, e.name, &g, &mut budget)?;
-        let certificate = certify_solution(
-            &d.problem,
+        let problem = Assembled::for_solver(scene, e)?;
+        let outcome = solve(
+            &problem,
             Friction::Given(&g),
-            &solution,
-            base.certificate.tolerance,
-        );
-        let status = certificate.verdict(solution.status);
-        candidates.push(Candidate {
-            scene: scene.name.clone(),
-            h: scene.finest().to_string(),
-            law: Law::GivenFriction,
-            solver: e.name.into(),
-            status,
-            certificate: certificate.residual(),
-            chosen: false,
-        });
+            e,
+            &settings,
+            caps,
+            &mut Silent,
+        )?;
+        candidates.push(candidate(scene, Law::GivenFriction, e, &outcome));
         let better = gf_best
             .as_ref()
-            .is_none_or(|b| certificate.residual() < b.certificate.residual());
-        if status == Status::Converged && better {
+            .is_none_or(|b| outcome.certificate.residual() < b.outcome.certificate.residual());
+        if outcome.status == Status::Converged && better {
             gf_best = Some(GivenFrictionReference {
                 solver: e.name,
-                discretization: d,
-                solution,
-                certificate,
+                outcome,
             });
         }
     }
@@ -162,6 +151,18 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
         given_friction: gf_best,
         candidates,
     }))
+}
+
+fn candidate(scene: &Scene, law: Law, entry: &Entry, outcome: &Outcome) -> Candidate {
+    Candidate {
+        scene: scene.name.clone(),
+        h: scene.finest().to_string(),
+        law,
+        solver: entry.name.into(),
+        status: outcome.status,
+        certificate: outcome.certificate.residual(),
+        chosen: false,
+    }
 }
 
 fn mark_chosen(candidates: &mut [Candidate], law: Law, solver: &str) {

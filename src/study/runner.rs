@@ -2,20 +2,16 @@
 //! Coulomb problem, or the given-friction subproblem at the reference's g),
 //! certify, compare with the reference, and time by repeating.
 
-use std::time::Instant;
-
 use anyhow::{Result, bail};
-use contactlab_solvers::{Control, Friction, Law, Observer, Progress, Silent, Solution};
+use contactlab_solvers::{Control, Friction, Law, Observer, Progress, Silent, Solution, Status};
 
-use crate::certificate::certify_solution;
-use crate::coulomb::budget::Budget;
 use crate::coulomb::continuation::LevelCount;
-use crate::coulomb::driver::{solve_given_friction, solve_scene};
 use crate::coulomb::fixed_point::{FrictionIteration, STAGE};
 use crate::io::csv::to_csv;
 use crate::io::output::write_atomic;
 use crate::mechanics::contact_zone::separation_of;
 use crate::mechanics::discretization::Discretization;
+use crate::solve::{Assembled, Caps, Outcome, solve};
 use crate::study::agreement::{Agreement, agreement};
 use crate::study::reference::{Reference, References};
 use crate::study::trial::{Trial, TrialOutcome, TrialSpec, TrialTiming};
@@ -30,18 +26,35 @@ pub struct Keep {
     pub solution: bool,
 }
 
-/// A measured trial.
+/// A measured trial: its record (the CSV row), its times, and the
+/// outcome of its first solve (the typed record the views read).
 pub struct Measured {
     pub trial: Trial,
     pub timing: TrialTiming,
-    /// The fixed point's steps (empty for given-friction trials).
-    pub friction: Vec<FrictionIteration>,
-    /// Work per mesh level.
-    pub levels: Vec<LevelCount>,
+    pub outcome: Outcome,
+    /// The convergence history (kept only when asked).
     pub history: Vec<Progress>,
-    /// The finest level's discretization, the solution and the friction
-    /// bound it was certified at (kept only when asked).
-    pub solution: Option<(Discretization, Solution, Vec<f64>)>,
+    /// The finest level it was certified on (kept only when asked).
+    pub finest: Option<Discretization>,
+}
+
+impl Measured {
+    /// The fixed point's steps (empty without a fixed point).
+    pub fn friction(&self) -> &[FrictionIteration] {
+        self.outcome.history()
+    }
+
+    /// Work per mesh level.
+    pub fn levels(&self) -> &[LevelCount] {
+        &self.outcome.levels
+    }
+
+    /// The finest level, the answer and its bound, if kept.
+    pub fn solution(&self) -> Option<(&Discretization, &Solution, &[f64])> {
+        self.finest
+            .as_ref()
+            .map(|d| (d, &self.outcome.solution, self.outcome.bound.as_slice()))
+    }
 }
 
 /// Keeps the stages a convergence history wants: the fixed point's and
@@ -63,138 +76,49 @@ impl Observer for Recorder {
     }
 }
 
-/// One solve of the trial: the answer, the finest discretization, and what
-/// the fixed point did.
-struct Solved {
-    discretization: Discretization,
-    solution: Solution,
-    /// The friction bound of the answer: the given g, or 𝓕p (Coulomb).
-    bound: Vec<f64>,
-    certificate: crate::certificate::Certificate,
-    /// The certified status, and the solver's (or the fixed point's) claim.
-    status: contactlab_solvers::Status,
-    claim: contactlab_solvers::Status,
-    outcome: TrialOutcome,
-    friction: Vec<FrictionIteration>,
-    levels: Vec<LevelCount>,
-    seconds: f64,
-    setup: f64,
-    /// Events of the solver's work stage.
-    work: usize,
-    detail: String,
-}
-
+/// One solve of the trial, with the finest level it was certified on.
 fn solve_once(
     spec: &TrialSpec,
     reference: Option<&Reference>,
     observer: &mut dyn Observer,
-) -> Result<Solved> {
-    let mut budget = Budget::new(spec.solver, spec.work, spec.seconds, observer);
-    if !spec.check_solvable {
-        return solve_unchecked(spec, &mut budget);
-    }
-    match spec.law {
-        Law::Coulomb => {
-            let run = solve_scene(&spec.scene, &spec.settings, spec.solver.name, &mut budget)?;
-            let setup = run.coulomb.history.iter().map(|h| h.setup_seconds).sum();
-            Ok(Solved {
-                work: budget.work(),
-                status: run.status,
-                claim: run.coulomb.status,
-                certificate: run.certificate,
-                outcome: run.coulomb.outcome.into(),
-                friction: run.coulomb.history,
-                levels: run.levels,
-                seconds: run.coulomb.seconds,
-                setup,
-                detail: run.coulomb.detail,
-                discretization: run.discretization,
-                bound: run.coulomb.g,
-                solution: run.coulomb.solution,
-            })
-        }
-        Law::GivenFriction => {
-            let Some(reference) = reference else {
-                bail!(
-                    "a given-friction trial needs the reference's bound g, and no reference could be earned for {} at h = {}",
-                    spec.scene.name,
-                    spec.scene.finest()
-                );
-            };
-            let t = Instant::now();
-            let (d, solution, levels) = solve_given_friction(
-                &spec.scene,
-                &spec.settings,
-                spec.solver.name,
-                &reference.g,
-                &mut budget,
-            )?;
-            let seconds = t.elapsed().as_secs_f64();
-            let work = budget.work();
-            let certificate = certify_solution(
-                &d.problem,
-                Friction::Given(&reference.g),
-                &solution,
-                spec.settings.certificate.tolerance,
-            );
-            Ok(Solved {
-                work,
-                status: certificate.verdict(solution.status),
-                claim: solution.status,
-                certificate,
-                outcome: TrialOutcome::NotApplicable,
-                friction: Vec::new(),
-                levels,
-                seconds: solution.timing.total().min(seconds),
-                setup: solution.timing.setup,
-                detail: solution.detail.clone(),
-                discretization: d,
-                bound: reference.g.clone(),
-                solution,
-            })
-        }
-    }
-}
-
-/// One given-friction solve (g = 0) of a scene that may violate condition
-/// (13), without the check.
-fn solve_unchecked(spec: &TrialSpec, budget: &mut Budget<'_>) -> Result<Solved> {
-    let d = Discretization::new_unchecked(&spec.scene, spec.scene.finest())?;
-    let mut solver = spec
-        .settings
-        .build(spec.solver)
-        .map_err(anyhow::Error::msg)?;
-    let t = Instant::now();
-    // One solve of the law the trial names, on the finest level: no fixed
-    // point (a solver of the subproblem at g = 0).
-    let zero = vec![0.0; d.problem.contacts().len()];
-    let friction = match spec.law {
-        Law::GivenFriction => Friction::Given(&zero),
-        Law::Coulomb => Friction::Coulomb,
+) -> Result<(Discretization, Outcome)> {
+    let caps = Caps {
+        work: spec.work,
+        seconds: spec.seconds,
     };
-    let solution = solver.solve(&d.problem, friction, None, budget);
-    let seconds = t.elapsed().as_secs_f64();
-    let certificate = certify_solution(
-        &d.problem,
+    let zero;
+    let (problem, friction) = if !spec.check_solvable {
+        // One solve of the law the trial names, on the finest level,
+        // without the check of condition (13): no fixed point (a solver of
+        // the subproblem at g = 0).
+        let d = Discretization::new_unchecked(&spec.scene, spec.scene.finest())?;
+        zero = vec![0.0; d.problem.contacts().len()];
+        let friction = match spec.law {
+            Law::GivenFriction => Friction::Given(&zero),
+            Law::Coulomb => Friction::Coulomb,
+        };
+        (Assembled::one_level(d), friction)
+    } else {
+        let friction = match (spec.law, reference) {
+            (Law::Coulomb, _) => Friction::Coulomb,
+            (Law::GivenFriction, Some(r)) => Friction::Given(&r.g),
+            (Law::GivenFriction, None) => bail!(
+                "a given-friction trial needs the reference's bound g, and no reference could be earned for {} at h = {}",
+                spec.scene.name,
+                spec.scene.finest()
+            ),
+        };
+        (Assembled::for_solver(&spec.scene, spec.solver)?, friction)
+    };
+    let outcome = solve(
+        &problem,
         friction,
-        &solution,
-        spec.settings.certificate.tolerance,
-    );
-    Ok(Solved {
-        work: budget.work(),
-        status: certificate.verdict(solution.status),
-        claim: solution.status,
-        certificate,
-        outcome: TrialOutcome::NotApplicable,
-        friction: Vec::new(),
-        levels: Vec::new(),
-        seconds,
-        setup: solution.timing.setup,
-        detail: solution.detail.clone(),
-        discretization: d,
-        bound: zero,
-        solution,
-    })
+        spec.solver,
+        &spec.settings,
+        caps,
+        observer,
+    )?;
+    Ok((problem.into_finest(), outcome))
 }
 
 /// Measures one trial against `reference` (its Coulomb or given-friction
@@ -205,47 +129,67 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
         entry: spec.solver,
         events: Vec::new(),
     };
-    let solved = solve_once(spec, reference, &mut recorder)?;
-    let mut times = vec![solved.seconds];
+    let (finest, outcome) = solve_once(spec, reference, &mut recorder)?;
+    let mut times = vec![outcome.timing.total()];
     for _ in 0..spec.repeats {
-        times.push(solve_once(spec, reference, &mut Silent)?.seconds);
+        times.push(solve_once(spec, reference, &mut Silent)?.1.timing.total());
     }
-    let s = &solved.solution;
-    let total = s.iterations;
-    let (outer, inner) = if solved.friction.is_empty() {
-        (total.outer, total.inner)
-    } else {
-        solved.friction.iter().fold((0, 0), |(o, i), f| {
-            (o + f.iterations.outer, i + f.iterations.inner)
-        })
+    let trial = trial_row(spec, reference, &finest, &outcome);
+    let timing = TrialTiming {
+        trial: 0,
+        scene: trial.scene.clone(),
+        h: trial.h.clone(),
+        solver: trial.solver.clone(),
+        law: trial.law,
+        knob: trial.knob.clone(),
+        value: trial.value.clone(),
+        runs: times.len(),
+        seconds_min: times.iter().copied().fold(f64::INFINITY, f64::min),
+        seconds_median: median(&times),
+        seconds_setup: outcome.timing.setup,
     };
-    let work = solved.work;
+    Ok(Measured {
+        trial,
+        timing,
+        outcome,
+        history: recorder.events,
+        finest: keep.solution.then_some(finest),
+    })
+}
+
+/// The trial's row: a view of its outcome, with its differences from the
+/// reference.
+pub fn trial_row(
+    spec: &TrialSpec,
+    reference: Option<&Reference>,
+    finest: &Discretization,
+    o: &Outcome,
+) -> Trial {
+    let s = &o.solution;
     let against: Option<(&str, Agreement)> = reference.and_then(|r| match spec.law {
         Law::Coulomb => Some((
             r.solver,
-            agreement(
-                &r.coulomb.discretization,
-                &r.g,
-                s,
-                &r.coulomb.coulomb.solution,
-            ),
+            agreement(&r.coulomb.finest, &r.g, s, &r.coulomb.outcome.solution),
         )),
         Law::GivenFriction => r.given_friction.as_ref().map(|gf| {
             (
                 gf.solver,
-                agreement(&gf.discretization, &r.g, s, &gf.solution),
+                agreement(&r.coulomb.finest, &r.g, s, &gf.outcome.solution),
             )
         }),
     });
-    let separation = separation_of(&solved.discretization, s);
-    let mut trial = Trial::not_run(spec, solved.status, solved.detail.clone());
-    trial.solver_status = solved.claim;
-    trial.outcome = solved.outcome;
-    trial.friction_iterations = solved.friction.len();
-    trial.outer_iterations = outer;
-    trial.inner_iterations = inner;
-    trial.work = work;
-    trial.contraction = solved.friction.last().and_then(|f| f.contraction);
+    let separation = separation_of(finest, s);
+    let mut trial = Trial::not_run(spec, o.status, o.detail.clone());
+    trial.solver_status = o.claim;
+    trial.outcome = match o.law {
+        Law::GivenFriction => TrialOutcome::NotApplicable,
+        Law::Coulomb => o.ending().into(),
+    };
+    trial.friction_iterations = o.friction_iterations();
+    trial.outer_iterations = o.work.outer;
+    trial.inner_iterations = o.work.inner;
+    trial.work = o.work.events;
+    trial.contraction = o.contraction();
     if let Some((name, a)) = against {
         trial.reference = name.to_string();
         trial.displacement_error = Some(a.displacement_max);
@@ -261,33 +205,11 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
         .collect::<Vec<_>>()
         .join(";");
     trial.separated_fraction = separation.fraction;
-    if solved.status == contactlab_solvers::Status::Inaccurate {
-        trial.detail = format!("{} ({})", trial.detail, solved.certificate.summary());
+    if o.status == Status::Inaccurate {
+        trial.detail = format!("{} ({})", trial.detail, o.certificate.summary());
     }
-    trial.set_certificate(&solved.certificate);
-    let timing = TrialTiming {
-        trial: 0,
-        scene: trial.scene.clone(),
-        h: trial.h.clone(),
-        solver: trial.solver.clone(),
-        law: trial.law,
-        knob: trial.knob.clone(),
-        value: trial.value.clone(),
-        runs: times.len(),
-        seconds_min: times.iter().copied().fold(f64::INFINITY, f64::min),
-        seconds_median: median(&times),
-        seconds_setup: solved.setup,
-    };
-    Ok(Measured {
-        trial,
-        timing,
-        friction: solved.friction,
-        levels: solved.levels,
-        history: recorder.events,
-        solution: keep
-            .solution
-            .then_some((solved.discretization, solved.solution, solved.bound)),
-    })
+    trial.set_certificate(&o.certificate);
+    trial
 }
 
 /// Writes `STEM.csv` (the trials) and `STEM_timing.csv` (their times).

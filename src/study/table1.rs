@@ -100,7 +100,7 @@ pub fn run(
 
 fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {
     let at = |h: &str| {
-        m.levels
+        m.levels()
             .iter()
             .find(|l| l.h.to_string() == h)
             .map(|l| l.sweeps)

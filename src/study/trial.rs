@@ -9,7 +9,7 @@ use contactlab_solvers::{Law, Status};
 use serde::{Deserialize, Serialize};
 
 use crate::certificate::Certificate;
-use crate::coulomb::fixed_point::Outcome;
+use crate::coulomb::fixed_point::Ending;
 use crate::io::csv::{fixed, fixed_opt};
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
@@ -210,16 +210,16 @@ pub enum TrialOutcome {
     NotApplicable,
 }
 
-impl From<Outcome> for TrialOutcome {
-    fn from(o: Outcome) -> Self {
+impl From<Ending> for TrialOutcome {
+    fn from(o: Ending) -> Self {
         match o {
-            Outcome::Converged => TrialOutcome::Converged,
-            Outcome::NotContracting => TrialOutcome::NotContracting,
-            Outcome::IterationCap => TrialOutcome::IterationCap,
-            Outcome::InnerFailed => TrialOutcome::InnerFailed,
-            Outcome::NonFinite => TrialOutcome::NonFinite,
-            Outcome::Stopped => TrialOutcome::Stopped,
-            Outcome::Direct => TrialOutcome::Direct,
+            Ending::Converged => TrialOutcome::Converged,
+            Ending::NotContracting => TrialOutcome::NotContracting,
+            Ending::IterationCap => TrialOutcome::IterationCap,
+            Ending::InnerFailed => TrialOutcome::InnerFailed,
+            Ending::NonFinite => TrialOutcome::NonFinite,
+            Ending::Stopped => TrialOutcome::Stopped,
+            Ending::Direct => TrialOutcome::Direct,
         }
     }
 }

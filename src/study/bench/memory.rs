@@ -9,13 +9,13 @@
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
-use contactlab_solvers::Law;
+use contactlab_solvers::{Friction, Law};
 
-use crate::coulomb::driver::{solve_assembled, solve_scene, solver_entry};
 use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::solve::{Assembled, Caps, solve, solver_entry};
 
 /// One solve's memory, measured in a fresh process.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -76,15 +76,22 @@ pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
         .saturating_sub(before);
     let settings = Settings::default();
     let silent = &mut contactlab_solvers::Silent;
-    let run = if entry.solves(Law::Coulomb) {
-        solve_assembled(scene, d, &settings, entry, silent)?
+    let problem = if entry.solves(Law::Coulomb) {
+        Assembled::one_level(d)
     } else {
         drop(d);
-        solve_scene(scene, &settings, solver, silent)?
+        Assembled::for_solver(scene, entry)?
     };
+    let run = solve(
+        &problem,
+        Friction::Coulomb,
+        entry,
+        &settings,
+        Caps::default(),
+        silent,
+    )?;
     let diagnostic = |name: &str| {
-        run.coulomb
-            .solution
+        run.solution
             .diagnostics
             .iter()
             .find(|(k, _)| *k == name)
@@ -94,7 +101,7 @@ pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
         h: scene.finest(),
         solver: solver.to_string(),
         status: run.status.to_string(),
-        seconds: run.coulomb.seconds,
+        seconds: run.timing.total(),
         peak_kb: peak_memory_kb().ok_or_else(unread)?,
         assembly_peak_kb,
         problem_kb,

@@ -268,8 +268,7 @@ pub fn run(
                 })
                 .context("a Coulomb trial per solver")?;
             let profile = |m: &Measured| {
-                m.solution
-                    .as_ref()
+                m.solution()
                     .map(|(d, s, g)| contact_profile(d, s, g, m.trial.status))
                     .unwrap_or_default()
             };
@@ -344,7 +343,7 @@ pub fn run(
     stress.name = "problem 1, plane stress".into();
     let plane_stress_fraction = references
         .get(&stress, settings)?
-        .map(|r| r.coulomb.separation.fraction);
+        .map(|r| r.coulomb.separation().fraction);
 
     log(&format!("sweep at h = {}", spec.sweep_h));
     let mut sweep_refs = References::default();
@@ -429,15 +428,15 @@ pub fn run(
     })
 }
 
-/// A measured trial without its solution (charts need trials and histories).
+/// A measured trial without its finest level (charts need trials and
+/// histories).
 fn clone_for_chart(m: &Measured) -> Measured {
     Measured {
         trial: m.trial.clone(),
         timing: m.timing.clone(),
-        friction: m.friction.clone(),
-        levels: m.levels.clone(),
+        outcome: m.outcome.clone(),
         history: m.history.clone(),
-        solution: None,
+        finest: None,
     }
 }
 

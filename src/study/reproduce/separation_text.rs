@@ -130,12 +130,12 @@ pub(super) fn separation_text(spec: &ReproduceSpec, out: &Outputs) -> String {
         }
     );
     if let Some(r) = reference {
-        let f1 = r.coulomb.separation.fraction;
+        let f1 = r.coulomb.separation().fraction;
         let p2 = out
             .references
             .all()
             .find(|x| x.scene.name == "problem 2")
-            .map(|x| x.coulomb.separation.fraction);
+            .map(|x| x.coulomb.separation().fraction);
         if let Some(f2) = p2 {
             let _ = writeln!(
                 s,
@@ -151,7 +151,7 @@ pub(super) fn separation_text(spec: &ReproduceSpec, out: &Outputs) -> String {
                 }
             );
         }
-        if let Some(a) = r.coulomb.separation.intervals.first().map(|i| i[0]) {
+        if let Some(a) = r.coulomb.separation().intervals.first().map(|i| i[0]) {
             let h = spec.h.h();
             let _ = writeln!(
                 s,

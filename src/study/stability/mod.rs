@@ -152,7 +152,7 @@ pub fn run(
             None
         };
         let m = measure(&spec, reference, Keep::default())?;
-        let contractions: Vec<Option<f64>> = m.friction.iter().map(|f| f.contraction).collect();
+        let contractions: Vec<Option<f64>> = m.friction().iter().map(|f| f.contraction).collect();
         let cx = Context {
             trend: trend(&contractions),
             ..cx
@@ -245,7 +245,8 @@ pub fn run(
             tick,
         )?;
         for m in measured {
-            let contractions: Vec<Option<f64>> = m.friction.iter().map(|f| f.contraction).collect();
+            let contractions: Vec<Option<f64>> =
+                m.friction().iter().map(|f| f.contraction).collect();
             let cx = Context {
                 solvable: true,
                 trend: trend(&contractions),
@@ -293,7 +294,7 @@ fn friction_group(
                     default_iterations = Some(m.trial.friction_iterations.max(1));
                 }
                 let certified = m.trial.certified();
-                map.steps.extend(m.friction.iter().map(|s| FrictionStep {
+                map.steps.extend(m.friction().iter().map(|s| FrictionStep {
                     scene: scene.name.clone(),
                     solver: entry.name.into(),
                     friction_coefficient: f,

@@ -143,7 +143,7 @@ pub fn run(
             let mut spread: Option<f64> = None;
             for (i, a) in good.iter().enumerate() {
                 for b in &good[i + 1..] {
-                    if let (Some((d, sa, _)), Some((_, sb, g))) = (&a.solution, &b.solution) {
+                    if let (Some((d, sa, _)), Some((_, sb, g))) = (a.solution(), b.solution()) {
                         let p = agreement(d, g, sa, sb).pressure_max;
                         spread = Some(spread.map_or(p, |s| s.max(p)));
                     }
@@ -157,10 +157,14 @@ pub fn run(
                 .filter_map(|m| diagnostic(m, "condition"))
                 .collect();
             let fp_difference = match (&fp, good.first()) {
-                (Some(fp), Some(g)) if fp.trial.certified() => match (&fp.solution, &g.solution) {
-                    (Some((d, a, _)), Some((_, b, g))) => Some(agreement(d, g, a, b).pressure_max),
-                    _ => None,
-                },
+                (Some(fp), Some(g)) if fp.trial.certified() => {
+                    match (fp.solution(), g.solution()) {
+                        (Some((d, a, _)), Some((_, b, g))) => {
+                            Some(agreement(d, g, a, b).pressure_max)
+                        }
+                        _ => None,
+                    }
+                }
                 _ => None,
             };
             rows.push(UniquenessRow {

@@ -1,0 +1,324 @@
+//! The one solve: a problem, a friction law, the solver's entry and the
+//! validated settings in; one [`Outcome`] out (the solution, its
+//! certificate, the certified status beside the solver's claim, the work,
+//! the times with the set-up apart, the fixed point's record, the work per
+//! mesh level). `solve`'s summary, every study's trial and the reference
+//! are views of it, so they cannot count or time a run differently.
+//!
+//! A solver of the Coulomb law solves the Coulomb problem directly; any
+//! other runs inside the successive approximations of paper (9)
+//! ([`crate::coulomb::fixed_point`]); a solver that warm-starts does each
+//! given-friction step by mesh continuation over the scene's levels
+//! (Algorithm 1, [`crate::coulomb::continuation`]).
+
+mod outcome;
+pub mod summary;
+
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use contactlab_solvers::entry::Entry;
+use contactlab_solvers::{Friction, Law, Observer, Solution, Status};
+
+use crate::certificate::certify_solution;
+use crate::coulomb::budget::Budget;
+use crate::coulomb::continuation::{Continuation, LevelCount};
+use crate::coulomb::fixed_point::{GivenFrictionStep, SingleLevel, friction_fixed_point};
+use crate::mechanics::contact_zone::{ProfileRow, Separation, contact_profile, separation_of};
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+
+pub use outcome::{FixedPoint, Outcome, Work};
+
+/// A scene assembled for one solver: its finest level, and before it the
+/// coarser levels its mesh continuation visits (only if it warm-starts).
+pub struct Assembled {
+    /// Coarse to fine; the last is the finest.
+    levels: Vec<Discretization>,
+}
+
+impl Assembled {
+    /// Assembles `scene` (condition (13) checked) for `entry`: every level
+    /// of the scene if the solver warm-starts, else the finest alone.
+    pub fn for_solver(scene: &Scene, entry: &Entry) -> Result<Self> {
+        let levels = if entry.warm_starts && scene.levels.len() > 1 {
+            scene
+                .levels
+                .iter()
+                .map(|&h| Discretization::new(scene, h))
+                .collect::<Result<Vec<_>, _>>()?
+        } else {
+            vec![Discretization::new(scene, scene.finest())?]
+        };
+        Ok(Self { levels })
+    }
+
+    /// One level already assembled (e.g. to time the assembly apart, or a
+    /// scene assembled without the check of condition (13)).
+    pub fn one_level(finest: Discretization) -> Self {
+        Self {
+            levels: vec![finest],
+        }
+    }
+
+    pub fn finest(&self) -> &Discretization {
+        self.levels.last().expect("an assembled scene has a level")
+    }
+
+    /// The finest level, the coarser ones dropped.
+    pub fn into_finest(mut self) -> Discretization {
+        self.levels.pop().expect("an assembled scene has a level")
+    }
+}
+
+/// Caps on a solve's work (events of the solver's work stage, over the
+/// whole solve) and wall-clock time, enforced through the observer hook.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Caps {
+    pub work: Option<usize>,
+    pub seconds: Option<f64>,
+}
+
+/// Solves `problem` under `friction` (the Coulomb law, or the
+/// given-friction subproblem at a bound on the finest level) with the
+/// solver of `entry` at `settings` (validated where they were resolved),
+/// within `caps`, and certifies the answer on the finest level.
+pub fn solve(
+    problem: &Assembled,
+    friction: Friction<'_>,
+    entry: &'static Entry,
+    settings: &Settings,
+    caps: Caps,
+    observer: &mut dyn Observer,
+) -> Result<Outcome> {
+    let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
+    let mut budget = Budget::new(entry, caps.work, caps.seconds, observer);
+    let finest = problem.finest();
+    let start = Instant::now();
+    let done = if friction == Friction::Coulomb && entry.solves(Law::Coulomb) {
+        let s = solver.solve(&finest.problem, Friction::Coulomb, None, &mut budget);
+        let bound = finest
+            .problem
+            .contacts()
+            .iter()
+            .zip(&s.pressure)
+            .map(|(c, p)| c.coefficient * p.max(0.0))
+            .collect();
+        Done::direct(problem, s, bound, start.elapsed().as_secs_f64())
+    } else if problem.levels.len() > 1 {
+        let mut step = Continuation::new(&problem.levels, solver.as_mut(), settings.schedule);
+        let done = steps(&mut step, friction, settings, &mut budget, start)?;
+        Done {
+            levels: step.counts.clone(),
+            ..done
+        }
+    } else {
+        let mut step = SingleLevel::new(&finest.problem, solver.as_mut());
+        let mut done = steps(&mut step, friction, settings, &mut budget, start)?;
+        done.levels = vec![done.one_level_count(problem)];
+        done
+    };
+    let certificate = certify_solution(
+        &finest.problem,
+        friction,
+        &done.solution,
+        settings.certificate.tolerance,
+    );
+    let status = certificate.verdict(done.claim);
+    let mut detail = match &done.fixed_point {
+        Some(fp) => fp.detail.clone(),
+        None => done.solution.detail.clone(),
+    };
+    if matches!(status, Status::Unbounded | Status::Infeasible) && finest.total_load < 0.0 {
+        // The load satisfies condition (13): a solution exists. (A scene
+        // assembled without the check may violate it: then the solver's
+        // word stands.)
+        detail = format!(
+            "{detail} — but condition (13) holds (total vertical load {:e} < 0), so a solution exists: \
+             this is a failure of the solver, not a property of the problem",
+            finest.total_load
+        );
+    }
+    let (work, timing) = match &done.fixed_point {
+        Some(fp) => (fp.work(), fp.timing(done.seconds)),
+        None => (Work::of(&done.solution), done.solution.timing),
+    };
+    Ok(Outcome {
+        solver: entry,
+        law: friction.law(),
+        bound: done.bound,
+        certificate,
+        status,
+        claim: done.claim,
+        detail,
+        work: Work {
+            events: budget.work(),
+            ..work
+        },
+        timing,
+        fixed_point: done.fixed_point,
+        levels: done.levels,
+        solution: done.solution,
+    })
+}
+
+/// What the solver, or the fixed point around it, gave before the
+/// certificate.
+struct Done {
+    solution: Solution,
+    /// The bound of the last given-friction step, or 𝓕p of a direct answer.
+    bound: Vec<f64>,
+    /// The solver's claim, or the fixed point's.
+    claim: Status,
+    fixed_point: Option<FixedPoint>,
+    levels: Vec<LevelCount>,
+    /// Wall-clock seconds.
+    seconds: f64,
+}
+
+impl Done {
+    /// A direct solve of the Coulomb problem on the finest level.
+    fn direct(problem: &Assembled, solution: Solution, bound: Vec<f64>, seconds: f64) -> Self {
+        let mut done = Self {
+            claim: solution.status,
+            solution,
+            bound,
+            fixed_point: None,
+            levels: Vec::new(),
+            seconds,
+        };
+        done.levels = vec![done.one_level_count(problem)];
+        done
+    }
+
+    /// The work on the finest level when it is the only one.
+    fn one_level_count(&self, problem: &Assembled) -> LevelCount {
+        let h = problem.finest().h();
+        match &self.fixed_point {
+            Some(fp) => {
+                let work = fp.work();
+                LevelCount {
+                    h,
+                    visits: fp.history.len(),
+                    uzawa: work.outer,
+                    sweeps: work.inner,
+                    seconds: fp.history.iter().map(|s| s.seconds).sum(),
+                }
+            }
+            None => LevelCount {
+                h,
+                visits: 1,
+                uzawa: self.solution.iterations.outer,
+                sweeps: self.solution.iterations.inner,
+                seconds: self.solution.timing.total(),
+            },
+        }
+    }
+}
+
+/// The given-friction steps of a solve: the fixed point of paper (9) for
+/// the Coulomb law, one step at the given bound otherwise.
+fn steps(
+    step: &mut dyn GivenFrictionStep,
+    friction: Friction<'_>,
+    settings: &Settings,
+    observer: &mut dyn Observer,
+    start: Instant,
+) -> Result<Done> {
+    Ok(match friction {
+        Friction::Coulomb => {
+            let coulomb = settings.coulomb().map_err(anyhow::Error::msg)?;
+            let c = friction_fixed_point(step, &coulomb, observer);
+            let fp = FixedPoint {
+                history: c.history,
+                ending: c.ending,
+                status: c.status,
+                detail: c.detail,
+            };
+            Done {
+                claim: fp.status,
+                solution: c.solution,
+                bound: c.g,
+                levels: Vec::new(),
+                fixed_point: Some(fp),
+                seconds: start.elapsed().as_secs_f64(),
+            }
+        }
+        Friction::Given(g) => {
+            let s = step.solve_step(g, observer);
+            Done {
+                claim: s.status,
+                solution: s,
+                bound: g.to_vec(),
+                levels: Vec::new(),
+                fixed_point: None,
+                seconds: start.elapsed().as_secs_f64(),
+            }
+        }
+    })
+}
+
+/// Assembles `scene` for `entry` and solves it: the convenience of scripts,
+/// tests and the `solve` command. Gives the finest level with the outcome.
+pub fn solve_scene(
+    scene: &Scene,
+    friction: Friction<'_>,
+    entry: &'static Entry,
+    settings: &Settings,
+    observer: &mut dyn Observer,
+) -> Result<Solved> {
+    let problem = Assembled::for_solver(scene, entry)?;
+    let outcome = solve(
+        &problem,
+        friction,
+        entry,
+        settings,
+        Caps::default(),
+        observer,
+    )?;
+    Ok(Solved {
+        finest: problem.into_finest(),
+        outcome,
+    })
+}
+
+/// A solve with the finest level it was certified on: what reports need.
+pub struct Solved {
+    pub finest: Discretization,
+    pub outcome: Outcome,
+}
+
+impl Solved {
+    /// The separated part of Γ_K.
+    pub fn separation(&self) -> Separation {
+        separation_of(&self.finest, &self.outcome.solution)
+    }
+
+    /// The profile along Γ_K, marked with the certified status.
+    pub fn profile(&self) -> Vec<ProfileRow> {
+        contact_profile(
+            &self.finest,
+            &self.outcome.solution,
+            &self.outcome.bound,
+            self.outcome.status,
+        )
+    }
+
+    /// The objective of paper (10) at the bound of the last step.
+    pub fn objective(&self) -> f64 {
+        self.finest
+            .problem
+            .objective(&self.outcome.solution.v, &self.outcome.bound)
+    }
+}
+
+/// The registered solver named `name`, or an error that lists them.
+pub fn solver_entry(name: &str) -> Result<&'static Entry> {
+    contactlab_solvers::registry::by_name(name).with_context(|| {
+        format!(
+            "unknown solver '{name}': the registered solvers are {}",
+            contactlab_solvers::registry::names().join(", ")
+        )
+    })
+}

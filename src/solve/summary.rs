@@ -1,0 +1,113 @@
+//! `summary.json` of `contactlab solve`: a view of one [`Outcome`] with
+//! the scene, the settings and the contact zone.
+
+use contactlab_solvers::Status;
+use serde::Serialize;
+
+use crate::certificate::Certificate;
+use crate::coulomb::continuation::LevelCount;
+use crate::coulomb::fixed_point::{Ending, FrictionIteration};
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::solve::{Outcome, Solved};
+
+/// `summary.json`.
+#[derive(Debug, Serialize)]
+pub struct Summary {
+    /// The whole scene: material, loads (normal and tangential), friction,
+    /// mesh levels.
+    pub scene: Scene,
+    /// The commit of contactlab that produced it (the binary's).
+    pub git_commit: String,
+    pub problem: String,
+    pub h: String,
+    pub solver: String,
+    pub plane: String,
+    pub friction_coefficient: f64,
+    pub friction_iterations: usize,
+    /// The certified status: `converged` only if the solver claimed it and
+    /// the certificate passed.
+    pub status: Status,
+    /// The solver's own claim, beside it.
+    pub solver_status: Status,
+    /// How the fixed point ended (`direct` for a Coulomb solver).
+    pub outcome: Ending,
+    pub detail: String,
+    /// Every condition of the Coulomb law at g = 𝓕p, in the problem's scales.
+    pub certificate: Certificate,
+    /// Which condition fails or is worst, in words.
+    pub certificate_summary: String,
+    pub separated_intervals: Vec<[f64; 2]>,
+    pub separated_fraction: f64,
+    pub separation_tolerance: f64,
+    pub max_pressure: f64,
+    pub total_contact_force: f64,
+    pub total_applied_load: f64,
+    pub objective: f64,
+    /// The solver's work: outer iterations (interior-point, Uzawa or Newton,
+    /// over all friction iterations) and inner ones (sweeps).
+    pub iterations_outer: usize,
+    pub iterations_inner: usize,
+    /// Seconds of the whole solve, its set-up (building, factorizing) and
+    /// the rest.
+    pub seconds: f64,
+    pub seconds_setup: f64,
+    pub seconds_solve: f64,
+    pub history: Vec<FrictionIteration>,
+    pub levels: Vec<LevelCount>,
+    /// Every setting, resolved.
+    pub settings: serde_json::Value,
+}
+
+impl Summary {
+    /// The summary of `solved` on `scene` at `settings`; `git_commit` is
+    /// the provenance the command attaches.
+    pub fn of(solved: &Solved, scene: &Scene, settings: &Settings, git_commit: String) -> Self {
+        let o: &Outcome = &solved.outcome;
+        let s = &o.solution;
+        let d = &solved.finest;
+        let total_contact_force = d
+            .problem
+            .contacts()
+            .iter()
+            .zip(&s.pressure)
+            .map(|(c, p)| c.weight * p)
+            .sum();
+        let separation = solved.separation();
+        Summary {
+            scene: scene.clone(),
+            git_commit,
+            problem: scene.name.clone(),
+            h: d.h().to_string(),
+            solver: o.solver.name.to_string(),
+            plane: scene.material.plane.to_string(),
+            friction_coefficient: scene.friction,
+            friction_iterations: o.friction_iterations(),
+            status: o.status,
+            solver_status: o.claim,
+            outcome: o.ending(),
+            detail: o.detail.clone(),
+            certificate: o.certificate,
+            certificate_summary: o.certificate.summary(),
+            separated_intervals: separation.intervals,
+            separated_fraction: separation.fraction,
+            separation_tolerance: separation.tolerance,
+            max_pressure: s.pressure.iter().fold(f64::NEG_INFINITY, |m, p| m.max(*p)),
+            total_contact_force,
+            total_applied_load: d.total_load,
+            objective: solved.objective(),
+            iterations_outer: o.work.outer,
+            iterations_inner: o.work.inner,
+            seconds: o.timing.total(),
+            seconds_setup: o.timing.setup,
+            seconds_solve: o.timing.solve,
+            history: o
+                .fixed_point
+                .as_ref()
+                .map(|fp| fp.history.clone())
+                .unwrap_or_default(),
+            levels: o.levels.clone(),
+            settings: settings.resolved(),
+        }
+    }
+}
