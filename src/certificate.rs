@@ -132,6 +132,24 @@ pub struct Certificate {
 }
 
 impl Certificate {
+    /// The certificate of an answer that does not exist (a trial not run):
+    /// every violation infinite.
+    pub fn not_run(law: Law, tolerance: f64) -> Self {
+        let inf = f64::INFINITY;
+        Certificate {
+            law,
+            nonpenetration: inf,
+            pressure_sign: inf,
+            complementarity: inf,
+            friction_bound: inf,
+            stick: inf,
+            slip_direction: inf,
+            stationarity: inf,
+            force_balance: inf,
+            tolerance,
+        }
+    }
+
     /// Every condition with its violation.
     pub fn measures(&self) -> [(Condition, f64); 8] {
         Condition::ALL.map(|c| (c, self.get(c)))

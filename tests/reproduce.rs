@@ -99,7 +99,7 @@ fn trial_header() -> Vec<String> {
         Law::Coulomb,
         &Settings::default(),
     );
-    header_of(&Trial::not_run(&spec, Status::NotRun, String::new())).unwrap()
+    header_of(&Trial::not_run(&spec, Status::NotRun, String::new()).row()).unwrap()
 }
 
 #[test]
@@ -386,7 +386,7 @@ fn trials_that_do_not_converge_are_marked_not_dropped() {
     let row = |knob: &str, value: &str| {
         &measured
             .iter()
-            .find(|m| m.trial.knob == knob && m.trial.value == value)
+            .find(|m| m.trial.knob() == (knob, value))
             .unwrap()
             .trial
     };

@@ -63,9 +63,9 @@ fn check_all_agree(scene: &Scene, references: &mut References) -> Vec<Measured> 
     assert!(reference.coulomb.outcome.certificate.passed());
     for m in &measured {
         let t = &m.trial;
-        let what = format!("{} on {} ({})", t.solver, t.scene, t.law.as_str());
+        let what = format!("{} on {} ({})", t.solver.name, t.scene, t.law.as_str());
         assert!(t.certified(), "{what}: {} {}", t.status, t.detail);
-        let (du, dp) = (t.displacement_error.unwrap(), t.pressure_error.unwrap());
+        let (du, dp) = (t.displacement_error().unwrap(), t.pressure_error().unwrap());
         assert!(
             du <= AGREE && dp <= AGREE,
             "{what}: Δu {du:.1e}, Δp {dp:.1e}"
@@ -76,7 +76,7 @@ fn check_all_agree(scene: &Scene, references: &mut References) -> Vec<Measured> 
         assert!(
             measured
                 .iter()
-                .any(|m| m.trial.solver == e.name && m.trial.law == Law::Coulomb)
+                .any(|m| m.trial.solver.name == e.name && m.trial.law == Law::Coulomb)
         );
     }
     measured

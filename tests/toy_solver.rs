@@ -21,6 +21,7 @@ use contactlab::solvers::{
 use contactlab::study::plans::{self, Plan, Variation};
 use contactlab::study::reference::References;
 use contactlab::study::report::sweep_charts;
+use contactlab::study::stability::classify::Class;
 use contactlab::study::stability::{StabilitySpec, run as stability};
 use contactlab::study::sweep::{self, SweepSpec};
 use contactlab::study::{compare, trial::Trial};
@@ -246,13 +247,13 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
     let toy: Vec<&Trial> = measured
         .iter()
         .map(|m| &m.trial)
-        .filter(|t| t.solver == "toy")
+        .filter(|t| t.solver.name == "toy")
         .collect();
     assert_eq!(toy.len(), 2, "{toy:?}");
     for t in &toy {
         assert!(t.certified(), "{t:?}");
-        assert!(t.pressure_error.unwrap() < 1e-4, "{t:?}");
-        assert_ne!(t.reference, "toy", "not exact: never the reference");
+        assert!(t.pressure_error().unwrap() < 1e-4, "{t:?}");
+        assert_ne!(t.reference, Some("toy"), "not exact: never the reference");
     }
     // Sweeps and the work-precision chart.
     let spec = SweepSpec {
@@ -264,7 +265,7 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         ..SweepSpec::default()
     };
     let swept = sweep::run(&spec, &settings, &mut References::default(), &|_| {}).unwrap();
-    assert!(swept.iter().any(|m| m.trial.knob == "toy.tolerance"));
+    assert!(swept.iter().any(|m| m.trial.knob().0 == "toy.tolerance"));
     let pairs: Vec<_> = swept.iter().map(|m| (&m.trial, &m.timing)).collect();
     let charts = sweep_charts(&pairs);
     let wp = charts
@@ -300,13 +301,13 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
     let default = map
         .trials
         .iter()
-        .find(|t| t.solver == "toy" && t.group == "default")
+        .find(|t| t.solver.name == "toy" && t.group == "default")
         .unwrap();
-    assert_eq!(default.class, "converged", "{default:?}");
+    assert_eq!(default.class, Some(Class::Converged), "{default:?}");
     let capped = map
         .trials
         .iter()
-        .find(|t| t.solver == "toy" && t.knob == "toy.max_iter")
+        .find(|t| t.solver.name == "toy" && t.knob().0 == "toy.max_iter")
         .unwrap();
-    assert_eq!(capped.class, "stalled", "{capped:?}");
+    assert_eq!(capped.class, Some(Class::Stalled), "{capped:?}");
 }

@@ -131,9 +131,9 @@ impl StudyProgress {
     /// A trial is done.
     pub fn tick(&self, t: &TrialSpec) {
         let knob = t
-            .knob
+            .setting
             .as_ref()
-            .map(|(k, v)| format!(", {k} = {v}"))
+            .map(|s| format!(", {} = {}", s.path, s.value))
             .unwrap_or_default();
         let msg = format!("{} {}{knob}", t.solver.name, t.law.as_str());
         self.step(&msg);

@@ -26,7 +26,9 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let target = folder.commit()?;
     let mut counts = std::collections::BTreeMap::new();
     for t in &map.trials {
-        *counts.entry(t.class.as_str()).or_insert(0) += 1;
+        *counts
+            .entry(t.class.map_or("", |c| c.as_str()))
+            .or_insert(0) += 1;
     }
     print(&format!(
         "wrote {}/stability.csv ({} trials: {counts:?}), stability_friction.csv and charts\n",
@@ -53,7 +55,8 @@ pub fn run_map(spec: &StabilitySpec, settings: &Settings) -> Result<Map> {
 /// The map's files: stability.csv, stability_friction.csv,
 /// stability_uniqueness.csv (the charts are the caller's).
 pub fn write_tables(dir: &Path, map: &Map) -> Result<()> {
-    write_atomic(&dir.join("stability.csv"), &to_csv(&map.trials, &[])?)?;
+    let rows: Vec<_> = map.trials.iter().map(|t| t.row()).collect();
+    write_atomic(&dir.join("stability.csv"), &to_csv(&rows, &[])?)?;
     write_atomic(
         &dir.join("stability_friction.csv"),
         &to_csv(&map.steps, &[])?,

@@ -29,7 +29,7 @@ pub fn run(args: &Table1Args) -> Result<()> {
     bar.finish();
     let mut report = table1::markdown(&rows);
     if let Some(folder) = folder {
-        let trials: Vec<_> = measured.iter().map(|m| m.trial.clone()).collect();
+        let trials: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
         write_atomic(&folder.path().join("table1.csv"), &to_csv(&rows, &[])?)?;
         write_atomic(
             &folder.path().join("table1_trials.csv"),

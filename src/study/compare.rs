@@ -10,7 +10,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::reference::References;
 use crate::study::runner::{Keep, Measured, measure_all};
-use crate::study::trial::{Trial, TrialSpec};
+use crate::study::trial::{Trial, TrialSpec, intervals_text};
 
 /// The study's name in trial records.
 pub const STUDY: &str = "compare";
@@ -77,16 +77,14 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
         let sep = if r.separated.is_empty() {
             "none".to_string()
         } else {
-            r.separated.replace(';', ", ")
+            intervals_text(&r.separated).replace(';', ", ")
         };
-        let certificate = if r.failing.is_empty() {
-            format!("{:.1e}", r.certificate)
+        let failing = r.failing();
+        let certificate = if failing.is_empty() {
+            format!("{:.1e}", r.residual())
         } else {
-            format!(
-                "**{:.1e}** ({})",
-                r.certificate,
-                r.failing.replace(';', ", ")
-            )
+            let names: Vec<&str> = failing.iter().map(|c| c.as_str()).collect();
+            format!("**{:.1e}** ({})", r.residual(), names.join(", "))
         };
         out += &format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({:.1}%) | {} | {} | {:.3} |\n",
@@ -94,15 +92,15 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
             r.h,
             r.law.as_str(),
             if r.study == STUDY {
-                r.solver.clone()
+                r.solver.name.to_string()
             } else {
-                format!("{} ({})", r.solver, r.study.replace('_', " "))
+                format!("{} ({})", r.solver.name, r.study.replace('_', " "))
             },
             r.status,
             r.solver_status,
-            e(r.displacement_error),
-            e(r.pressure_error),
-            e(r.traction_error),
+            e(r.displacement_error()),
+            e(r.pressure_error()),
+            e(r.agreement.map(|a| a.traction_max)),
             sep,
             100.0 * r.separated_fraction,
             certificate,
@@ -112,8 +110,8 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
     }
     let reference: Vec<String> = {
         let mut v: Vec<String> = Vec::new();
-        for r in trials.iter().filter(|r| !r.reference.is_empty()) {
-            let s = format!("`{}` ({})", r.reference, r.law.as_str());
+        for (name, r) in trials.iter().filter_map(|r| Some((r.reference?, r))) {
+            let s = format!("`{name}` ({})", r.law.as_str());
             if !v.contains(&s) {
                 v.push(s);
             }
@@ -122,7 +120,7 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
     };
     let tol = trials
         .first()
-        .map(|r| r.certificate_tolerance)
+        .map(|r| r.tolerance)
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
     out + &format!(
         "\nStatus: certified (a claim of convergence that fails the certificate is `inaccurate`); claim: the solver's own. \

@@ -50,7 +50,7 @@ pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
     let mut out = Vec::new();
     let mut groups: Vec<(String, String)> = trials
         .iter()
-        .map(|(t, _)| (t.scene.clone(), t.h.clone()))
+        .map(|(t, _)| (t.scene.clone(), t.h.to_string()))
         .collect();
     groups.sort();
     groups.dedup();
@@ -58,7 +58,7 @@ pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
         let tag = sweep_tag(&scene, &h);
         let here: Vec<&(&Trial, &TrialTiming)> = trials
             .iter()
-            .filter(|(t, _)| t.scene == scene && t.h == h)
+            .filter(|(t, _)| t.scene == scene && t.h.to_string() == h)
             .collect();
         for (group, file, what) in [
             (
@@ -118,11 +118,14 @@ fn work_precision_series(here: &[&(&Trial, &TrialTiming)], group: &str) -> Vec<S
                 .iter()
                 .filter(|(t, _)| {
                     t.group == group
-                        && t.solver == e.name
+                        && t.solver.name == e.name
                         && t.certified() == certified
                         && (certified || t.solver_status.is_converged())
                 })
-                .filter_map(|(t, tm)| t.pressure_error.map(|p| (p.max(WP_FLOOR), tm.seconds_min)))
+                .filter_map(|(t, tm)| {
+                    t.pressure_error()
+                        .map(|p| (p.max(WP_FLOOR), tm.seconds_min))
+                })
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             pts
@@ -145,7 +148,12 @@ fn variation_charts(
     tag: &str,
     runs: &[&Trial],
 ) -> Vec<(String, Chart)> {
-    let numeric = |t: &Trial| t.value.parse::<f64>().ok().filter(|v| *v > 0.0);
+    let numeric = |t: &Trial| {
+        t.setting
+            .as_ref()
+            .and_then(|s| s.number)
+            .filter(|v| *v > 0.0)
+    };
     if runs.iter().filter(|t| numeric(t).is_some()).count() < 2 {
         return Vec::new();
     }
@@ -176,7 +184,8 @@ fn variation_charts(
         for t in runs.iter().filter(|t| numeric(t).is_none()) {
             if let Some(y) = f(t) {
                 v.push(
-                    Series::line(format!("{name} at {}", t.value), vec![(lo, y), (hi, y)]).dashed(),
+                    Series::line(format!("{name} at {}", t.knob().1), vec![(lo, y), (hi, y)])
+                        .dashed(),
                 );
             }
         }
@@ -189,9 +198,9 @@ fn variation_charts(
         "friction iterations",
         &count(|t| t.friction_iterations),
     ));
-    let mut errors = metric("max displacement error", &|t| t.displacement_error);
-    errors.extend(metric("max pressure error", &|t| t.pressure_error));
-    errors.extend(metric("certificate", &|t| Some(t.certificate)));
+    let mut errors = metric("max displacement error", &|t| t.displacement_error());
+    errors.extend(metric("max pressure error", &|t| t.pressure_error()));
+    errors.extend(metric("certificate", &|t| Some(t.residual())));
     let slug = group.replace('.', "_");
     vec![
         (
@@ -404,7 +413,7 @@ pub fn convergence_charts(problem: u32, h: &str, measured: &[Measured]) -> Vec<(
         .iter()
         .filter(|m| m.trial.law == contactlab_solvers::Law::Coulomb)
     {
-        let solver = m.trial.solver.as_str();
+        let solver = m.trial.solver.name;
         let direct =
             registry::by_name(solver).is_some_and(|e| e.solves(contactlab_solvers::Law::Coulomb));
         let stages: Vec<&str> = registry::by_name(solver)

@@ -14,7 +14,8 @@ use crate::mechanics::discretization::Discretization;
 use crate::solve::{Assembled, Caps, Outcome, solve};
 use crate::study::agreement::{Agreement, agreement};
 use crate::study::reference::{Reference, References};
-use crate::study::trial::{Trial, TrialOutcome, TrialSpec, TrialTiming};
+pub use crate::study::trial::intervals_text;
+use crate::study::trial::{Trial, TrialOutcome, TrialRow, TrialSpec, TrialTiming};
 
 /// How the repeated runs' times are summarized and what is kept.
 #[derive(Clone, Copy, Debug, Default)]
@@ -135,14 +136,15 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
         times.push(solve_once(spec, reference, &mut Silent)?.1.timing.total());
     }
     let trial = trial_row(spec, reference, &finest, &outcome);
+    let (knob, value) = trial.knob();
     let timing = TrialTiming {
         trial: 0,
         scene: trial.scene.clone(),
-        h: trial.h.clone(),
-        solver: trial.solver.clone(),
+        h: trial.h.to_string(),
+        solver: trial.solver.name.to_string(),
         law: trial.law,
-        knob: trial.knob.clone(),
-        value: trial.value.clone(),
+        knob: knob.to_string(),
+        value: value.to_string(),
         runs: times.len(),
         seconds_min: times.iter().copied().fold(f64::INFINITY, f64::min),
         seconds_median: median(&times),
@@ -157,7 +159,7 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
     })
 }
 
-/// The trial's row: a view of its outcome, with its differences from the
+/// The trial: a view of its outcome, with its differences from the
 /// reference.
 pub fn trial_row(
     spec: &TrialSpec,
@@ -166,7 +168,7 @@ pub fn trial_row(
     o: &Outcome,
 ) -> Trial {
     let s = &o.solution;
-    let against: Option<(&str, Agreement)> = reference.and_then(|r| match spec.law {
+    let against: Option<(&'static str, Agreement)> = reference.and_then(|r| match spec.law {
         Law::Coulomb => Some((
             r.solver,
             agreement(&r.coulomb.finest, &r.g, s, &r.coulomb.outcome.solution),
@@ -191,32 +193,24 @@ pub fn trial_row(
     trial.work = o.work.events;
     trial.contraction = o.contraction();
     if let Some((name, a)) = against {
-        trial.reference = name.to_string();
-        trial.displacement_error = Some(a.displacement_max);
-        trial.pressure_error = Some(a.pressure_max);
-        trial.traction_error = Some(a.traction_max);
-        trial.objective_gap = Some(a.objective_gap);
+        trial.reference = Some(name);
+        trial.agreement = Some(a);
     }
-    trial.separated = intervals_text(&separation.intervals);
-    trial.diagnostics = s
-        .diagnostics
-        .iter()
-        .map(|(k, v)| format!("{k}={v:e}"))
-        .collect::<Vec<_>>()
-        .join(";");
+    trial.separated = separation.intervals;
     trial.separated_fraction = separation.fraction;
+    trial.diagnostics = s.diagnostics.clone();
     if o.status == Status::Inaccurate {
         trial.detail = format!("{} ({})", trial.detail, o.certificate.summary());
     }
-    trial.set_certificate(&o.certificate);
+    trial.certificate = Some(o.certificate);
     trial
 }
 
 /// Writes `STEM.csv` (the trials) and `STEM_timing.csv` (their times).
 pub fn write_trials(dir: &std::path::Path, stem: &str, measured: &[Measured]) -> Result<()> {
-    let trials: Vec<&Trial> = measured.iter().map(|m| &m.trial).collect();
+    let rows: Vec<TrialRow> = measured.iter().map(|m| m.trial.row()).collect();
     let timing: Vec<&TrialTiming> = measured.iter().map(|m| &m.timing).collect();
-    write_atomic(&dir.join(format!("{stem}.csv")), &to_csv(&trials, &[])?)?;
+    write_atomic(&dir.join(format!("{stem}.csv")), &to_csv(&rows, &[])?)?;
     write_atomic(
         &dir.join(format!("{stem}_timing.csv")),
         &to_csv(&timing, &[])?,
@@ -232,15 +226,6 @@ pub fn median(x: &[f64]) -> f64 {
         n if n % 2 == 1 => v[n / 2],
         n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
     }
-}
-
-/// Separated intervals as `[a;b] [c;d]` (no commas, for CSV).
-pub fn intervals_text(intervals: &[[f64; 2]]) -> String {
-    intervals
-        .iter()
-        .map(|[a, b]| format!("[{a:.4};{b:.4}]"))
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 /// Measures trials in order, each against the reference of its scene and

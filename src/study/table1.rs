@@ -123,7 +123,7 @@ fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {
         mpr_1_32: at("1/32"),
         mpr_1_64: at("1/64"),
         separated_fraction: t.separated_fraction,
-        certificate: t.certificate,
+        certificate: t.residual(),
         paper_mpp: paper.1,
         paper_mu: paper.2,
         paper_mpr: paper.3,

@@ -1,18 +1,45 @@
 //! The one record every study produces: a trial, one solver on one problem
 //! under one setting, with its certified status beside the solver's claim,
 //! its counts, its certificate, and its agreement with the study's
-//! reference. Accuracy columns are deterministic; times live apart, in
-//! [`TrialTiming`].
+//! reference. In memory a [`Trial`] is typed (the mesh, the solver's entry,
+//! the varied setting, the outcome's statuses, counts and certificate, the
+//! separated intervals, the study's class); it becomes text only when
+//! written, as a [`TrialRow`]. Accuracy columns are deterministic; times
+//! live apart, in [`TrialTiming`].
 
 use contactlab_solvers::registry::Entry;
-use contactlab_solvers::{Law, Status};
+use contactlab_solvers::{Law, Status, Stopping};
 use serde::{Deserialize, Serialize};
 
-use crate::certificate::Certificate;
+use crate::certificate::{Certificate, Condition};
 use crate::coulomb::fixed_point::Ending;
 use crate::io::csv::{fixed, fixed_opt};
+use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::agreement::Agreement;
+use crate::study::stability::classify::Class;
+
+/// A setting a trial varies: its path (`relaxation.r`, `epsilon`, or a
+/// study's own name for what it varies, such as `friction`) and its value
+/// as the command line writes it (`1e-3`, `exact`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setting {
+    pub path: String,
+    pub value: String,
+    /// The value as a number, when it is one.
+    pub number: Option<f64>,
+}
+
+impl Setting {
+    pub fn new(path: &str, value: &str) -> Self {
+        Self {
+            path: path.to_string(),
+            value: value.to_string(),
+            number: value.trim().parse().ok(),
+        }
+    }
+}
 
 /// A planned trial.
 #[derive(Clone)]
@@ -24,8 +51,8 @@ pub struct TrialSpec {
     pub scene: Scene,
     pub solver: &'static Entry,
     pub law: Law,
-    /// The setting varied, as `path = value`, if any.
-    pub knob: Option<(String, String)>,
+    /// The setting varied, if any.
+    pub setting: Option<Setting>,
     pub settings: Settings,
     /// Stop after this much work (events of the solver's work stage).
     pub work: Option<usize>,
@@ -56,7 +83,7 @@ impl TrialSpec {
             scene: scene.clone(),
             solver,
             law,
-            knob: None,
+            setting: None,
             settings: settings.clone(),
             work: None,
             seconds: None,
@@ -70,7 +97,7 @@ impl TrialSpec {
         self.settings
             .set_text(path, value)
             .map_err(anyhow::Error::msg)?;
-        self.knob = Some((path.to_string(), value.to_string()));
+        self.setting = Some(Setting::new(path, value));
         Ok(self)
     }
 
@@ -81,7 +108,7 @@ impl TrialSpec {
         self.settings
             .set_epsilon(epsilon)
             .map_err(anyhow::Error::msg)?;
-        self.knob = Some(("epsilon".to_string(), format!("{epsilon:e}")));
+        self.setting = Some(Setting::new("epsilon", &format!("{epsilon:e}")));
         Ok(self)
     }
 
@@ -117,9 +144,195 @@ impl TrialSpec {
     }
 }
 
-/// One trial's accuracy record (one row of a study's trials CSV).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// One trial, typed: what was run and what came of it.
+#[derive(Clone, Debug)]
 pub struct Trial {
+    pub study: &'static str,
+    pub group: String,
+    pub scene: String,
+    pub h: MeshSize,
+    pub solver: &'static Entry,
+    pub law: Law,
+    pub setting: Option<Setting>,
+    pub stopping: Stopping,
+    /// The certified status: the solver's claim, or `inaccurate` when a
+    /// claim of convergence fails the certificate.
+    pub status: Status,
+    /// The solver's own claim.
+    pub solver_status: Status,
+    /// How the fixed point ended (`direct` for a solver of the Coulomb
+    /// problem, `not_applicable` on the given-friction subproblem).
+    pub outcome: TrialOutcome,
+    pub friction_iterations: usize,
+    pub outer_iterations: usize,
+    pub inner_iterations: usize,
+    /// Events of the solver's work stage.
+    pub work: usize,
+    /// The fixed point's last observed contraction factor.
+    pub contraction: Option<f64>,
+    /// The certificate of its answer (none for a trial not run), and the
+    /// tolerance it is held to.
+    pub certificate: Option<Certificate>,
+    pub tolerance: f64,
+    /// The solver whose answer is the reference, and the differences from it.
+    pub reference: Option<&'static str>,
+    pub agreement: Option<Agreement>,
+    /// Separated intervals of Γ_K and their fraction.
+    pub separated: Vec<[f64; 2]>,
+    pub separated_fraction: f64,
+    /// The scene's total vertical load on the upper body (condition (13):
+    /// negative).
+    pub total_load: f64,
+    pub detail: String,
+    /// What the solver reports beyond its counts (e.g. the condition
+    /// number of its final Newton matrix).
+    pub diagnostics: Vec<(&'static str, f64)>,
+    /// A study's verdict on the trial (the stability map's class), and why.
+    pub class: Option<Class>,
+    pub reason: String,
+}
+
+impl Trial {
+    /// Whether the certified status is converged.
+    pub fn certified(&self) -> bool {
+        self.status.is_converged()
+    }
+
+    /// The largest violation of the certificate (infinite without one).
+    pub fn residual(&self) -> f64 {
+        self.certificate.map_or(f64::INFINITY, |c| c.residual())
+    }
+
+    /// The conditions that fail the certificate, worst first (none without
+    /// one: nothing was checked).
+    pub fn failing(&self) -> Vec<Condition> {
+        self.certificate.map(|c| c.failing()).unwrap_or_default()
+    }
+
+    /// The maximum pressure difference from the reference, if there was one.
+    pub fn pressure_error(&self) -> Option<f64> {
+        self.agreement.map(|a| a.pressure_max)
+    }
+
+    /// The maximum displacement difference from the reference.
+    pub fn displacement_error(&self) -> Option<f64> {
+        self.agreement.map(|a| a.displacement_max)
+    }
+
+    /// The varied setting's path and value (`"", ""` when none).
+    pub fn knob(&self) -> (&str, &str) {
+        self.setting
+            .as_ref()
+            .map_or(("", ""), |s| (s.path.as_str(), s.value.as_str()))
+    }
+
+    /// A trial that was not run, with the reason (e.g. condition (13) fails):
+    /// the spec's columns, infinite violations, no counts.
+    pub fn not_run(spec: &TrialSpec, status: Status, detail: String) -> Self {
+        Trial {
+            study: spec.study,
+            group: spec.group.clone(),
+            scene: spec.scene.name.clone(),
+            h: spec.scene.finest(),
+            solver: spec.solver,
+            law: spec.law,
+            setting: spec.setting.clone(),
+            stopping: spec.settings.stopping,
+            status,
+            solver_status: status,
+            outcome: TrialOutcome::NotApplicable,
+            friction_iterations: 0,
+            outer_iterations: 0,
+            inner_iterations: 0,
+            work: 0,
+            contraction: None,
+            certificate: None,
+            tolerance: spec.settings.certificate.tolerance,
+            reference: None,
+            agreement: None,
+            separated: Vec::new(),
+            separated_fraction: 0.0,
+            total_load: spec.scene.total_vertical_load(),
+            detail,
+            diagnostics: Vec::new(),
+            class: None,
+            reason: String::new(),
+        }
+    }
+
+    /// The trial as a row of text, as written.
+    pub fn row(&self) -> TrialRow {
+        let (knob, value) = self.knob();
+        let c = self
+            .certificate
+            .unwrap_or_else(|| Certificate::not_run(self.law, self.tolerance));
+        let a = self.agreement;
+        TrialRow {
+            study: self.study.into(),
+            group: self.group.clone(),
+            scene: self.scene.clone(),
+            h: self.h.to_string(),
+            solver: self.solver.name.into(),
+            law: self.law,
+            knob: knob.into(),
+            value: value.into(),
+            stopping: self.stopping.as_str().into(),
+            status: self.status,
+            solver_status: self.solver_status,
+            outcome: self.outcome,
+            failing: self
+                .failing()
+                .iter()
+                .map(|f| f.as_str())
+                .collect::<Vec<_>>()
+                .join(";"),
+            friction_iterations: self.friction_iterations,
+            outer_iterations: self.outer_iterations,
+            inner_iterations: self.inner_iterations,
+            work: self.work,
+            contraction: self.contraction,
+            certificate: self.residual(),
+            certificate_tolerance: self.tolerance,
+            nonpenetration: c.nonpenetration,
+            pressure_sign: c.pressure_sign,
+            complementarity: c.complementarity,
+            friction_bound: c.friction_bound,
+            stick: c.stick,
+            slip_direction: c.slip_direction,
+            stationarity: c.stationarity,
+            force_balance: c.force_balance,
+            reference: self.reference.unwrap_or_default().into(),
+            displacement_error: a.map(|a| a.displacement_max),
+            pressure_error: a.map(|a| a.pressure_max),
+            traction_error: a.map(|a| a.traction_max),
+            objective_gap: a.map(|a| a.objective_gap),
+            separated: intervals_text(&self.separated),
+            separated_fraction: self.separated_fraction,
+            detail: self.detail.clone(),
+            diagnostics: self
+                .diagnostics
+                .iter()
+                .map(|(k, v)| format!("{k}={v:e}"))
+                .collect::<Vec<_>>()
+                .join(";"),
+            class: self.class.map(|c| c.as_str()).unwrap_or_default().into(),
+            reason: self.reason.clone(),
+        }
+    }
+}
+
+/// Separated intervals as `[a;b] [c;d]` (no commas, for CSV).
+pub fn intervals_text(intervals: &[[f64; 2]]) -> String {
+    intervals
+        .iter()
+        .map(|[a, b]| format!("[{a:.4};{b:.4}]"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// One trial's accuracy record as written (one row of a study's trials CSV).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrialRow {
     pub study: String,
     pub group: String,
     pub scene: String,
@@ -130,22 +343,15 @@ pub struct Trial {
     pub knob: String,
     pub value: String,
     pub stopping: String,
-    /// The certified status: the solver's claim, or `inaccurate` when a
-    /// claim of convergence fails the certificate.
     pub status: Status,
-    /// The solver's own claim.
     pub solver_status: Status,
-    /// How the fixed point ended (`direct` for a solver of the Coulomb
-    /// problem, `not_applicable` on the given-friction subproblem).
     pub outcome: TrialOutcome,
     /// The conditions that fail the certificate, worst first (`;`-separated).
     pub failing: String,
     pub friction_iterations: usize,
     pub outer_iterations: usize,
     pub inner_iterations: usize,
-    /// Events of the solver's work stage.
     pub work: usize,
-    /// The fixed point's last observed contraction factor.
     #[serde(serialize_with = "fixed_opt")]
     pub contraction: Option<f64>,
     /// The certificate's measure (largest violation) and its tolerance.
@@ -186,11 +392,7 @@ pub struct Trial {
     #[serde(serialize_with = "fixed")]
     pub separated_fraction: f64,
     pub detail: String,
-    /// What the solver reports beyond its counts (`name=value;...`, e.g. the
-    /// condition number of its final Newton matrix).
     pub diagnostics: String,
-    /// A study's verdict on the trial (the stability map's class), and why;
-    /// empty where a study does not classify.
     pub class: String,
     pub reason: String,
 }
@@ -220,83 +422,6 @@ impl From<Ending> for TrialOutcome {
             Ending::NonFinite => TrialOutcome::NonFinite,
             Ending::Stopped => TrialOutcome::Stopped,
             Ending::Direct => TrialOutcome::Direct,
-        }
-    }
-}
-
-impl Trial {
-    /// The certificate's columns.
-    pub fn set_certificate(&mut self, c: &Certificate) {
-        self.certificate = c.residual();
-        self.certificate_tolerance = c.tolerance;
-        self.nonpenetration = c.nonpenetration;
-        self.pressure_sign = c.pressure_sign;
-        self.complementarity = c.complementarity;
-        self.friction_bound = c.friction_bound;
-        self.stick = c.stick;
-        self.slip_direction = c.slip_direction;
-        self.stationarity = c.stationarity;
-        self.force_balance = c.force_balance;
-        self.failing = c
-            .failing()
-            .iter()
-            .map(|f| f.as_str())
-            .collect::<Vec<_>>()
-            .join(";");
-    }
-
-    /// Whether the certified status is converged.
-    pub fn certified(&self) -> bool {
-        self.status.is_converged()
-    }
-}
-
-impl Trial {
-    /// A trial that was not run, with the reason (e.g. condition (13) fails):
-    /// the spec's columns, infinite violations, no counts.
-    pub fn not_run(spec: &TrialSpec, status: Status, detail: String) -> Self {
-        let (knob, value) = spec.knob.clone().unwrap_or_default();
-        let inf = f64::INFINITY;
-        Trial {
-            study: spec.study.into(),
-            group: spec.group.clone(),
-            scene: spec.scene.name.clone(),
-            h: spec.scene.finest().to_string(),
-            solver: spec.solver.name.into(),
-            law: spec.law,
-            knob,
-            value,
-            stopping: spec.settings.stopping.as_str().into(),
-            status,
-            solver_status: status,
-            outcome: TrialOutcome::NotApplicable,
-            failing: String::new(),
-            friction_iterations: 0,
-            outer_iterations: 0,
-            inner_iterations: 0,
-            work: 0,
-            contraction: None,
-            certificate: inf,
-            certificate_tolerance: spec.settings.certificate.tolerance,
-            nonpenetration: inf,
-            pressure_sign: inf,
-            complementarity: inf,
-            friction_bound: inf,
-            stick: inf,
-            slip_direction: inf,
-            stationarity: inf,
-            force_balance: inf,
-            reference: String::new(),
-            displacement_error: None,
-            pressure_error: None,
-            traction_error: None,
-            objective_gap: None,
-            separated: String::new(),
-            separated_fraction: 0.0,
-            detail,
-            diagnostics: String::new(),
-            class: String::new(),
-            reason: String::new(),
         }
     }
 }

@@ -100,7 +100,7 @@ fn run_once(
         min_seconds: seconds,
         ratio_to_factorization: seconds / factorization,
         status: tr.status.as_str().into(),
-        certificate: tr.certificate,
+        certificate: tr.residual(),
         pressure_error: f64::NAN,
         work: tr.work,
         note: format!(

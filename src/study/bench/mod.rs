@@ -321,8 +321,8 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
                 let row = mesh.rows.last_mut().expect("just pushed");
                 row.runs = m.timing.runs;
                 row.min_seconds = m.timing.seconds_min;
-                row.certificate = tr.certificate;
-                row.pressure_error = tr.pressure_error.unwrap_or(f64::NAN);
+                row.certificate = tr.residual();
+                row.pressure_error = tr.pressure_error().unwrap_or(f64::NAN);
                 row.work = tr.work;
             }
         }
@@ -413,7 +413,7 @@ fn large_mesh(
         note,
     );
     let row = mesh.rows.last_mut().expect("just pushed");
-    row.certificate = tr.certificate;
+    row.certificate = tr.residual();
     row.work = tr.work;
     Ok(tr.status == contactlab_solvers::Status::Converged)
 }

@@ -29,7 +29,7 @@ use crate::mechanics::mesh::Mesh;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::runner::{Keep, Measured, measure};
-use crate::study::trial::TrialSpec;
+use crate::study::trial::{Setting, TrialSpec};
 
 pub use collection::{Instance, collection};
 
@@ -181,7 +181,7 @@ pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<Planned>> {
                     &settings,
                 )
                 .with_seconds(Some(spec.time_limit));
-                t.knob = Some(("target".into(), format!("{target:e}")));
+                t.setting = Some(Setting::new("target", &format!("{target:e}")));
                 out.push((inst.clone(), t, target));
             }
         }
@@ -225,17 +225,17 @@ pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(Benchma
         let row = BenchmarkRow {
             instance: inst.id.clone(),
             family: inst.family.into(),
-            h: tr.h.clone(),
+            h: tr.h.to_string(),
             unknowns: unknowns(inst.scene.finest(), &mut known),
             friction_coefficient: inst.scene.friction,
-            solver: tr.solver.clone(),
+            solver: tr.solver.name.to_string(),
             target,
             status: tr.status.to_string(),
             solver_status: tr.solver_status.to_string(),
             success: tr.certified(),
             claimed_but_failed: claimed && !tr.certified(),
-            certificate: tr.certificate,
-            failing: tr.failing.clone(),
+            certificate: tr.residual(),
+            failing: tr.row().failing,
             seconds: m.timing.seconds_min,
             time_limit: t.seconds.unwrap_or(f64::INFINITY),
             work: tr.work,

@@ -38,7 +38,7 @@ use crate::study::runner::{Keep, Measured, measure, measure_all, write_trials};
 use crate::study::stability::{self, Map, StabilitySpec};
 use crate::study::sweep::{self, SweepSpec};
 use crate::study::table1::{self, Table1Row};
-use crate::study::trial::{Trial, TrialSpec};
+use crate::study::trial::{Trial, TrialRow, TrialSpec, intervals_text};
 
 /// The group of the paper's method at the paper's settings in compare.csv.
 pub const PAPER_SETTINGS: &str = "paper_settings";
@@ -203,7 +203,7 @@ pub fn run(
         &out.join("table1.tex"),
         booktabs(&table1::markdown(&t1), "Table 1 of Zhiltsov & Namm (2019): iteration counts of the paper's method, ours beside the paper's (contactlab reproduce)").as_bytes(),
     )?;
-    let t1_trials: Vec<Trial> = t1_measured.iter().map(|m| m.trial.clone()).collect();
+    let t1_trials: Vec<TrialRow> = t1_measured.iter().map(|m| m.trial.row()).collect();
     write_atomic(&out.join("table1_trials.csv"), &to_csv(&t1_trials, &[])?)?;
 
     let solvers = registry::solvers();
@@ -262,7 +262,7 @@ pub fn run(
             let with = measured
                 .iter()
                 .find(|m| {
-                    m.trial.solver == e.name
+                    m.trial.solver.name == e.name
                         && m.trial.law == Law::Coulomb
                         && m.trial.study == compare::STUDY
                 })
@@ -283,7 +283,7 @@ pub fn run(
                     solver: e.name.into(),
                     friction_coefficient: f,
                     status: m.trial.status.to_string(),
-                    separated: m.trial.separated.clone(),
+                    separated: intervals_text(&m.trial.separated),
                     separated_fraction: m.trial.separated_fraction,
                 });
             }

@@ -87,7 +87,7 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
     let compare_trials: Vec<&Measured> = out.compare.iter().flat_map(|(_, v)| v.iter()).collect();
     let tol = compare_trials
         .first()
-        .map(|t| t.trial.certificate_tolerance)
+        .map(|t| t.trial.tolerance)
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
     let context = Context {
         quick: spec.quick,
@@ -221,7 +221,7 @@ fn agreement(trials: &[&Measured], tol: f64) -> String {
         trials
             .iter()
             .map(|m| &m.trial)
-            .filter(|t| t.study == study && t.solver == solver && t.law == Law::Coulomb)
+            .filter(|t| t.study == study && t.solver.name == solver && t.law == Law::Coulomb)
             .collect()
     };
     let describe = |ts: &[&Trial]| -> (String, f64, f64, f64, usize) {
@@ -232,9 +232,9 @@ fn agreement(trials: &[&Measured], tol: f64) -> String {
         let ok = ts.iter().filter(|t| t.certified()).count();
         (
             statuses.join(", "),
-            worst(ts, |t| t.displacement_error),
-            worst(ts, |t| t.pressure_error),
-            ts.iter().map(|t| t.certificate).fold(0.0, f64::max),
+            worst(ts, |t| t.displacement_error()),
+            worst(ts, |t| t.pressure_error()),
+            ts.iter().map(|t| t.residual()).fold(0.0, f64::max),
             ok,
         )
     };

@@ -34,10 +34,12 @@ pub(super) fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> St
     let curve = |solver: &str| -> Vec<(f64, f64)> {
         let mut pts: Vec<(f64, f64)> = sweep
             .iter()
-            .filter(|m| m.trial.group == group && m.trial.solver == solver && m.trial.certified())
+            .filter(|m| {
+                m.trial.group == group && m.trial.solver.name == solver && m.trial.certified()
+            })
             .filter_map(|m| {
                 m.trial
-                    .pressure_error
+                    .pressure_error()
                     .map(|e| (e.max(crate::study::report::WP_FLOOR), m.timing.seconds_min))
             })
             .filter(|(_, t)| *t > 0.0)
@@ -52,7 +54,7 @@ pub(super) fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> St
             *n != baseline
                 && sweep
                     .iter()
-                    .any(|m| m.trial.group == group && m.trial.solver == *n)
+                    .any(|m| m.trial.group == group && m.trial.solver.name == *n)
         })
         .map(|other| {
             let points = curve(other);
@@ -112,27 +114,27 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
         let failed: Vec<String> = runs
             .iter()
             .filter(|t| !t.certified())
-            .map(|t| format!("{} ({})", t.value, t.status))
+            .map(|t| format!("{} ({})", t.knob().1, t.status))
             .collect();
         let cheapest = certified.iter().min_by_key(|t| t.work);
         lines.push(format!(
             "- `{g}` ({}): certified at {}; {}{}",
-            runs.first().map(|t| t.solver.as_str()).unwrap_or(""),
+            runs.first().map(|t| t.solver.name).unwrap_or(""),
             if certified.is_empty() {
                 "no value".to_string()
             } else {
                 certified
                     .iter()
-                    .map(|t| t.value.clone())
+                    .map(|t| t.knob().1.to_string())
                     .collect::<Vec<_>>()
                     .join(", ")
             },
             match cheapest {
                 Some(t) => format!(
                     "the least work at {} ({} work, pressure error {})",
-                    t.value,
+                    t.knob().1,
                     t.work,
-                    t.pressure_error
+                    t.pressure_error()
                         .map(|e| format!("{e:.1e}"))
                         .unwrap_or_else(|| "–".into())
                 ),

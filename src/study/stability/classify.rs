@@ -118,17 +118,21 @@ pub fn classify(t: &Trial, cx: &Context) -> (Class, String) {
             Class::Wrong,
             format!(
                 "converged by its own test but the certificate fails ({} > {:e})",
-                t.failing.replace(';', ", "),
-                t.certificate_tolerance
+                t.failing()
+                    .iter()
+                    .map(|c| c.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                t.tolerance
             ),
         ),
         Status::Converged => {
-            if let Some(e) = t.pressure_error.filter(|e| *e > WRONG_PRESSURE) {
+            if let Some(e) = t.pressure_error().filter(|e| *e > WRONG_PRESSURE) {
                 return (
                     Class::Wrong,
                     format!(
                         "certified, but its pressure differs from the reference ({}) by {e:.1e} > {WRONG_PRESSURE:e}",
-                        t.reference
+                        t.reference.unwrap_or_default()
                     ),
                 );
             }

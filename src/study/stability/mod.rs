@@ -29,7 +29,7 @@ use crate::settings::Settings;
 use crate::study::reference::References;
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
-use crate::study::trial::{Trial, TrialSpec};
+use crate::study::trial::{Setting, Trial, TrialSpec};
 use classify::{Class, Context, classify, trend};
 
 /// The study's name in trial records.
@@ -107,6 +107,15 @@ pub struct FrictionStep {
     pub certified: bool,
 }
 
+/// The groups of the map's trials.
+pub const DEFAULT: &str = "default";
+pub const STRESS: &str = "stress";
+pub const LOAD: &str = "load";
+pub const REFUSED: &str = "refused";
+pub const BYPASSED: &str = "refused_check_bypassed";
+pub const FRICTION: &str = "friction";
+pub const FRICTION_BISECTION: &str = "friction_bisection";
+
 /// The map: classified trials, the friction scan's steps and the
 /// uniqueness study's findings.
 pub struct Map {
@@ -159,7 +168,7 @@ pub fn run(
         };
         let mut t = m.trial.clone();
         let (class, reason) = classify(&t, &cx);
-        t.class = class.as_str().into();
+        t.class = Some(class);
         t.reason = reason;
         map.trials.push(t);
         tick(&spec);
@@ -176,7 +185,7 @@ pub fn run(
             solvable: true,
             ..Context::default()
         };
-        let default = one(&mut map, trial("default"), solvable)?;
+        let default = one(&mut map, trial(DEFAULT), solvable)?;
         let default_work = Some(default.trial.work).filter(|_| default.trial.certified());
         for v in crate::study::plans::plan(entry).stress {
             let path = format!("{}.{}", entry.name, v.knob);
@@ -185,7 +194,7 @@ pub fn run(
                     default_work,
                     ..solvable
                 };
-                one(&mut map, trial("stress").varying(&path, value)?, cx)?;
+                one(&mut map, trial(STRESS).varying(&path, value)?, cx)?;
             }
         }
     }
@@ -195,7 +204,7 @@ pub fn run(
     for &total in &spec.load_totals {
         let scene = lifted_problem(total, spec.h)?;
         for entry in registry::solvers() {
-            let t = TrialSpec::new(STUDY, "load", &scene, entry, Law::Coulomb, base)
+            let t = TrialSpec::new(STUDY, LOAD, &scene, entry, Law::Coulomb, base)
                 .with_work(work_cap(entry, spec.work_scale));
             let cx = Context {
                 solvable: true,
@@ -213,20 +222,20 @@ pub fn run(
             .map(|e| e.to_string())
             .unwrap_or_default();
         for entry in registry::solvers() {
-            let t = TrialSpec::new(STUDY, "refused", &scene, entry, Law::GivenFriction, base)
+            let t = TrialSpec::new(STUDY, REFUSED, &scene, entry, Law::GivenFriction, base)
                 .with_work(work_cap(entry, spec.work_scale));
             let mut refused = Trial::not_run(&t, Status::NotRun, refusal.clone());
-            refused.class = Class::Refused.as_str().into();
+            refused.class = Some(Class::Refused);
             refused.reason = format!("our check of condition (13): {refusal}");
             map.trials.push(refused);
             let mut bypass = t.unchecked();
-            bypass.group = "refused_check_bypassed".into();
+            bypass.group = BYPASSED.into();
             // A load that balances to rounding is refused by the algebraic
             // problem's own check too (its net load is no scale to measure
             // the contact in): recorded as refused, not solved.
             if let Err(e) = Discretization::new_unchecked(&scene, spec.h) {
                 let mut refused = Trial::not_run(&bypass, Status::NotRun, e.to_string());
-                refused.class = Class::Refused.as_str().into();
+                refused.class = Some(Class::Refused);
                 refused.reason = format!("the algebraic problem's check: {e}");
                 map.trials.push(refused);
                 continue;
@@ -254,7 +263,7 @@ pub fn run(
             };
             let mut t = m.trial;
             let (class, reason) = classify(&t, &cx);
-            t.class = class.as_str().into();
+            t.class = Some(class);
             t.reason = reason;
             map.trials.push(t);
         }
@@ -283,7 +292,7 @@ fn friction_group(
                 scene.friction = f;
                 let mut t = TrialSpec::new(STUDY, group, &scene, entry, Law::Coulomb, &settings)
                     .with_work(work_cap(entry, spec.work_scale));
-                t.knob = Some(("friction".into(), format!("{f}")));
+                t.setting = Some(Setting::new(FRICTION, &format!("{f}")));
                 let cx = Context {
                     solvable: true,
                     default_friction_iterations: default_iterations,
@@ -307,7 +316,7 @@ fn friction_group(
             };
             let (mut last_ok, mut first_bad) = (None, None);
             for &f in &spec.friction_values {
-                let ok = attempt(map, f, "friction")?;
+                let ok = attempt(map, f, FRICTION)?;
                 if first_bad.is_none() {
                     if ok {
                         last_ok = Some(f);
@@ -319,7 +328,7 @@ fn friction_group(
             if let (Some(mut lo), Some(mut hi)) = (last_ok, first_bad) {
                 for _ in 0..spec.bisection_steps {
                     let mid = 0.5 * (lo + hi);
-                    if attempt(map, mid, "friction_bisection")? {
+                    if attempt(map, mid, FRICTION_BISECTION)? {
                         lo = mid
                     } else {
                         hi = mid

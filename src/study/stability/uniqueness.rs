@@ -22,7 +22,7 @@ use crate::study::reference::References;
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::stability::STUDY;
 use crate::study::sweep::work_cap;
-use crate::study::trial::TrialSpec;
+use crate::study::trial::{Setting, TrialSpec};
 
 /// One friction coefficient's finding for one direct solver.
 #[derive(Clone, Debug, Serialize)]
@@ -56,10 +56,11 @@ pub struct UniquenessRow {
 }
 
 fn diagnostic(m: &Measured, name: &str) -> Option<f64> {
-    m.trial.diagnostics.split(';').find_map(|kv| {
-        let (k, v) = kv.split_once('=')?;
-        (k == name).then(|| v.parse().ok()).flatten()
-    })
+    m.trial
+        .diagnostics
+        .iter()
+        .find(|(k, _)| *k == name)
+        .map(|(_, v)| *v)
 }
 
 /// Runs the study on `scene` for each coefficient; returns the trials (to be
@@ -102,7 +103,7 @@ pub fn run(
             Some(e) => {
                 let mut t = TrialSpec::new(STUDY, "uniqueness", &sc, e, Law::Coulomb, settings)
                     .with_work(work_cap(e, work_scale));
-                t.knob = Some(("friction".into(), format!("{f}")));
+                t.setting = Some(Setting::new("friction", &format!("{f}")));
                 let reference = references.get(&sc, settings)?;
                 let m = measure(&t, reference, keep)?;
                 tick(&t);
@@ -131,11 +132,12 @@ pub fn run(
                         .collect::<Vec<_>>()
                         .join(",")
                 };
-                t.knob = Some(("friction, start".into(), format!("{f}, {label}")));
+                t.setting = Some(Setting::new(
+                    &format!("friction (start {k}: {label})"),
+                    &format!("{f}"),
+                ));
                 let reference = references.get(&sc, settings)?;
-                let mut m = measure(&t, reference, keep)?;
-                m.trial.value = format!("{f}");
-                m.trial.knob = format!("friction (start {k}: {label})");
+                let m = measure(&t, reference, keep)?;
                 tick(&t);
                 answers.push(m);
             }
@@ -178,7 +180,7 @@ pub fn run(
                 condition_max: conds.iter().copied().reduce(f64::max),
                 fixed_point_solver: fp
                     .as_ref()
-                    .map(|m| m.trial.solver.clone())
+                    .map(|m| m.trial.solver.name.to_string())
                     .unwrap_or_default(),
                 fixed_point_status: fp
                     .as_ref()

@@ -6,13 +6,28 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+use crate::certificate::Condition;
 use crate::io::charts::{Chart, Series};
-use crate::study::stability::FrictionStep;
 use crate::study::stability::classify::{Class, SLOW_FACTOR, WRONG_PRESSURE};
+use crate::study::stability::{BYPASSED, DEFAULT, FRICTION, FrictionStep, LOAD, STRESS};
 use crate::study::trial::Trial;
 
 fn class_of(t: &Trial) -> Class {
-    Class::parse(&t.class).unwrap_or(Class::Converged)
+    t.class.unwrap_or(Class::Converged)
+}
+
+/// The class as the tables write it.
+fn class_text(t: &Trial) -> &'static str {
+    class_of(t).as_str()
+}
+
+/// The failing conditions, `, `-separated.
+fn failing_text(t: &Trial) -> String {
+    t.failing()
+        .iter()
+        .map(|c| c.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Counts per group and class, then every trial that did not simply
@@ -47,11 +62,11 @@ pub fn summary_markdown(trials: &[Trial]) -> String {
         s += &format!(
             "| {} | {} | {} | {} | {} | **{}** | {} |\n",
             r.group,
-            r.solver,
+            r.solver.name,
             r.scene,
             r.h,
             setting(r),
-            r.class,
+            class_text(r),
             reason.replace('|', "/")
         );
     }
@@ -59,35 +74,27 @@ pub fn summary_markdown(trials: &[Trial]) -> String {
 }
 
 fn setting(r: &Trial) -> String {
-    if r.knob.is_empty() {
-        "defaults".into()
-    } else {
-        format!("{} = {}", r.knob, r.value)
+    match &r.setting {
+        None => "defaults".into(),
+        Some(s) => format!("{} = {}", s.path, s.value),
     }
 }
 
 /// Per solver and stress knob: the values in each class, in the order run.
 pub fn stress_findings(trials: &[Trial]) -> Vec<String> {
     let mut out = Vec::new();
-    let mut keys: Vec<(String, String)> = Vec::new();
-    for t in trials.iter().filter(|t| t.group == "stress") {
-        let k = (t.solver.clone(), t.knob.clone());
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    for (solver, knob) in keys {
+    for (solver, knob) in stress_keys(trials) {
         let mut by: BTreeMap<usize, (Class, Vec<String>)> = BTreeMap::new();
         for t in trials
             .iter()
-            .filter(|t| t.group == "stress" && t.solver == solver && t.knob == knob)
+            .filter(|t| t.group == STRESS && t.solver.name == solver && t.knob().0 == knob)
         {
             let c = class_of(t);
             let i = Class::ALL.iter().position(|x| *x == c).unwrap_or(0);
             by.entry(i)
                 .or_insert((c, Vec::new()))
                 .1
-                .push(t.value.clone());
+                .push(t.knob().1.to_string());
         }
         let parts: Vec<String> = by
             .values()
@@ -96,6 +103,18 @@ pub fn stress_findings(trials: &[Trial]) -> Vec<String> {
         out.push(format!("`{knob}`: {}", parts.join("; ")));
     }
     out
+}
+
+/// Each (solver, knob) of the stress groups, in the order run.
+fn stress_keys(trials: &[Trial]) -> Vec<(String, String)> {
+    let mut keys: Vec<(String, String)> = Vec::new();
+    for t in trials.iter().filter(|t| t.group == STRESS) {
+        let k = (t.solver.name.to_string(), t.knob().0.to_string());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys
 }
 
 /// Where the friction scan stops being certified, for one problem and solver.
@@ -117,11 +136,11 @@ pub struct FrictionLimit {
 pub fn friction_limits(trials: &[Trial]) -> Vec<FrictionLimit> {
     let friction: Vec<&Trial> = trials
         .iter()
-        .filter(|t| t.group.starts_with("friction"))
+        .filter(|t| t.group.starts_with(FRICTION))
         .collect();
     let mut keys: Vec<(String, String)> = friction
         .iter()
-        .map(|t| (t.scene.clone(), t.solver.clone()))
+        .map(|t| (t.scene.clone(), t.solver.name.to_string()))
         .collect();
     keys.sort();
     keys.dedup();
@@ -129,8 +148,11 @@ pub fn friction_limits(trials: &[Trial]) -> Vec<FrictionLimit> {
         .map(|(p, s)| {
             let mut runs: Vec<(f64, bool)> = friction
                 .iter()
-                .filter(|t| t.scene == p && t.solver == s)
-                .map(|t| (t.value.parse().unwrap_or(f64::NAN), t.certified()))
+                .filter(|t| t.scene == p && t.solver.name == s)
+                .map(|t| {
+                    let f = t.setting.as_ref().and_then(|s| s.number);
+                    (f.unwrap_or(f64::NAN), t.certified())
+                })
                 .collect();
             runs.sort_by(|a, b| a.0.total_cmp(&b.0));
             let first_bad = runs.iter().find(|r| !r.1).map(|r| r.0);
@@ -161,7 +183,7 @@ pub fn readme_section(trials: &[Trial]) -> String {
     let mut s = String::new();
     let tol = trials
         .first()
-        .map(|t| t.certificate_tolerance)
+        .map(|t| t.tolerance)
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
     let _ = writeln!(
         s,
@@ -173,7 +195,7 @@ pub fn readme_section(trials: &[Trial]) -> String {
          by more than {WRONG_PRESSURE:e}; **slow**, right but more than {SLOW_FACTOR}× the work of the same solver at its \
          defaults; **converged**. Every trial stops at a work cap (a count), so the map is the same on every machine.\n"
     );
-    let mut solvers: Vec<&str> = trials.iter().map(|t| t.solver.as_str()).collect();
+    let mut solvers: Vec<&str> = trials.iter().map(|t| t.solver.name).collect();
     solvers.dedup();
     let mut seen = Vec::new();
     for solver in solvers {
@@ -183,17 +205,17 @@ pub fn readme_section(trials: &[Trial]) -> String {
         seen.push(solver);
         let own: Vec<Trial> = trials
             .iter()
-            .filter(|t| t.solver == solver)
+            .filter(|t| t.solver.name == solver)
             .cloned()
             .collect();
         let lines = stress_findings(&own);
-        if let Some(d) = own.iter().find(|t| t.group == "default") {
+        if let Some(d) = own.iter().find(|t| t.group == DEFAULT) {
             let _ = writeln!(
                 s,
                 "- **{solver}** at its defaults: {} ({} work, certificate {:.1e}). {}",
-                d.class,
+                class_text(d),
                 d.work,
-                d.certificate,
+                d.residual(),
                 lines.join("; ")
             );
         }
@@ -234,17 +256,22 @@ pub fn readme_section(trials: &[Trial]) -> String {
     }
     let load: Vec<&Trial> = trials
         .iter()
-        .filter(|t| t.group == "load" && class_of(t) != Class::Converged)
+        .filter(|t| t.group == LOAD && class_of(t) != Class::Converged)
         .collect();
     let listed: Vec<String> = load
         .iter()
         .map(|t| {
-            let failing = if t.failing.is_empty() {
+            let failing = if t.failing().is_empty() {
                 String::new()
             } else {
-                format!(": {}", t.failing.replace(';', ", "))
+                format!(": {}", failing_text(t))
             };
-            format!("{} with {} ({}{failing})", t.scene, t.solver, t.class)
+            format!(
+                "{} with {} ({}{failing})",
+                t.scene,
+                t.solver.name,
+                class_text(t)
+            )
         })
         .collect();
     let _ = writeln!(
@@ -255,7 +282,10 @@ pub fn readme_section(trials: &[Trial]) -> String {
         } else {
             listed.join("; ")
         },
-        if load.iter().any(|t| t.failing.starts_with("force_balance")) {
+        if load
+            .iter()
+            .any(|t| t.failing().first() == Some(&Condition::ForceBalance))
+        {
             " The force balance is held to the net load the contact carries, while relative stopping rules are scaled \
              by the gross load Σ|f|: as the net load falls, a solver stopped at the same relative change resolves it \
              less and less."
@@ -265,8 +295,16 @@ pub fn readme_section(trials: &[Trial]) -> String {
     );
     let bypassed: Vec<String> = trials
         .iter()
-        .filter(|t| t.group == "refused_check_bypassed")
-        .map(|t| format!("{} on {}: {} ({})", t.solver, t.scene, t.status, t.class))
+        .filter(|t| t.group == BYPASSED)
+        .map(|t| {
+            format!(
+                "{} on {}: {} ({})",
+                t.solver.name,
+                t.scene,
+                t.status,
+                class_text(t)
+            )
+        })
         .collect();
     if !bypassed.is_empty() {
         let _ = writeln!(
@@ -283,24 +321,17 @@ pub fn readme_section(trials: &[Trial]) -> String {
 /// point's contraction against 𝓕, and the certificate against the load.
 pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> {
     let mut out = Vec::new();
-    let mut keys: Vec<(String, String)> = Vec::new();
-    for t in trials.iter().filter(|t| t.group == "stress") {
-        let k = (t.solver.clone(), t.knob.clone());
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    for (solver, knob) in keys {
+    for (solver, knob) in stress_keys(trials) {
         let runs: Vec<&Trial> = trials
             .iter()
-            .filter(|t| t.group == "stress" && t.solver == solver && t.knob == knob)
+            .filter(|t| t.group == STRESS && t.solver.name == solver && t.knob().0 == knob)
             .collect();
         let numeric: Vec<(f64, &Trial)> = runs
             .iter()
             .filter_map(|t| {
-                t.value
-                    .parse::<f64>()
-                    .ok()
+                t.setting
+                    .as_ref()
+                    .and_then(|s| s.number)
                     .filter(|v| *v > 0.0)
                     .map(|v| (v, *t))
             })
@@ -409,20 +440,17 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
             },
         ));
     }
-    let load: Vec<&Trial> = trials.iter().filter(|t| t.group == "load").collect();
+    let load: Vec<&Trial> = trials.iter().filter(|t| t.group == LOAD).collect();
     if !load.is_empty() {
-        let mut solvers: Vec<&str> = load.iter().map(|t| t.solver.as_str()).collect();
+        let mut solvers: Vec<&str> = load.iter().map(|t| t.solver.name).collect();
         solvers.sort();
         solvers.dedup();
         let mut series = Vec::new();
         for &s in &solvers {
             let points = |certified: bool| -> Vec<(f64, f64)> {
                 load.iter()
-                    .filter(|t| t.solver == s && t.certified() == certified)
-                    .filter_map(|t| {
-                        let total = t.scene.rsplit(' ').next()?.parse::<f64>().ok()?;
-                        Some((-total, t.certificate.max(1e-16)))
-                    })
+                    .filter(|t| t.solver.name == s && t.certified() == certified)
+                    .map(|t| (t.total_load.abs(), t.residual().max(1e-16)))
                     .collect()
             };
             series.extend(Series::certified_and_failed(s, points(true), points(false)));
