@@ -12,9 +12,40 @@ use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{Law, Status, registry};
 use contactlab::study::reference::References;
-use contactlab::study::reproduce::FILES;
 use contactlab::study::runner::{Keep, measure_all};
 use contactlab::study::trial::{Trial, TrialSpec};
+
+/// Files a reproduce run must write (besides profiles and charts): one or
+/// more per study, the manifest and the README.
+const FILES: [&str; 27] = [
+    "README.md",
+    "manifest.json",
+    "table1.csv",
+    "table1.tex",
+    "table1_trials.csv",
+    "compare.csv",
+    "compare.tex",
+    "compare_timing.csv",
+    "references.csv",
+    "separation.csv",
+    "sweep.csv",
+    "sweep_timing.csv",
+    "sweep_references.csv",
+    "stability.csv",
+    "stability_friction.csv",
+    "stability_uniqueness.csv",
+    "stability_references.csv",
+    "performance.csv",
+    "performance_goals.md",
+    "benchmark.csv",
+    "benchmark.md",
+    "benchmark_trials.csv",
+    "benchmark_trials_timing.csv",
+    "benchmark_summary.csv",
+    "benchmark_1e-4.tex",
+    "benchmark_1e-8.tex",
+    "discretization_error.csv",
+];
 
 /// The committed reference: `compare.csv` of `reproduce --quick`.
 const REFERENCE: &str = include_str!("reference/quick_compare.csv");
@@ -114,6 +145,23 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     for f in FILES {
         assert!(out.join(f).is_file(), "missing {f}");
     }
+    // The README's list of files is the run's: every file it names exists,
+    // and every file written (besides charts and profiles, listed by
+    // pattern) is named.
+    let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
+    let listed: std::collections::BTreeSet<String> = readme
+        .lines()
+        .filter_map(|l| l.strip_prefix("- `"))
+        .filter_map(|l| l.split('`').next())
+        .filter(|f| out.join(f).is_file())
+        .map(String::from)
+        .collect();
+    let written: std::collections::BTreeSet<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|f| !f.starts_with('.') && out.join(f).is_file())
+        .collect();
+    assert_eq!(listed, written);
     // The memory probe ran in its fresh process and its table was written.
     let goals = std::fs::read_to_string(out.join("performance_goals.md")).unwrap();
     assert!(goals.contains("### Where the memory goes"), "{goals}");

@@ -11,7 +11,8 @@ use contactlab::settings::Settings;
 use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Law, Silent, registry};
 use contactlab::study::agreement::agreement;
-use contactlab::study::compare;
+use contactlab::study::compare::Compare;
+use contactlab::study::lab::{Findings, Lab, Quiet};
 use contactlab::study::reference::References;
 use contactlab::study::runner::Measured;
 
@@ -48,17 +49,17 @@ fn regimes() -> Vec<(&'static str, Scene)> {
     ]
 }
 
-fn check_all_agree(scene: &Scene, references: &mut References) -> Vec<Measured> {
-    let settings = Settings::default();
-    let measured = compare::run(
-        scene,
-        &settings,
-        &registry::solvers(),
-        0,
-        references,
-        &|_| {},
-    )
-    .unwrap();
+fn check_all_agree(scene: &Scene) -> (Vec<Measured>, References) {
+    let mut lab = Lab::new(Settings::default(), &|_| {}, &Quiet);
+    let study = Compare {
+        scene: scene.clone(),
+        solvers: registry::solvers(),
+        repeats: 0,
+    };
+    let mut findings = Findings::default();
+    lab.run(&study, &mut findings).unwrap();
+    let measured = findings.compare.remove(0).1;
+    let references = std::mem::take(&mut lab.references);
     let reference = references.all().next().expect("a reference is earned");
     assert!(reference.coulomb.outcome.certificate.passed());
     for m in &measured {
@@ -79,14 +80,13 @@ fn check_all_agree(scene: &Scene, references: &mut References) -> Vec<Measured> 
                 .any(|m| m.trial.solver.name == e.name && m.trial.law == Law::Coulomb)
         );
     }
-    measured
+    (measured, references)
 }
 
 #[test]
 fn every_solver_agrees_in_each_contact_regime() {
     for (regime, scene) in regimes() {
-        let mut references = References::default();
-        check_all_agree(&scene, &mut references);
+        let (_, references) = check_all_agree(&scene);
         // The scene is in the regime it is named for: the reference's answer,
         // read with thresholds relative to its largest displacement (an
         // interior-point answer carries roundoff jumps ~1e-10 of it).
@@ -139,10 +139,7 @@ fn every_solver_agrees_in_each_contact_regime() {
 fn every_solver_agrees_on_the_papers_problems() {
     for k in [4, 5] {
         for n in [1, 3] {
-            check_all_agree(
-                &at(Scene::paper_problem(n).unwrap(), k),
-                &mut References::default(),
-            );
+            check_all_agree(&at(Scene::paper_problem(n).unwrap(), k));
         }
     }
 }

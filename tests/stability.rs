@@ -9,21 +9,15 @@ use contactlab::solvers::{
     ContactNode, ContactProblem, Friction, ProxUzawa, RelaxationSettings, Silent, Solver, Status,
     registry,
 };
-use contactlab::study::reference::References;
+use contactlab::study::lab::{Lab, Quiet};
 use contactlab::study::stability::classify::Class;
 use contactlab::study::stability::{Map, StabilitySpec, run};
 use contactlab::study::trial::Trial;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
 fn quick_map() -> Map {
-    run(
-        &StabilitySpec::quick(),
-        &Settings::default(),
-        &mut References::default(),
-        &|_| {},
-        &|_| {},
-    )
-    .unwrap()
+    let mut lab = Lab::new(Settings::default(), &|_| {}, &Quiet);
+    run(&StabilitySpec::quick(), &mut lab).unwrap()
 }
 
 fn find<'a>(trials: &'a [Trial], group: &str, solver: &str, knob: &str, value: &str) -> &'a Trial {

@@ -18,13 +18,13 @@ use contactlab::solvers::{
     ContactProblem, Control, Friction, Iterations, Law, Observer, Progress, Solution, Solver,
     Start, Status, Timing,
 };
+use contactlab::study::lab::{Findings, Lab, Quiet};
 use contactlab::study::plans::{self, Plan, Variation};
-use contactlab::study::reference::References;
 use contactlab::study::report::sweep_charts;
 use contactlab::study::stability::classify::Class;
 use contactlab::study::stability::{StabilitySpec, run as stability};
-use contactlab::study::sweep::{self, SweepSpec};
-use contactlab::study::{compare, trial::Trial};
+use contactlab::study::sweep::{Sweep, SweepSpec};
+use contactlab::study::{compare::Compare, trial::Trial};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -234,16 +234,15 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
     // The comparison: the toy's subproblem and Coulomb trials, certified,
     // against the earned reference.
     let settings = Settings::default();
-    let mut references = References::default();
-    let measured = compare::run(
-        &scene(),
-        &settings,
-        &registry::solvers(),
-        0,
-        &mut references,
-        &|_| {},
-    )
-    .unwrap();
+    let mut lab = Lab::new(settings.clone(), &|_| {}, &Quiet);
+    let mut findings = Findings::default();
+    let study = Compare {
+        scene: scene(),
+        solvers: registry::solvers(),
+        repeats: 0,
+    };
+    lab.run(&study, &mut findings).unwrap();
+    let measured = &findings.compare[0].1;
     let toy: Vec<&Trial> = measured
         .iter()
         .map(|m| &m.trial)
@@ -264,7 +263,14 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         repeats: 0,
         ..SweepSpec::default()
     };
-    let swept = sweep::run(&spec, &settings, &mut References::default(), &|_| {}).unwrap();
+    let study = Sweep {
+        spec,
+        extra: Vec::new(),
+        references_file: "references.csv",
+    };
+    let mut lab = Lab::new(settings.clone(), &|_| {}, &Quiet);
+    lab.run(&study, &mut findings).unwrap();
+    let swept = &findings.sweep;
     assert!(swept.iter().any(|m| m.trial.knob().0 == "toy.tolerance"));
     let pairs: Vec<_> = swept.iter().map(|m| (&m.trial, &m.timing)).collect();
     let charts = sweep_charts(&pairs);
@@ -290,14 +296,8 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
     quick.friction_values = vec![0.5];
     quick.load_totals = vec![];
     quick.violating_totals = vec![];
-    let map = stability(
-        &quick,
-        &settings,
-        &mut References::default(),
-        &|_| {},
-        &|_| {},
-    )
-    .unwrap();
+    let mut lab = Lab::new(settings, &|_| {}, &Quiet);
+    let map = stability(&quick, &mut lab).unwrap();
     let default = map
         .trials
         .iter()

@@ -4,12 +4,13 @@
 use anyhow::{Result, bail};
 
 use crate::cli::{BenchArgs, BenchOneArgs};
-use crate::io::output::{log, print};
+use crate::commands::run_study;
+use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
 use crate::study::bench::BenchSpec;
-use crate::study::bench::goals::{goals_markdown, write_bench};
+use crate::study::bench::goals::{Bench, goals_markdown};
 use crate::study::bench::memory::measure_here;
-use crate::study::report::write_all;
+use crate::study::lab::write_artifacts;
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let settings = args.settings.resolve()?;
@@ -32,14 +33,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         spec.budget = b;
     }
     let folder = RunFolder::create(&args.out)?;
-    let out = write_bench(folder.path(), &spec, &settings, &|l| {
-        log(format!("bench: {l}"))
-    })?;
-    write_all(&folder.path().join("charts"), &out.charts)?;
+    let (findings, artifacts) = run_study(&Bench { spec }, settings)?;
+    write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
+    let goals = findings.bench.map(|b| b.goals).unwrap_or_default();
     print(&format!(
         "{}\nwrote {}/performance.csv, performance_goals.md and charts\n",
-        goals_markdown(&out.goals),
+        goals_markdown(&goals),
         target.display()
     ))
 }

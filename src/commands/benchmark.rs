@@ -2,19 +2,15 @@
 //! target accuracy (or a shard of it), and `contactlab benchmark-merge`:
 //! the same tables and charts from several shards' folders.
 
-use std::path::Path;
-
 use anyhow::{Result, bail};
 
 use crate::cli::{BenchmarkArgs, BenchmarkMergeArgs};
-use crate::commands::{StudyProgress, solver_list};
-use crate::io::csv::to_csv;
+use crate::commands::{run_study, solver_list};
 use crate::io::manifest::Manifest;
 use crate::io::output::{json_bytes, print, write_atomic};
 use crate::io::run_folder::RunFolder;
-use crate::study::benchmark::{self, BenchmarkRow, BenchmarkSpec, Shard, views};
-use crate::study::report::write_all;
-use crate::study::runner::{Measured, write_trials};
+use crate::study::benchmark::{self, Benchmark, BenchmarkSpec, Shard, views};
+use crate::study::lab::{Artifact, write_artifacts};
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
     if args.settings.certificate_tolerance.is_some() {
@@ -34,17 +30,10 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         spec.targets = args.targets.clone();
     }
     let folder = RunFolder::create(&args.out)?;
-    let plan = benchmark::plan(&spec, &settings)?;
-    let progress = StudyProgress::new(
-        plan.len() as u64,
-        &format!("benchmark {}/{}", spec.shard.index, spec.shard.of),
-    )
-    .with_costs(benchmark::expected_costs(&plan), spec.time_limit);
-    let done = benchmark::run(plan, &|t| progress.tick(t))?;
-    progress.finish();
-    let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
+    let study = Benchmark { spec: spec.clone() };
+    let (findings, artifacts) = run_study(&study, settings.clone())?;
     let dir = folder.path();
-    write_run(dir, &rows, &measured)?;
+    write_artifacts(dir, &artifacts)?;
     let manifest = Manifest::collect(
         &settings,
         serde_json::json!({
@@ -58,7 +47,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         }),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let report = views::report(&rows);
+    let report = views::report(&findings.benchmark);
     let target = folder.commit()?;
     print(&format!(
         "{report}\nwrote {}/benchmark.csv, its tables and charts\n",
@@ -66,25 +55,15 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     ))
 }
 
-/// A run's files: benchmark.csv (the rows), benchmark_trials.csv and its
-/// timing file (every trial in full), and the views.
-pub fn write_run(dir: &Path, rows: &[BenchmarkRow], measured: &[Measured]) -> Result<()> {
-    write_atomic(&dir.join("benchmark.csv"), &to_csv(rows, &[])?)?;
-    write_trials(dir, "benchmark_trials", measured)?;
-    let charts = views::write(dir, rows)?;
-    write_all(&dir.join("charts"), &charts)?;
-    Ok(())
-}
-
 pub fn merge(args: &BenchmarkMergeArgs) -> Result<()> {
     let rows = benchmark::merge::read_shards(&args.shards)?;
     let manifest = benchmark::merge::merged_manifest(&args.shards)?;
     let folder = RunFolder::create(&args.out)?;
     let dir = folder.path();
-    write_atomic(&dir.join("benchmark.csv"), &to_csv(&rows, &[])?)?;
+    let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[])?];
+    artifacts.extend(views::artifacts(&rows)?);
+    write_artifacts(dir, &artifacts)?;
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let charts = views::write(dir, &rows)?;
-    write_all(&dir.join("charts"), &charts)?;
     let report = views::report(&rows);
     let target = folder.commit()?;
     print(&format!(

@@ -19,6 +19,8 @@ use contactlab_solvers::{Control, Observer, Progress};
 
 use crate::coulomb::fixed_point;
 use crate::io::output::log;
+use crate::settings::Settings;
+use crate::study::lab::{Artifact, Findings, Lab, Study, Tracker};
 use crate::study::trial::TrialSpec;
 
 /// Logs the friction loop to stderr.
@@ -191,6 +193,58 @@ fn style(template: &str) -> indicatif::ProgressStyle {
 fn clock(seconds: f64) -> String {
     let s = seconds.max(0.0).round() as u64;
     format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
+/// The commands' [`Tracker`]: a progress bar (a line every 10 s off a
+/// terminal) for each stretch of trials a study starts; ticks outside a
+/// stretch go to a counter of unknown length.
+pub struct Bars {
+    what: String,
+    current: std::cell::RefCell<Option<StudyProgress>>,
+}
+
+impl Bars {
+    pub fn new(what: &str) -> Self {
+        Self {
+            what: what.to_string(),
+            current: std::cell::RefCell::new(None),
+        }
+    }
+}
+
+impl Tracker for Bars {
+    fn start(&self, what: &str, costs: Vec<f64>, cap: f64) {
+        self.finish();
+        let what = if what.is_empty() { &self.what } else { what };
+        *self.current.borrow_mut() =
+            Some(StudyProgress::new(costs.len() as u64, what).with_costs(costs, cap));
+    }
+
+    fn tick(&self, trial: &TrialSpec) {
+        self.current
+            .borrow_mut()
+            .get_or_insert_with(|| StudyProgress::new(0, &self.what))
+            .tick(trial);
+    }
+
+    fn finish(&self) {
+        if let Some(p) = self.current.borrow_mut().take() {
+            p.finish();
+        }
+    }
+}
+
+/// Runs one study in a lab of its own at `settings`, with progress on
+/// stderr: its findings and its artifacts.
+pub fn run_study(study: &dyn Study, settings: Settings) -> Result<(Findings, Vec<Artifact>)> {
+    let bars = Bars::new(study.name());
+    let name = study.name();
+    let log_line = move |l: &str| log(format!("{name}: {l}"));
+    let mut lab = Lab::new(settings, &log_line, &bars);
+    let mut findings = Findings::default();
+    let artifacts = lab.run(study, &mut findings)?;
+    bars.finish();
+    Ok((findings, artifacts))
 }
 
 /// The solvers named (all registered ones if none).

@@ -6,10 +6,12 @@ use std::time::Instant;
 use anyhow::Result;
 
 use crate::cli::ReproduceArgs;
+use crate::commands::Bars;
 use crate::io::manifest::Manifest;
 use crate::io::output::{json_bytes, log, print, write_atomic};
 use crate::io::run_folder::RunFolder;
-use crate::study::report::write_all;
+use crate::study::lab::Tracker as _;
+use crate::study::lab::{Lab, write_artifacts};
 use crate::study::reproduce::{self, ReproduceSpec, readme};
 
 pub fn run(args: &ReproduceArgs) -> Result<()> {
@@ -22,17 +24,22 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     let folder = RunFolder::create(&args.out)?;
     let started = Instant::now();
     let dir = folder.path().to_path_buf();
-    let outputs = reproduce::run(&dir, &spec, &settings, &|l| {
+    let log_line = |l: &str| {
         log(format!(
             "reproduce [{:.0} s]: {l}",
             started.elapsed().as_secs_f64()
         ))
-    })?;
-    log(format!(
-        "reproduce [{:.0} s]: charts and README",
-        started.elapsed().as_secs_f64()
-    ));
-    write_all(&dir.join("charts"), &outputs.charts)?;
+    };
+    let bars = Bars::new("reproduce");
+    let mut lab = Lab::new(settings.clone(), &log_line, &bars);
+    let (findings, artifacts) = reproduce::run(&spec, &mut lab)?;
+    bars.finish();
+    log_line("charts and README");
+    let files = write_artifacts(&dir, &artifacts)?;
+    let charts: Vec<String> = artifacts
+        .iter()
+        .filter_map(|a| a.chart_name().map(str::to_string))
+        .collect();
     let seconds = started.elapsed().as_secs_f64();
     let manifest = Manifest::collect(
         &settings,
@@ -43,7 +50,17 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
         }),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let text = readme::render(&spec, &manifest, &outputs, seconds)?;
+    let mut files = files;
+    files.splice(0..0, ["README.md".to_string(), "manifest.json".to_string()]);
+    let text = readme::render(
+        &spec,
+        &manifest,
+        &findings,
+        &lab.references,
+        &files,
+        &charts,
+        seconds,
+    )?;
     write_atomic(&dir.join("README.md"), text.as_bytes())?;
     let target = folder.commit()?;
     print(&format!(

@@ -1,22 +1,17 @@
 //! `contactlab sweep`: one-factor sweeps and the work-precision diagram.
 
-use std::path::Path;
-
 use anyhow::{Result, bail};
 use contactlab_solvers::Law;
 
 use crate::cli::SweepArgs;
-use crate::commands::{StudyProgress, solver_list};
-use crate::io::csv::to_csv;
-use crate::io::output::{log, print, write_atomic};
+use crate::commands::{run_study, solver_list};
+use crate::io::output::{log, print};
 use crate::io::run_folder::RunFolder;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::reference::References;
-use crate::study::report::{sweep_charts, write_all};
-use crate::study::runner::{Keep, Measured, measure_all, write_trials};
-use crate::study::sweep::{self, STUDY, SweepSpec, work_cap};
-use crate::study::trial::{Trial, TrialSpec, TrialTiming};
+use crate::study::lab::write_artifacts;
+use crate::study::sweep::{STUDY, Sweep, SweepSpec, work_cap};
+use crate::study::trial::TrialSpec;
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     let (scenes, base) = match &args.scene {
@@ -45,17 +40,25 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         repeats: args.repeats as usize,
         work_scale: 1.0,
     };
-    let mut specs = sweep::plan(&spec, &settings)?;
-    specs.extend(varied(args, &spec, &settings)?);
+    let extra = varied(args, &spec, &settings)?;
     let folder = RunFolder::create(&args.out)?;
-    let bar = StudyProgress::new(specs.len() as u64, "sweep");
-    let mut references = References::default();
-    let measured = measure_all(&specs, &mut references, Keep::default(), &|t| bar.tick(t))?;
-    bar.finish();
-    write_files(folder.path(), &measured, &references)?;
+    let study = Sweep {
+        spec,
+        extra,
+        references_file: "references.csv",
+    };
+    let (findings, artifacts) = run_study(&study, settings)?;
+    write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
-    let failed = measured.iter().filter(|m| !m.trial.certified()).count();
-    log(format!("{} trials, {failed} not certified", measured.len()));
+    let failed = findings
+        .sweep
+        .iter()
+        .filter(|m| !m.trial.certified())
+        .count();
+    log(format!(
+        "{} trials, {failed} not certified",
+        findings.sweep.len()
+    ));
     print(&format!(
         "wrote {}/sweep.csv, sweep_timing.csv, references.csv and charts\n",
         target.display()
@@ -99,20 +102,4 @@ fn varied(args: &SweepArgs, spec: &SweepSpec, settings: &Settings) -> Result<Vec
         }
     }
     Ok(out)
-}
-
-/// sweep.csv, sweep_timing.csv, references.csv and the charts.
-pub fn write_files(dir: &Path, measured: &[Measured], references: &References) -> Result<()> {
-    write_trials(dir, "sweep", measured)?;
-    write_atomic(
-        &dir.join("references.csv"),
-        &to_csv(&references.candidates(), &[])?,
-    )?;
-    write_all(&dir.join("charts"), &sweep_charts(&pairs(measured)))?;
-    Ok(())
-}
-
-/// Each trial with its times, for the charts.
-pub fn pairs(measured: &[Measured]) -> Vec<(&Trial, &TrialTiming)> {
-    measured.iter().map(|m| (&m.trial, &m.timing)).collect()
 }

@@ -25,6 +25,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{Solved, solve_scene, solver_entry};
 use crate::solvers::{Friction, Law, Silent, registry};
+use crate::study::lab::{Artifact, Findings, Lab, Study};
 
 /// Which problems, on which meshes, against which reference mesh.
 #[derive(Clone, Debug, Serialize)]
@@ -232,6 +233,46 @@ pub fn run(spec: &ErrorSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<
         }
     }
     Ok(rows)
+}
+
+/// The discretization error as a study: discretization_error.csv and its
+/// charts. Its direct solver is the spec's, else the one certified on the
+/// reference mesh in the speed study run before it, else the fastest
+/// certified on that study's finest mesh.
+pub struct Errors {
+    pub spec: ErrorSpec,
+}
+
+impl Study for Errors {
+    fn name(&self) -> &'static str {
+        "discretization_error"
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        lab.log(&format!(
+            "discretization error against h = {}",
+            self.spec.reference
+        ));
+        let mut spec = self.spec.clone();
+        if let (None, Some(bench)) = (spec.solver, &findings.bench) {
+            let finest = bench
+                .meshes
+                .last()
+                .map(|h| h.to_string())
+                .unwrap_or_default();
+            spec.solver =
+                crate::study::bench::certified_direct(&bench.rows, &spec.reference.to_string())
+                    .or_else(|| crate::study::bench::certified_direct(&bench.rows, &finest));
+        }
+        let log = lab.logger();
+        let errors = run(&spec, &lab.settings, &|l| {
+            log(&format!("discretization error: {l}"))
+        })?;
+        let mut artifacts = vec![Artifact::csv("discretization_error.csv", &errors, &[])?];
+        artifacts.extend(Artifact::charts(charts(&errors)));
+        findings.errors = errors;
+        Ok(artifacts)
+    }
 }
 
 /// Errors against h on log–log axes, one chart per problem.

@@ -8,6 +8,7 @@ pub mod bench;
 pub mod benchmark;
 pub mod compare;
 pub mod discretization_error;
+pub mod lab;
 pub mod plans;
 pub mod reference;
 pub mod report;

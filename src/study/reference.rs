@@ -207,7 +207,7 @@ impl References {
         if !self.enabled {
             return Ok(None);
         }
-        let key = serde_json::to_string(scene)?;
+        let key = Self::key(scene)?;
         let index = match self.earned.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
@@ -219,6 +219,22 @@ impl References {
         Ok(self.earned[index].1.as_ref())
     }
 
+    /// The key of a scene's references: the whole scene (material,
+    /// friction, loads, levels), not only its name.
+    pub fn key(scene: &Scene) -> Result<String> {
+        Ok(serde_json::to_string(scene)?)
+    }
+
+    /// The candidates of the references of the scenes with these keys, in
+    /// the order of the keys.
+    pub fn candidates_for(&self, keys: &[String]) -> Vec<Candidate> {
+        keys.iter()
+            .filter_map(|k| self.earned.iter().find(|(key, _)| key == k))
+            .filter_map(|(_, r)| r.as_ref())
+            .flat_map(|r| r.candidates.clone())
+            .collect()
+    }
+
     /// Every candidate of every reference earned, for `references.csv`.
     pub fn candidates(&self) -> Vec<Candidate> {
         self.earned
@@ -226,6 +242,14 @@ impl References {
             .filter_map(|(_, r)| r.as_ref())
             .flat_map(|r| r.candidates.clone())
             .collect()
+    }
+
+    /// The references of the scenes with these keys, in the order of the
+    /// keys.
+    pub fn of<'a>(&'a self, keys: &'a [String]) -> impl Iterator<Item = &'a Reference> {
+        keys.iter()
+            .filter_map(|k| self.earned.iter().find(|(key, _)| key == k))
+            .filter_map(|(_, r)| r.as_ref())
     }
 
     /// The references earned, in order.

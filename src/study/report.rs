@@ -1,9 +1,6 @@
 //! Charts drawn from trials: contact-zone profiles (the paper's figures 2-5),
 //! convergence histories, the work-precision diagram and one-factor sweeps.
 
-use std::path::{Path, PathBuf};
-
-use anyhow::Result;
 use contactlab_solvers::registry;
 
 use crate::coulomb::fixed_point::STAGE;
@@ -12,18 +9,6 @@ use crate::mechanics::contact_zone::ProfileRow;
 use crate::study::runner::Measured;
 use crate::study::sweep::{SCHEDULE, WORK_PRECISION, WORK_PRECISION_COULOMB};
 use crate::study::trial::{Trial, TrialTiming};
-
-/// Writes each chart as `dir/name.svg`; returns the paths.
-pub fn write_all(dir: &Path, charts: &[(String, Chart)]) -> Result<Vec<PathBuf>> {
-    charts
-        .iter()
-        .map(|(name, c)| {
-            let path = dir.join(format!("{name}.svg"));
-            c.write(&path)?;
-            Ok(path)
-        })
-        .collect()
-}
 
 /// Errors below this are drawn at it in the work-precision diagram: the
 /// reference's own resolution.

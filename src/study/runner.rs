@@ -7,15 +7,13 @@ use contactlab_solvers::{Control, Friction, Law, Observer, Progress, Silent, Sol
 
 use crate::coulomb::continuation::LevelCount;
 use crate::coulomb::fixed_point::{FrictionIteration, STAGE};
-use crate::io::csv::to_csv;
-use crate::io::output::write_atomic;
 use crate::mechanics::contact_zone::separation_of;
 use crate::mechanics::discretization::Discretization;
 use crate::solve::{Assembled, Caps, Outcome, solve};
 use crate::study::agreement::{Agreement, agreement};
 use crate::study::reference::{Reference, References};
 pub use crate::study::trial::intervals_text;
-use crate::study::trial::{Trial, TrialOutcome, TrialRow, TrialSpec, TrialTiming};
+use crate::study::trial::{Trial, TrialOutcome, TrialSpec, TrialTiming};
 
 /// How the repeated runs' times are summarized and what is kept.
 #[derive(Clone, Copy, Debug, Default)]
@@ -48,6 +46,17 @@ impl Measured {
     /// Work per mesh level.
     pub fn levels(&self) -> &[LevelCount] {
         &self.outcome.levels
+    }
+
+    /// A copy without the finest level (charts need trials and histories).
+    pub fn without_finest(&self) -> Measured {
+        Measured {
+            trial: self.trial.clone(),
+            timing: self.timing.clone(),
+            outcome: self.outcome.clone(),
+            history: self.history.clone(),
+            finest: None,
+        }
     }
 
     /// The finest level, the answer and its bound, if kept.
@@ -204,17 +213,6 @@ pub fn trial_row(
     }
     trial.certificate = Some(o.certificate);
     trial
-}
-
-/// Writes `STEM.csv` (the trials) and `STEM_timing.csv` (their times).
-pub fn write_trials(dir: &std::path::Path, stem: &str, measured: &[Measured]) -> Result<()> {
-    let rows: Vec<TrialRow> = measured.iter().map(|m| m.trial.row()).collect();
-    let timing: Vec<&TrialTiming> = measured.iter().map(|m| &m.timing).collect();
-    write_atomic(&dir.join(format!("{stem}.csv")), &to_csv(&rows, &[])?)?;
-    write_atomic(
-        &dir.join(format!("{stem}_timing.csv")),
-        &to_csv(&timing, &[])?,
-    )
 }
 
 /// The median of a non-empty list (NaN for an empty one).

@@ -19,9 +19,10 @@ use contactlab_solvers::registry::{self, Entry};
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::lab::{Artifact, Findings, Lab, Study};
 use crate::study::plans;
-use crate::study::reference::References;
-use crate::study::runner::{Keep, Measured, measure_all};
+use crate::study::report::sweep_charts;
+use crate::study::runner::Keep;
 use crate::study::trial::TrialSpec;
 
 /// The study's name in trial records.
@@ -137,13 +138,40 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
     Ok(out)
 }
 
-/// Runs a sweep.
-pub fn run(
-    spec: &SweepSpec,
-    base: &Settings,
-    references: &mut References,
-    tick: &dyn Fn(&TrialSpec),
-) -> Result<Vec<Measured>> {
-    let specs = plan(spec, base)?;
-    measure_all(&specs, references, Keep::default(), tick)
+/// The sweep as a study: sweep.csv, sweep_timing.csv, its references file
+/// and the charts.
+pub struct Sweep {
+    pub spec: SweepSpec,
+    /// Trials planned apart (`--vary`).
+    pub extra: Vec<TrialSpec>,
+    /// The file of its references' candidates (`references.csv` alone,
+    /// `sweep_references.csv` in a results folder).
+    pub references_file: &'static str,
+}
+
+impl Study for Sweep {
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        lab.log(&format!(
+            "sweep at h = {}",
+            self.spec
+                .meshes
+                .iter()
+                .map(|h| h.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        let mut specs = plan(&self.spec, &lab.settings)?;
+        specs.extend(self.extra.iter().cloned());
+        let measured = lab.measure(&specs, Keep::default())?;
+        let mut artifacts = crate::study::compare::trials_artifacts(STUDY, &measured)?;
+        artifacts.push(Artifact::csv(self.references_file, &lab.candidates(), &[])?);
+        let pairs: Vec<_> = measured.iter().map(|m| (&m.trial, &m.timing)).collect();
+        artifacts.extend(Artifact::charts(sweep_charts(&pairs)));
+        findings.sweep = measured;
+        Ok(artifacts)
+    }
 }

@@ -10,12 +10,13 @@ use serde::Serialize;
 
 use crate::coulomb::continuation::Schedule;
 use crate::io::csv::fixed;
+use crate::io::latex::booktabs;
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::reference::References;
-use crate::study::runner::{Keep, Measured, measure_all};
+use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::runner::{Keep, Measured};
 use crate::study::trial::{Trial, TrialSpec};
 
 /// The study's name in trial records.
@@ -81,21 +82,65 @@ pub fn plan(
     Ok(out)
 }
 
-/// Runs the trials (no reference: Table 1 is counts) and builds the rows.
-pub fn run(
-    specs: &[TrialSpec],
-    problems: &[u32],
-    tick: &dyn Fn(&TrialSpec),
-) -> Result<(Vec<Measured>, Vec<Table1Row>)> {
-    let mut none = References::none();
-    let measured = measure_all(specs, &mut none, Keep::default(), tick)?;
-    let rows = measured
+/// Table 1 as a study: table1.csv, table1.tex and table1_trials.csv.
+pub struct Table1 {
+    pub problems: Vec<u32>,
+    pub schedules: Vec<Schedule>,
+    pub h: MeshSize,
+    pub plane: PlaneModel,
+    /// The settings of its trials (the paper's, by default: not the lab's).
+    pub settings: Settings,
+}
+
+impl Study for Table1 {
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        lab.log(&format!(
+            "Table 1 at h = {} (schedules: {})",
+            self.h,
+            self.schedules
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        let specs = plan(
+            &self.problems,
+            &self.schedules,
+            &self.settings,
+            self.h,
+            self.plane,
+        )?;
+        let measured = lab.measure_alone(&specs, Keep::default())?;
+        let rows = rows(&measured, &specs, &self.problems);
+        let trials: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
+        let artifacts = vec![
+            Artifact::csv("table1.csv", &rows, &[])?,
+            Artifact::text(
+                "table1.tex",
+                &booktabs(
+                    &markdown(&rows),
+                    "Table 1 of Zhiltsov & Namm (2019): iteration counts of the paper's method, ours beside the paper's (contactlab reproduce)",
+                ),
+            ),
+            Artifact::csv("table1_trials.csv", &trials, &[])?,
+        ];
+        findings.table1 = rows;
+        Ok(artifacts)
+    }
+}
+
+/// The rows of measured Table 1 trials.
+fn rows(measured: &[Measured], specs: &[TrialSpec], problems: &[u32]) -> Vec<Table1Row> {
+    measured
         .iter()
         .zip(specs)
         .zip(problems.iter().cycle())
         .map(|((m, spec), &problem)| row(m, spec.settings.schedule, problem))
-        .collect();
-    Ok((measured, rows))
+        .collect()
 }
 
 fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {

@@ -2,20 +2,17 @@
 //! of one run, charts of time against size, the memory of the fastest
 //! solver measured in a fresh process, and the files.
 
-use std::path::Path;
-
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Role};
 use serde::Serialize;
 
 use crate::io::charts::{Chart, Series};
-use crate::io::csv::to_csv;
-use crate::io::output::write_atomic;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow, bench};
+use crate::study::lab::{Artifact, Findings, Lab, Study};
 
 /// One goal, measured.
 #[derive(Clone, Debug, Serialize)]
@@ -355,21 +352,48 @@ pub fn fit_slope(points: &[(f64, f64)]) -> Option<f64> {
 
 /// What one benchmark run wrote.
 pub struct BenchOutput {
-    /// The paper's problem the benchmark ran on.
+    /// The paper's problem the benchmark ran on, and its meshes (the
+    /// large ones aside).
     pub problem: u32,
+    pub meshes: Vec<MeshSize>,
     pub rows: Vec<PerfRow>,
     pub goals: Vec<Goal>,
     /// Each large mesh's fastest solver, measured in a fresh process.
     pub memory: Vec<MemoryUse>,
+    /// `performance_goals.md`: the goals, where the memory goes, the
+    /// paper's method at equal accuracy.
+    pub goals_markdown: String,
     pub charts: Vec<(String, Chart)>,
 }
 
-/// Runs the benchmark, measures the memory of the fastest solver on each
-/// large mesh (the finest mesh if there are none) in a fresh process, and
-/// writes `performance.csv` and `performance_goals.md` into `out` (the
-/// charts are returned).
-pub fn write_bench(
-    out: &Path,
+/// The speed measurements as a study: performance.csv,
+/// performance_goals.md and the charts.
+pub struct Bench {
+    pub spec: BenchSpec,
+}
+
+impl Study for Bench {
+    fn name(&self) -> &'static str {
+        "bench"
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        lab.log("speed");
+        let log = lab.logger();
+        let out = measure_bench(&self.spec, &lab.settings, &|l| log(&format!("bench: {l}")))?;
+        let mut artifacts = vec![
+            Artifact::csv("performance.csv", &out.rows, &[])?,
+            Artifact::text("performance_goals.md", &out.goals_markdown),
+        ];
+        artifacts.extend(Artifact::charts(out.charts.clone()));
+        findings.bench = Some(out);
+        Ok(artifacts)
+    }
+}
+
+/// Runs the benchmark and measures the memory of the fastest solver on
+/// each large mesh (the finest mesh if there are none) in a fresh process.
+pub fn measure_bench(
     spec: &BenchSpec,
     settings: &Settings,
     log: &dyn Fn(&str),
@@ -400,17 +424,17 @@ pub fn write_bench(
     }
     let finest = memory.last().map(|u| (u.h, u.peak_kb));
     let goals = goals(&rows, finest);
-    write_atomic(&out.join("performance.csv"), &to_csv(&rows, &[])?)?;
     let mut md = goals_markdown(&goals);
     md += &memory::markdown(&memory);
     md += &unmeasured;
     md += &equal_accuracy_markdown(&rows, spec.problem);
-    write_atomic(&out.join("performance_goals.md"), md.as_bytes())?;
     Ok(BenchOutput {
         problem: spec.problem,
+        meshes: spec.meshes.clone(),
         charts: performance_charts(&rows),
         rows,
         goals,
         memory,
+        goals_markdown: md,
     })
 }

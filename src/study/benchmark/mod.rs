@@ -28,6 +28,7 @@ use crate::mechanics::dofs::{DofExpansion, DofMap};
 use crate::mechanics::mesh::Mesh;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
+use crate::study::lab::{Artifact, Findings, Lab, Study};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::trial::{Setting, TrialSpec};
 
@@ -125,6 +126,43 @@ pub struct BenchmarkRow {
     pub time_limit: f64,
     pub work: usize,
     pub detail: String,
+}
+
+/// The benchmark as a study: benchmark.csv, its trials and their times,
+/// and its views.
+pub struct Benchmark {
+    pub spec: BenchmarkSpec,
+}
+
+impl Study for Benchmark {
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        let plan = plan(&self.spec, &lab.settings)?;
+        lab.log(&format!(
+            "benchmark over the problem collection: {} runs",
+            plan.len()
+        ));
+        lab.start(
+            &format!("benchmark {}/{}", self.spec.shard.index, self.spec.shard.of),
+            expected_costs(&plan),
+            self.spec.time_limit,
+        );
+        let tracker = lab.tracker();
+        let done = run(plan, &|t| tracker.tick(t))?;
+        lab.finish();
+        let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
+        let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[])?];
+        artifacts.extend(crate::study::compare::trials_artifacts(
+            "benchmark_trials",
+            &measured,
+        )?);
+        artifacts.extend(views::artifacts(&rows)?);
+        findings.benchmark = rows;
+        Ok(artifacts)
+    }
 }
 
 /// Every solver's own tolerances are this fraction of the target: measured

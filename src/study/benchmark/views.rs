@@ -4,15 +4,13 @@
 //! at the time limit), the runs it claimed but the certificate refused, and
 //! performance profiles (Dolan & Moré 2002).
 
-use std::path::Path;
-
 use anyhow::Result;
 use serde::Serialize;
 
 use crate::io::charts::{Chart, Series};
-use crate::io::csv::{fixed, to_csv};
-use crate::io::output::write_atomic;
+use crate::io::csv::fixed;
 use crate::study::benchmark::BenchmarkRow;
+use crate::study::lab::Artifact;
 
 /// The shift of the shifted geometric mean, seconds: times well below it
 /// count as about equal (a 1 ms and a 10 ms solve are both fast), so the
@@ -220,23 +218,23 @@ pub fn refused_lines(rows: &[BenchmarkRow]) -> Vec<String> {
         .collect()
 }
 
-/// Writes the views of `rows` into `dir`: benchmark_summary.csv, a
-/// Markdown and a LaTeX table per target, benchmark.md, and the profiles.
-/// Returns the charts (to be drawn by the caller with the others).
-pub fn write(dir: &Path, rows: &[BenchmarkRow]) -> Result<Vec<(String, Chart)>> {
+/// The views of `rows`: benchmark_summary.csv, a LaTeX table per target,
+/// benchmark.md, and the performance profiles.
+pub fn artifacts(rows: &[BenchmarkRow]) -> Result<Vec<Artifact>> {
     let sums = summaries(rows);
-    write_atomic(&dir.join("benchmark_summary.csv"), &to_csv(&sums, &[])?)?;
+    let mut out = vec![Artifact::csv("benchmark_summary.csv", &sums, &[])?];
     for t in targets(rows) {
         let comment = format!(
             "contactlab benchmark at target accuracy {t:.0e}; shifted geometric mean with shift {SHIFT} s, a failure at the time limit"
         );
-        write_atomic(
-            &dir.join(format!("benchmark_{}.tex", tag(t))),
-            crate::io::latex::booktabs(&markdown(&sums, t), &comment).as_bytes(),
-        )?;
+        out.push(Artifact::text(
+            &format!("benchmark_{}.tex", tag(t)),
+            &crate::io::latex::booktabs(&markdown(&sums, t), &comment),
+        ));
     }
-    write_atomic(&dir.join("benchmark.md"), report(rows).as_bytes())?;
-    Ok(profile_charts(rows))
+    out.push(Artifact::text("benchmark.md", &report(rows)));
+    out.extend(Artifact::charts(profile_charts(rows)));
+    Ok(out)
 }
 
 /// The benchmark's section of a report: per target the table, the runs

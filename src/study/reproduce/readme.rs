@@ -5,15 +5,19 @@
 
 use std::fmt::Write as _;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::{self, Role};
 use serde::Serialize;
 
 use crate::io::manifest::Manifest;
+use crate::study::bench::goals::BenchOutput;
 use crate::study::compare;
+use crate::study::compare::paper::PAPER_SETTINGS;
+use crate::study::lab::Findings;
+use crate::study::reference::References;
+use crate::study::reproduce::ReproduceSpec;
 use crate::study::reproduce::intents::{ChartRef, named};
-use crate::study::reproduce::{FILES, Outputs, PAPER_SETTINGS, ReproduceSpec};
 use crate::study::runner::Measured;
 use crate::study::stability::classify::WRONG_PRESSURE;
 use crate::study::stability::views;
@@ -71,7 +75,7 @@ struct Context {
     equal_accuracy: String,
     speed_table: String,
     performance_charts: Vec<ChartRef>,
-    files: Vec<&'static str>,
+    files: Vec<String>,
     benchmark: String,
     benchmark_charts: Vec<ChartRef>,
     errors_reference: String,
@@ -82,8 +86,23 @@ struct Context {
 }
 
 /// Renders the README.
-pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -> Result<String> {
-    let chart_names: Vec<String> = out.charts.iter().map(|(n, _)| n.clone()).collect();
+///
+/// `files` are the paths the run wrote (its artifacts), `charts` the names
+/// of its charts.
+pub fn render(
+    spec: &ReproduceSpec,
+    m: &Manifest,
+    out: &Findings,
+    references: &References,
+    files: &[String],
+    chart_names: &[String],
+    seconds: f64,
+) -> Result<String> {
+    let stability = out
+        .stability
+        .as_ref()
+        .context("the stability study did not run")?;
+    let bench = out.bench.as_ref().context("the bench study did not run")?;
     let compare_trials: Vec<&Measured> = out.compare.iter().flat_map(|(_, v)| v.iter()).collect();
     let tol = compare_trials
         .first()
@@ -114,7 +133,7 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
                 source: e.source,
             })
             .collect(),
-        references: references_text(out),
+        references: references_text(references, &out.compare_references),
         agreement: agreement(&compare_trials, tol),
         compare_table: {
             let trials: Vec<Trial> = compare_trials.iter().map(|m| m.trial.clone()).collect();
@@ -125,11 +144,11 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
             compare::markdown(&trials, &secs)
         },
         separation_table: separation_table(spec, out),
-        separation_text: separation_text(spec, out),
+        separation_text: separation_text(spec, out, references),
         table1: table1_markdown(&out.table1),
         table1_text: table1_text(out),
-        profile_charts: named(&chart_names, "profile_"),
-        convergence_charts: named(&chart_names, "convergence_"),
+        profile_charts: named(chart_names, "profile_"),
+        convergence_charts: named(chart_names, "convergence_"),
         sweep_scene: spec
             .sweep
             .scenes
@@ -137,14 +156,13 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
             .map(|s| s.name.clone())
             .unwrap_or_default(),
         sweep_h: spec.sweep_h.to_string(),
-        work_precision_charts: named(&chart_names, "work_precision_"),
+        work_precision_charts: named(chart_names, "work_precision_"),
         work_precision_text: work_precision_text(&out.sweep),
         variations_text: variations_text(&out.sweep),
-        variation_charts: named(&chart_names, "sweep_"),
+        variation_charts: named(chart_names, "sweep_"),
         stability_section: {
-            let mut s = views::readme_section(&out.stability.trials);
-            let lines =
-                crate::study::stability::uniqueness::readme_lines(&out.stability.uniqueness);
+            let mut s = views::readme_section(&stability.trials);
+            let lines = crate::study::stability::uniqueness::readme_lines(&stability.uniqueness);
             if !lines.is_empty() {
                 s += "\n**Past the fixed point's limit** (problem 1; a solver of the Coulomb problem itself from its \
                       default start and from each starting point its registry entry lists; `stability_uniqueness.csv`):\n\n";
@@ -153,19 +171,23 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
             }
             s
         },
-        stability_charts: named(&chart_names, "stability_"),
-        stability_summary: views::summary_markdown(&out.stability.trials),
-        goals: crate::study::bench::goals::goals_markdown(&out.bench.goals),
-        memory: crate::study::bench::memory::markdown(&out.bench.memory),
+        stability_charts: named(chart_names, "stability_"),
+        stability_summary: views::summary_markdown(&stability.trials),
+        goals: crate::study::bench::goals::goals_markdown(&bench.goals),
+        memory: crate::study::bench::memory::markdown(&bench.memory),
         equal_accuracy: crate::study::bench::goals::equal_accuracy_markdown(
-            &out.bench.rows,
-            out.bench.problem,
+            &bench.rows,
+            bench.problem,
         ),
-        speed_table: speed_table(out),
-        performance_charts: named(&chart_names, "performance_"),
-        files: FILES.to_vec(),
+        speed_table: speed_table(bench),
+        performance_charts: named(chart_names, "performance_"),
+        files: files
+            .iter()
+            .filter(|f| !f.starts_with("charts/") && !f.starts_with("profiles/"))
+            .cloned()
+            .collect(),
         benchmark: crate::study::benchmark::views::report(&out.benchmark),
-        benchmark_charts: named(&chart_names, "benchmark_"),
+        benchmark_charts: named(chart_names, "benchmark_"),
         errors_reference: spec.errors.reference.to_string(),
         errors_solver: out
             .errors
@@ -173,7 +195,7 @@ pub fn render(spec: &ReproduceSpec, m: &Manifest, out: &Outputs, seconds: f64) -
             .map_or(String::new(), |r| r.solver.clone()),
         errors_table: crate::study::discretization_error::markdown(&out.errors),
         errors_text: crate::study::discretization_error::findings(&out.errors),
-        errors_charts: named(&chart_names, "discretization_error_"),
+        errors_charts: named(chart_names, "discretization_error_"),
     };
     let mut env = minijinja::Environment::new();
     env.add_template("readme", TEMPLATE)?;
@@ -184,10 +206,9 @@ fn worst(trials: &[&Trial], f: fn(&Trial) -> Option<f64>) -> f64 {
     trials.iter().filter_map(|t| f(t)).fold(0.0, f64::max)
 }
 
-fn references_text(out: &Outputs) -> String {
-    let mut parts: Vec<String> = out
-        .references
-        .all()
+fn references_text(references: &References, keys: &[String]) -> String {
+    let mut parts: Vec<String> = references
+        .of(keys)
         .map(|r| {
             format!(
                 "{} at h = {}: `{}`{}",
@@ -284,7 +305,7 @@ fn agreement(trials: &[&Measured], tol: f64) -> String {
     s
 }
 
-fn table1_text(out: &Outputs) -> String {
+fn table1_text(out: &Findings) -> String {
     let score = |schedule: &str| -> f64 {
         out.table1
             .iter()
@@ -310,8 +331,8 @@ fn table1_text(out: &Outputs) -> String {
     )
 }
 
-fn speed_table(out: &Outputs) -> String {
-    let rows = &out.bench.rows;
+fn speed_table(bench: &BenchOutput) -> String {
+    let rows = &bench.rows;
     // Each mesh once, in the order of its first row (later studies revisit
     // meshes).
     let mut meshes: Vec<&str> = Vec::new();

@@ -5,7 +5,9 @@ use std::fmt::Write as _;
 
 use contactlab_solvers::registry;
 
-use crate::study::reproduce::{Outputs, ReproduceSpec};
+use crate::study::lab::Findings;
+use crate::study::reference::References;
+use crate::study::reproduce::ReproduceSpec;
 
 /// The paper's reported separation (section 5, h = 1/64): problem 1 with
 /// friction on [0.81, 1.00] (19%), without friction 34%; problem 3 closed.
@@ -16,7 +18,7 @@ pub const PAPER_SEPARATION: [(u32, &str, &str); 3] = [
 ];
 
 pub(super) fn zone(
-    out: &Outputs,
+    out: &Findings,
     problem: u32,
     solver: &str,
     friction: bool,
@@ -35,7 +37,7 @@ pub(super) fn zone(
         })
 }
 
-pub(super) fn separation_table(spec: &ReproduceSpec, out: &Outputs) -> String {
+pub(super) fn separation_table(spec: &ReproduceSpec, out: &Findings) -> String {
     let mut s = String::from(
         "| problem | solver | with friction | without friction | paper, with | paper, without |\n|---|---|---|---|---|---|\n",
     );
@@ -64,9 +66,15 @@ pub(super) fn separation_table(spec: &ReproduceSpec, out: &Outputs) -> String {
     s
 }
 
-pub(super) fn separation_text(spec: &ReproduceSpec, out: &Outputs) -> String {
+pub(super) fn separation_text(
+    spec: &ReproduceSpec,
+    out: &Findings,
+    references: &References,
+) -> String {
     let mut s = String::new();
-    let reference = out.references.all().find(|r| r.scene.name == "problem 1");
+    let reference = references
+        .of(&out.compare_references)
+        .find(|r| r.scene.name == "problem 1");
     let mut differ = Vec::new();
     for a in &out.separation {
         for b in &out.separation {
@@ -131,9 +139,8 @@ pub(super) fn separation_text(spec: &ReproduceSpec, out: &Outputs) -> String {
     );
     if let Some(r) = reference {
         let f1 = r.coulomb.separation().fraction;
-        let p2 = out
-            .references
-            .all()
+        let p2 = references
+            .of(&out.compare_references)
             .find(|x| x.scene.name == "problem 2")
             .map(|x| x.coulomb.separation().fraction);
         if let Some(f2) = p2 {

@@ -26,7 +26,7 @@ use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
-use crate::study::reference::References;
+use crate::study::lab::{Artifact, Findings, Lab, Study};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
 use crate::study::trial::{Setting, Trial, TrialSpec};
@@ -141,14 +141,42 @@ pub fn lifted_problem(total: f64, h: MeshSize) -> Result<Scene> {
     Ok(s)
 }
 
-/// Runs the whole map; `log` hears of each group, `tick` of each trial.
-pub fn run(
-    spec: &StabilitySpec,
-    base: &Settings,
-    references: &mut References,
-    log: &dyn Fn(&str),
-    tick: &dyn Fn(&TrialSpec),
-) -> Result<Map> {
+/// The map as a study: stability.csv, stability_friction.csv,
+/// stability_uniqueness.csv, its references file (if named) and the charts.
+pub struct Stability {
+    pub spec: StabilitySpec,
+    pub references_file: Option<&'static str>,
+}
+
+impl Study for Stability {
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        lab.log("stability map");
+        let map = run(&self.spec, lab)?;
+        let rows: Vec<_> = map.trials.iter().map(|t| t.row()).collect();
+        let mut artifacts = vec![
+            Artifact::csv("stability.csv", &rows, &[])?,
+            Artifact::csv("stability_friction.csv", &map.steps, &[])?,
+            Artifact::csv("stability_uniqueness.csv", &map.uniqueness, &[])?,
+        ];
+        if let Some(file) = self.references_file {
+            artifacts.push(Artifact::csv(file, &lab.candidates(), &[])?);
+        }
+        artifacts.extend(Artifact::charts(views::charts(&map.trials, &map.steps)));
+        findings.stability = Some(map);
+        Ok(artifacts)
+    }
+}
+
+/// Runs the whole map in `lab` (at its settings): the lab's log hears of
+/// each group, its progress of each trial.
+pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
+    let base = &lab.settings.clone();
+    let (log, tracker) = (lab.logger(), lab.tracker());
+    let log = |line: &str| log(&format!("stability: {line}"));
     let mut map = Map {
         trials: Vec::new(),
         steps: Vec::new(),
@@ -156,7 +184,7 @@ pub fn run(
     };
     let mut one = |map: &mut Map, spec: TrialSpec, cx: Context| -> Result<Measured> {
         let reference = if spec.check_solvable {
-            references.get(&spec.scene, &spec.settings)?
+            lab.reference(&spec.scene, &spec.settings)?
         } else {
             None
         };
@@ -171,7 +199,7 @@ pub fn run(
         t.class = Some(class);
         t.reason = reason;
         map.trials.push(t);
-        tick(&spec);
+        tracker.tick(&spec);
         Ok(m)
     };
     log("each solver at its defaults and under its stress conditions");
@@ -250,8 +278,7 @@ pub fn run(
             &spec.uniqueness_values,
             base,
             spec.work_scale,
-            references,
-            tick,
+            lab,
         )?;
         for m in measured {
             let contractions: Vec<Option<f64>> =

@@ -17,8 +17,8 @@ use crate::io::csv::{fixed, fixed_opt};
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::agreement::agreement;
+use crate::study::lab::Lab;
 use crate::study::plans::plan;
-use crate::study::reference::References;
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::stability::STUDY;
 use crate::study::sweep::work_cap;
@@ -70,9 +70,9 @@ pub fn run(
     coefficients: &[f64],
     settings: &Settings,
     work_scale: f64,
-    references: &mut References,
-    tick: &dyn Fn(&TrialSpec),
+    lab: &mut Lab,
 ) -> Result<(Vec<Measured>, Vec<UniquenessRow>)> {
+    let tracker = lab.tracker();
     let direct: Vec<&'static Entry> = registry::solvers()
         .into_iter()
         .filter(|e| e.solves(Law::Coulomb) && !plan(e).restarts.is_empty())
@@ -89,8 +89,8 @@ pub fn run(
         // The fixed point around the given-friction solver that earned this
         // scene's given-friction reference (the most accurate one), else
         // the first exact one.
-        let earned = references
-            .get(&sc, settings)?
+        let earned = lab
+            .reference(&sc, settings)?
             .and_then(|r| r.given_friction.as_ref())
             .and_then(|g| registry::by_name(g.solver))
             .filter(|e| !e.solves(Law::Coulomb));
@@ -104,9 +104,9 @@ pub fn run(
                 let mut t = TrialSpec::new(STUDY, "uniqueness", &sc, e, Law::Coulomb, settings)
                     .with_work(work_cap(e, work_scale));
                 t.setting = Some(Setting::new("friction", &format!("{f}")));
-                let reference = references.get(&sc, settings)?;
+                let reference = lab.reference(&sc, settings)?;
                 let m = measure(&t, reference, keep)?;
-                tick(&t);
+                tracker.tick(&t);
                 Some(m)
             }
             None => None,
@@ -136,9 +136,9 @@ pub fn run(
                     &format!("friction (start {k}: {label})"),
                     &format!("{f}"),
                 ));
-                let reference = references.get(&sc, settings)?;
+                let reference = lab.reference(&sc, settings)?;
                 let m = measure(&t, reference, keep)?;
-                tick(&t);
+                tracker.tick(&t);
                 answers.push(m);
             }
             let good: Vec<&Measured> = answers.iter().filter(|m| m.trial.certified()).collect();

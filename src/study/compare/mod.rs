@@ -6,14 +6,64 @@ use anyhow::Result;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::Entry;
 
+use crate::io::latex::booktabs;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::reference::References;
-use crate::study::runner::{Keep, Measured, measure_all};
+use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::runner::{Keep, Measured};
 use crate::study::trial::{Trial, TrialSpec, intervals_text};
 
 /// The study's name in trial records.
 pub const STUDY: &str = "compare";
+
+pub mod paper;
+
+/// The comparison of `solvers` on one scene, as a study: compare.csv,
+/// compare_timing.csv, compare.tex and references.csv.
+pub struct Compare {
+    pub scene: Scene,
+    pub solvers: Vec<&'static Entry>,
+    pub repeats: usize,
+}
+
+impl Study for Compare {
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        let specs = plan(&self.scene, &lab.settings, &self.solvers, self.repeats);
+        let measured = lab.measure(&specs, Keep::default())?;
+        let mut artifacts = trials_artifacts(STUDY, &measured)?;
+        artifacts.push(Artifact::text(
+            "compare.tex",
+            &booktabs(
+                &markdown_of(&measured),
+                "every solver against the earned reference (contactlab compare)",
+            ),
+        ));
+        artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
+        findings.compare.push((0, measured));
+        Ok(artifacts)
+    }
+}
+
+/// A study's trials and their times: `STEM.csv` and `STEM_timing.csv`.
+pub fn trials_artifacts(stem: &str, measured: &[Measured]) -> Result<Vec<Artifact>> {
+    let rows: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
+    let timing: Vec<_> = measured.iter().map(|m| &m.timing).collect();
+    Ok(vec![
+        Artifact::csv(&format!("{stem}.csv"), &rows, &[])?,
+        Artifact::csv(&format!("{stem}_timing.csv"), &timing, &[])?,
+    ])
+}
+
+/// The Markdown table of measured comparison trials.
+pub fn markdown_of(measured: &[Measured]) -> String {
+    let trials: Vec<Trial> = measured.iter().map(|m| m.trial.clone()).collect();
+    let seconds: Vec<f64> = measured.iter().map(|m| m.timing.seconds_min).collect();
+    markdown(&trials, &seconds)
+}
 
 /// The trials: per solver, the subproblem (if it solves it) and the Coulomb
 /// problem, each run `1 + repeats` times for its time.
@@ -36,28 +86,6 @@ pub fn plan(
         }
     }
     out
-}
-
-/// Runs the comparison, keeping histories and solutions (for the charts and
-/// the profiles).
-pub fn run(
-    scene: &Scene,
-    settings: &Settings,
-    solvers: &[&'static Entry],
-    repeats: usize,
-    references: &mut References,
-    tick: &dyn Fn(&TrialSpec),
-) -> Result<Vec<Measured>> {
-    let specs = plan(scene, settings, solvers, repeats);
-    measure_all(
-        &specs,
-        references,
-        Keep {
-            history: true,
-            solution: true,
-        },
-        tick,
-    )
 }
 
 /// A Markdown table of comparison trials.
