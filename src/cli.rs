@@ -13,6 +13,7 @@ use crate::coulomb::continuation::Schedule;
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 
+mod choices;
 mod scene_args;
 mod settings_args;
 
@@ -146,10 +147,10 @@ pub struct Table1Args {
     #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 3])]
     pub problems: Vec<u32>,
     /// Continuation schedules to run.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
+    #[arg(long, value_parser = choices::schedule(), value_delimiter = ',', default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
     pub schedules: Vec<Schedule>,
     /// Plane strain or plane stress.
-    #[arg(long, value_enum, default_value_t = PlaneModel::Strain)]
+    #[arg(long, value_parser = choices::plane(), default_value_t = PlaneModel::Strain)]
     pub plane: PlaneModel,
     /// Folder for table1.csv and table1_trials.csv (replaced whole).
     #[arg(long, value_name = "DIR")]

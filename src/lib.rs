@@ -19,6 +19,7 @@ pub mod certificate;
 pub mod cli;
 pub mod commands;
 pub mod coulomb;
+pub mod formats;
 pub mod io;
 pub mod mechanics;
 pub mod settings;

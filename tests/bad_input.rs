@@ -4,7 +4,7 @@
 
 use std::process::Command;
 
-use contactlab::io::scene_file;
+use contactlab::formats::scene_file;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use proptest::prelude::*;

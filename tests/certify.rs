@@ -20,7 +20,7 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 use contactlab::certificate::{Condition, DEFAULT_TOLERANCE, certify};
-use contactlab::io::export::export;
+use contactlab::formats::instance::export;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
@@ -550,7 +550,7 @@ fn a_nearly_balanced_load_holds_the_contact_to_the_net_load() {
     });
     scene.name = "nearly balanced".into();
     let d = Discretization::new(&scene, scene.finest()).unwrap();
-    export(&inst, &scene, &d).unwrap();
+    export(&inst, &scene, &d, "test").unwrap();
     let run = solve_scene(
         &scene,
         Friction::Coulomb,

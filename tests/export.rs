@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-use contactlab::io::export::{export, import};
+use contactlab::formats::instance::{export, import};
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
@@ -33,7 +33,7 @@ fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
     let mut scene = Scene::paper_problem(1).unwrap();
     scene.set_finest(MeshSize::from_level(4).unwrap());
     let d = Discretization::new(&scene, scene.finest()).unwrap();
-    export(&inst, &scene, &d).unwrap();
+    export(&inst, &scene, &d, "test").unwrap();
     // The same problem, to the last bit.
     let p = import(&inst).unwrap().problem;
     assert_eq!(p.n(), d.problem.n());

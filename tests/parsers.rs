@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use contactlab::io::export::{contacts_from, forces_from, import};
+use contactlab::formats::instance::{contacts_from, forces_from, import};
 use contactlab::io::guarded::Lines;
 use contactlab::io::matrix_market::{Expect, parse};
 use contactlab::study::benchmark::merge::rows_from;

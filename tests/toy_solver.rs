@@ -213,7 +213,7 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
     let mut settings = Settings::default();
     settings.set_text("toy.tolerance", "1e-11").unwrap();
     assert!(settings.set_text("toy.nosuch", "1").is_err());
-    let (_, from_file) = contactlab::io::scene_file::parse(
+    let (_, from_file) = contactlab::formats::scene_file::parse(
         "name = \"x\"\n[[loads]]\nfrom = 0.0\nto = 0.5\np2 = -1.0\n[solver.toy]\ntolerance = 1e-9\n",
     )
     .unwrap()

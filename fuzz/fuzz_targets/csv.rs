@@ -1,7 +1,7 @@
 //! The CSV readers: contact nodes, contact forces, benchmark rows.
 #![no_main]
 
-use contactlab::io::export::{contacts_from, forces_from};
+use contactlab::formats::instance::{contacts_from, forces_from};
 use contactlab::study::benchmark::merge::rows_from;
 use libfuzzer_sys::fuzz_target;
 

@@ -5,7 +5,7 @@
 #![no_main]
 
 use contactlab::certificate::{DEFAULT_TOLERANCE, certify};
-use contactlab::io::export::import;
+use contactlab::formats::instance::import;
 use contactlab::solvers::Law;
 use libfuzzer_sys::fuzz_target;
 

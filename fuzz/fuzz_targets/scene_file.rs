@@ -2,7 +2,7 @@
 //! the coarsest discretization of what validates. Must never panic.
 #![no_main]
 
-use contactlab::io::scene_file;
+use contactlab::formats::scene_file;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use libfuzzer_sys::fuzz_target;

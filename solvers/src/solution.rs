@@ -187,7 +187,7 @@ impl Solution {
     /// The solution with status [`Status::NonFinite`] if any of its numbers
     /// is not finite, whatever the solver said: every solver ends through
     /// this one rule, so a NaN never passes as a claim of any kind.
-    pub fn flag_non_finite(mut self) -> Self {
+    pub(crate) fn flag_non_finite(mut self) -> Self {
         if !self.is_finite() {
             self.status = Status::NonFinite;
         }

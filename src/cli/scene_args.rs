@@ -39,7 +39,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "NU", allow_hyphen_values = true)]
     pub poisson: Option<f64>,
     /// Plane strain or plane stress (default strain; the paper does not say).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = super::choices::plane())]
     pub plane: Option<PlaneModel>,
     /// Coulomb friction coefficient 𝓕 ≥ 0 (default 0.5; 0 is frictionless).
     #[arg(long, value_name = "F", allow_hyphen_values = true)]
@@ -56,7 +56,7 @@ impl SceneArgs {
     /// the defaults), with the scene overrides applied and validated.
     pub fn load(&self) -> Result<(Scene, Settings)> {
         let (mut scene, settings) = match (&self.scene, self.problem) {
-            (Some(path), _) => crate::io::scene_file::load(path)?,
+            (Some(path), _) => crate::formats::scene_file::load(path)?,
             (None, Some(n)) => (Scene::paper_problem(n)?, Settings::default()),
             (None, None) => anyhow::bail!(
                 "no scene given: add --problem N (the paper's problem 1, 2 or 3) or --scene FILE (a scene file)"

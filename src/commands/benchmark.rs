@@ -57,7 +57,14 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
 
 pub fn merge(args: &BenchmarkMergeArgs) -> Result<()> {
     let rows = benchmark::merge::read_shards(&args.shards)?;
-    let manifest = benchmark::merge::merged_manifest(&args.shards)?;
+    let manifest = benchmark::merge::merged_manifest(
+        &args.shards,
+        serde_json::json!({
+            "command": std::env::args().collect::<Vec<_>>(),
+            "git_commit": crate::io::manifest::git_commit(),
+            "date": crate::io::manifest::utc_now(),
+        }),
+    )?;
     let folder = RunFolder::create(&args.out)?;
     let dir = folder.path();
     let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[])?];

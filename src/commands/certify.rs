@@ -11,7 +11,7 @@ use contactlab_solvers::reduction::dual::displacements_from_forces;
 
 use crate::certificate::certify;
 use crate::cli::CertifyArgs;
-use crate::io::export::{import, read_forces, read_vector};
+use crate::formats::instance::{import, read_forces, read_vector};
 use crate::io::output::print;
 
 pub fn run(args: &CertifyArgs) -> Result<()> {

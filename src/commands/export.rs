@@ -1,10 +1,11 @@
 //! `contactlab export`: a scene's finest-level problem as files any
-//! scientific code reads ([`crate::io::export`]).
+//! scientific code reads ([`crate::formats::instance`]).
 
 use anyhow::Result;
 
 use crate::cli::ExportArgs;
-use crate::io::export::export;
+use crate::formats::instance::export;
+use crate::io::manifest::git_commit;
 use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
 use crate::mechanics::discretization::Discretization;
@@ -13,7 +14,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     let folder = RunFolder::create(&args.out)?;
     let d = Discretization::new(&scene, scene.finest())?;
-    export(folder.path(), &scene, &d)?;
+    export(folder.path(), &scene, &d, &git_commit())?;
     let target = folder.commit()?;
     print(&format!(
         "wrote {} at h = {} ({} unknowns, {} contact nodes) into {}: A.mtx, M.mtx, f.mtx, rigid_modes.mtx, contact.csv, S.mtx, b_condensed.mtx, z_condensed.mtx, problem.json\n",

@@ -49,7 +49,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         write_atomic(&dir.join("summary.json"), &json_bytes(&summary)?)?;
         if args.vtu {
             let text =
-                crate::io::vtu::vtu(&solved.finest, &scene.material, &solved.outcome.solution);
+                crate::formats::vtu::vtu(&solved.finest, &scene.material, &solved.outcome.solution);
             write_atomic(&dir.join("field.vtu"), text.as_bytes())?;
         }
         let target = folder.commit()?;

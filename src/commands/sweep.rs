@@ -16,7 +16,7 @@ use crate::study::trial::TrialSpec;
 pub fn run(args: &SweepArgs) -> Result<()> {
     let (scenes, base) = match &args.scene {
         Some(path) => {
-            let (scene, settings) = crate::io::scene_file::load(path)?;
+            let (scene, settings) = crate::formats::scene_file::load(path)?;
             (vec![scene], settings)
         }
         None => (

@@ -21,9 +21,7 @@ use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 
 /// Whether coarse levels are revisited in every friction iteration.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Schedule {
     #[default]
@@ -33,12 +31,21 @@ pub enum Schedule {
     FinestOnly,
 }
 
-impl std::fmt::Display for Schedule {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
+impl Schedule {
+    pub const ALL: [Self; 2] = [Self::Revisit, Self::FinestOnly];
+
+    /// Its name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
             Schedule::Revisit => "revisit",
             Schedule::FinestOnly => "finest-only",
-        })
+        }
+    }
+}
+
+impl std::fmt::Display for Schedule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 

@@ -1,14 +1,13 @@
-//! Input and output: scene files, output files written whole, charts and the
-//! manifest of a results directory.
+//! The bottom layer: files written whole, guarded reads, run folders, CSV,
+//! Matrix Market, LaTeX, charts and the manifest. Nothing here knows the
+//! mechanics or the Coulomb problem beyond plain numbers (the formats that
+//! do live in [`crate::formats`]).
 
 pub mod charts;
 pub mod csv;
-pub mod export;
 pub mod guarded;
 pub mod latex;
 pub mod manifest;
 pub mod matrix_market;
 pub mod output;
 pub mod run_folder;
-pub mod scene_file;
-pub mod vtu;

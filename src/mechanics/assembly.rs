@@ -7,69 +7,12 @@ use std::collections::HashMap;
 use nalgebra_sparse::CsrMatrix;
 use nalgebra_sparse::pattern::SparsityPattern;
 
+pub use crate::mechanics::element::{element_mass, element_stiffness, strain_matrix};
+
 use crate::mechanics::dofs::DofExpansion;
 use crate::mechanics::material::Material;
 use crate::mechanics::mesh::{Body, Mesh};
 use crate::mechanics::scene::Traction;
-
-/// Twice the signed area of a triangle.
-fn twice_area(p: &[[f64; 2]; 3]) -> f64 {
-    (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1])
-}
-
-/// The constant strain matrix B of a linear triangle: ε = B u_e with
-/// ε = (ε11, ε22, 2ε12) and u_e = (u1_a, u2_a, u1_b, ...).
-pub fn strain_matrix(p: [[f64; 2]; 3]) -> [[f64; 6]; 3] {
-    let area2 = twice_area(&p);
-    let mut b = [[0.0; 6]; 3];
-    for a in 0..3 {
-        let (q, r) = (p[(a + 1) % 3], p[(a + 2) % 3]);
-        let dx = (q[1] - r[1]) / area2; // ∂φ_a/∂x
-        let dy = (r[0] - q[0]) / area2; // ∂φ_a/∂y
-        b[0][2 * a] = dx;
-        b[1][2 * a + 1] = dy;
-        b[2][2 * a] = dy;
-        b[2][2 * a + 1] = dx;
-    }
-    b
-}
-
-/// Element stiffness of a linear triangle, local order (u1_a, u2_a, u1_b, ...):
-/// K = area · BᵀDB.
-pub fn element_stiffness(p: [[f64; 2]; 3], d: &[[f64; 3]; 3]) -> [[f64; 6]; 6] {
-    let b = strain_matrix(p);
-    let area = twice_area(&p) / 2.0;
-    let mut k = [[0.0; 6]; 6];
-    for (i, ki) in k.iter_mut().enumerate() {
-        for (j, kij) in ki.iter_mut().enumerate() {
-            let mut sum = 0.0;
-            for r in 0..3 {
-                for c in 0..3 {
-                    sum += b[r][i] * d[r][c] * b[c][j];
-                }
-            }
-            *kij = area * sum;
-        }
-    }
-    k
-}
-
-/// Consistent P1 mass matrix of a triangle, per component: area/12·(1 + δ_ab).
-/// Consistent rather than lumped because the proximal term of paper (15) is
-/// the exact L2 norm, and on this mesh it has the sparsity of the stiffness,
-/// so the relaxation sweep over A + M costs the same either way.
-pub fn element_mass(p: [[f64; 2]; 3]) -> [[f64; 6]; 6] {
-    let area = twice_area(&p) / 2.0;
-    let mut m = [[0.0; 6]; 6];
-    for a in 0..3 {
-        for b in 0..3 {
-            let value = area / 12.0 * if a == b { 2.0 } else { 1.0 };
-            m[2 * a][2 * b] = value;
-            m[2 * a + 1][2 * b + 1] = value;
-        }
-    }
-    m
-}
 
 /// The triangles of the mesh (optionally one body's), as node triples.
 /// Pushed from `for_each`, which drives the mesh's nested iterator from the
@@ -539,80 +482,4 @@ pub fn load_vector(dofs: &impl DofExpansion, forces: &[[f64; 2]]) -> Vec<f64> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mechanics::dofs::{DofMap, PhysicalDofs, Terms};
-    use crate::mechanics::mesh_size::MeshSize;
-
-    /// Both sums, as pattern and values' bits.
-    fn both_sums(
-        mesh: &Mesh,
-        dofs: &impl DofExpansion,
-        only: Option<Body>,
-    ) -> [(SparsityPattern, Vec<Vec<u64>>); 2] {
-        let d = Material::default().elasticity_matrix();
-        let elements: [&ElementMatrix<'_>; 2] = [&|p| element_stiffness(p, &d), &element_mass];
-        [Sum::ByNodesWherePossible, Sum::ByUnknowns].map(|sum| {
-            let (pattern, values) = assemble_rows(mesh, dofs, only, elements, sum);
-            let bits = values
-                .iter()
-                .map(|v| v.iter().map(|x| x.to_bits()).collect());
-            (pattern, bits.collect())
-        })
-    }
-
-    /// Every component of node `b` is node `a`'s unknown: the nodes next to
-    /// both meet that unknown through two nodes.
-    struct Tied {
-        physical: PhysicalDofs,
-        a: usize,
-        b: usize,
-    }
-
-    impl DofExpansion for Tied {
-        fn n(&self) -> usize {
-            self.physical.n()
-        }
-
-        fn terms(&self, node: usize, k: usize) -> Terms {
-            let node = if node == self.b { self.a } else { node };
-            self.physical.terms(node, k)
-        }
-    }
-
-    /// A block whose nodes around meet one unknown through two nodes goes
-    /// back to the sums by unknowns: kept by nodes, its rows would hold that
-    /// column twice and the patterns would differ.
-    #[test]
-    fn an_unknown_met_through_two_nodes_is_summed_by_unknowns() {
-        let mesh = Mesh::new(MeshSize::from_level(2).unwrap());
-        let dofs = Tied {
-            physical: PhysicalDofs {
-                num_nodes: mesh.num_nodes(),
-            },
-            a: mesh.node(Body::Lower, 1, 1),
-            b: mesh.node(Body::Lower, 2, 1),
-        };
-        let [(p1, v1), (p2, v2)] = both_sums(&mesh, &dofs, None);
-        assert_eq!(p1, p2);
-        assert_eq!(v1, v2);
-    }
-
-    /// Summing one-node blocks by nodes gives the sums by unknowns bit for
-    /// bit (the sign of zero included) on the paper's meshes, both bodies
-    /// and each alone: a wrong corner, component or coefficient in the
-    /// 2 × 2 blocks, a lost contact term, or a duplicate unknown not sent
-    /// back to the sums by unknowns would show here.
-    #[test]
-    fn sums_by_nodes_are_the_sums_by_unknowns_bit_for_bit() {
-        for k in 1..=5 {
-            let mesh = Mesh::new(MeshSize::from_level(k).unwrap());
-            let dofs = DofMap::new(&mesh);
-            for only in [None, Some(Body::Lower), Some(Body::Upper)] {
-                let [(p1, v1), (p2, v2)] = both_sums(&mesh, &dofs, only);
-                assert_eq!(p1, p2, "k = {k}, {only:?}");
-                assert_eq!(v1, v2, "k = {k}, {only:?}");
-            }
-        }
-    }
-}
+mod tests;

@@ -4,19 +4,28 @@ use serde::{Deserialize, Serialize};
 
 /// Which plane reduction of 3-D elasticity. The paper does not say; plane
 /// strain is the default (a thick body), plane stress is the thin-plate reading.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PlaneModel {
     Strain,
     Stress,
 }
 
-impl std::fmt::Display for PlaneModel {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
+impl PlaneModel {
+    pub const ALL: [Self; 2] = [Self::Strain, Self::Stress];
+
+    /// Its name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
             PlaneModel::Strain => "strain",
             PlaneModel::Stress => "stress",
-        })
+        }
+    }
+}
+
+impl std::fmt::Display for PlaneModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 

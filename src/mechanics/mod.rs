@@ -6,6 +6,7 @@ pub mod assembly;
 pub mod contact_zone;
 pub mod discretization;
 pub mod dofs;
+pub mod element;
 pub mod material;
 pub mod mesh;
 pub mod mesh_size;

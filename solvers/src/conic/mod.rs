@@ -24,28 +24,27 @@
 //! sparse factorization kept across calls), and v recovered from y. Clarabel
 //! then factors KKT systems of order 6m instead of n + 4m.
 
-use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
+use clarabel::solver::{DefaultSettings, DefaultSettingsBuilder};
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
-use crate::observer::{Limits, Observer, Progress};
+use crate::observer::{Limits, Observer};
 use crate::problem::ContactProblem;
-use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
+use crate::reduction::condensed::{Condensed, Kept, condense};
 use crate::settings::{Kind, Validate, from_tree, to_tree};
-use crate::solution::{Iterations, Solution, Status, Timing};
+use crate::solution::{Iterations, Solution, Status};
 use crate::solver::{Friction, Law, Solver, Start};
 
+mod program;
+use program::Program;
+
 /// The progress stage of one interior point (its unit of work).
-pub const INTERIOR_POINT: &str = "interior_point";
+pub(crate) const INTERIOR_POINT: &str = "interior_point";
 
 /// The registry entry of the conic oracle.
-pub const ENTRY: Entry = Entry {
+pub(crate) const ENTRY: Entry = Entry {
     name: "clarabel",
     about: "conic oracle: interior point (Clarabel) with a second-order cone per contact node",
     source: "Goulart & Chen (2024), Clarabel; the subproblem is paper (10) as a conic program",
@@ -122,7 +121,7 @@ pub const ENTRY: Entry = Entry {
 /// dimensions the cone |s_i| ≤ z_i is the two half-planes s_i − z_i ≤ 0 and
 /// −s_i − z_i ≤ 0, so the subproblem is a quadratic program with
 /// nonnegative cones only.
-pub const ENTRY_QP: Entry = Entry {
+pub(crate) const ENTRY_QP: Entry = Entry {
     name: "clarabel-qp",
     about: "the conic oracle as a QP: the friction cone of each node as two half-planes (nonnegative cones only)",
     source: "Goulart & Chen (2024), Clarabel; paper (10) with |s| ≤ z written as s − z ≤ 0, −s − z ≤ 0",
@@ -140,7 +139,7 @@ pub const ENTRY_QP: Entry = Entry {
 /// the same second-order cone program, its KKT systems factored by faer's
 /// supernodal LDLᵀ (Clarabel's `faer-sparse` feature) instead of QDLDL, on
 /// one thread like every timed solver here.
-pub const ENTRY_FAER: Entry = Entry {
+pub(crate) const ENTRY_FAER: Entry = Entry {
     name: "clarabel-faer",
     about: "the conic oracle (second-order cones) with faer's sparse LDLᵀ instead of QDLDL inside Clarabel",
     source: "Goulart & Chen (2024), Clarabel, direct_solve_method = \"faer\"; paper (10) as a conic program",
@@ -165,7 +164,7 @@ pub const ENTRY_FAER: Entry = Entry {
 /// rose from 6e-13 to 3e-8 while μ fell to 1e-15, past where the full
 /// program stops) and its iteration counts changed with the units; the
 /// half-planes did neither.
-pub const ENTRY_CONDENSED: Entry = Entry {
+pub(crate) const ENTRY_CONDENSED: Entry = Entry {
     name: "clarabel-condensed",
     about: "the conic oracle on the problem condensed onto the contact unknowns (dense Schur complement; cone as two half-planes; faer's LDLᵀ)",
     source: "Goulart & Chen (2024), Clarabel; paper (10) as a QP in the contact unknowns after static condensation (Schur complement of the interior unknowns)",
@@ -253,7 +252,7 @@ pub const DEFAULT_TOLERANCE: f64 = 1e-10;
 
 impl ConicSettings {
     /// All three tolerances set to `tol`, everything else default.
-    pub fn with_tolerance(tol: f64) -> Self {
+    pub(crate) fn with_tolerance(tol: f64) -> Self {
         Self {
             tol_gap_abs: tol,
             tol_gap_rel: tol,
@@ -312,41 +311,6 @@ impl ConicSolver {
             condensation: Kept::default(),
         }
     }
-}
-
-/// Maps every Clarabel status explicitly.
-pub fn map_status(status: SolverStatus) -> Status {
-    match status {
-        SolverStatus::Solved => Status::Converged,
-        SolverStatus::AlmostSolved => Status::ReducedAccuracy,
-        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => Status::Infeasible,
-        SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => Status::Unbounded,
-        SolverStatus::MaxIterations => Status::MaxIterations,
-        SolverStatus::MaxTime => Status::TimeLimit,
-        SolverStatus::NumericalError => Status::NumericalError,
-        SolverStatus::InsufficientProgress => Status::InsufficientProgress,
-        SolverStatus::CallbackTerminated => Status::InsufficientProgress,
-        SolverStatus::Unsolved => Status::NotRun,
-    }
-}
-
-/// Builds a Clarabel CSC matrix from (row, col, value) triplets.
-fn csc_from_triplets(
-    nrows: usize,
-    ncols: usize,
-    mut t: Vec<(usize, usize, f64)>,
-) -> CscMatrix<f64> {
-    t.sort_by_key(|&(r, c, _)| (c, r));
-    let mut colptr = vec![0usize; ncols + 1];
-    for &(_, c, _) in &t {
-        colptr[c + 1] += 1;
-    }
-    for c in 0..ncols {
-        colptr[c + 1] += colptr[c];
-    }
-    let rowval = t.iter().map(|&(r, _, _)| r).collect();
-    let nzval = t.iter().map(|&(_, _, v)| v).collect();
-    CscMatrix::new(nrows, ncols, colptr, rowval, nzval)
 }
 
 impl Solver for ConicSolver {
@@ -433,152 +397,5 @@ impl Solver for ConicSolver {
             diagnostics: Vec::new(),
         };
         out.flag_non_finite()
-    }
-}
-
-/// The given-friction subproblem (10) on some unknowns u: all of v, or the
-/// contact unknowns after the condensation.
-struct Program<'a> {
-    /// Number of unknowns u.
-    unknowns: usize,
-    /// The upper triangle of the quadratic form's matrix, (row, col, value).
-    upper: Vec<(usize, usize, f64)>,
-    /// The load on u.
-    load: &'a [f64],
-    /// The positions of (t_i, s_i) in u, per contact node.
-    contact: Vec<(usize, usize)>,
-    /// The given friction bound g_i per contact node.
-    bound: &'a [f64],
-}
-
-/// What Clarabel returned, back in the problem's units.
-struct Answer {
-    unknowns: Vec<f64>,
-    /// (λ_i, μ_i): the nodal normal force and friction force of each node.
-    forces: Vec<(f64, f64)>,
-    end: Ending,
-}
-
-impl Program<'_> {
-    /// Writes the program for Clarabel in the problem's scales (u = U û,
-    /// objective over F·U, g the bound given), solves it and scales back.
-    fn solve(
-        self,
-        settings: &ConicSettings,
-        problem: &ContactProblem,
-        t0: Instant,
-        observer: &mut dyn Observer,
-    ) -> Result<Answer, String> {
-        let (n, m) = (self.unknowns, self.contact.len());
-        let contacts = problem.contacts();
-        // u = U û; the objective is divided by F·U; forces come back over F.
-        let (force, stiffness) = if settings.scale_unknowns {
-            let s = problem.scales();
-            (s.force, s.stiffness)
-        } else {
-            (1.0, 1.0)
-        };
-        let displacement = force / stiffness;
-        // P: the upper triangle over K; the cone variables z_i have no quadratic term.
-        let p_trip = self
-            .upper
-            .into_iter()
-            .map(|(i, j, v)| (i, j, v / stiffness))
-            .collect();
-        let p = csc_from_triplets(n + m, n + m, p_trip);
-        let mut q: Vec<f64> = self.load.iter().map(|f| -f / force).collect();
-        q.extend(
-            contacts
-                .iter()
-                .zip(self.bound)
-                .map(|(c, g)| c.weight * g / force),
-        );
-        // Rows 0..m: t_i + slack = 0 (slack ≥ 0). SOC: rows m+2i, m+2i+1:
-        // −(z_i, s_i) + slack = 0 in SOC(2). QP: s_i − z_i + slack = 0 and
-        // −s_i − z_i + slack = 0, slacks ≥ 0.
-        let qp = settings.formulation == Formulation::Qp;
-        let mut a_trip = Vec::with_capacity(5 * m);
-        for (i, &(t, s)) in self.contact.iter().enumerate() {
-            a_trip.push((i, t, 1.0));
-            if qp {
-                a_trip.push((m + 2 * i, s, 1.0));
-                a_trip.push((m + 2 * i, n + i, -1.0));
-                a_trip.push((m + 2 * i + 1, s, -1.0));
-                a_trip.push((m + 2 * i + 1, n + i, -1.0));
-            } else {
-                a_trip.push((m + 2 * i, n + i, -1.0));
-                a_trip.push((m + 2 * i + 1, s, -1.0));
-            }
-        }
-        let a = csc_from_triplets(3 * m, n + m, a_trip);
-        let b = vec![0.0; 3 * m];
-        let mut cones = Vec::with_capacity(m + 1);
-        if m > 0 {
-            if qp {
-                cones.push(SupportedConeT::NonnegativeConeT(3 * m));
-            } else {
-                cones.push(SupportedConeT::NonnegativeConeT(m));
-                cones.extend((0..m).map(|_| SupportedConeT::SecondOrderConeT(2)));
-            }
-        }
-        let clarabel_settings = settings.clarabel(&observer.limits());
-        let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, clarabel_settings)
-            .map_err(|e| format!("Clarabel set-up failed: {e}"))?;
-        let history: Arc<Mutex<Vec<Progress>>> = Arc::default();
-        if observer.wants(INTERIOR_POINT) {
-            let sink = Arc::clone(&history);
-            let started = Instant::now();
-            solver.set_termination_callback(move |info: &clarabel::solver::DefaultInfo<f64>| {
-                if let Ok(mut h) = sink.lock() {
-                    h.push(Progress {
-                        stage: INTERIOR_POINT,
-                        iteration: info.iterations as usize,
-                        residual: info
-                            .res_primal
-                            .max(info.res_dual)
-                            .max(info.gap_rel.min(info.gap_abs)),
-                        seconds: started.elapsed().as_secs_f64(),
-                    });
-                }
-                false
-            });
-        }
-        let setup = t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
-        solver.solve();
-        let solve = t1.elapsed().as_secs_f64();
-        if let Ok(h) = history.lock() {
-            for event in h.iter() {
-                // Clarabel has finished: its budget was passed in its settings.
-                let _ = observer.observe(event);
-            }
-        }
-        let sol = &solver.solution;
-        // The duals: λ_i of the row t_i ≤ 0; μ_i the tail of the cone's dual
-        // (SOC) or the difference of the two half-planes' duals (QP, from
-        // stationarity in s: (Au − f)_s + γ_a − γ_b = 0).
-        let forces = (0..m)
-            .map(|i| {
-                let mu = if qp {
-                    sol.z[m + 2 * i + 1] - sol.z[m + 2 * i]
-                } else {
-                    sol.z[m + 2 * i + 1]
-                };
-                (sol.z[i] * force, mu * force)
-            })
-            .collect();
-        Ok(Answer {
-            unknowns: sol.x[..n].iter().map(|x| x * displacement).collect(),
-            forces,
-            end: Ending {
-                status: map_status(sol.status),
-                detail: format!(
-                    "Clarabel {:?} after {} iterations (gap_rel {:.1e}, r_prim {:.1e}, r_dual {:.1e})",
-                    sol.status, sol.iterations, solver.info.gap_rel, sol.r_prim, sol.r_dual
-                ),
-                steps: sol.iterations as usize,
-                timing: Timing { setup, solve },
-            },
-        })
     }
 }

@@ -36,10 +36,10 @@ use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 /// The progress stage of one newton (its unit of work).
-pub const NEWTON_STEP: &str = "newton";
+pub(crate) const NEWTON_STEP: &str = "newton";
 
 /// The registry entry of the condensed semismooth Newton solver.
-pub const ENTRY: Entry = Entry {
+pub(crate) const ENTRY: Entry = Entry {
     name: NEWTON_STEP,
     about: "fast exact solver: condensation onto the contact unknowns (sparse Cholesky once), semismooth Newton with line search",
     source: "Fischer (1992) and Billups (1995) NCP/box functions; De Luca, Facchinei & Kanzow (1996) globalization on the merit ½‖Φ‖²",

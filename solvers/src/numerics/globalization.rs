@@ -8,19 +8,19 @@
 /// ρ of the descent test: small, so that the Newton direction is refused
 /// only when it is nearly orthogonal to −∇Ψ (DFK's numerical experiments
 /// take 1e-8; the test is made in the problem's units, see [`Units`]).
-pub const DESCENT_RHO: f64 = 1e-10;
+pub(crate) const DESCENT_RHO: f64 = 1e-10;
 /// p of the descent test: p > 2 is what the convergence theory needs (DFK
 /// Theorem 3.1); 2.1 is their choice.
-pub const DESCENT_P: f64 = 2.1;
+pub(crate) const DESCENT_P: f64 = 2.1;
 /// σ of the sufficient decrease Ψ(x + αd) ≤ Ψ(x) + σα∇Ψᵀd (Armijo; DFK
 /// take 1e-4, the usual value, Nocedal & Wright (3.4)).
-pub const ARMIJO_SIGMA: f64 = 1e-4;
+pub(crate) const ARMIJO_SIGMA: f64 = 1e-4;
 /// The factor by which a refused step is shortened.
-pub const BACKTRACK: f64 = 0.5;
+pub(crate) const BACKTRACK: f64 = 0.5;
 /// The shortest step tried before the search gives up: below it, in double
 /// precision, x + αd no longer differs from x in any but the last bits (a
 /// stationary point of Ψ that is not a zero).
-pub const MIN_STEP: f64 = 1e-14;
+pub(crate) const MIN_STEP: f64 = 1e-14;
 
 /// The merit Ψ = ½‖Φ‖² of a residual Φ.
 pub fn merit(phi: &[f64]) -> f64 {
@@ -35,7 +35,7 @@ pub fn merit(phi: &[f64]) -> f64 {
 /// measured against the load `scale` (‖b̂‖∞). With ‖d‖^p in raw units,
 /// E = 1e-30 or loads × 1e100 turned every step into a gradient step.
 #[derive(Clone, Copy, Debug)]
-pub struct Units {
+pub(crate) struct Units {
     pub displacements: usize,
     pub kappa: f64,
     pub scale: f64,
@@ -46,7 +46,7 @@ impl Units {
     /// displacements, then forces) with operator `s` and load `b`: κ the
     /// mean |S_kk| (1 for an empty or zero S), the scale ‖b‖∞ (at least the
     /// smallest normal number).
-    pub fn of_condensed(s: &faer::Mat<f64>, b: &[f64]) -> Self {
+    pub(crate) fn of_condensed(s: &faer::Mat<f64>, b: &[f64]) -> Self {
         let n = s.nrows();
         let mean = (0..n).map(|k| s[(k, k)].abs()).sum::<f64>() / n.max(1) as f64;
         Self {
@@ -61,7 +61,7 @@ impl Units {
 
     /// Whether the Newton direction `d` descends Ψ enough to be taken:
     /// ∇Ψᵀd ≤ −ρ‖d‖^p in these units (`slope` is ∇Ψᵀd).
-    pub fn descends(&self, slope: f64, d: &[f64]) -> bool {
+    pub(crate) fn descends(&self, slope: f64, d: &[f64]) -> bool {
         let size: f64 = d
             .iter()
             .enumerate()
@@ -102,7 +102,7 @@ pub fn direction(
 /// merit and whatever the caller keeps of it. The first α = 1, ½, ¼, ...
 /// with sufficient decrease (any α = 1 when the search is off) is taken;
 /// None once α falls below [`MIN_STEP`].
-pub fn armijo<T>(
+pub(crate) fn armijo<T>(
     psi: f64,
     slope: f64,
     line_search: bool,

@@ -39,7 +39,7 @@ pub fn spmv_into(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
 /// `values` (one per stored entry, in its order): the product with a matrix
 /// kept as values on another's pattern, such as the mass matrix on the
 /// stiffness's. No allocation.
-pub fn spmv_values_into(pattern: &CsrMatrix<f64>, values: &[f64], x: &[f64], y: &mut [f64]) {
+pub(crate) fn spmv_values_into(pattern: &CsrMatrix<f64>, values: &[f64], x: &[f64], y: &mut [f64]) {
     assert_eq!(x.len(), pattern.ncols(), "spmv: x has the wrong length");
     assert_eq!(y.len(), pattern.nrows(), "spmv: y has the wrong length");
     assert_eq!(
@@ -95,7 +95,7 @@ pub fn max_abs(x: &[f64]) -> f64 {
 /// finite. Eight independent lanes, so that the maxima do not wait on each
 /// other in one chain of comparisons: this pass over a matrix's values was a
 /// tenth of a 1/64 assembly as one chain.
-pub fn max_abs_if_finite(x: &[f64]) -> Option<f64> {
+pub(crate) fn max_abs_if_finite(x: &[f64]) -> Option<f64> {
     const LANES: usize = 8;
     let (mut max, mut bad) = ([0.0f64; LANES], [false; LANES]);
     let chunks = x.chunks_exact(LANES);
@@ -151,7 +151,7 @@ fn lower_of(a: &CsrMatrix<f64>) -> CscMatrix<f64> {
 /// for a symmetric matrix, line j's entries at or beyond j are column j of
 /// the lower triangle, either way. One pass, no intermediate copy: at
 /// h = 1/1024 the triplet route held two more copies of A at once.
-pub fn lower_part(
+pub(crate) fn lower_part(
     k: usize,
     offsets: &[usize],
     indices: &[usize],
@@ -213,7 +213,10 @@ impl SparseCholesky {
     /// trailing block of L can be read with [`SparseCholesky::trailing_factor`].
     /// Takes the lower triangle (see [`lower_part`]), which it keeps: no
     /// other copy of the matrix is made.
-    pub fn with_trailing(lower: CscMatrix<f64>, trailing: &[usize]) -> Result<Self, LinalgError> {
+    pub(crate) fn with_trailing(
+        lower: CscMatrix<f64>,
+        trailing: &[usize],
+    ) -> Result<Self, LinalgError> {
         let n = lower.nrows();
         let mut local = vec![0usize; n];
         for &j in trailing {
@@ -271,7 +274,7 @@ impl SparseCholesky {
     /// The dense lower-triangular block of L on the last `k` pivots (in
     /// elimination order): for a factorization built by
     /// [`SparseCholesky::with_trailing`], the trailing unknowns in their order.
-    pub fn trailing_factor(&self, k: usize) -> Option<Mat<f64>> {
+    pub(crate) fn trailing_factor(&self, k: usize) -> Option<Mat<f64>> {
         let n = self.n();
         let off = n.checked_sub(k)?;
         let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
@@ -338,12 +341,12 @@ impl SparseCholesky {
     }
 
     /// Nonzeros of the factor L.
-    pub fn factor_nnz(&self) -> usize {
+    pub(crate) fn factor_nnz(&self) -> usize {
         self.values.len()
     }
 
     /// Solves A X = B in place for the columns of `rhs`.
-    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+    pub(crate) fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let par = Par::Seq;
         let mut mem = MemBuffer::new(
             self.symbolic

@@ -3,8 +3,8 @@
 //! globalization, roots of monotone functions, and pseudo-random numbers.
 //! Each lives here once, with its source and its constants named.
 
-pub mod globalization;
+pub(crate) mod globalization;
 pub mod linalg;
-pub mod ncp;
-pub mod random;
-pub mod roots;
+pub(crate) mod ncp;
+pub(crate) mod random;
+pub(crate) mod roots;

@@ -9,7 +9,7 @@
 /// generalized gradient (at the kink a = b = 0, the element along the
 /// diagonal, 1 − 1/√2 each).
 #[inline]
-pub fn fb(a: f64, b: f64) -> (f64, f64, f64) {
+pub(crate) fn fb(a: f64, b: f64) -> (f64, f64, f64) {
     let r = a.hypot(b);
     if r == 0.0 {
         let d = 1.0 - std::f64::consts::FRAC_1_SQRT_2;
@@ -26,7 +26,7 @@ pub fn fb(a: f64, b: f64) -> (f64, f64, f64) {
 /// derivatives (∂μ, ∂F, ∂G); ∂G is needed where G = 𝓕λ is an unknown (the
 /// Coulomb problem).
 #[inline]
-pub fn billups(mu: f64, f: f64, g: f64) -> (f64, f64, f64, f64) {
+pub(crate) fn billups(mu: f64, f: f64, g: f64) -> (f64, f64, f64, f64) {
     let (inner, ia, ib) = fb(g - mu, -f);
     let (outer, oa, ob) = fb(mu + g, -inner);
     // ∂inner/∂μ = −ia, ∂inner/∂F = −ib, ∂inner/∂G = ia; outer's second

@@ -5,7 +5,7 @@
 /// A linear congruential generator, state x ← 6364136223846793005·x +
 /// 1442695040888963407 (mod 2⁶⁴) (Knuth, TAOCP vol. 2, MMIX).
 #[derive(Clone, Debug)]
-pub struct Lcg(u64);
+pub(crate) struct Lcg(u64);
 
 impl Lcg {
     pub fn new(seed: u64) -> Self {

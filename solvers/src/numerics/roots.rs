@@ -3,7 +3,7 @@
 /// A root of a nonincreasing function near `x0`: bracketed by doubling
 /// steps from `step`, then bisected to the last bit. None if no sign change
 /// is found within 200 doublings.
-pub fn monotone_root(f: impl Fn(f64) -> f64, x0: f64, step: f64) -> Option<f64> {
+pub(crate) fn monotone_root(f: impl Fn(f64) -> f64, x0: f64, step: f64) -> Option<f64> {
     let f0 = f(x0);
     if f0 == 0.0 {
         return Some(x0);

@@ -255,7 +255,7 @@ impl ContactProblem {
     }
 
     /// y = M x into a caller's buffer, without building M.
-    pub fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
+    pub(crate) fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
         match &self.mass {
             Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values, x, y),
             Mass::Matrix(m) => crate::numerics::linalg::spmv_into(m, x, y),
@@ -281,7 +281,7 @@ impl ContactProblem {
 
     /// Identifies A and M: it changes only when a problem is built, not when
     /// the friction bound changes, so solvers may keep factorizations keyed by it.
-    pub fn operator_id(&self) -> u64 {
+    pub(crate) fn operator_id(&self) -> u64 {
         self.operator_id
     }
 

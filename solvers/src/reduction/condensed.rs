@@ -42,7 +42,7 @@ impl Condensed {
     /// What the condensation keeps, in bytes, for a solver's diagnostics:
     /// the values of the factor of A_II (its indices come on top) and the
     /// dense Schur complement S. Where a large solve's memory goes.
-    pub fn memory_diagnostics(&self) -> [(&'static str, f64); 2] {
+    pub(crate) fn memory_diagnostics(&self) -> [(&'static str, f64); 2] {
         let bytes = std::mem::size_of::<f64>();
         [
             ("factor_values_bytes", (bytes * self.factor_nnz) as f64),
@@ -192,7 +192,7 @@ fn reduce_load(
 /// Something built from a problem's operator (its condensation, a factor),
 /// kept across calls on the same operator: the friction iterations and the
 /// repeated runs of a study call a solver many times with one A.
-pub struct Kept<K: PartialEq, T> {
+pub(crate) struct Kept<K: PartialEq, T> {
     entry: Option<(K, T)>,
 }
 
@@ -204,7 +204,7 @@ impl<K: PartialEq, T> Default for Kept<K, T> {
 
 impl<K: PartialEq, T> Kept<K, T> {
     /// The value kept for `key`, built by `build` if the key changed.
-    pub fn get_or_build(
+    pub(crate) fn get_or_build(
         &mut self,
         key: K,
         build: impl FnOnce() -> Result<T, String>,

@@ -30,7 +30,7 @@ use crate::problem::ContactProblem;
 use crate::reduction::condensed::Condensed;
 
 /// The contact problem in the contact forces (2m unknowns r, plus β).
-pub struct DualOperator {
+pub(crate) struct DualOperator {
     /// M = (S + c ẑẑᵀ)⁻¹, or S⁻¹ when there is no rigid mode (dense, 2m × 2m).
     pub m: Mat<f64>,
     /// b̂.
@@ -82,10 +82,6 @@ impl DualOperator {
         self.b.len()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.b.is_empty()
-    }
-
     /// y = M (b̂ − r) + β ẑ.
     pub fn displacements(&self, r: &[f64], beta: f64) -> Vec<f64> {
         let n2 = self.len();
@@ -111,21 +107,10 @@ impl DualOperator {
         }
     }
 
-    /// The equilibrium residual ẑᵀ(b̂ − r) (0 without a rigid mode).
-    pub fn equilibrium(&self, r: &[f64]) -> f64 {
-        self.z.as_ref().map_or(0.0, |z| {
-            z.iter()
-                .zip(&self.b)
-                .zip(r)
-                .map(|((z, b), r)| z * (b - r))
-                .sum()
-        })
-    }
-
     /// The translation that closes the gap: given y⁰ = M(b̂ − r), the β for
     /// which the largest jump is zero (t_i = y⁰_{t_i} + β ẑ_{t_i} ≤ 0 at every
     /// node, with equality at one). None without a rigid mode.
-    pub fn closing_translation(&self, y0: &[f64]) -> Option<f64> {
+    pub(crate) fn closing_translation(&self, y0: &[f64]) -> Option<f64> {
         let z = self.z.as_ref()?;
         let mut beta = f64::NEG_INFINITY;
         let mut upper = f64::INFINITY;
@@ -142,7 +127,7 @@ impl DualOperator {
 
     /// The largest eigenvalue of M by power iteration (a step size for
     /// gradient methods on the forces).
-    pub fn largest_eigenvalue(&self) -> f64 {
+    pub(crate) fn largest_eigenvalue(&self) -> f64 {
         let n2 = self.len();
         let mut x = vec![1.0 / (n2.max(1) as f64).sqrt(); n2];
         let mut lambda = 0.0;

@@ -19,12 +19,12 @@ pub const OVER_RELAXATION_KNOB: &str = "omega";
 pub const STUDIED_OMEGA: f64 = 1.5;
 
 /// The progress stage of one Uzawa iteration (14).
-pub const UZAWA: &str = "uzawa";
+pub(crate) const UZAWA: &str = "uzawa";
 /// The progress stage of one pointwise relaxation sweep (the unit of work).
-pub const SWEEP: &str = "sweep";
+pub(crate) const SWEEP: &str = "sweep";
 
 /// The registry entry of the paper's method.
-pub const ENTRY: Entry = Entry {
+pub(crate) const ENTRY: Entry = Entry {
     name: "relaxation",
     about: "the paper's method: prox-Uzawa on the modified Lagrangian, pointwise relaxation inside",
     source: "Zhiltsov & Namm (2019), sections 3-5: modified Lagrangian (Theorem 2), Uzawa (14), proximal regularization (15)-(16), Algorithm 1",
@@ -118,7 +118,7 @@ pub const ENTRY: Entry = Entry {
 
 /// One relaxation sweep at the default relative settings, with multipliers
 /// l = 1 and bounds g = ½ at every contact node so that every branch runs.
-pub fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
+pub(crate) fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
     let resolved = RelaxationSettings::default().resolve(problem);
     let op = RelaxationOperator::new(problem, resolved.proximal);
     let matrix = op.h.clone();

@@ -19,11 +19,10 @@
 
 mod entry;
 pub mod pointwise;
-pub mod residual;
+pub(crate) mod residual;
 
-pub use entry::{
-    CERTIFIED_STOP_KNOB, ENTRY, OVER_RELAXATION_KNOB, STUDIED_OMEGA, SWEEP, UZAWA, sweep_kernel,
-};
+pub use entry::{CERTIFIED_STOP_KNOB, OVER_RELAXATION_KNOB, STUDIED_OMEGA};
+pub(crate) use entry::{ENTRY, SWEEP, UZAWA};
 
 use std::time::Instant;
 
@@ -38,7 +37,7 @@ use pointwise::{RelaxationOperator, Smoothing, SweepData};
 
 /// The paper's finest mesh, 1/64: its sweep threshold is 1e-4·ε·(1/64)
 /// (section 5), a length written into the rule.
-pub const PAPER_SWEEP_LENGTH: f64 = 1.0 / 64.0;
+pub(crate) const PAPER_SWEEP_LENGTH: f64 = 1.0 / 64.0;
 
 /// Settings of the prox-Uzawa relaxation solver.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -72,7 +71,7 @@ pub struct RelaxationSettings {
 /// The paper's Huber width (our choice: the paper smooths |s| without saying
 /// how): below what its sweep threshold resolves at h = 1/64
 /// (1e-4 · 1e-4 / 64 ≈ 1.6e-10), so the smoothing does not show.
-pub const DEFAULT_HUBER_DELTA: f64 = 1e-10;
+pub(crate) const DEFAULT_HUBER_DELTA: f64 = 1e-10;
 
 impl Default for RelaxationSettings {
     fn default() -> Self {
@@ -225,7 +224,7 @@ impl ProxUzawa {
 
 /// Runs `prox_uzawa` (Algorithm 1, lines 4-7) on one problem with absolute
 /// values `resolved` and caps from `settings`.
-pub fn prox_uzawa(
+pub(crate) fn prox_uzawa(
     op: &RelaxationOperator,
     problem: &ContactProblem,
     g: &[f64],

@@ -68,7 +68,7 @@ impl<'de> Deserialize<'de> for Smoothing {
 }
 
 /// A command-line smoothing: `exact` or a positive Huber width.
-pub fn parse_smoothing(text: &str) -> Result<serde_json::Value, String> {
+pub(crate) fn parse_smoothing(text: &str) -> Result<serde_json::Value, String> {
     let t = text.trim();
     if t.eq_ignore_ascii_case("exact") {
         return Ok("exact".into());
@@ -88,7 +88,7 @@ fn is_smoothing(value: &serde_json::Value) -> bool {
 }
 
 /// The kind of the `smoothing` setting.
-pub const SMOOTHING: crate::settings::Kind = crate::settings::Kind::Custom {
+pub(crate) const SMOOTHING: crate::settings::Kind = crate::settings::Kind::Custom {
     describe: "`exact` or a Huber width > 0",
     parse: parse_smoothing,
     check: is_smoothing,
@@ -109,14 +109,14 @@ impl Smoothing {
 /// and increasing: its root lies in the active piece (l + r x > 0) or in the
 /// inactive one, and the pieces are tried in that order.
 #[inline]
-pub fn minimize_jump(a: f64, c: f64, w: f64, l: f64, r: f64) -> f64 {
+pub(crate) fn minimize_jump(a: f64, c: f64, w: f64, l: f64, r: f64) -> f64 {
     let active = -(c + w * l) / (a + w * r);
     if l + r * active > 0.0 { active } else { -c / a }
 }
 
 /// argmin_x ½ a x² + c x + wg |x| (soft thresholding), a > 0, wg ≥ 0.
 #[inline]
-pub fn minimize_slip_exact(a: f64, c: f64, wg: f64) -> f64 {
+pub(crate) fn minimize_slip_exact(a: f64, c: f64, wg: f64) -> f64 {
     if c < -wg {
         -(c + wg) / a
     } else if c > wg {
@@ -128,7 +128,7 @@ pub fn minimize_slip_exact(a: f64, c: f64, wg: f64) -> f64 {
 
 /// argmin_x ½ a x² + c x + wg φ_δ(x) for the Huber function φ_δ.
 #[inline]
-pub fn minimize_slip_huber(a: f64, c: f64, wg: f64, delta: f64) -> f64 {
+pub(crate) fn minimize_slip_huber(a: f64, c: f64, wg: f64, delta: f64) -> f64 {
     let knee = wg + a * delta;
     if c < -knee {
         -(c + wg) / a
@@ -153,7 +153,7 @@ pub enum Coordinate {
 /// H = A + ρM with what a sweep needs precomputed: its CSR arrays, the
 /// diagonal, and the role of each unknown.
 #[derive(Clone, Debug)]
-pub struct RelaxationOperator {
+pub(crate) struct RelaxationOperator {
     pub h: CsrMatrix<f64>,
     pub diag: Vec<f64>,
     /// 1 / diag, so that free coordinates cost a multiplication.
@@ -166,7 +166,7 @@ pub struct RelaxationOperator {
 /// Per-call data of a sweep: the right-hand side, the multipliers, the
 /// friction bounds (times weights) and the treatment of the terms.
 #[derive(Clone, Copy, Debug)]
-pub struct SweepData<'a> {
+pub(crate) struct SweepData<'a> {
     pub b: &'a [f64],
     /// Uzawa multipliers l_i (per contact node).
     pub l: &'a [f64],
@@ -268,7 +268,7 @@ impl RelaxationOperator {
     }
 
     /// (H v − b)_j: the gradient of the quadratic part at coordinate j.
-    pub fn gradient_at(&self, v: &[f64], b: &[f64], j: usize) -> f64 {
+    pub(crate) fn gradient_at(&self, v: &[f64], b: &[f64], j: usize) -> f64 {
         let (offsets, cols, vals) = self.h.csr_data();
         (offsets[j]..offsets[j + 1])
             .map(|k| vals[k] * v[cols[k]])

@@ -15,7 +15,7 @@ use crate::problem::ContactProblem;
 /// (zᵀ r over |zᵀ f|: A z = 0, so zᵀ r is the load the contact forces leave
 /// unbalanced, which small residuals at many nodes can add up to). `r` is
 /// scratch of length n (no allocation).
-pub fn contact_residual(
+pub(crate) fn contact_residual(
     problem: &ContactProblem,
     bound: &[f64],
     v: &[f64],

@@ -40,10 +40,10 @@ use crate::solution::{Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 /// The progress stage of one admm step (its unit of work).
-pub const STEP: &str = "admm_step";
+pub(crate) const STEP: &str = "admm_step";
 
 /// The registry entry of ADMM.
-pub const ENTRY: Entry = Entry {
+pub(crate) const ENTRY: Entry = Entry {
     name: "admm",
     about: "ADMM on the primal problem splitting the contact unknowns: condensation, one Cholesky of S + ρI reused, ρ = mean diag S",
     source: "Glowinski & Marrocco (1975); Boyd et al. (2011), Distributed optimization ... ADMM, sections 3 and 5",
@@ -89,7 +89,7 @@ pub const ENTRY: Entry = Entry {
 /// Settings of ADMM (relative in both stopping modes).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct AdmmSettings {
+pub(crate) struct AdmmSettings {
     pub tolerance: f64,
     pub rho_factor: f64,
     pub max_iter: usize,
@@ -115,7 +115,7 @@ impl Validate for AdmmSettings {
 /// ADMM. Keeps the condensation and the factor of S + ρI across calls on
 /// the same problem operator and penalty.
 #[derive(Default)]
-pub struct Admm {
+pub(crate) struct Admm {
     pub settings: AdmmSettings,
     cache: Kept<(u64, f64), (Condensed, faer::linalg::solvers::Llt<f64>, f64)>,
 }

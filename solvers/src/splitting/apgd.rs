@@ -35,10 +35,10 @@ use crate::solution::{Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 /// The progress stage of one apgd step (its unit of work).
-pub const STEP: &str = "apgd_step";
+pub(crate) const STEP: &str = "apgd_step";
 
 /// The registry entry of APGD.
-pub const ENTRY: Entry = Entry {
+pub(crate) const ENTRY: Entry = Entry {
     name: "apgd",
     about: "accelerated projected gradient (FISTA with restart) on the contact forces, the equilibrium along the rigid mode as an exact constraint",
     source: "Beck & Teboulle (2009), FISTA; O'Donoghue & Candès (2015), adaptive restart; Mazhar et al. (2015), APGD for frictional contact",
@@ -84,7 +84,7 @@ pub const ENTRY: Entry = Entry {
 /// Settings of APGD (relative in both stopping modes).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct ApgdSettings {
+pub(crate) struct ApgdSettings {
     pub tolerance: f64,
     pub max_iter: usize,
     pub restart: bool,
@@ -110,7 +110,7 @@ impl Validate for ApgdSettings {
 /// APGD. Keeps the condensation, M and its largest eigenvalue across calls
 /// on the same problem operator.
 #[derive(Default)]
-pub struct Apgd {
+pub(crate) struct Apgd {
     pub settings: ApgdSettings,
     cache: Kept<u64, (Condensed, DualOperator, f64)>,
 }

@@ -35,10 +35,10 @@ use crate::solution::{Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 /// The progress stage of one nsgs sweep (its unit of work).
-pub const SWEEP: &str = "nsgs_sweep";
+pub(crate) const SWEEP: &str = "nsgs_sweep";
 
 /// The registry entry of nonsmooth Gauss-Seidel.
-pub const ENTRY: Entry = Entry {
+pub(crate) const ENTRY: Entry = Entry {
     name: "nsgs",
     about: "nonsmooth Gauss-Seidel on the contact forces: exact 2×2 local solves on the condensed operator, the rigid translation as an extra unknown",
     source: "Jean (1999), the non-smooth contact dynamics method; Acary, Brémond & Huber (2018), Inria RR-9118, section 4",
@@ -79,7 +79,7 @@ pub const ENTRY: Entry = Entry {
 /// its test is relative to the problem's scales).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct NsgsSettings {
+pub(crate) struct NsgsSettings {
     pub tolerance: f64,
     pub max_sweeps: usize,
 }
@@ -102,7 +102,7 @@ impl Validate for NsgsSettings {
 
 /// How the friction bound of a node is given.
 #[derive(Clone, Copy, Debug)]
-pub enum Bound {
+pub(crate) enum Bound {
     /// G = w g (the given-friction subproblem).
     Given(f64),
     /// G = 𝓕 λ (the Coulomb problem).
@@ -112,7 +112,7 @@ pub enum Bound {
 /// The exact solution of one node's problem (t, s) = q − W r with
 /// r = (λ, ν): the first of the six cases whose conditions hold, or the one
 /// that violates them least.
-pub fn local_solve(w: [[f64; 2]; 2], q: [f64; 2], bound: Bound) -> [f64; 2] {
+pub(crate) fn local_solve(w: [[f64; 2]; 2], q: [f64; 2], bound: Bound) -> [f64; 2] {
     let [[wtt, wts], [wst, wss]] = w;
     let mut best = ([0.0, 0.0], f64::INFINITY);
     let mut consider = |r: [f64; 2], violation: f64| {
@@ -169,7 +169,7 @@ pub fn local_solve(w: [[f64; 2]; 2], q: [f64; 2], bound: Bound) -> [f64; 2] {
 /// Nonsmooth Gauss-Seidel. Keeps the condensation and the operator M
 /// across calls on the same problem operator.
 #[derive(Default)]
-pub struct Nsgs {
+pub(crate) struct Nsgs {
     pub settings: NsgsSettings,
     cache: Kept<u64, (Condensed, DualOperator)>,
 }

@@ -230,8 +230,12 @@ pub fn read_shards(dirs: &[PathBuf]) -> Result<Vec<BenchmarkRow>> {
 
 /// The manifest of a merged folder: the first shard's (the shards agree on
 /// everything but the shard) as the manifest of the whole run (shard 1/1),
-/// with the folders merged, and the merge's own command, commit and date.
-pub fn merged_manifest(dirs: &[PathBuf]) -> Result<serde_json::Value> {
+/// with the folders merged, and `merged_by` (the merge's own command,
+/// commit and date, the caller's).
+pub fn merged_manifest(
+    dirs: &[PathBuf],
+    merged_by: serde_json::Value,
+) -> Result<serde_json::Value> {
     let first = dirs.first().context("no shard given")?;
     let path = first.join("manifest.json");
     let text = guarded::read_small_text(&path, MAX_MANIFEST_BYTES)
@@ -240,10 +244,6 @@ pub fn merged_manifest(dirs: &[PathBuf]) -> Result<serde_json::Value> {
         .with_context(|| format!("{}: not a manifest", path.display()))?;
     m["run"]["benchmark"]["shard"] = serde_json::json!(Shard::WHOLE);
     m["merged_from"] = serde_json::json!(dirs);
-    m["merged_by"] = serde_json::json!({
-        "command": std::env::args().collect::<Vec<_>>(),
-        "git_commit": crate::io::manifest::git_commit(),
-        "date": crate::io::manifest::utc_now(),
-    });
+    m["merged_by"] = merged_by;
     Ok(m)
 }

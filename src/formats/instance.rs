@@ -84,7 +84,7 @@ fn dense(rows: usize, cols: usize, at: impl Fn(usize, usize) -> f64) -> CooMatri
 }
 
 /// Writes the instance `d` (the finest level of `scene`) into `dir`.
-pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
+pub fn export(dir: &Path, scene: &Scene, d: &Discretization, git_commit: &str) -> Result<()> {
     let p = &d.problem;
     let n = p.n();
     write_atomic(&dir.join("A.mtx"), &mtx(&CooMatrix::from(p.a())))?;
@@ -185,7 +185,7 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization) -> Result<()> {
         ],
         scene: scene.clone(),
         h: d.h().to_string(),
-        git_commit: crate::io::manifest::git_commit(),
+        git_commit: git_commit.to_string(),
     };
     write_atomic(&dir.join("problem.json"), &json_bytes(&description)?)?;
     Ok(())

@@ -1,0 +1,70 @@
+use super::*;
+
+#[test]
+fn tick_labels_read_well() {
+    assert_eq!(tick_label(-7e-21, false, 6e-5), "0");
+    assert_eq!(tick_label(10.0, false, 100.0), "10");
+    assert_eq!(tick_label(0.25, false, 1.0), "0.25");
+    assert_eq!(tick_label(2e-5, false, 6e-5), "2e-5");
+    assert_eq!(tick_label(2.5e-5, false, 6e-5), "2.5e-5");
+    assert_eq!(tick_label(1e-3, true, 1.0), "1e-3");
+    assert_eq!(tick_label(30000.0, false, 1e5), "30000");
+}
+
+#[test]
+fn log_axes_are_labelled_at_every_decade() {
+    assert_eq!(
+        decades(0.5e-9, 2e-3),
+        (-9..=-3).map(|k| 10f64.powi(k)).collect::<Vec<_>>()
+    );
+    // Less than two decades: 1, 2, 5 in each.
+    assert_eq!(decades(1.5, 30.0), vec![2.0, 5.0, 10.0, 20.0]);
+}
+
+#[test]
+fn svg_has_title_axes_and_every_series() {
+    for (log_x, log_y) in [(false, false), (true, true), (true, false), (false, true)] {
+        let chart = Chart::new(
+            "A title",
+            "x label [m]",
+            "y label [s]",
+            log_x,
+            log_y,
+            vec![
+                Series::line("first", vec![(1.0, 2.0), (10.0, 20.0)]),
+                Series::line("second", vec![(2.0, 1.0), (5.0, f64::NAN), (20.0, 3.0)]).dashed(),
+                Series::line("third", vec![(3.0, 3.0)]).scatter(),
+                Series::line("fourth", vec![(4.0, 3.0)]).failed(),
+            ],
+        );
+        let svg = chart.to_svg().unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        for text in [
+            "A title",
+            "x label [m]",
+            "y label [s]",
+            "first",
+            "second",
+            "third",
+            "fourth",
+        ] {
+            assert!(svg.contains(text), "missing {text}");
+        }
+    }
+}
+
+#[test]
+fn round_off_is_drawn_as_zero() {
+    let drawn = |points: Vec<(f64, f64)>| {
+        Chart::new("t", "x", "y", false, false, vec![Series::line("s", points)])
+            .with_y_resolution(1e-9)
+            .drawable()[0]
+            .clone()
+    };
+    assert_eq!(
+        drawn(vec![(0.0, 1e-13), (1.0, -2e-13)]),
+        vec![(0.0, 0.0), (1.0, 0.0)]
+    );
+    // A real value stays.
+    assert_eq!(drawn(vec![(0.0, 1e-6)]), vec![(0.0, 1e-6)]);
+}
