@@ -6,7 +6,7 @@
 
 use contactlab::certificate::{DEFAULT_TOLERANCE, certify};
 use contactlab::formats::instance::import;
-use contactlab::solvers::Law;
+use contactlab::solvers::Friction;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -26,11 +26,12 @@ fuzz_target!(|data: &[u8]| {
         std::fs::write(dir.join(name), bytes).unwrap();
     }
     std::fs::write(dir.join("M.mtx"), parts[1]).unwrap();
-    if let Ok(p) = import(&dir) {
+    if let Ok(instance) = import(&dir) {
+        let p = &instance.problem;
         let m = p.contacts().len();
         let c = certify(
-            &p,
-            Law::Coulomb,
+            p,
+            Friction::Coulomb,
             &vec![0.0; p.n()],
             &vec![0.0; m],
             &vec![0.0; m],
