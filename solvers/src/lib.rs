@@ -12,6 +12,7 @@
 
 pub mod conic;
 pub mod entry;
+pub mod multigrid;
 pub mod newton;
 pub mod numerics;
 pub mod observer;

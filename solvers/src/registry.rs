@@ -20,6 +20,7 @@ pub const SOLVERS: &[&Entry] = &[
     &crate::splitting::apgd::ENTRY,
     &crate::splitting::admm::ENTRY,
     &crate::newton::coulomb::ENTRY,
+    &crate::multigrid::ENTRY,
 ];
 
 /// Solvers registered at run time (by a program that embeds contactlab, or

@@ -70,6 +70,7 @@ impl Discretization {
             contacts,
             vec![rigid_mode],
         )
+        .and_then(|p| p.with_hierarchy(crate::mechanics::hierarchy::prolongations(h)))
         .map_err(|e| match e {
             ProblemError::Scale { .. } => BuildError::Scales(e),
             ProblemError::NonFinite { what: "A" } => BuildError::Overflow {

@@ -7,6 +7,7 @@ pub mod contact_zone;
 pub mod discretization;
 pub mod dofs;
 pub mod element;
+pub mod hierarchy;
 pub mod material;
 pub mod mesh;
 pub mod mesh_size;

@@ -124,6 +124,9 @@ pub struct ContactProblem {
     rigid_modes: Vec<Vec<f64>>,
     scales: Scales,
     operator_id: u64,
+    /// Prolongations of a nested hierarchy, coarse to fine, the last onto
+    /// these unknowns (empty: no hierarchy). Shared between clones.
+    prolongations: std::sync::Arc<[CsrMatrix<f64>]>,
 }
 
 impl ContactProblem {
@@ -211,7 +214,42 @@ impl ContactProblem {
             rigid_modes,
             scales,
             operator_id: NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed),
+            prolongations: std::sync::Arc::from(Vec::new()),
         })
+    }
+
+    /// The same problem with a hierarchy of nested spaces for multigrid
+    /// solvers: `prolongations[l]` maps the unknowns of level l to those of
+    /// level l + 1, the last onto this problem's unknowns. Plain matrices:
+    /// the mechanics builds them, no solver sees a mesh. Checked: chained
+    /// dimensions, finite entries.
+    pub fn with_hierarchy(
+        mut self,
+        prolongations: Vec<CsrMatrix<f64>>,
+    ) -> Result<Self, ProblemError> {
+        let mut expected = self.n();
+        for p in prolongations.iter().rev() {
+            if p.nrows() != expected {
+                return Err(ProblemError::Dimension {
+                    what: "prolongation",
+                    expected,
+                    got: p.nrows(),
+                });
+            }
+            if p.values().iter().any(|x| !x.is_finite()) {
+                return Err(ProblemError::NonFinite {
+                    what: "prolongation",
+                });
+            }
+            expected = p.ncols();
+        }
+        self.prolongations = prolongations.into();
+        Ok(self)
+    }
+
+    /// The hierarchy's prolongations, coarse to fine (empty without one).
+    pub fn prolongations(&self) -> &[CsrMatrix<f64>] {
+        &self.prolongations
     }
 
     /// Number of unknowns.
