@@ -22,7 +22,6 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use contactlab_solvers::reduction::condensed::condense;
 use contactlab_solvers::{ContactNode, ContactProblem, Friction};
-use nalgebra_sparse::io::save_to_matrix_market_str;
 use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::{Deserialize, Serialize};
 
@@ -69,8 +68,19 @@ pub struct Description {
     pub git_commit: String,
 }
 
+/// A general matrix in Matrix Market coordinate format, with the banner
+/// `%%MatrixMarket` that scipy.io.mmread requires.
 fn mtx(coo: &CooMatrix<f64>) -> Vec<u8> {
-    save_to_matrix_market_str(coo).into_bytes()
+    let entries: Vec<_> = coo.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
+    matrix_market::write_coordinate(coo.nrows(), coo.ncols(), entries.into_iter(), false)
+        .into_bytes()
+}
+
+/// A symmetric matrix, marked so (its lower triangle written).
+fn mtx_symmetric(coo: &CooMatrix<f64>) -> Vec<u8> {
+    let entries: Vec<_> = coo.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
+    matrix_market::write_coordinate(coo.nrows(), coo.ncols(), entries.into_iter(), true)
+        .into_bytes()
 }
 
 fn dense(rows: usize, cols: usize, at: impl Fn(usize, usize) -> f64) -> CooMatrix<f64> {
@@ -87,8 +97,11 @@ fn dense(rows: usize, cols: usize, at: impl Fn(usize, usize) -> f64) -> CooMatri
 pub fn export(dir: &Path, scene: &Scene, d: &Discretization, git_commit: &str) -> Result<()> {
     let p = &d.problem;
     let n = p.n();
-    write_atomic(&dir.join("A.mtx"), &mtx(&CooMatrix::from(p.a())))?;
-    write_atomic(&dir.join("M.mtx"), &mtx(&CooMatrix::from(&*p.mass())))?;
+    write_atomic(&dir.join("A.mtx"), &mtx_symmetric(&CooMatrix::from(p.a())))?;
+    write_atomic(
+        &dir.join("M.mtx"),
+        &mtx_symmetric(&CooMatrix::from(&*p.mass())),
+    )?;
     write_atomic(&dir.join("f.mtx"), &mtx(&dense(n, 1, |i, _| p.f()[i])))?;
     let modes = p.rigid_modes();
     write_atomic(
@@ -117,7 +130,10 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization, git_commit: &str) -
     write_atomic(&dir.join("contact.csv"), &w.into_inner()?)?;
     let c = condense(p).map_err(anyhow::Error::msg)?;
     let m2 = c.b.len();
-    write_atomic(&dir.join("S.mtx"), &mtx(&dense(m2, m2, |i, j| c.s[(i, j)])))?;
+    write_atomic(
+        &dir.join("S.mtx"),
+        &mtx_symmetric(&dense(m2, m2, |i, j| c.s[(i, j)])),
+    )?;
     write_atomic(
         &dir.join("b_condensed.mtx"),
         &mtx(&dense(m2, 1, |i, _| c.b[i])),
