@@ -219,6 +219,21 @@ const PLANS: &[(&str, Plan)] = &[
         },
     ),
     (
+        "tnnmg",
+        Plan {
+            // One bare V-cycle per iteration (Gräser & Sander's choice):
+            // slower here, see the solver's documentation.
+            stress: &[Variation {
+                knob: "linear_steps",
+                values: &["1"],
+                quick: &["1"],
+            }],
+            work: 100_000,
+            accuracy: DECADES,
+            ..DEFAULT
+        },
+    ),
+    (
         "admm",
         Plan {
             sweeps: &[Variation {

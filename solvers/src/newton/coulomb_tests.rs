@@ -1,6 +1,7 @@
 //! The reduced Newton system against the whole Jacobian.
 
 use super::*;
+use faer::linalg::solvers::Solve;
 
 /// A symmetric positive definite S, a load and a state with every kind of
 /// node: open, closed and sticking, closed and slipping (λ > 0 so the
