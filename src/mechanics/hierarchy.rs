@@ -76,15 +76,7 @@ pub fn prolongation(coarse: (&Mesh, &DofMap), fine: (&Mesh, &DofMap)) -> CsrMatr
     }
     // Duplicates (a coarse unknown reached twice) are summed; exact zeros
     // (u' − u'' of a shared lower unknown) are dropped.
-    let csr = CsrMatrix::from(&coo);
-    let (rows, cols) = (csr.nrows(), csr.ncols());
-    let mut keep = CooMatrix::new(rows, cols);
-    for (r, c, &v) in csr.triplet_iter() {
-        if v != 0.0 {
-            keep.push(r, c, v);
-        }
-    }
-    CsrMatrix::from(&keep)
+    CsrMatrix::from(&coo).filter(|_, _, &v| v != 0.0)
 }
 
 /// The prolongations of the nested meshes 1/2, 1/4, …, `h`, coarse to fine

@@ -22,14 +22,20 @@ pub(crate) enum Local {
     Slip(f64),
 }
 
+/// The position of row k's diagonal entry among A's stored entries, if it
+/// is stored and above `floor`.
+pub(crate) fn diagonal_position(a: &CsrMatrix<f64>, k: usize, floor: f64) -> Option<usize> {
+    let offsets = a.row_offsets();
+    (offsets[k]..offsets[k + 1])
+        .find(|&p| a.col_indices()[p] == k)
+        .filter(|&p| a.values()[p] > floor)
+}
+
 /// The position of each row's diagonal entry among A's stored entries.
 pub(crate) fn diagonal_positions(a: &CsrMatrix<f64>) -> Result<Vec<usize>, String> {
-    let (offsets, cols) = (a.row_offsets(), a.col_indices());
     (0..a.nrows())
         .map(|k| {
-            (offsets[k]..offsets[k + 1])
-                .find(|&p| cols[p] == k)
-                .filter(|&p| a.values()[p] > 0.0)
+            diagonal_position(a, k, 0.0)
                 .ok_or_else(|| format!("row {k} has no positive diagonal entry"))
         })
         .collect()
@@ -78,14 +84,14 @@ pub(crate) fn linear_sweep(
     diag: &[usize],
     b: &[f64],
     x: &mut [f64],
-    fixed: Option<&[bool]>,
+    fixed: &[bool],
     forward: bool,
 ) {
     let vals = a.values();
     let n = x.len();
     for step in 0..n {
         let k = if forward { step } else { n - 1 - step };
-        if fixed.is_some_and(|f| f[k]) {
+        if fixed[k] {
             continue;
         }
         let c = off_diagonal_rhs(a, k, diag[k], b[k], x);

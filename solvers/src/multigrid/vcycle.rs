@@ -13,7 +13,7 @@
 
 use nalgebra_sparse::CsrMatrix;
 
-use crate::multigrid::smoother::linear_sweep;
+use crate::multigrid::smoother::{diagonal_position, linear_sweep};
 use crate::numerics::linalg::spmv_into;
 
 /// Eigenvalues below this fraction of the largest are the coarsest
@@ -86,20 +86,12 @@ struct Level {
 
 impl Level {
     fn new(a: CsrMatrix<f64>) -> Self {
-        let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
-        let scale = vals.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let mut fixed = vec![false; a.nrows()];
-        let diag = (0..a.nrows())
-            .map(
-                |k| match (offsets[k]..offsets[k + 1]).find(|&p| cols[p] == k) {
-                    Some(p) if vals[p] > 1e-14 * scale => p,
-                    _ => {
-                        fixed[k] = true;
-                        0
-                    }
-                },
-            )
+        let scale = a.values().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let found: Vec<Option<usize>> = (0..a.nrows())
+            .map(|k| diagonal_position(&a, k, 1e-14 * scale))
             .collect();
+        let fixed = found.iter().map(Option::is_none).collect();
+        let diag = found.into_iter().map(|p| p.unwrap_or(0)).collect();
         Self { a, diag, fixed }
     }
 }
@@ -209,7 +201,7 @@ impl Hierarchy {
             let x = &mut self.x[l];
             x.fill(0.0);
             for _ in 0..sweeps {
-                linear_sweep(matrix, dg, &self.b[l], x, Some(fixed), true);
+                linear_sweep(matrix, dg, &self.b[l], x, fixed, true);
             }
             let r = &mut self.r[l];
             spmv_into(matrix, x, r);
@@ -243,7 +235,7 @@ impl Hierarchy {
                 (&lv.a, &lv.diag[..], &lv.fixed[..])
             };
             for _ in 0..sweeps {
-                linear_sweep(matrix, dg, &self.b[l], &mut self.x[l], Some(fixed), false);
+                linear_sweep(matrix, dg, &self.b[l], &mut self.x[l], fixed, false);
             }
         }
         c.copy_from_slice(&self.x[top]);
