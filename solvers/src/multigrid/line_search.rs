@@ -12,29 +12,32 @@ const BISECTIONS: usize = 60;
 const DOUBLINGS: usize = 60;
 
 /// The step α ∈ [0, α_max] minimizing J(v + α c), where
-/// J(v + α c) − J(v) = ½α² cᵀAc − α cᵀr + Σ_slips b_k(|v_k + α c_k| − |v_k|),
-/// r = f − A v, `cac` = cᵀAc, `cr` = cᵀr, and α_max keeps every jump
-/// t_k + α c_k ≤ 0. J is convex along the line and its right derivative
-/// nondecreasing, so the minimizer is found by bisection on its sign; 0
-/// when c is no descent direction.
-pub(crate) fn exact_step(laws: &[Local], v: &[f64], c: &[f64], cac: f64, cr: f64) -> f64 {
+/// J(v + α c) − J(v) = ½α² cᵀAc − α cᵀr + Σ_k (φ_k(v_k + α c_k) − φ_k(v_k)),
+/// r = b − A v, `cac` = cᵀAc, `cr` = cᵀr, the sum over the unknowns with a
+/// law (`contact`), and α_max keeps every jump t_k + α c_k ≤ 0. J is
+/// convex along the line and its right derivative nondecreasing, so the
+/// minimizer is found by bisection on its sign; 0 when c is no descent
+/// direction.
+pub(crate) fn exact_step(
+    laws: &[Local],
+    contact: &[usize],
+    v: &[f64],
+    c: &[f64],
+    cac: f64,
+    cr: f64,
+) -> f64 {
     let mut alpha_max = f64::INFINITY;
-    for ((law, &vk), &ck) in laws.iter().zip(v).zip(c) {
-        if *law == Local::Jump && ck > 0.0 {
-            alpha_max = alpha_max.min((-vk).max(0.0) / ck);
+    for &k in contact {
+        if laws[k] == Local::Jump && c[k] > 0.0 {
+            alpha_max = alpha_max.min((-v[k]).max(0.0) / c[k]);
         }
     }
     // The right derivative of J(v + α c) in α.
     let slope = |alpha: f64| -> f64 {
         let mut s = alpha * cac - cr;
-        for ((law, &vk), &ck) in laws.iter().zip(v).zip(c) {
-            if let (Local::Slip(b), true) = (*law, ck != 0.0) {
-                let x = vk + alpha * ck;
-                s += b * if x > 0.0 || (x == 0.0 && ck > 0.0) {
-                    ck
-                } else {
-                    -ck
-                };
+        for &k in contact {
+            if c[k] != 0.0 {
+                s += laws[k].slope(v[k] + alpha * c[k], c[k]);
             }
         }
         s
@@ -76,16 +79,24 @@ pub(crate) fn exact_step(laws: &[Local], v: &[f64], c: &[f64], cac: f64, cr: f64
 /// one that keeps every jump t_k + β z_k ≤ 0: the translation that closes
 /// the gap where it is smallest. None when z moves a slip or the load does
 /// not push.
-pub(crate) fn closing_translation(laws: &[Local], v: &[f64], z: &[f64], fz: f64) -> Option<f64> {
+pub(crate) fn closing_translation(
+    laws: &[Local],
+    contact: &[usize],
+    v: &[f64],
+    z: &[f64],
+    fz: f64,
+) -> Option<f64> {
     if fz >= 0.0 {
         return None;
     }
     let mut beta = f64::NEG_INFINITY;
-    for ((law, &vk), &zk) in laws.iter().zip(v).zip(z) {
-        match *law {
+    for &k in contact {
+        let (vk, zk) = (v[k], z[k]);
+        match laws[k] {
             Local::Slip(_) if zk != 0.0 => return None,
             Local::Jump if zk < 0.0 => beta = beta.max(vk / -zk),
             Local::Jump if zk > 0.0 => return None,
+            Local::Penalty { .. } | Local::Huber { .. } => return None,
             _ => {}
         }
     }
@@ -112,7 +123,7 @@ mod tests {
             }
             e
         };
-        let alpha = exact_step(&laws, &v, &c, cac, cr);
+        let alpha = exact_step(&laws, &[1, 2, 3], &v, &c, cac, cr);
         assert!(alpha <= 0.5 / 0.4 + 1e-15, "t stays ≤ 0");
         for i in 0..=1250 {
             let a = i as f64 * 1e-3;

@@ -32,25 +32,27 @@
 //! It stops when an iteration moves no unknown by more than tolerance · U
 //! (U the problem's displacement scale).
 
+pub(crate) mod iteration;
 mod line_search;
-mod smoother;
-mod vcycle;
+pub(crate) mod smoother;
+pub(crate) mod vcycle;
 
 use std::time::Instant;
 
-use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
+use nalgebra_sparse::CsrMatrix;
+
 use crate::numerics::linalg::spmv_into;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
-use crate::reduction::condensed::Kept;
 use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
-use line_search::{closing_translation, exact_step};
-use smoother::{Local, diagonal_positions, nonlinear_sweep};
+use iteration::{Cycle, Energy, Workspace, iterate};
+use line_search::closing_translation;
+use smoother::{Local, diagonal_positions};
 use vcycle::Hierarchy;
 
 /// The progress stage of one TNNMG iteration (its unit of work).
@@ -142,20 +144,17 @@ impl Validate for TnnmgSettings {
     }
 }
 
-/// What depends on A and the prolongations only: A's diagonal positions
-/// and the restrictions Pᵀ.
-struct Operator {
-    diag: Vec<usize>,
-    restrict: Vec<CsrMatrix<f64>>,
-}
+/// Hierarchies kept across calls: one per operator of the continuation's
+/// levels (the friction fixed point revisits them), at most this many.
+const KEPT_HIERARCHIES: usize = 12;
 
-/// TNNMG. Keeps the operator's data and the last truncated hierarchy
-/// across calls on the same problem operator (the friction fixed point).
+/// TNNMG. Keeps the Galerkin hierarchy of each operator it met, truncated
+/// as last used, across calls (the continuation's levels in every step of
+/// the friction fixed point).
 #[derive(Default)]
 pub struct Tnnmg {
     pub settings: TnnmgSettings,
-    operator: Kept<u64, Operator>,
-    hierarchy: Option<(u64, Hierarchy)>,
+    hierarchies: Vec<(u64, Hierarchy)>,
 }
 
 impl Tnnmg {
@@ -167,15 +166,25 @@ impl Tnnmg {
     }
 }
 
-/// The coordinates at a kink of J at v: closed jumps and sticking slips.
-fn truncation(laws: &[Local], v: &[f64], out: &mut [bool]) {
-    for ((o, law), &vk) in out.iter_mut().zip(laws).zip(v) {
-        *o = match *law {
-            Local::Free => false,
-            Local::Jump => vk >= 0.0,
-            Local::Slip(b) => b > 0.0 && vk == 0.0,
-        };
-    }
+/// The hierarchy of operator `id` in `kept`, built if missing (the oldest
+/// dropped beyond [`KEPT_HIERARCHIES`]).
+pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
+    kept: &'k mut Vec<(K, Hierarchy)>,
+    id: K,
+    a: &CsrMatrix<f64>,
+    p: &[CsrMatrix<f64>],
+) -> Result<&'k mut Hierarchy, String> {
+    let index = match kept.iter().position(|(k, _)| *k == id) {
+        Some(i) => i,
+        None => {
+            if kept.len() >= KEPT_HIERARCHIES {
+                kept.remove(0);
+            }
+            kept.push((id, Hierarchy::new(a, diagonal_positions(a)?, p)));
+            kept.len() - 1
+        }
+    };
+    Ok(&mut kept[index].1)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -207,143 +216,53 @@ impl Solver for Tnnmg {
         }
         let t0 = Instant::now();
         let a = problem.a();
-        let id = problem.operator_id();
-        let op = match self.operator.get_or_build(id, || {
-            Ok(Operator {
-                diag: diagonal_positions(a)?,
-                restrict: p.iter().map(|p| p.transpose()).collect(),
-            })
-        }) {
-            Ok(op) => op,
+        let hierarchy = match kept_hierarchy(&mut self.hierarchies, problem.operator_id(), a, p) {
+            Ok(h) => h,
             Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         let mut laws = vec![Local::Free; n];
+        let mut contact = Vec::with_capacity(2 * m);
         for (c, g) in contacts.iter().zip(bound) {
             laws[c.t] = Local::Jump;
             laws[c.s] = Local::Slip(c.weight * g);
+            contact.extend([c.t, c.s]);
         }
+        contact.sort_unstable();
         let f = problem.f();
-        let z = problem.rigid_modes().first();
+        let z = problem.rigid_modes().first().map(|z| &z[..]);
         let fz = z.map_or(0.0, |z| dot(f, z));
-        let zz = z.map_or(0.0, |z| dot(z, z));
+        let energy = Energy {
+            a,
+            b: f,
+            laws: &laws,
+            contact: &contact,
+            kernel: z.map(|z| (z, dot(z, z))),
+        };
+        let cycle = Cycle {
+            presmoothing: self.settings.presmoothing,
+            linear_steps: self.settings.linear_steps,
+            linear_sweeps: self.settings.linear_sweeps,
+        };
         let u = problem.scales().displacement;
         let tol = self.settings.tolerance;
-        // The iteration's vectors, allocated once.
         let mut v = start.map_or_else(|| vec![0.0; n], |s| s.v.to_vec());
         if v.len() != n {
             v = vec![0.0; n];
         }
         let mut previous = v.clone();
-        let mut r = vec![0.0; n];
-        let mut d = vec![0.0; n];
-        let mut c = vec![0.0; n];
-        let mut ac = vec![0.0; n];
-        let (mut lin_r, mut lin_z, mut lin_p) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        let mut truncated = vec![false; n];
+        let mut ws = Workspace::new(n);
         let mut status = Status::MaxIterations;
         let mut detail = format!("iteration cap {} reached", self.settings.max_iter);
         let mut iterations = 0;
         for k in 1..=self.settings.max_iter {
             iterations = k;
             previous.copy_from_slice(&v);
-            for _ in 0..self.settings.presmoothing {
-                nonlinear_sweep(a, &op.diag, f, &laws, &mut v);
-            }
-            // The defect of the truncated Newton system.
-            truncation(&laws, &v, &mut truncated);
-            spmv_into(a, &v, &mut r);
-            let mut rigid_free = z.is_some();
-            for k in 0..n {
-                r[k] = f[k] - r[k];
-                d[k] = if truncated[k] {
-                    if laws[k] == Local::Jump {
-                        rigid_free = false;
-                    }
-                    0.0
-                } else if let Local::Slip(b) = laws[k] {
-                    r[k] - b * v[k].signum()
-                } else {
-                    r[k]
-                };
-            }
-            if let (true, Some(z)) = (rigid_free, z) {
-                let along = dot(&d, z) / zz;
-                for (dk, zk) in d.iter_mut().zip(z) {
-                    *dk -= along * zk;
-                }
-            }
-            let rebuild = !matches!(&self.hierarchy, Some((h_id, h)) if *h_id == id && h.truncated() == truncated);
-            if rebuild {
-                self.hierarchy = Some((id, Hierarchy::new(a, p, &op.restrict, truncated.clone())));
-            }
-            let (_, hierarchy) = self.hierarchy.as_mut().expect("just built");
-            // The truncated Newton step: conjugate gradients on A_T c = d
-            // preconditioned by the V-cycle (its symmetric Gauss-Seidel
-            // makes it symmetric positive definite on the free unknowns).
-            let mut cycle = |rhs: &[f64], out: &mut [f64]| {
-                hierarchy.v_cycle(
-                    a,
-                    &op.diag,
-                    p,
-                    &op.restrict,
-                    rhs,
-                    self.settings.linear_sweeps,
-                    out,
-                )
-            };
-            c.fill(0.0);
-            lin_r.copy_from_slice(&d);
-            cycle(&lin_r, &mut lin_z);
-            lin_p.copy_from_slice(&lin_z);
-            let mut rz = dot(&lin_r, &lin_z);
-            for step in 0..self.settings.linear_steps {
-                spmv_into(a, &lin_p, &mut ac);
-                for (q, &cut) in ac.iter_mut().zip(&truncated) {
-                    if cut {
-                        *q = 0.0;
-                    }
-                }
-                let pq = dot(&lin_p, &ac);
-                if !(pq > 0.0 && rz > 0.0) {
-                    break;
-                }
-                let step_length = rz / pq;
-                for ((ck, rk), (pk, qk)) in c
-                    .iter_mut()
-                    .zip(lin_r.iter_mut())
-                    .zip(lin_p.iter().zip(&ac))
-                {
-                    *ck += step_length * pk;
-                    *rk -= step_length * qk;
-                }
-                if step + 1 == self.settings.linear_steps {
-                    break;
-                }
-                cycle(&lin_r, &mut lin_z);
-                let rz_next = dot(&lin_r, &lin_z);
-                let beta = rz_next / rz;
-                rz = rz_next;
-                for (pk, zk) in lin_p.iter_mut().zip(&lin_z) {
-                    *pk = zk + beta * *pk;
-                }
-            }
-            // The projection onto the admissible set: v + c keeps t ≤ 0, so
-            // that a full step is admissible (Gräser & Sander 2019,
-            // Algorithm 1, step 4).
-            for ((ck, law), vk) in c.iter_mut().zip(&laws).zip(&v) {
-                if *law == Local::Jump {
-                    *ck = (vk + *ck).min(0.0) - vk;
-                }
-            }
-            spmv_into(a, &c, &mut ac);
-            let alpha = exact_step(&laws, &v, &c, dot(&c, &ac), dot(&c, &r));
-            for (vk, ck) in v.iter_mut().zip(&c) {
-                *vk += alpha * ck;
-            }
+            iterate(&energy, hierarchy, p, cycle, &mut ws, &mut v);
+            // The exact minimization along the rigid mode.
             if let Some((z, beta)) =
-                z.and_then(|z| closing_translation(&laws, &v, z, fz).map(|b| (z, b)))
+                z.and_then(|z| closing_translation(&laws, &contact, &v, z, fz).map(|b| (z, b)))
             {
                 for (vk, zk) in v.iter_mut().zip(z) {
                     *vk += beta * zk;
@@ -376,6 +295,7 @@ impl Solver for Tnnmg {
                 break;
             }
         }
+        let mut r = std::mem::take(&mut ws.r);
         // The contact forces are the residual's: λ_i = (f − Av)_{t_i},
         // μ_i = −(f − Av)_{s_i} (the certificate's stationarity).
         spmv_into(a, &v, &mut r);

@@ -2,14 +2,21 @@
 //! minimizers of the nonsmooth energy (the TNNMG smoother), and the linear
 //! symmetric Gauss-Seidel of the V-cycle.
 //!
-//! Along coordinate k the energy J(v) = ½ vᵀAv − fᵀv + Σ w_i g_i |s_i|
-//! (t_i ≤ 0) is ½A_kk x² − c x + φ_k(x), c = f_k − Σ_{j≠k} A_kj v_j, whose
-//! exact minimizer is c/A_kk for an unknown without a contact law, the
-//! projection min(0, c/A_kk) for a jump t_i (paper (12)'s projection), and
-//! the soft thresholding sign(c) max(|c| − w_i g_i, 0)/A_kk for a slip s_i
-//! (no smoothing of |s|: Gräser & Sander 2019, section 5.1, Example 5.3).
+//! Along coordinate k the energy J(v) = ½ vᵀAv − bᵀv + Σ_k φ_k(v_k) is
+//! ½A_kk x² − c x + φ_k(x), c = b_k − Σ_{j≠k} A_kj v_j. For the given-
+//! friction problem (paper (10)) φ_k is the constraint t_i ≤ 0 or
+//! w_i g_i |s_i|, and the exact minimizers are c/A_kk without a law, the
+//! projection min(0, c/A_kk) for a jump (paper (12)'s projection), and the
+//! soft thresholding sign(c) max(|c| − w_i g_i, 0)/A_kk for a slip (no
+//! smoothing of |s|: Gräser & Sander 2019, section 5.1, Example 5.3). For
+//! the inner problem of the paper's Algorithm 1 (the modified Lagrangian at
+//! fixed l, paper (11) and (15)) φ_k is the penalty w_i/(2r)((l_i + r t_i)⁺)²
+//! or the Huber smoothing of w_i g_i |s_i|; their minimizers are the
+//! relaxation's own ([`crate::relaxation::pointwise`]).
 
 use nalgebra_sparse::CsrMatrix;
+
+use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 
 /// The contact law along one coordinate.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +27,50 @@ pub(crate) enum Local {
     Jump,
     /// A slip s_i with its nodal friction bound w_i g_i.
     Slip(f64),
+    /// A jump under the modified Lagrangian's penalty
+    /// (w/(2r))((l + r t)⁺)², paper (11): C¹, piecewise quadratic.
+    Penalty { w: f64, l: f64, r: f64 },
+    /// A slip under the Huber smoothing w g φ_δ(s): C¹, piecewise quadratic.
+    Huber { wg: f64, delta: f64 },
+}
+
+impl Local {
+    /// Whether v_k sits at a kink of φ_k, where the truncated Newton step
+    /// keeps it fixed: a closed jump, a sticking slip. The C¹ laws have none.
+    pub(crate) fn at_kink(self, x: f64) -> bool {
+        match self {
+            Local::Jump => x >= 0.0,
+            Local::Slip(b) => b > 0.0 && x == 0.0,
+            _ => false,
+        }
+    }
+
+    /// φ_k''(x), the curvature the Newton step adds to A_kk (zero at a kink
+    /// and along the laws that are piecewise linear).
+    pub(crate) fn curvature(self, x: f64) -> f64 {
+        match self {
+            Local::Penalty { w, l, r } if l + r * x > 0.0 => w * r,
+            Local::Huber { wg, delta } if x.abs() < delta => wg / delta,
+            _ => 0.0,
+        }
+    }
+
+    /// The right derivative of φ_k at x in the direction c (the constraint
+    /// of a jump excluded: the line search bounds the step instead).
+    pub(crate) fn slope(self, x: f64, c: f64) -> f64 {
+        match self {
+            Local::Free | Local::Jump => 0.0,
+            Local::Slip(b) => {
+                b * if x > 0.0 || (x == 0.0 && c > 0.0) {
+                    c
+                } else {
+                    -c
+                }
+            }
+            Local::Penalty { w, l, r } => w * (l + r * x).max(0.0) * c,
+            Local::Huber { wg, delta } => wg * (x / delta).clamp(-1.0, 1.0) * c,
+        }
+    }
 }
 
 /// The position of row k's diagonal entry among A's stored entries, if it
@@ -59,6 +110,8 @@ pub(crate) fn local_minimizer(law: Local, a: f64, c: f64) -> f64 {
         Local::Free => c / a,
         Local::Jump => (c / a).min(0.0),
         Local::Slip(bound) => c.signum() * (c.abs() - bound).max(0.0) / a,
+        Local::Penalty { w, l, r } => minimize_jump(a, -c, w, l, r),
+        Local::Huber { wg, delta } => minimize_slip_huber(a, -c, wg, delta),
     }
 }
 
@@ -77,11 +130,13 @@ pub(crate) fn nonlinear_sweep(
     }
 }
 
-/// Forward (`forward`) or backward linear Gauss-Seidel on A x = b, keeping
-/// x_k = 0 where `fixed` says so (the truncated coordinates).
+/// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,
+/// D = diag(`shift`) (empty: none), keeping x_k = 0 where `fixed` says so
+/// (the truncated coordinates).
 pub(crate) fn linear_sweep(
     a: &CsrMatrix<f64>,
     diag: &[usize],
+    shift: &[f64],
     b: &[f64],
     x: &mut [f64],
     fixed: &[bool],
@@ -95,7 +150,7 @@ pub(crate) fn linear_sweep(
             continue;
         }
         let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
-        x[k] = c / vals[diag[k]];
+        x[k] = c / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
     }
 }
 
