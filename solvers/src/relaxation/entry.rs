@@ -81,6 +81,12 @@ pub(crate) const ENTRY: Entry = Entry {
             kind: Kind::Between(0.0, 2.0),
         },
         Knob {
+            name: "inner",
+            fields: &["inner"],
+            help: "the inner minimization at fixed l^k: `sweeps` (the paper's pointwise relaxation) or `multigrid` (TNNMG with those sweeps as smoother: sweep_factor and max_sweeps then apply to its iterations, the certified rule is checked after each, omega is not used)",
+            kind: Kind::Word(&["sweeps", "multigrid"]),
+        },
+        Knob {
             name: CERTIFIED_STOP_KNOB,
             fields: &["target"],
             help: "certified stopping: stop when the contact law's and stationarity's largest violation in the problem's scales (the certificate's measure) is ≤ target, checked after every Uzawa step and every check_every sweeps; 0: the paper's rules on max|Δl| and max|Δv|",

@@ -18,21 +18,26 @@
 //! silent stop.
 
 mod entry;
+mod inner;
 pub mod pointwise;
 pub(crate) mod residual;
 
 pub use entry::{CERTIFIED_STOP_KNOB, OVER_RELAXATION_KNOB, STUDIED_OMEGA};
 pub(crate) use entry::{ENTRY, SWEEP, UZAWA};
+pub use inner::Inner;
 
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::multigrid::kept_hierarchy;
+use crate::multigrid::vcycle::Hierarchy;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::{ContactNode, ContactProblem};
 use crate::settings::{Stopping, Validate, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Solver, Start};
+use inner::{InnerSolver, MultigridInner};
 use pointwise::{RelaxationOperator, Smoothing, SweepData};
 
 /// The paper's finest mesh, 1/64: its sweep threshold is 1e-4·ε·(1/64)
@@ -57,6 +62,9 @@ pub struct RelaxationSettings {
     pub smoothing: Smoothing,
     /// Over-relaxation ω ∈ (0, 2) of the free coordinates (1: the paper).
     pub omega: f64,
+    /// The inner minimization: the paper's sweeps, or TNNMG with them as
+    /// its smoother.
+    pub inner: Inner,
     /// Certified stopping: stop once [`residual::contact_residual`] ≤ target
     /// (0: the paper's rules).
     pub target: f64,
@@ -111,6 +119,7 @@ impl RelaxationSettings {
                     delta: DEFAULT_HUBER_DELTA,
                 },
                 omega: 1.0,
+                inner: Inner::Sweeps,
                 target: 0.0,
                 check_every: 10,
                 max_uzawa: 1000,
@@ -124,6 +133,7 @@ impl RelaxationSettings {
                 proximal: 1e-5,
                 smoothing: Smoothing::Huber { delta: 1e-7 },
                 omega: 1.0,
+                inner: Inner::Sweeps,
                 target: 0.0,
                 check_every: 10,
                 max_uzawa: 1000,
@@ -193,39 +203,44 @@ impl Validate for RelaxationSettings {
 }
 
 /// The prox-Uzawa relaxation solver. Keeps H = A + ρM across calls on the
-/// same operator (the steps of the Coulomb fixed point).
-#[derive(Clone, Debug, Default)]
+/// same operator (the steps of the Coulomb fixed point), and with
+/// `inner = multigrid` the Galerkin hierarchy of each H it met.
+#[derive(Default)]
 pub struct ProxUzawa {
     pub settings: RelaxationSettings,
     cache: Option<(u64, f64, RelaxationOperator)>,
+    hierarchies: Vec<((u64, u64), Hierarchy)>,
 }
 
 impl ProxUzawa {
     pub fn new(settings: RelaxationSettings) -> Self {
         Self {
             settings,
-            cache: None,
+            ..Self::default()
         }
     }
+}
 
-    fn operator(&mut self, problem: &ContactProblem, rho: f64) -> &RelaxationOperator {
-        let key = (problem.operator_id(), rho);
-        let stale = self
-            .cache
-            .as_ref()
-            .is_none_or(|(id, r, _)| (*id, *r) != key);
-        if stale {
-            let op = RelaxationOperator::new(problem, rho);
-            self.cache = Some((key.0, key.1, op));
-        }
-        &self.cache.as_ref().expect("just filled").2
+/// H = A + ρM for `problem`, kept in `cache` while the operator and ρ stay.
+fn operator<'c>(
+    cache: &'c mut Option<(u64, f64, RelaxationOperator)>,
+    problem: &ContactProblem,
+    rho: f64,
+) -> &'c RelaxationOperator {
+    let key = (problem.operator_id(), rho);
+    if cache.as_ref().is_none_or(|(id, r, _)| (*id, *r) != key) {
+        *cache = None;
+        *cache = Some((key.0, key.1, RelaxationOperator::new(problem, rho)));
     }
+    &cache.as_ref().expect("just filled").2
 }
 
 /// Runs `prox_uzawa` (Algorithm 1, lines 4-7) on one problem with absolute
 /// values `resolved` and caps from `settings`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn prox_uzawa(
     op: &RelaxationOperator,
+    inner: &mut InnerSolver<'_>,
     problem: &ContactProblem,
     g: &[f64],
     resolved: &Resolved,
@@ -256,6 +271,13 @@ pub(crate) fn prox_uzawa(
     let certified = settings.target > 0.0;
     let (mut l_next, mut q) = (vec![0.0; m], vec![0.0; m]);
     let mut scratch = vec![0.0; if certified { n } else { 0 }];
+    // A multigrid iteration costs about twenty sweeps: the certified rule
+    // is checked after each.
+    let check_every = match inner {
+        InnerSolver::Sweeps => settings.check_every,
+        InnerSolver::Multigrid(_) => 1,
+    };
+    let unit = inner.unit();
     let mut last_residual = f64::INFINITY;
     let (mut sweeps, mut uzawa) = (0usize, 0usize);
     let mut status = Status::MaxIterations;
@@ -277,10 +299,11 @@ pub(crate) fn prox_uzawa(
             smoothing: resolved.smoothing,
             omega: settings.omega,
         };
+        inner.begin(contacts, &data);
         let mut converged_inner = false;
         let mut reached = None;
         for q_sweep in 1..=settings.max_sweeps {
-            let change = op.sweep(&mut v, &data);
+            let change = inner.step(op, &mut v, &data);
             sweeps += 1;
             if want_sweeps {
                 let control = observer.observe(&Progress {
@@ -292,7 +315,7 @@ pub(crate) fn prox_uzawa(
                 if let Control::Stop(s) = control {
                     status = s;
                     detail = format!(
-                        "stopped by the harness in Uzawa iteration {k} after {sweeps} sweeps (max|Δv| = {change:.3e})"
+                        "stopped by the harness in Uzawa iteration {k} after {sweeps} {unit} (max|Δv| = {change:.3e})"
                     );
                     break 'uzawa;
                 }
@@ -302,7 +325,7 @@ pub(crate) fn prox_uzawa(
                 detail = format!("non-finite iterate in sweep {q_sweep} of Uzawa iteration {k}");
                 break 'uzawa;
             }
-            if certified && sweeps.is_multiple_of(settings.check_every) {
+            if certified && sweeps.is_multiple_of(check_every) {
                 uzawa_update(&l, &v, contacts, resolved.r, &mut l_next);
                 friction_traction(op, &v, &b, contacts, g, resolved.smoothing, &mut q);
                 let residual =
@@ -321,7 +344,7 @@ pub(crate) fn prox_uzawa(
             l.copy_from_slice(&l_next);
             status = Status::Converged;
             detail = format!(
-                "contact residual {residual:.3e} ≤ {:.0e} in Uzawa iteration {k} after {sweeps} sweeps",
+                "contact residual {residual:.3e} ≤ {:.0e} in Uzawa iteration {k} after {sweeps} {unit}",
                 settings.target
             );
             break;
@@ -358,7 +381,7 @@ pub(crate) fn prox_uzawa(
             if residual <= settings.target {
                 status = Status::Converged;
                 detail = format!(
-                    "contact residual {residual:.3e} ≤ {:.0e} after {k} Uzawa iterations, {sweeps} sweeps",
+                    "contact residual {residual:.3e} ≤ {:.0e} after {k} Uzawa iterations, {sweeps} {unit}",
                     settings.target
                 );
                 break;
@@ -372,14 +395,14 @@ pub(crate) fn prox_uzawa(
         } else if dl <= resolved.uzawa_tolerance {
             status = Status::Converged;
             detail = format!(
-                "max|Δl| = {dl:.3e} ≤ {:.3e} after {k} Uzawa iterations, {sweeps} sweeps",
+                "max|Δl| = {dl:.3e} ≤ {:.3e} after {k} Uzawa iterations, {sweeps} {unit}",
                 resolved.uzawa_tolerance
             );
             break;
         }
         if let Control::Stop(s) = control {
             status = s;
-            detail = format!("stopped by the harness after {k} Uzawa iterations, {sweeps} sweeps");
+            detail = format!("stopped by the harness after {k} Uzawa iterations, {sweeps} {unit}");
             break;
         }
     }
@@ -445,9 +468,36 @@ impl Solver for ProxUzawa {
         let t0 = Instant::now();
         let settings = self.settings.clone();
         let resolved = settings.resolve(problem);
-        let op = self.operator(problem, resolved.proximal);
+        let op = operator(&mut self.cache, problem, resolved.proximal);
+        let mut inner = match settings.inner {
+            Inner::Sweeps => InnerSolver::Sweeps,
+            Inner::Multigrid => {
+                let p = problem.prolongations();
+                let (n, m) = (problem.n(), problem.contacts().len());
+                if p.is_empty() {
+                    return Solution::failed(
+                        n,
+                        m,
+                        Status::NotRun,
+                        "relaxation.inner = multigrid needs the problem's mesh hierarchy (problems built from a scene carry one; an imported instance does not)",
+                    );
+                }
+                let key = (problem.operator_id(), resolved.proximal.to_bits());
+                match kept_hierarchy(&mut self.hierarchies, key, &op.h, p) {
+                    Ok(h) => InnerSolver::Multigrid(Box::new(MultigridInner::new(
+                        h,
+                        p,
+                        n,
+                        problem.contacts(),
+                    ))),
+                    Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+                }
+            }
+        };
         let setup = t0.elapsed().as_secs_f64();
-        let mut out = prox_uzawa(op, problem, g, &resolved, &settings, start, observer);
+        let mut out = prox_uzawa(
+            op, &mut inner, problem, g, &resolved, &settings, start, observer,
+        );
         out.timing.setup = setup;
         out
     }
