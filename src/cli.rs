@@ -72,8 +72,9 @@ pub enum Command {
     Stability(StabilityArgs),
     /// Measure speed: assembly, each solver's inner kernel against one SpMV,
     /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
-    /// 1/256, as medians after a warm-up on one thread and as ratios to one
-    /// sparse factorization; at 1/512 and 1/1024 (not with --quick) assembly,
+    /// 1/256, as medians after a warm-up on one thread and as ratios to the
+    /// best sparse factorization here (faer on both cores, symbolic analysis
+    /// once); at 1/512 and 1/1024 (not with --quick) assembly,
     /// one factorization and the fastest certified direct Coulomb solver, once
     /// each; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
     /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle

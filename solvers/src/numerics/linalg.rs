@@ -194,8 +194,17 @@ pub struct SparseCholesky {
     values: Vec<f64>,
 }
 
-impl SparseCholesky {
-    /// Symbolic analysis and numeric factorization of `a` (full symmetric storage).
+/// The symbolic analysis (AMD ordering, elimination tree, supernodes) of a
+/// symmetric matrix, done once so that numeric factorizations of the same
+/// pattern can be timed alone: how a code that refactors one pattern
+/// (a Newton method, a time stepper) pays for a factorization.
+pub struct CholeskyAnalysis {
+    symbolic: SymbolicCholesky<usize>,
+    lower: CscMatrix<f64>,
+}
+
+impl CholeskyAnalysis {
+    /// The analysis of `a` (full symmetric storage).
     pub fn new(a: &CsrMatrix<f64>) -> Result<Self, LinalgError> {
         let lower = lower_of(a);
         let symbolic = factorize_symbolic_cholesky(
@@ -205,6 +214,60 @@ impl SparseCholesky {
             Default::default(),
         )
         .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+        Ok(Self { symbolic, lower })
+    }
+
+    /// The numeric factorization on `threads` threads (faer's supernodal
+    /// LLᵀ with rayon parallelism; 1: sequential) and one solve of A x = b
+    /// in place on as many.
+    pub fn factor_and_solve(&self, threads: usize, b: &mut [f64]) -> Result<(), LinalgError> {
+        let par = if threads > 1 {
+            Par::rayon(threads)
+        } else {
+            Par::Seq
+        };
+        let values = numeric_values(&self.symbolic, &self.lower, par)?;
+        let n = b.len();
+        let rhs = faer::MatMut::from_column_major_slice_mut(b, n, 1);
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, par));
+        faer::sparse::linalg::cholesky::LltRef::new(&self.symbolic, &values)
+            .solve_in_place_with_conj(Conj::No, rhs, par, MemStack::new(&mut mem));
+        Ok(())
+    }
+}
+
+/// The values of L for a symbolic analysis and the lower triangle of A.
+fn numeric_values(
+    symbolic: &SymbolicCholesky<usize>,
+    lower: &CscMatrix<f64>,
+    par: Par,
+) -> Result<Vec<f64>, LinalgError> {
+    let mut values = vec![0.0; symbolic.len_val()];
+    let mut mem =
+        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
+    symbolic
+        .factorize_numeric_llt(
+            &mut values,
+            faer_ref(lower),
+            Side::Lower,
+            LltRegularization::default(),
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| match e {
+            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                LinalgError::NotPositiveDefinite { index }
+            }
+        })?;
+    Ok(values)
+}
+
+impl SparseCholesky {
+    /// Symbolic analysis and numeric factorization of `a` (full symmetric storage).
+    pub fn new(a: &CsrMatrix<f64>) -> Result<Self, LinalgError> {
+        let CholeskyAnalysis { symbolic, lower } = CholeskyAnalysis::new(a)?;
         Self::from_symbolic(symbolic, lower)
     }
 
@@ -312,26 +375,16 @@ impl SparseCholesky {
         symbolic: SymbolicCholesky<usize>,
         lower: CscMatrix<f64>,
     ) -> Result<Self, LinalgError> {
-        let mut values = vec![0.0; symbolic.len_val()];
-        let par = Par::Seq;
-        let mut mem =
-            MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
-        symbolic
-            .factorize_numeric_llt(
-                &mut values,
-                faer_ref(&lower),
-                Side::Lower,
-                LltRegularization::default(),
-                par,
-                MemStack::new(&mut mem),
-                Default::default(),
-            )
-            .map(|_| ())
-            .map_err(|e| match e {
-                faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
-                    LinalgError::NotPositiveDefinite { index }
-                }
-            })?;
+        Self::numeric(symbolic, &lower, Par::Seq)
+    }
+
+    /// The numeric factorization for a symbolic analysis, on `par`.
+    fn numeric(
+        symbolic: SymbolicCholesky<usize>,
+        lower: &CscMatrix<f64>,
+        par: Par,
+    ) -> Result<Self, LinalgError> {
+        let values = numeric_values(&symbolic, lower, par)?;
         Ok(Self { symbolic, values })
     }
 
