@@ -125,6 +125,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
         let start = Start {
             v: &lift,
             pressure: &pressure,
+            accuracy: None,
         };
         let s = solver.solve(p, Friction::Given(&g), Some(start), &mut Silent);
         energies.push(energy(p, &g, &s.v));
@@ -143,6 +144,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
     let start = Start {
         v: &lift,
         pressure: &pressure,
+        accuracy: None,
     };
     let s = solver.solve(p, Friction::Given(&g), Some(start), &mut Silent);
     eprintln!("from the open start: {}", s.detail);

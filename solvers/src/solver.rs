@@ -86,6 +86,13 @@ impl Friction<'_> {
 pub struct Start<'a> {
     pub v: &'a [f64],
     pub pressure: &'a [f64],
+    /// The accuracy the caller needs of this solve, relative (in the
+    /// problem's scales), when it needs less than the solver's own
+    /// tolerance: the friction fixed point asks a fraction of its last
+    /// relative change of g (an inexact fixed point: Newton-like forcing
+    /// terms, Dembo, Eisenstat & Steihaug 1982). A solver may stop at the
+    /// looser of this and its own tolerance, or ignore it; None: its own.
+    pub accuracy: Option<f64>,
 }
 
 /// A solver of the algebraic contact problem.

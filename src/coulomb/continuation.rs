@@ -105,7 +105,12 @@ impl GivenFrictionStep for Continuation<'_> {
         &self.finest().problem
     }
 
-    fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution {
+    fn solve_step(
+        &mut self,
+        g: &[f64],
+        accuracy: Option<f64>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
         let top = self.levels.len() - 1;
         let first = match (self.schedule, &self.last) {
             (Schedule::FinestOnly, Some(_)) => top,
@@ -132,6 +137,7 @@ impl GivenFrictionStep for Continuation<'_> {
                 Some(Start {
                     v: &v,
                     pressure: &l,
+                    accuracy,
                 }),
                 observer,
             );

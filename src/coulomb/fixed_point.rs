@@ -16,6 +16,12 @@ use serde::{Deserialize, Serialize};
 /// The stage name of the fixed point's progress events (residual max|Δg|).
 pub const STAGE: &str = "friction";
 
+/// The default forcing factor: the inner accuracy a thousandth of the last
+/// relative change of g, so that inner errors stay below the change they
+/// perturb while the first steps, whose g is far from the fixed point, are
+/// not solved to 1e-10.
+pub const DEFAULT_FORCING: f64 = 1e-3;
+
 /// Settings of the fixed point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -30,6 +36,10 @@ pub struct CoulombSettings {
     /// Stop as not contracting when max|Δg| has not fallen over this many
     /// iterations (0: never).
     pub stall_window: usize,
+    /// The forcing factor η of the inexact fixed point: step m + 1 asks its
+    /// solver for a relative accuracy η·max|Δg^m|/(𝓕P) when that is looser
+    /// than the solver's own tolerance ([`Start::accuracy`]; 0: never).
+    pub forcing: f64,
 }
 
 impl Default for CoulombSettings {
@@ -54,6 +64,7 @@ impl CoulombSettings {
             },
             max_iterations: 50,
             stall_window: 5,
+            forcing: DEFAULT_FORCING,
         }
     }
 
@@ -88,6 +99,12 @@ pub const KNOBS: &[Knob] = &[
         kind: Kind::Count,
     },
     Knob {
+        name: "forcing",
+        fields: &["forcing"],
+        help: "inexact fixed point: ask each given-friction solve for a relative accuracy of forcing·max|Δg|/(𝓕P) of the previous step when looser than its own tolerance (solvers that read it: tnnmg); 0: never",
+        kind: Kind::NonNegative,
+    },
+    Knob {
         name: "stall_window",
         fields: &["stall_window"],
         help: "stop as not contracting when max|Δg| has not fallen over this many iterations (0: never)",
@@ -111,8 +128,14 @@ impl Validate for CoulombSettings {
 pub trait GivenFrictionStep {
     /// The finest level's problem (its coefficients and scales).
     fn problem(&self) -> &ContactProblem;
-    /// Solves with friction bound `g`.
-    fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution;
+    /// Solves with friction bound `g`, to the relative `accuracy` if the
+    /// caller needs less than the solver's own tolerance ([`Start::accuracy`]).
+    fn solve_step(
+        &mut self,
+        g: &[f64],
+        accuracy: Option<f64>,
+        observer: &mut dyn Observer,
+    ) -> Solution;
 }
 
 /// How the fixed point ended.
@@ -211,9 +234,16 @@ pub fn friction_fixed_point(
     let mut g = vec![0.0; coefficient.len()];
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
+    // The relative change of g is max|Δg| over 𝓕P.
+    let bound_scale =
+        coefficient.iter().fold(0.0f64, |m, c| m.max(*c)) * step.problem().scales().pressure;
     for m in 1..=settings.max_iterations {
         let t = Instant::now();
-        let solution = step.solve_step(&g, observer);
+        // The first step, from g = 0, is as far from the fixed point as g
+        // itself (relative change 1).
+        let accuracy = (settings.forcing > 0.0 && bound_scale > 0.0)
+            .then(|| settings.forcing * last_change.map_or(1.0, |c| c / bound_scale));
+        let solution = step.solve_step(&g, accuracy, observer);
         let g_next: Vec<f64> = solution
             .pressure
             .iter()
@@ -349,10 +379,16 @@ impl GivenFrictionStep for SingleLevel<'_> {
         self.problem
     }
 
-    fn solve_step(&mut self, g: &[f64], observer: &mut dyn Observer) -> Solution {
+    fn solve_step(
+        &mut self,
+        g: &[f64],
+        accuracy: Option<f64>,
+        observer: &mut dyn Observer,
+    ) -> Solution {
         let start = self.last.as_ref().map(|s| Start {
             v: &s.v,
             pressure: &s.pressure,
+            accuracy,
         });
         let solution = self
             .solver
@@ -402,7 +438,7 @@ mod tests {
             &self.problem
         }
 
-        fn solve_step(&mut self, g: &[f64], _: &mut dyn Observer) -> Solution {
+        fn solve_step(&mut self, g: &[f64], _: Option<f64>, _: &mut dyn Observer) -> Solution {
             Solution {
                 v: vec![],
                 pressure: self.p0.iter().zip(g).map(|(p, g)| p + self.k * g).collect(),
@@ -444,6 +480,7 @@ mod tests {
             max_iterations: 7,
             stall_window: 0,
             stopping: Stopping::Paper,
+            forcing: 0.0,
         };
         let out = friction_fixed_point(&mut step, &s, &mut Silent);
         assert_eq!(out.status, Status::MaxIterations);
@@ -456,6 +493,7 @@ mod tests {
             max_iterations: 50,
             stall_window: 3,
             stopping: Stopping::Paper,
+            forcing: 0.0,
         };
         let out = friction_fixed_point(&mut step, &s, &mut Silent);
         assert_eq!(out.status, Status::InsufficientProgress);

@@ -246,7 +246,7 @@ fn steps(
             }
         }
         Friction::Given(g) => {
-            let s = step.solve_step(g, observer);
+            let s = step.solve_step(g, None, observer);
             Done {
                 claim: s.status,
                 solution: s,

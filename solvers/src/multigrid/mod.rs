@@ -246,7 +246,10 @@ impl Solver for Tnnmg {
             linear_sweeps: self.settings.linear_sweeps,
         };
         let u = problem.scales().displacement;
-        let tol = self.settings.tolerance;
+        // The looser of its own tolerance and the caller's need.
+        let tol = start
+            .and_then(|s| s.accuracy)
+            .map_or(self.settings.tolerance, |a| a.max(self.settings.tolerance));
         let mut v = start.map_or_else(|| vec![0.0; n], |s| s.v.to_vec());
         if v.len() != n {
             v = vec![0.0; n];
