@@ -120,15 +120,9 @@ impl Settings {
     pub fn set_text(&mut self, path: &str, text: &str) -> Result<(), String> {
         match path {
             "schedule" => {
-                self.schedule = match text.trim() {
-                    "revisit" => Schedule::Revisit,
-                    "finest-only" => Schedule::FinestOnly,
-                    _ => {
-                        return Err(format!(
-                            "schedule = '{text}' is invalid: give revisit or finest-only"
-                        ));
-                    }
-                };
+                self.schedule = Schedule::from_name(text).ok_or_else(|| {
+                    format!("schedule = '{text}' is invalid: give revisit, finest-only or nested")
+                })?;
                 return Ok(());
             }
             "stopping" => {

@@ -151,8 +151,8 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                 Arg::new(SCHEDULE)
                     .long(SCHEDULE)
                     .value_name("SCHEDULE")
-                    .value_parser(["revisit", "finest-only"])
-                    .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first [default: revisit]"),
+                    .value_parser(Schedule::ALL.map(Schedule::name))
+                    .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first, or nested: the whole Coulomb problem on each level in turn, each started from the level below [default: revisit]"),
             );
         }
         for e in S::solvers() {
@@ -186,10 +186,7 @@ impl<S: SolverSet> clap::FromArgMatches for SettingsArgs<S> {
             }),
             epsilon: m.try_get_one::<f64>(EPSILON).ok().flatten().copied(),
             max_friction_iterations: text(MAX_FRICTION),
-            schedule: text(SCHEDULE).map(|s| match s.as_str() {
-                "finest-only" => Schedule::FinestOnly,
-                _ => Schedule::Revisit,
-            }),
+            schedule: text(SCHEDULE).and_then(|s| Schedule::from_name(&s)),
             certificate_tolerance: m.try_get_one::<f64>(CERTIFY_TOL).ok().flatten().copied(),
             assignments: Vec::new(),
         };

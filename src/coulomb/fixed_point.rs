@@ -136,6 +136,26 @@ pub trait GivenFrictionStep {
         accuracy: Option<f64>,
         observer: &mut dyn Observer,
     ) -> Solution;
+    /// The first bound g⁰ of the fixed point, when the step can do better
+    /// than g⁰ = 0 (the nested schedule: the Coulomb problem solved on the
+    /// coarser meshes first); None: g⁰ = 0.
+    fn initial_bound(
+        &mut self,
+        _settings: &CoulombSettings,
+        _observer: &mut dyn Observer,
+    ) -> Option<Vec<f64>> {
+        None
+    }
+}
+
+/// g_i = 𝓕_i p_i⁺ for the problem's coefficients: the bound of paper (9).
+pub fn bound_of(problem: &ContactProblem, pressure: &[f64]) -> Vec<f64> {
+    problem
+        .contacts()
+        .iter()
+        .zip(pressure)
+        .map(|(c, p)| c.coefficient * p.max(0.0))
+        .collect()
 }
 
 /// How the fixed point ended.
@@ -231,7 +251,10 @@ pub fn friction_fixed_point(
         .iter()
         .map(|c| c.coefficient)
         .collect();
-    let mut g = vec![0.0; coefficient.len()];
+    let mut g = step
+        .initial_bound(settings, observer)
+        .filter(|g| g.len() == coefficient.len())
+        .unwrap_or_else(|| vec![0.0; coefficient.len()]);
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
     // The relative change of g is max|Δg| over 𝓕P.
@@ -362,14 +385,26 @@ pub struct SingleLevel<'a> {
     pub problem: &'a ContactProblem,
     pub solver: &'a mut dyn Solver,
     last: Option<Solution>,
+    /// The start of the first step (displacements, pressures), if any.
+    first: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl<'a> SingleLevel<'a> {
     pub fn new(problem: &'a ContactProblem, solver: &'a mut dyn Solver) -> Self {
+        Self::starting(problem, solver, None)
+    }
+
+    /// Its first step started from `first` (displacements, pressures).
+    pub fn starting(
+        problem: &'a ContactProblem,
+        solver: &'a mut dyn Solver,
+        first: Option<(Vec<f64>, Vec<f64>)>,
+    ) -> Self {
         Self {
             problem,
             solver,
             last: None,
+            first,
         }
     }
 }
@@ -385,9 +420,14 @@ impl GivenFrictionStep for SingleLevel<'_> {
         accuracy: Option<f64>,
         observer: &mut dyn Observer,
     ) -> Solution {
-        let start = self.last.as_ref().map(|s| Start {
-            v: &s.v,
-            pressure: &s.pressure,
+        let start = match (&self.last, &self.first) {
+            (Some(s), _) => Some((&s.v[..], &s.pressure[..])),
+            (None, Some((v, p))) => Some((&v[..], &p[..])),
+            (None, None) => None,
+        }
+        .map(|(v, pressure)| Start {
+            v,
+            pressure,
             accuracy,
         });
         let solution = self
