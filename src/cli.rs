@@ -81,7 +81,11 @@ pub enum Command {
     /// at 1/256, once each without the budget (about 2 h, 1.5 h of it the
     /// paper's method at 1/256; --quick: seconds); and where the fastest
     /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
-    /// --quick), each in a fresh process. Writes performance.csv,
+    /// --quick), each in a fresh process; the multigrid goals (about 2 min):
+    /// tnnmg's iterations from zero at every mesh, the whole Coulomb problem
+    /// by tnnmg (nested schedule) on the large meshes in a fresh process, the
+    /// paper's method with relaxation.inner = multigrid at 1/256, and tnnmg
+    /// against newton-coulomb at 1/64 and 1/256. Writes performance.csv,
     /// performance_goals.md and charts into --out.
     Bench(BenchArgs),
     /// The benchmark over the problem collection (the paper's problems over
@@ -350,6 +354,9 @@ pub struct BenchOneArgs {
     pub scene: SceneArgs,
     #[arg(long)]
     pub solver: String,
+    /// Mesh continuation of a solver that warm-starts.
+    #[arg(long, value_parser = choices::schedule(), default_value_t = Schedule::Revisit)]
+    pub schedule: Schedule,
 }
 
 /// Parses the command line and runs it; errors are one line on stderr with a

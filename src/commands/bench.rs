@@ -48,6 +48,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 pub fn run_one(args: &BenchOneArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     faer::set_global_parallelism(faer::Par::Seq);
-    let used = measure_here(&scene, &args.solver)?;
+    let used = measure_here(&scene, &args.solver, args.schedule)?;
     print(&format!("{}\n", serde_json::to_string(&used)?))
 }

@@ -11,7 +11,7 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
-use crate::study::bench::{BenchSpec, PerfRow, bench};
+use crate::study::bench::{BenchSpec, PerfRow, bench, multigrid};
 use crate::study::lab::{Artifact, Findings, Lab, Study};
 
 /// One goal, measured.
@@ -417,7 +417,7 @@ pub fn measure_bench(
             "memory of {} at h = {h} (fresh process)",
             fastest.solver
         ));
-        match measure_in_fresh_process(spec.problem, h, &fastest.solver) {
+        match measure_in_fresh_process(spec.problem, h, &fastest.solver, settings.schedule) {
             Ok(used) => memory.push(used),
             Err(e) => {
                 log(&format!("memory at h = {h} not measured: {e:#}"));
@@ -426,7 +426,10 @@ pub fn measure_bench(
         }
     }
     let finest = memory.last().map(|u| (u.h, u.peak_kb));
-    let goals = goals(&rows, finest);
+    let mut goals = goals(&rows, finest);
+    let multigrid = multigrid::measure(spec, log)?;
+    goals.extend(multigrid::goals(&multigrid, &rows));
+    memory.extend(multigrid.coulomb.iter().cloned());
     let mut md = goals_markdown(&goals);
     md += &memory::markdown(&memory);
     md += &unmeasured;

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use contactlab_solvers::{Friction, Law};
 
+use crate::coulomb::continuation::Schedule;
 use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
@@ -60,7 +61,7 @@ fn peak_memory_kb() -> Option<u64> {
 /// then the solve on that assembly (a solver of the given-friction
 /// subproblem, which needs every level of the continuation, assembles them
 /// itself after the first is dropped). Meaningful only in a fresh process.
-pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
+pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<MemoryUse> {
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
     let entry = solver_entry(solver)?;
@@ -74,7 +75,8 @@ pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
     let problem_kb = status_kb("VmRSS")
         .ok_or_else(unread)?
         .saturating_sub(before);
-    let settings = Settings::default();
+    let mut settings = Settings::default();
+    settings.schedule = schedule;
     let silent = &mut contactlab_solvers::Silent;
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)
@@ -112,7 +114,12 @@ pub fn measure_here(scene: &Scene, solver: &str) -> Result<MemoryUse> {
 
 /// Runs `bench-one` for `solver` on problem `problem` at `h` in a fresh
 /// process and reads its answer.
-pub fn measure_in_fresh_process(problem: u32, h: MeshSize, solver: &str) -> Result<MemoryUse> {
+pub fn measure_in_fresh_process(
+    problem: u32,
+    h: MeshSize,
+    solver: &str,
+    schedule: Schedule,
+) -> Result<MemoryUse> {
     let o = std::process::Command::new(std::env::current_exe()?)
         .args([
             "bench-one",
@@ -122,6 +129,8 @@ pub fn measure_in_fresh_process(problem: u32, h: MeshSize, solver: &str) -> Resu
             &h.to_string(),
             "--solver",
             solver,
+            "--schedule",
+            schedule.name(),
         ])
         .output()?;
     anyhow::ensure!(

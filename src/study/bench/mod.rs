@@ -13,6 +13,7 @@
 pub mod equal_accuracy;
 pub mod goals;
 pub mod memory;
+pub mod multigrid;
 
 use std::time::Instant;
 

@@ -1,0 +1,260 @@
+//! The multigrid goals of the benchmark: TNNMG's iteration counts from
+//! zero on the given-friction subproblem, the whole Coulomb problem at the
+//! finest large mesh by TNNMG with the nested schedule (time and peak
+//! memory in a fresh process, against the best factorization), the paper's
+//! method with `relaxation.inner = multigrid` at a certified accuracy, and
+//! TNNMG's pressures against semismooth Newton's. Each is measured once:
+//! counts and agreements do not vary between runs, and the times are
+//! single cold solves, as the large meshes' are.
+
+use anyhow::Result;
+use contactlab_solvers::{Friction, Silent, registry};
+use serde::Serialize;
+use serde_json::json;
+
+use crate::certificate::certify_solution;
+use crate::coulomb::continuation::Schedule;
+use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::solve::{solve_scene, solver_entry};
+use crate::study::bench::goals::Goal;
+use crate::study::bench::memory::{MemoryUse, measure_in_fresh_process};
+use crate::study::bench::{BenchSpec, PerfRow};
+
+/// The registered multigrid solver of the given-friction subproblem.
+pub const SOLVER: &str = "tnnmg";
+
+/// The iteration bound of the goal, from zero to a certified 1e-8.
+pub const ITERATION_GOAL: usize = 30;
+
+/// The certificate's tolerance of the iteration counts.
+const COUNT_TOLERANCE: f64 = 1e-8;
+
+/// The given bound of the iteration counts: half the Coulomb scale 𝓕P at
+/// every node (slip, stick and separation all occur on problem 1).
+const BOUND_OF_SCALE: f64 = 0.5;
+
+/// What was measured.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MultigridRows {
+    /// (h, iterations, certified) from zero on the given-friction problem.
+    pub iterations: Vec<(MeshSize, usize, bool)>,
+    /// The whole Coulomb problem, nested schedule, in a fresh process.
+    pub coulomb: Vec<MemoryUse>,
+    /// The paper's method with multigrid inside: (h, seconds, status).
+    pub paper: Option<(MeshSize, f64, String)>,
+    /// max|p − p_Newton| / P of the Coulomb answers: (h, gap).
+    pub agreement: Vec<(MeshSize, f64)>,
+}
+
+/// The meshes of each measurement for a benchmark spec: every mesh of the
+/// spec and its large ones for the counts; the large ones (the finest mesh
+/// without) for the Coulomb problem; 1/256 (or the finest) for the paper's
+/// method; 1/64 and 1/256 (those the spec has) for the agreement.
+fn meshes(spec: &BenchSpec) -> (Vec<MeshSize>, Vec<MeshSize>, MeshSize, Vec<MeshSize>) {
+    let all: Vec<MeshSize> = spec
+        .meshes
+        .iter()
+        .chain(&spec.large)
+        .copied()
+        .filter(|h| h.level() >= 4)
+        .collect();
+    let finest = *spec.meshes.last().expect("a benchmark has meshes");
+    let large = if spec.large.is_empty() {
+        vec![finest]
+    } else {
+        spec.large.clone()
+    };
+    let at = |k: u32| {
+        MeshSize::from_level(k)
+            .ok()
+            .filter(|h| spec.meshes.contains(h))
+    };
+    let paper = at(8).unwrap_or(finest);
+    let agreement = [at(6), at(8)].into_iter().flatten().collect();
+    (all, large, paper, agreement)
+}
+
+/// Runs the measurements (none if no multigrid solver is registered).
+pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
+    let mut out = MultigridRows::default();
+    if registry::by_name(SOLVER).is_none() {
+        return Ok(out);
+    }
+    let (counts, large, paper, agreement) = meshes(spec);
+    for h in counts {
+        log(&format!("{SOLVER} from zero at h = {h}"));
+        out.iterations.push(count_from_zero(spec.problem, h)?);
+    }
+    for &h in &large {
+        log(&format!(
+            "{SOLVER} on the Coulomb problem at h = {h} (fresh process)"
+        ));
+        match measure_in_fresh_process(spec.problem, h, SOLVER, Schedule::Nested) {
+            Ok(used) => out.coulomb.push(used),
+            Err(e) => log(&format!("not measured: {e:#}")),
+        }
+    }
+    log(&format!("the paper's method with multigrid at h = {paper}"));
+    let scene = Scene::paper_problem_to(spec.problem, paper)?;
+    let mut settings = Settings::default();
+    settings
+        .set("relaxation.inner", json!("multigrid"))
+        .map_err(anyhow::Error::msg)?;
+    settings
+        .set("relaxation.target", json!(1e-6))
+        .map_err(anyhow::Error::msg)?;
+    let entry = solver_entry("relaxation")?;
+    let solved = solve_scene(&scene, Friction::Coulomb, entry, &settings, &mut Silent)?;
+    let o = &solved.outcome;
+    out.paper = Some((paper, o.timing.total(), o.status.to_string()));
+    for h in agreement {
+        log(&format!("{SOLVER} against newton-coulomb at h = {h}"));
+        out.agreement.push((h, agreement_at(spec.problem, h)?));
+    }
+    Ok(out)
+}
+
+/// TNNMG from zero on the given-friction subproblem at `h` (one level):
+/// its iterations to a change of 1e-11·U, and whether the answer passes the
+/// certificate at 1e-8.
+fn count_from_zero(problem: u32, h: MeshSize) -> Result<(MeshSize, usize, bool)> {
+    let scene = Scene::paper_problem_to(problem, h)?;
+    let d = Discretization::new(&scene, h)?;
+    let p = &d.problem;
+    let g = vec![BOUND_OF_SCALE * scene.friction * p.scales().pressure; p.contacts().len()];
+    let mut settings = Settings::default();
+    settings
+        .set("tnnmg.tolerance", json!(1e-11))
+        .map_err(anyhow::Error::msg)?;
+    let mut solver = settings
+        .build(solver_entry(SOLVER)?)
+        .map_err(anyhow::Error::msg)?;
+    let s = solver.solve(p, Friction::Given(&g), None, &mut Silent);
+    let certified = certify_solution(p, Friction::Given(&g), &s, COUNT_TOLERANCE).passed();
+    Ok((h, s.iterations.outer, certified && s.status.is_converged()))
+}
+
+/// max|p − p_N|/P between TNNMG in the nested fixed point (tolerance
+/// 1e-12, ε = 1e-11; at 1e-13 the change per iteration stalls at rounding
+/// at 1/256) and newton-coulomb at its defaults, both certified
+/// (NaN if either is not).
+fn agreement_at(problem: u32, h: MeshSize) -> Result<f64> {
+    let scene = Scene::paper_problem_to(problem, h)?;
+    let run = |solver: &str, settings: &Settings| -> Result<Option<(Vec<f64>, f64)>> {
+        let solved = solve_scene(
+            &scene,
+            Friction::Coulomb,
+            solver_entry(solver)?,
+            settings,
+            &mut Silent,
+        )?;
+        let o = solved.outcome;
+        let scale = solved.finest.problem.scales().pressure;
+        Ok(o.status
+            .is_converged()
+            .then_some((o.solution.pressure, scale)))
+    };
+    let mut tight = Settings::default();
+    tight.schedule = Schedule::Nested;
+    tight
+        .set("tnnmg.tolerance", json!(1e-12))
+        .map_err(anyhow::Error::msg)?;
+    tight
+        .set("coulomb.epsilon", json!(1e-11))
+        .map_err(anyhow::Error::msg)?;
+    let (Some((mg, scale)), Some((newton, _))) = (
+        run(SOLVER, &tight)?,
+        run("newton-coulomb", &Settings::default())?,
+    ) else {
+        return Ok(f64::NAN);
+    };
+    Ok(mg
+        .iter()
+        .zip(&newton)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+        / scale)
+}
+
+/// The best factorization's median seconds at `h` in `rows`.
+fn factorization(rows: &[PerfRow], h: MeshSize) -> Option<f64> {
+    rows.iter()
+        .find(|r| r.what == "factorization" && r.h == h.to_string())
+        .map(|r| r.median_seconds)
+}
+
+/// The goals of issue 28, checked against one run.
+pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
+    let mut out = Vec::new();
+    if !m.iterations.is_empty() {
+        let list: Vec<String> = m
+            .iterations
+            .iter()
+            .map(|(h, k, ok)| format!("{h}: {k}{}", if *ok { "" } else { " (not certified)" }))
+            .collect();
+        out.push(Goal {
+            goal: format!(
+                "{SOLVER} from zero to a certified {COUNT_TOLERANCE:.0e} on the given-friction subproblem (g = {BOUND_OF_SCALE}·𝓕P): at most {ITERATION_GOAL} iterations at every h"
+            ),
+            measured: list.join(", "),
+            pass: Some(m.iterations.iter().all(|(_, k, ok)| *ok && *k <= ITERATION_GOAL)),
+        });
+    }
+    for used in &m.coulomb {
+        let f = factorization(rows, used.h);
+        let ratio = f.map_or(f64::NAN, |f| used.seconds / f);
+        out.push(Goal {
+            goal: format!(
+                "whole Coulomb problem at h = {} by {SOLVER} (nested schedule), certified: at most 0.5 × the best factorization, peak at most 1 GiB",
+                used.h
+            ),
+            measured: format!(
+                "{:.1} s = {ratio:.1} × factorization ({}), peak {:.2} GiB, {}",
+                used.seconds,
+                f.map_or("not measured".into(), |f| format!("{f:.1} s")),
+                used.peak_kb as f64 / (1024.0 * 1024.0),
+                used.status
+            ),
+            pass: Some(
+                used.status == "converged"
+                    && ratio <= 0.5
+                    && used.peak_kb <= 1024 * 1024,
+            ),
+        });
+    }
+    if !m.coulomb.is_empty() {
+        out.push(Goal {
+            goal: "h = 1/2048 and 1/4096 certified, peak at most 12 GiB".into(),
+            measured: format!(
+                "not run: meshes finer than {} are refused",
+                MeshSize::from_level(crate::mechanics::mesh_size::MAX_LEVEL)
+                    .map_or("?".into(), |h| h.to_string())
+            ),
+            pass: Some(false),
+        });
+    }
+    if let Some((h, seconds, status)) = &m.paper {
+        out.push(Goal {
+            goal: format!(
+                "the paper's method with relaxation.inner = multigrid and target = 1e-6 at h = {h}: at most 10 s, certified"
+            ),
+            measured: format!("{seconds:.2} s, {status}"),
+            pass: Some(status == "converged" && *seconds <= 10.0),
+        });
+    }
+    if !m.agreement.is_empty() {
+        let list: Vec<String> = m
+            .agreement
+            .iter()
+            .map(|(h, gap)| format!("{h}: {gap:.1e}"))
+            .collect();
+        out.push(Goal {
+            goal: format!("{SOLVER} against newton-coulomb: max|Δp|/P at most 1e-9"),
+            measured: list.join(", "),
+            pass: Some(m.agreement.iter().all(|(_, gap)| *gap <= 1e-9)),
+        });
+    }
+    out
+}
