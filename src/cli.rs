@@ -251,9 +251,10 @@ pub struct ReproduceArgs {
     /// A small run for tests and smoke checks (h = 1/16, fewer points).
     #[arg(long)]
     pub quick: bool,
-    /// Output folder (replaced whole).
-    #[arg(long, value_name = "DIR", default_value = "results")]
-    pub out: PathBuf,
+    /// Output folder (replaced whole) [default: results; with --quick:
+    /// results-quick, so that a smoke run never replaces the committed study].
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }

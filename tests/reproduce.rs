@@ -133,15 +133,28 @@ fn trial_header() -> Vec<String> {
     header_of(&Trial::not_run(&spec, Status::NotRun, String::new()).row()).unwrap()
 }
 
+/// Run without --out where a committed study lies: the smoke run goes to
+/// results-quick and leaves results/ as it was (it once replaced 130
+/// committed files without a word).
 #[test]
 fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("results");
+    let committed = dir.path().join("results");
+    std::fs::create_dir(&committed).unwrap();
+    std::fs::write(committed.join("README.md"), "the committed study\n").unwrap();
+    let out = dir.path().join("results-quick");
     let o = Command::new(env!("CARGO_BIN_EXE_contactlab"))
-        .args(["reproduce", "--quick", "--out", out.to_str().unwrap()])
+        .args(["reproduce", "--quick"])
+        .current_dir(dir.path())
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        std::fs::read_to_string(committed.join("README.md")).unwrap(),
+        "the committed study\n",
+        "a quick run wrote over results/"
+    );
+    assert_eq!(std::fs::read_dir(&committed).unwrap().count(), 1);
     for f in FILES {
         assert!(out.join(f).is_file(), "missing {f}");
     }

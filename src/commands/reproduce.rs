@@ -1,6 +1,7 @@
 //! `contactlab reproduce`: the main job, into one output folder that is
 //! replaced whole when everything is written.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Result;
@@ -14,6 +15,11 @@ use crate::study::lab::Tracker as _;
 use crate::study::lab::{Lab, write_artifacts};
 use crate::study::reproduce::{self, ReproduceSpec, readme};
 
+/// The committed study's folder, the default of a full run.
+pub const FULL_FOLDER: &str = "results";
+/// The default folder of `--quick`: never the committed study.
+pub const QUICK_FOLDER: &str = "results-quick";
+
 pub fn run(args: &ReproduceArgs) -> Result<()> {
     let settings = args.settings.resolve()?;
     let spec = if args.quick {
@@ -21,7 +27,15 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     } else {
         ReproduceSpec::full()
     };
-    let folder = RunFolder::create(&args.out)?;
+    // A smoke run never writes over the committed study unless told to.
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from(if args.quick {
+            QUICK_FOLDER
+        } else {
+            FULL_FOLDER
+        })
+    });
+    let folder = RunFolder::create(&out)?;
     let started = Instant::now();
     let dir = folder.path().to_path_buf();
     let log_line = |l: &str| {
