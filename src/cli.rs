@@ -148,11 +148,11 @@ pub struct Table1Args {
     /// Finest mesh (continuation runs 1/8, ..., h).
     #[arg(long, value_name = "1/2^k", default_value = "1/64")]
     pub h: MeshSize,
-    /// Problems to run.
-    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 3])]
+    /// Problems to run (`1 3` or `1,3`).
+    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = [1, 2, 3])]
     pub problems: Vec<u32>,
-    /// Continuation schedules to run.
-    #[arg(long, value_parser = choices::schedule(), value_delimiter = ',', default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
+    /// Continuation schedules to run (`revisit finest-only` or with commas).
+    #[arg(long, value_parser = choices::schedule(), value_delimiter = ',', num_args = 1.., default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
     pub schedules: Vec<Schedule>,
     /// Plane strain or plane stress.
     #[arg(long, value_parser = choices::plane(), default_value_t = PlaneModel::Strain)]

@@ -142,3 +142,40 @@ fn every_subcommand_has_help() {
         );
     }
 }
+
+/// `table1 --problems 1 3` (the form its help's `[default: 1 2 3]` shows)
+/// runs those two problems, as `--problems 1,3` does; and its help states
+/// the stopping mode it uses, the paper's (it said `[default: relative]`).
+#[test]
+fn table1_takes_the_problem_list_its_help_shows() {
+    for list in [&["1", "3"][..], &["1,3"][..]] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("t");
+        let mut args = vec![
+            "table1",
+            "--h",
+            "1/8",
+            "--schedules",
+            "revisit",
+            "--problems",
+        ];
+        args.extend_from_slice(list);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = contactlab(&args);
+        assert!(
+            o.status.success(),
+            "{list:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let csv = std::fs::read_to_string(out.join("table1.csv")).unwrap();
+        let problems: Vec<&str> = csv
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').next().unwrap())
+            .collect();
+        assert_eq!(problems, ["1", "3"], "{list:?}");
+    }
+    let help = String::from_utf8_lossy(&contactlab(&["table1", "--help"]).stdout).to_string();
+    let stopping = help.lines().find(|l| l.contains("--stopping <MODE>")).unwrap();
+    assert!(stopping.contains("[default: paper]"), "{stopping}");
+}

@@ -18,6 +18,8 @@ pub trait SolverSet: Clone + std::fmt::Debug + Default + Send + Sync + 'static {
     /// Whether the command offers --schedule (a command with its own
     /// schedule flag does not).
     const SCHEDULE: bool = true;
+    /// The stopping mode the command uses when --stopping is not given.
+    const STOPPING_DEFAULT: &'static str = "relative";
 }
 
 /// Every registered solver.
@@ -41,6 +43,7 @@ impl SolverSet for PapersMethod {
             .collect()
     }
     const SCHEDULE: bool = false;
+    const STOPPING_DEFAULT: &'static str = "paper";
 }
 
 /// Changes to the settings given on the command line; the knobs offered are
@@ -101,7 +104,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .long(STOPPING)
                     .value_name("MODE")
                     .value_parser(["relative", "paper"])
-                    .help("How tolerances and scale-dependent settings are read: `relative` to the problem's own scales (load, stiffness, length of Γ_K), so that the units do not matter, or `paper`: the paper's absolute values, for its Table 1 [default: relative]"),
+                    .help(format!("How tolerances and scale-dependent settings are read: `relative` to the problem's own scales (load, stiffness, length of Γ_K), so that the units do not matter, or `paper`: the paper's absolute values, for its Table 1 [default: {}]", S::STOPPING_DEFAULT)),
             )
             .arg(
                 Arg::new(EPSILON)
