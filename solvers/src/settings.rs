@@ -110,6 +110,11 @@ impl Kind {
         let value = match self {
             Kind::Custom { parse, .. } => parse(text)?,
             Kind::Word(_) => Value::String(text.trim().to_string()),
+            Kind::Flag => match text.trim().to_ascii_lowercase().as_str() {
+                "true" | "yes" | "on" | "1" => Value::Bool(true),
+                "false" | "no" | "off" | "0" => Value::Bool(false),
+                other => Value::String(other.to_string()),
+            },
             _ => parse_scalar(text)?,
         };
         if self.check(&value) {
@@ -144,7 +149,7 @@ impl Kind {
             Kind::Whole => "a whole number ≥ 0".into(),
             Kind::Fraction => "a number in [0, 1)".into(),
             Kind::Between(lo, hi) => format!("a number strictly between {lo} and {hi}"),
-            Kind::Flag => "true or false".into(),
+            Kind::Flag => "true or false (also yes/no, on/off, 1/0)".into(),
             Kind::Word(words) => format!("one of {}", words.join(", ")),
             Kind::Custom { describe, .. } => describe.to_string(),
         }
@@ -264,7 +269,11 @@ mod tests {
             (Kind::Count, &["1", "200"], &["0", "1.5", "-3"]),
             (Kind::Fraction, &["0", "0.5"], &["1", "-0.1"]),
             (Kind::Between(0.0, 2.0), &["1", "1.9"], &["0", "2", "3"]),
-            (Kind::Flag, &["true", "false"], &["yes", "1"]),
+            (
+                Kind::Flag,
+                &["true", "false", "yes", "No", "on", "OFF", "1", "0"],
+                &["maybe", "2", "", "truth"],
+            ),
             (Kind::Word(&["soc", "qp"]), &["soc", "qp"], &["socp", ""]),
         ];
         for (kind, good, bad) in cases {
