@@ -176,6 +176,9 @@ fn table1_takes_the_problem_list_its_help_shows() {
         assert_eq!(problems, ["1", "3"], "{list:?}");
     }
     let help = String::from_utf8_lossy(&contactlab(&["table1", "--help"]).stdout).to_string();
-    let stopping = help.lines().find(|l| l.contains("--stopping <MODE>")).unwrap();
+    let stopping = help
+        .lines()
+        .find(|l| l.contains("--stopping <MODE>"))
+        .unwrap();
     assert!(stopping.contains("[default: paper]"), "{stopping}");
 }

@@ -350,6 +350,21 @@ fn extreme_values_and_counts_get_one_line_naming_the_field() {
             "relaxation.smoothing",
         ),
         (["solve"].map(String::from).to_vec(), "--problem N"),
+        // A sweep that plans nothing says why instead of writing an empty
+        // study.
+        (
+            [
+                "sweep",
+                "--solvers",
+                "newton-coulomb",
+                "--no-work-precision",
+                "--out",
+                "/tmp/contactlab-never-written",
+            ]
+            .map(String::from)
+            .to_vec(),
+            "plans no trials",
+        ),
     ];
     for (args, expected) in cases {
         let o = contactlab().args(&args).output().unwrap();

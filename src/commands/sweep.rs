@@ -41,6 +41,14 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         work_scale: 1.0,
     };
     let extra = varied(args, &spec, &settings)?;
+    if extra.is_empty() && crate::study::sweep::plan(&spec, &settings)?.is_empty() {
+        let names: Vec<&str> = spec.solvers.iter().map(|e| e.name).collect();
+        bail!(
+            "the sweep plans no trials: {} {} no settings to vary in the registry's sweeps and --no-work-precision skips the work-precision diagram; give --vary PATH=V1,V2,... or drop --no-work-precision",
+            names.join(", "),
+            if names.len() == 1 { "has" } else { "have" }
+        );
+    }
     let folder = RunFolder::create(&args.out)?;
     let study = Sweep {
         spec,
