@@ -7,6 +7,7 @@ use crate::commands::run_study;
 use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
 use crate::study::lab::write_artifacts;
+use crate::study::stability::views::counts_markdown;
 use crate::study::stability::{Stability, StabilitySpec};
 
 pub fn run(args: &StabilityArgs) -> Result<()> {
@@ -25,14 +26,9 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
     let trials = findings.stability.map(|m| m.trials).unwrap_or_default();
-    let mut counts = std::collections::BTreeMap::new();
-    for t in &trials {
-        *counts
-            .entry(t.class.map_or("", |c| c.as_str()))
-            .or_insert(0) += 1;
-    }
     print(&format!(
-        "wrote {}/stability.csv ({} trials: {counts:?}), stability_friction.csv and charts\n",
+        "{}\nwrote {}/stability.csv ({} trials; every trial that did not simply converge, with its reason, in stability_summary.md), stability_friction.csv and charts\n",
+        counts_markdown(&trials),
         target.display(),
         trials.len()
     ))

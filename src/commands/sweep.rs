@@ -68,7 +68,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         findings.sweep.len()
     ));
     print(&format!(
-        "wrote {}/sweep.csv, sweep_timing.csv, references.csv and charts\n",
+        "wrote {}/sweep_summary.md (a table of every trial), sweep.csv, sweep_timing.csv, references.csv and charts\n",
         target.display()
     ))
 }

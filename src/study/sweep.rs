@@ -169,9 +169,43 @@ impl Study for Sweep {
         let measured = lab.measure(&specs, Keep::default())?;
         let mut artifacts = crate::study::compare::trials_artifacts(STUDY, &measured)?;
         artifacts.push(Artifact::csv(self.references_file, &lab.candidates(), &[])?);
+        artifacts.push(Artifact::text(
+            "sweep_summary.md",
+            &summary_markdown(&measured),
+        ));
         let pairs: Vec<_> = measured.iter().map(|m| (&m.trial, &m.timing)).collect();
         artifacts.extend(Artifact::charts(sweep_charts(&pairs)));
         findings.sweep = measured;
         Ok(artifacts)
     }
+}
+
+/// The sweep as a readable table: one row per trial with the setting it
+/// varies, its certified status, the certificate, its work and its time.
+pub fn summary_markdown(measured: &[crate::study::runner::Measured]) -> String {
+    let mut s = String::from(
+        "| group | solver | problem | h | law | setting | status | certificate | iterations (friction: outer / inner) | time (s) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for m in measured {
+        let r = &m.trial;
+        let setting = r.setting.as_ref().map_or("defaults".to_string(), |s| {
+            format!("{} = {}", s.path, s.value)
+        });
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {:.1e} | {}: {} / {} | {:.3} |\n",
+            r.group,
+            r.solver.name,
+            r.scene,
+            r.h,
+            r.law.as_str(),
+            setting,
+            r.status,
+            r.residual(),
+            r.friction_iterations,
+            r.outer_iterations,
+            r.inner_iterations,
+            m.timing.seconds_min
+        );
+    }
+    s
 }

@@ -161,6 +161,10 @@ impl Study for Stability {
             Artifact::csv("stability.csv", &rows, &[])?,
             Artifact::csv("stability_friction.csv", &map.steps, &[])?,
             Artifact::csv("stability_uniqueness.csv", &map.uniqueness, &[])?,
+            Artifact::text(
+                "stability_summary.md",
+                &views::summary_markdown(&map.trials),
+            ),
         ];
         if let Some(file) = self.references_file {
             artifacts.push(Artifact::csv(file, &lab.candidates(), &[])?);

@@ -33,6 +33,26 @@ fn failing_text(t: &Trial) -> String {
 /// Counts per group and class, then every trial that did not simply
 /// converge with its reason.
 pub fn summary_markdown(trials: &[Trial]) -> String {
+    let mut s = counts_markdown(trials);
+    s += "\n| group | solver | problem | h | setting | class | reason |\n|---|---|---|---|---|---|---|\n";
+    for r in trials.iter().filter(|r| class_of(r) != Class::Converged) {
+        let reason: String = r.reason.chars().take(220).collect();
+        s += &format!(
+            "| {} | {} | {} | {} | {} | **{}** | {} |\n",
+            r.group,
+            r.solver.name,
+            r.scene,
+            r.h,
+            setting(r),
+            class_text(r),
+            reason.replace('|', "/")
+        );
+    }
+    s
+}
+
+/// The trials counted per group and class, as a Markdown table.
+pub fn counts_markdown(trials: &[Trial]) -> String {
     let mut groups: Vec<&str> = trials.iter().map(|r| r.group.as_str()).collect();
     groups.dedup();
     let mut s = String::from("| group | ");
@@ -55,20 +75,6 @@ pub fn summary_markdown(trials: &[Trial]) -> String {
             s += &format!(" {n} |");
         }
         s += "\n";
-    }
-    s += "\n| group | solver | problem | h | setting | class | reason |\n|---|---|---|---|---|---|---|\n";
-    for r in trials.iter().filter(|r| class_of(r) != Class::Converged) {
-        let reason: String = r.reason.chars().take(220).collect();
-        s += &format!(
-            "| {} | {} | {} | {} | {} | **{}** | {} |\n",
-            r.group,
-            r.solver.name,
-            r.scene,
-            r.h,
-            setting(r),
-            class_text(r),
-            reason.replace('|', "/")
-        );
     }
     s
 }
