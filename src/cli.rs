@@ -305,6 +305,15 @@ fn positive_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
+fn friction_bound(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(g) if g.is_finite() && g >= 0.0 && g < crate::mechanics::scene::MAGNITUDES.1 => Ok(g),
+        _ => Err(format!(
+            "'{s}': give a friction bound (force per length) ≥ 0, e.g. 10"
+        )),
+    }
+}
+
 fn positive_tolerance(s: &str) -> Result<f64, String> {
     let t = s
         .trim()
@@ -322,6 +331,11 @@ fn positive_tolerance(s: &str) -> Result<f64, String> {
 pub struct ExportArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
+    /// A uniform friction bound g (force per length) to state in
+    /// contact.csv, making the instance a given-friction subproblem that
+    /// `certify --given-friction` checks; without it the column g is empty.
+    #[arg(long, value_name = "G", value_parser = friction_bound)]
+    pub friction_bound: Option<f64>,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,

@@ -550,7 +550,7 @@ fn a_nearly_balanced_load_holds_the_contact_to_the_net_load() {
     });
     scene.name = "nearly balanced".into();
     let d = Discretization::new(&scene, scene.finest()).unwrap();
-    export(&inst, &scene, &d, "test").unwrap();
+    export(&inst, &scene, &d, None, "test").unwrap();
     let run = solve_scene(
         &scene,
         Friction::Coulomb,

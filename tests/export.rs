@@ -33,7 +33,7 @@ fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
     let mut scene = Scene::paper_problem(1).unwrap();
     scene.set_finest(MeshSize::from_level(4).unwrap());
     let d = Discretization::new(&scene, scene.finest()).unwrap();
-    export(&inst, &scene, &d, "test").unwrap();
+    export(&inst, &scene, &d, None, "test").unwrap();
     // The same problem, to the last bit.
     let p = import(&inst).unwrap().problem;
     assert_eq!(p.n(), d.problem.n());
@@ -97,4 +97,60 @@ fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
     let o = certify(&inst, &["--displacements", v_file.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--displacements"));
+}
+
+/// An instance states a friction bound only when told: without
+/// `--friction-bound`, contact.csv's column g is empty and `certify
+/// --given-friction` refuses in one line (it once read zeros there and
+/// silently checked the frictionless problem); with `--friction-bound 5`
+/// every row says 5.
+#[test]
+fn the_friction_bound_of_an_instance_is_stated_or_refused() {
+    let bin = env!("CARGO_BIN_EXE_contactlab");
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, bounded) = (dir.path().join("plain"), dir.path().join("bounded"));
+    for (out, extra) in [
+        (&plain, &[][..]),
+        (&bounded, &["--friction-bound", "5"][..]),
+    ] {
+        let o = Command::new(bin)
+            .args(["export", "--problem", "1", "--h", "1/8", "--out"])
+            .arg(out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let g_column = |folder: &Path| -> Vec<String> {
+        let text = std::fs::read_to_string(folder.join("contact.csv")).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let at = header.iter().position(|h| *h == "g").unwrap();
+        lines
+            .map(|l| l.split(',').nth(at).unwrap().to_string())
+            .collect()
+    };
+    assert!(g_column(&plain).iter().all(String::is_empty));
+    assert!(g_column(&bounded).iter().all(|g| g == "5.0" || g == "5"));
+    let n = import(&plain).unwrap().problem.n();
+    let zeros = dir.path().join("v.txt");
+    std::fs::write(&zeros, "0\n".repeat(n)).unwrap();
+    let o = Command::new(bin)
+        .args(["certify", "--given-friction", "--instance"])
+        .arg(&plain)
+        .arg("--displacements")
+        .arg(&zeros)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("states no friction bound"), "{stderr}");
+    assert_eq!(
+        import(&bounded).unwrap().g,
+        Some(vec![
+            5.0;
+            import(&bounded).unwrap().problem.contacts().len()
+        ])
+    );
 }

@@ -91,7 +91,7 @@ fn scipy_reads_every_export_bit_for_bit() {
     let dir = std::env::temp_dir().join(format!("contactlab-scipy-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    export(&dir, &scene, &d, "test").unwrap();
+    export(&dir, &scene, &d, None, "test").unwrap();
     let read = read_with_scipy(py, &dir, &["A", "M", "f", "rigid_modes"]);
     let p = &d.problem;
     let n = p.n();

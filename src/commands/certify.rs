@@ -68,7 +68,13 @@ pub fn run(args: &CertifyArgs) -> Result<()> {
         (None, None) => bail!("no answer given: add --displacements FILE and/or --forces FILE"),
     };
     let friction = if args.given_friction {
-        Friction::Given(&instance.g)
+        match &instance.g {
+            Some(g) => Friction::Given(g),
+            None => bail!(
+                "--given-friction: {}/contact.csv states no friction bound (its column g is empty); export with --friction-bound G, fill the column with the bound of the subproblem you solved, or certify the Coulomb law (drop --given-friction)",
+                args.instance.display()
+            ),
+        }
     } else {
         Friction::Coulomb
     };

@@ -14,7 +14,13 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     let folder = RunFolder::create(&args.out)?;
     let d = Discretization::new(&scene, scene.finest())?;
-    export(folder.path(), &scene, &d, &git_commit())?;
+    export(
+        folder.path(),
+        &scene,
+        &d,
+        args.friction_bound,
+        &git_commit(),
+    )?;
     let target = folder.commit()?;
     print(&format!(
         "wrote {} at h = {} ({} unknowns, {} contact nodes) into {}: A.mtx, M.mtx, f.mtx, rigid_modes.mtx, contact.csv, S.mtx, b_condensed.mtx, z_condensed.mtx, problem.json\n",

@@ -43,8 +43,10 @@ pub struct ContactRow {
     pub s: usize,
     /// Trapezoid weight w_i of Γ_K.
     pub weight: f64,
-    /// Friction bound g_i of the given-friction subproblem (force/length).
-    pub g: f64,
+    /// Friction bound g_i of the given-friction subproblem (force/length);
+    /// empty when the instance states none (the Coulomb problem's bound is
+    /// 𝓕p of its own answer, unknown before it is solved).
+    pub g: Option<f64>,
     /// Coulomb coefficient 𝓕_i.
     pub coefficient: f64,
 }
@@ -94,7 +96,15 @@ fn dense(rows: usize, cols: usize, at: impl Fn(usize, usize) -> f64) -> CooMatri
 }
 
 /// Writes the instance `d` (the finest level of `scene`) into `dir`.
-pub fn export(dir: &Path, scene: &Scene, d: &Discretization, git_commit: &str) -> Result<()> {
+/// `bound`: the uniform friction bound g of a given-friction subproblem to
+/// state in `contact.csv` (None: its column g stays empty).
+pub fn export(
+    dir: &Path,
+    scene: &Scene,
+    d: &Discretization,
+    bound: Option<f64>,
+    git_commit: &str,
+) -> Result<()> {
     let p = &d.problem;
     let n = p.n();
     write_atomic(&dir.join("A.mtx"), &mtx_symmetric(&CooMatrix::from(p.a())))?;
@@ -119,7 +129,7 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization, git_commit: &str) -
             t: c.t,
             s: c.s,
             weight: c.weight,
-            g: 0.0,
+            g: bound,
             coefficient: c.coefficient,
         })
         .collect();
@@ -187,7 +197,7 @@ pub fn export(dir: &Path, scene: &Scene, d: &Discretization, git_commit: &str) -
             ("rigid_modes.mtx", "kernel of A, n x k"),
             (
                 "contact.csv",
-                "node,x,t,s,weight,g,coefficient per contact node",
+                "node,x,t,s,weight,g,coefficient per contact node (g, the bound of a given-friction subproblem, empty unless export was given --friction-bound)",
             ),
             (
                 "S.mtx",
@@ -292,21 +302,31 @@ pub fn import(dir: &Path) -> Result<Instance> {
     let (contacts, g) = read_contacts(&dir.join("contact.csv"), m)?;
     let problem = ContactProblem::new(a, f, mass, contacts, modes)
         .with_context(|| format!("{shown}: the files do not form a contact problem"))?;
-    Friction::Given(&g)
-        .check(&problem)
-        .map_err(|e| anyhow::anyhow!("{shown}: contact.csv's column g: {e}"))?;
+    let g = match g.iter().filter(|g| g.is_some()).count() {
+        0 => None,
+        given if given == g.len() => Some(g.into_iter().flatten().collect::<Vec<f64>>()),
+        given => bail!(
+            "{shown}: contact.csv's column g gives a bound for {given} of {} nodes; give it for every node or for none",
+            g.len()
+        ),
+    };
+    if let Some(g) = &g {
+        Friction::Given(g)
+            .check(&problem)
+            .map_err(|e| anyhow::anyhow!("{shown}: contact.csv's column g: {e}"))?;
+    }
     Ok(Instance { problem, g })
 }
 
 /// An exported problem read back: the problem, and the friction bound g of
-/// its given-friction subproblem (`contact.csv`'s column g).
+/// its given-friction subproblem (`contact.csv`'s column g; None if empty).
 pub struct Instance {
     pub problem: ContactProblem,
-    pub g: Vec<f64>,
+    pub g: Option<Vec<f64>>,
 }
 
 /// Reads exactly `m` rows of `contact.csv`, node i on row i.
-fn read_contacts(path: &Path, m: usize) -> Result<(Vec<ContactNode>, Vec<f64>)> {
+fn read_contacts(path: &Path, m: usize) -> Result<(Vec<ContactNode>, Vec<Option<f64>>)> {
     let (file, _) = guarded::open(path)
         .map_err(|reason| anyhow::anyhow!("cannot read {}: {reason}", path.display()))?;
     contacts_from(file, m, &path.display().to_string())
@@ -319,7 +339,7 @@ pub fn contacts_from(
     source: impl std::io::Read,
     m: usize,
     shown: &str,
-) -> Result<(Vec<ContactNode>, Vec<f64>)> {
+) -> Result<(Vec<ContactNode>, Vec<Option<f64>>)> {
     let mut contacts = Vec::with_capacity(m);
     let mut g = Vec::with_capacity(m);
     for (i, rec) in guarded::csv_reader(source)
