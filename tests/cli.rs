@@ -100,13 +100,22 @@ fn solve_writes_the_documented_profile_and_summary() {
     assert_eq!(summary["solver_status"], "converged");
     assert_eq!(summary["certificate"]["law"], "coulomb");
     assert_eq!(summary["h"], "1/8");
-    // No temporary files are left behind: the two files and the run's marker.
+    // No temporary files are left behind: the four files and the run's marker.
     let mut names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, [".contactlab-run", "profile.csv", "summary.json"]);
+    assert_eq!(
+        names,
+        [
+            ".contactlab-run",
+            "displacements.mtx",
+            "forces.csv",
+            "profile.csv",
+            "summary.json"
+        ]
+    );
     let siblings: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -154,3 +154,51 @@ fn the_friction_bound_of_an_instance_is_stated_or_refused() {
         ])
     );
 }
+
+/// `solve --out` writes its answer in the exported unknowns and node order:
+/// `certify` certifies it from displacements.mtx and from forces.csv.
+#[test]
+fn a_solve_can_be_certified_from_its_own_files() {
+    let bin = env!("CARGO_BIN_EXE_contactlab");
+    let dir = tempfile::tempdir().unwrap();
+    let (run, inst) = (dir.path().join("run"), dir.path().join("inst"));
+    for args in [
+        vec![
+            "solve",
+            "--problem",
+            "1",
+            "--h",
+            "1/16",
+            "--solver",
+            "newton-coulomb",
+            "--out",
+        ],
+        vec!["export", "--problem", "1", "--h", "1/16", "--out"],
+    ] {
+        let out = if args[0] == "solve" { &run } else { &inst };
+        let o = Command::new(bin).args(&args).arg(out).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    for (flag, file) in [
+        ("--displacements", "displacements.mtx"),
+        ("--forces", "forces.csv"),
+    ] {
+        let o = Command::new(bin)
+            .args(["certify", "--instance"])
+            .arg(&inst)
+            .arg(flag)
+            .arg(run.join(file))
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{flag}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            stdout.contains("certificate: certified"),
+            "{flag}: {stdout}"
+        );
+    }
+}

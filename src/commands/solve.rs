@@ -47,6 +47,26 @@ pub fn run(args: &SolveArgs) -> Result<()> {
             &to_csv(&solved.profile(), &PROFILE_COLUMNS)?,
         )?;
         write_atomic(&dir.join("summary.json"), &json_bytes(&summary)?)?;
+        // The answer itself, in the unknowns and node order of `export`, so
+        // that `certify --displacements` or `--forces` can check any run.
+        let answer = &solved.outcome.solution;
+        let v = &answer.v;
+        write_atomic(
+            &dir.join("displacements.mtx"),
+            crate::io::matrix_market::write_coordinate(
+                v.len(),
+                1,
+                v.iter().enumerate().map(|(i, &x)| (i, 0, x)),
+                false,
+            )
+            .as_bytes(),
+        )?;
+        let mut forces = csv::Writer::from_writer(Vec::new());
+        forces.write_record(["pressure", "friction_traction"])?;
+        for (p, q) in answer.pressure.iter().zip(&answer.friction_traction) {
+            forces.write_record([format!("{p:e}"), format!("{q:e}")])?;
+        }
+        write_atomic(&dir.join("forces.csv"), &forces.into_inner()?)?;
         if args.vtu {
             let text =
                 crate::formats::vtu::vtu(&solved.finest, &scene.material, &solved.outcome.solution);
@@ -54,7 +74,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         }
         let target = folder.commit()?;
         report += &format!(
-            "wrote {} and {}{}\n",
+            "wrote {}, displacements.mtx, forces.csv and {}{}\n",
             target.join("profile.csv").display(),
             target.join("summary.json").display(),
             if args.vtu { " and field.vtu" } else { "" }
