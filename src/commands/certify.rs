@@ -7,11 +7,10 @@
 
 use anyhow::{Result, bail};
 use contactlab_solvers::Friction;
-use contactlab_solvers::reduction::dual::displacements_from_forces;
 
 use crate::certificate::certify;
 use crate::cli::CertifyArgs;
-use crate::formats::instance::{import, read_forces, read_vector};
+use crate::formats::instance::{complete_answer, import, read_forces, read_vector};
 use crate::io::output::print;
 
 pub fn run(args: &CertifyArgs) -> Result<()> {
@@ -28,45 +27,17 @@ pub fn run(args: &CertifyArgs) -> Result<()> {
         .as_deref()
         .map(|path| read_forces(path, m))
         .transpose()?;
-    let (v, p, q, how) = match (v, forces) {
-        (Some(v), Some((p, q))) => (v, p, q, "displacements and contact forces as given"),
-        (Some(v), None) => {
-            // A v − f + Σ w p e_t − Σ w q e_s = 0 at the contact rows.
-            let (offsets, cols, vals) = problem.a().csr_data();
-            let row = |i: usize| -> f64 {
-                (offsets[i]..offsets[i + 1])
-                    .map(|k| vals[k] * v[cols[k]])
-                    .sum::<f64>()
-                    - problem.f()[i]
-            };
-            let p = problem
-                .contacts()
-                .iter()
-                .map(|c| -row(c.t) / c.weight)
-                .collect();
-            let q = problem
-                .contacts()
-                .iter()
-                .map(|c| row(c.s) / c.weight)
-                .collect();
-            (
-                v,
-                p,
-                q,
-                "displacements as given; contact forces from stationarity at the contact rows",
-            )
+    if v.is_none() && forces.is_none() {
+        bail!("no answer given: add --displacements FILE and/or --forces FILE");
+    }
+    let how = match (&v, &forces) {
+        (Some(_), Some(_)) => "displacements and contact forces as given",
+        (Some(_), None) => {
+            "displacements as given; contact forces from stationarity at the contact rows"
         }
-        (None, Some((p, q))) => {
-            let v = displacements_from_forces(problem, &p, &q).map_err(anyhow::Error::msg)?;
-            (
-                v,
-                p,
-                q,
-                "contact forces as given; displacements from the elastic response to them",
-            )
-        }
-        (None, None) => bail!("no answer given: add --displacements FILE and/or --forces FILE"),
+        _ => "contact forces as given; displacements from the elastic response to them",
     };
+    let (v, p, q) = complete_answer(problem, v, forces)?;
     let friction = if args.given_friction {
         match &instance.g {
             Some(g) => Friction::Given(g),

@@ -475,3 +475,47 @@ pub fn forces_from(
     }
     Ok((p, q))
 }
+
+/// An answer made whole for the certificate: displacements v, pressures p
+/// and friction tractions q. Given v alone, the forces follow from
+/// stationarity at the contact rows, A v − f + Σ w p e_t − Σ w q e_s = 0;
+/// given the forces alone, v follows from the elastic response to them
+/// ([`displacements_from_forces`]). `certify` and the Python package's
+/// `certify` both complete an answer here.
+pub fn complete_answer(
+    problem: &ContactProblem,
+    v: Option<Vec<f64>>,
+    forces: Option<(Vec<f64>, Vec<f64>)>,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    Ok(match (v, forces) {
+        (Some(v), Some((p, q))) => (v, p, q),
+        (Some(v), None) => {
+            let (offsets, cols, vals) = problem.a().csr_data();
+            let row = |i: usize| -> f64 {
+                (offsets[i]..offsets[i + 1])
+                    .map(|k| vals[k] * v[cols[k]])
+                    .sum::<f64>()
+                    - problem.f()[i]
+            };
+            let p = problem
+                .contacts()
+                .iter()
+                .map(|c| -row(c.t) / c.weight)
+                .collect();
+            let q = problem
+                .contacts()
+                .iter()
+                .map(|c| row(c.s) / c.weight)
+                .collect();
+            (v, p, q)
+        }
+        (None, Some((p, q))) => {
+            let v = contactlab_solvers::reduction::dual::displacements_from_forces(problem, &p, &q)
+                .map_err(anyhow::Error::msg)?;
+            (v, p, q)
+        }
+        (None, None) => {
+            anyhow::bail!("no answer given: give the displacements and/or the contact forces")
+        }
+    })
+}
