@@ -1,0 +1,363 @@
+"""contactlab from Python: the paper's contact problem, its certified solvers
+and its studies (Zhiltsov & Namm 2019, two plane elastic bodies in unilateral
+contact with Coulomb friction).
+
+Everything numerical is contactlab's own Rust code, the code the command
+line runs: a ``Problem`` is the assembled scene, ``solve`` is ``contactlab
+solve``, ``certify`` is ``contactlab certify``. This module only turns its
+arrays into numpy and scipy objects.
+
+    import contactlab as cl
+    p = cl.Problem.paper(1, h="1/64")
+    r = cl.solve(p, solver="newton-coulomb")
+    r.status, r.certificate.passed, r.pressure.max()
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+
+import numpy as np
+import scipy.sparse
+
+from . import _contactlab
+from ._contactlab import Error
+
+__all__ = [
+    "Error",
+    "Problem",
+    "Contact",
+    "Certificate",
+    "Result",
+    "Trial",
+    "solvers",
+    "solve",
+    "certify",
+    "work_precision",
+]
+
+
+def solvers() -> List[str]:
+    """The registered solvers' names, as ``contactlab solve --solver`` takes them."""
+    return list(_contactlab.solvers())
+
+
+@dataclass(frozen=True)
+class Contact:
+    """The contact nodes of a problem on Γ_K, one entry per node.
+
+    ``t`` and ``s`` index the jump t = v'_2 − v''_2 and the slip
+    s = v'_1 − v''_1 in the unknowns; ``weight`` is the trapezoid weight
+    w_i, ``coefficient`` the friction coefficient 𝓕_i and ``x`` the node's
+    abscissa.
+    """
+
+    t: np.ndarray
+    s: np.ndarray
+    weight: np.ndarray
+    coefficient: np.ndarray
+    x: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+
+def _csr(parts, n: int) -> scipy.sparse.csr_array:
+    indptr, indices, data = parts
+    return scipy.sparse.csr_array((data, indices, indptr), shape=(n, n))
+
+
+class Problem:
+    """One scene assembled on its finest mesh, in the problem's own unknowns
+    (boundary conditions and the (t, s) change of variables on Γ_K applied).
+
+    ``A`` (stiffness) and ``M`` (the mass matrix of the proximal term) are
+    ``scipy.sparse.csr_array``; ``f`` is the load vector; ``contact`` the
+    contact nodes; ``rigid_mode`` the kernel of A (the upper body's vertical
+    translation).
+    """
+
+    def __init__(self, inner: "_contactlab.Problem"):
+        self._p = inner
+
+    @classmethod
+    def paper(
+        cls,
+        number: int,
+        h: Optional[str] = None,
+        young: Optional[float] = None,
+        poisson: Optional[float] = None,
+        friction: Optional[float] = None,
+    ) -> "Problem":
+        """The paper's problem 1, 2 or 3 (``h`` such as "1/64": the finest mesh)."""
+        return cls(_contactlab.Problem.paper(number, h, young, poisson, friction))
+
+    @classmethod
+    def from_scene(
+        cls,
+        path: str,
+        h: Optional[str] = None,
+        young: Optional[float] = None,
+        poisson: Optional[float] = None,
+        friction: Optional[float] = None,
+    ) -> "Problem":
+        """A scene file, as ``contactlab solve --scene`` reads it."""
+        return cls(_contactlab.Problem.from_scene(str(path), h, young, poisson, friction))
+
+    @property
+    def name(self) -> str:
+        return self._p.name
+
+    @property
+    def h(self) -> str:
+        return self._p.h
+
+    @property
+    def n(self) -> int:
+        return self._p.n
+
+    @property
+    def A(self) -> scipy.sparse.csr_array:
+        return _csr(self._p._a(), self.n)
+
+    @property
+    def M(self) -> scipy.sparse.csr_array:
+        return _csr(self._p._m(), self.n)
+
+    @property
+    def f(self) -> np.ndarray:
+        return self._p.f
+
+    @property
+    def contact(self) -> Contact:
+        return Contact(**self._p._contact())
+
+    @property
+    def rigid_mode(self) -> np.ndarray:
+        return self._p.rigid_mode
+
+    def __repr__(self) -> str:
+        return repr(self._p)
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """The verdict of contactlab's certificate on an answer: each condition's
+    violation in the problem's own scales (nonpenetration, complementarity,
+    the friction law, stationarity, force balance, ...), and whether the
+    largest is within the tolerance."""
+
+    passed: bool
+    tolerance: float
+    residual: float
+    summary: str
+    violations: Dict[str, float]
+    law: str = "coulomb"
+
+    @classmethod
+    def _of(cls, d: Mapping) -> "Certificate":
+        return cls(
+            passed=bool(d["passed"]),
+            tolerance=float(d["tolerance"]),
+            residual=float(d["residual"]),
+            summary=str(d["summary"]),
+            violations=dict(d["violations"]),
+            law=str(d.get("law", "coulomb")),
+        )
+
+
+@dataclass(frozen=True)
+class Result:
+    """One certified solve. ``status`` is the certified verdict,
+    ``solver_status`` the solver's own claim."""
+
+    solver: str
+    status: str
+    solver_status: str
+    detail: str
+    certificate: Certificate
+    displacements: np.ndarray
+    pressure: np.ndarray
+    friction_traction: np.ndarray
+    bound: np.ndarray
+    iterations: Dict[str, int]
+    seconds: float
+    seconds_setup: float
+    #: The contact zone, node by node: the bytes ``solve --out`` writes to
+    #: ``profile.csv``.
+    profile_csv: str = ""
+
+
+def _settings(settings: Optional[Mapping[str, object]]) -> List[tuple]:
+    out = []
+    for path, value in (settings or {}).items():
+        if isinstance(value, bool):
+            value = "true" if value else "false"
+        out.append((str(path), str(value)))
+    return out
+
+
+def solve(
+    problem: Problem,
+    solver: Optional[str] = None,
+    settings: Optional[Mapping[str, object]] = None,
+    bound: Optional[Sequence[float]] = None,
+    target: Optional[float] = None,
+) -> Result:
+    """Solves the problem's Coulomb law (or, given ``bound``, the
+    given-friction subproblem at that bound) with a registered solver (the
+    oracle if none) and certifies the answer: ``contactlab solve``.
+
+    ``settings`` maps ``OWNER.NAME`` paths to values, as ``--set`` does
+    (``{"newton-coulomb.tolerance": 1e-12}``). ``target`` sets the solver's
+    accuracy knob and ε below it and certifies at it, as the benchmark does.
+    """
+    g = None if bound is None else [float(x) for x in bound]
+    d = _contactlab.solve(problem._p, solver, _settings(settings), g, target)
+    return Result(
+        solver=d["solver"],
+        status=d["status"],
+        solver_status=d["solver_status"],
+        detail=d["detail"],
+        certificate=Certificate._of(d["certificate"]),
+        displacements=d["displacements"],
+        pressure=d["pressure"],
+        friction_traction=d["friction_traction"],
+        bound=d["bound"],
+        iterations=dict(d["iterations"]),
+        seconds=float(d["seconds"]),
+        seconds_setup=float(d["seconds_setup"]),
+        profile_csv=d["profile_csv"],
+    )
+
+
+def _array(x, name: str) -> Optional[np.ndarray]:
+    if x is None:
+        return None
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    if a.ndim != 1:
+        raise Error(f"{name}: give a one-dimensional array (it has shape {a.shape})")
+    return a
+
+
+def certify(
+    problem: Problem,
+    displacements=None,
+    forces: Optional[tuple] = None,
+    bound=None,
+    tolerance: Optional[float] = None,
+) -> Certificate:
+    """The certificate of an answer computed anywhere: ``contactlab certify``.
+
+    Give ``displacements`` (the contact forces then follow from stationarity
+    at the contact rows), ``forces=(pressure, friction_traction)`` per
+    contact node (the displacements then follow from the elastic response),
+    or both. With ``bound`` the given-friction law at that bound is checked,
+    else the Coulomb law.
+    """
+    p = q = None
+    if forces is not None:
+        try:
+            p, q = forces
+        except (TypeError, ValueError):
+            raise Error("forces: give a pair (pressure, friction_traction)") from None
+    d = _contactlab.certify(
+        problem._p,
+        _array(displacements, "displacements"),
+        _array(p, "pressure"),
+        _array(q, "friction_traction"),
+        _array(bound, "bound"),
+        tolerance,
+    )
+    return Certificate._of(d)
+
+
+#: A solver written in Python: called as ``fn(problem, target)``, it gives
+#: the displacements (an array of ``problem.n``), or a dict with
+#: ``displacements`` and/or ``forces`` = (pressure, friction_traction).
+PythonSolver = Callable[[Problem, float], object]
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One run of a study: a solver at a target accuracy, certified."""
+
+    solver: str
+    target: float
+    certified: bool
+    certificate: Certificate
+    seconds: float
+    status: str
+    python: bool = False
+
+
+def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) -> Trial:
+    start = time.perf_counter()
+    answer = fn(problem, target)
+    seconds = time.perf_counter() - start
+    if isinstance(answer, Mapping):
+        c = certify(
+            problem,
+            displacements=answer.get("displacements"),
+            forces=answer.get("forces"),
+            tolerance=target,
+        )
+    else:
+        c = certify(problem, displacements=answer, tolerance=target)
+    return Trial(
+        solver=name,
+        target=target,
+        certified=c.passed,
+        certificate=c,
+        seconds=seconds,
+        status="converged" if c.passed else "inaccurate",
+        python=True,
+    )
+
+
+def work_precision(
+    problem: Problem,
+    solvers: Union[Iterable[str], Mapping[str, Union[str, PythonSolver]]],
+    targets: Sequence[float] = (1e-4, 1e-6, 1e-8),
+    chart: Optional[str] = None,
+) -> List[Trial]:
+    """A work-precision study: each solver at each target accuracy, every
+    answer certified by contactlab's certificate at that target, timed.
+
+    ``solvers`` lists registered solvers' names, or maps display names to a
+    registered name or to a Python function (see ``PythonSolver``): a
+    Python solver's answers pass through the same certificate and are drawn
+    in the same chart. With ``chart`` (a path ending in .svg) the trials are
+    drawn as the command line draws its work-precision charts: the
+    certificate's largest violation against seconds, certified points joined
+    and failed ones as crosses.
+    """
+    if not isinstance(solvers, Mapping):
+        solvers = {name: name for name in solvers}
+    trials: List[Trial] = []
+    for name, how in solvers.items():
+        for target in targets:
+            if callable(how):
+                trials.append(_python_trial(name, how, problem, float(target)))
+            else:
+                r = solve(problem, solver=how, target=float(target))
+                trials.append(
+                    Trial(
+                        solver=name,
+                        target=float(target),
+                        certified=r.certificate.passed,
+                        certificate=r.certificate,
+                        seconds=r.seconds,
+                        status=r.status,
+                    )
+                )
+    if chart is not None:
+        _contactlab._work_precision_chart(
+            f"Work against precision: {problem.name}, h = {problem.h}",
+            "largest violation in the certificate (relative)",
+            [(t.solver, t.certificate.residual, t.seconds, t.certified) for t in trials],
+            str(chart),
+        )
+    return trials

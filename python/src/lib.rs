@@ -1,0 +1,425 @@
+//! `contactlab._contactlab`: the compiled half of the Python package.
+//!
+//! It exposes the library's own functions, not copies of them: a problem is
+//! the scene assembled by [`Discretization`] (the one the CLI solves), a
+//! solve is [`solve_scene`] with settings resolved by [`Settings::set_text`]
+//! (the CLI's `--set`), a certificate is [`certify`] (the CLI's `certify`).
+//! The Python layer (`contactlab/__init__.py`) turns the plain arrays given
+//! here into scipy and numpy objects. Every error is one
+//! `contactlab.Error` with the CLI's one-line message.
+
+use contactlab::certificate::certify as certify_answer;
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
+use contactlab::settings::Settings;
+use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solvers::{Friction, Silent, registry};
+use nalgebra_sparse::CsrMatrix;
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use pyo3::create_exception;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+create_exception!(
+    _contactlab,
+    Error,
+    PyValueError,
+    "A contactlab error: the same one-line message as the command line's."
+);
+
+fn err(e: impl std::fmt::Display) -> PyErr {
+    Error::new_err(e.to_string())
+}
+
+fn anyhow_err(e: anyhow::Error) -> PyErr {
+    Error::new_err(format!("{e:#}"))
+}
+
+/// The scene of a problem and its assembly on the finest mesh.
+#[pyclass(frozen, module = "contactlab._contactlab")]
+struct Problem {
+    scene: Scene,
+    finest: Discretization,
+}
+
+/// The scene overrides that `solve --problem/--scene` take as flags.
+#[allow(clippy::too_many_arguments)]
+fn build(
+    mut scene: Scene,
+    h: Option<&str>,
+    young: Option<f64>,
+    poisson: Option<f64>,
+    friction: Option<f64>,
+) -> PyResult<Problem> {
+    if let Some(h) = h {
+        let h: MeshSize = h.parse().map_err(|m| err(format!("h: {m}")))?;
+        scene.set_finest(h);
+    }
+    if let Some(e) = young {
+        scene.material.young = e;
+    }
+    if let Some(nu) = poisson {
+        scene.material.poisson = nu;
+    }
+    if let Some(f) = friction {
+        scene.friction = f;
+    }
+    scene.validate().map_err(err)?;
+    let finest = Discretization::new(&scene, scene.finest()).map_err(err)?;
+    Ok(Problem { scene, finest })
+}
+
+/// A sparse matrix as numpy arrays: (indptr, indices, data).
+type Csr<'py> = (
+    Bound<'py, PyArray1<usize>>,
+    Bound<'py, PyArray1<usize>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+fn csr<'py>(py: Python<'py>, a: &CsrMatrix<f64>) -> Csr<'py> {
+    let (offsets, cols, vals) = a.csr_data();
+    (
+        offsets.to_vec().into_pyarray(py),
+        cols.to_vec().into_pyarray(py),
+        vals.to_vec().into_pyarray(py),
+    )
+}
+
+#[pymethods]
+impl Problem {
+    /// The paper's problem `number` (1, 2 or 3).
+    #[staticmethod]
+    #[pyo3(signature = (number, h=None, young=None, poisson=None, friction=None))]
+    fn paper(
+        number: u32,
+        h: Option<&str>,
+        young: Option<f64>,
+        poisson: Option<f64>,
+        friction: Option<f64>,
+    ) -> PyResult<Self> {
+        let scene = Scene::paper_problem(number).map_err(err)?;
+        build(scene, h, young, poisson, friction)
+    }
+
+    /// A scene file (TOML, as `solve --scene` reads it).
+    #[staticmethod]
+    #[pyo3(signature = (path, h=None, young=None, poisson=None, friction=None))]
+    fn from_scene(
+        path: std::path::PathBuf,
+        h: Option<&str>,
+        young: Option<f64>,
+        poisson: Option<f64>,
+        friction: Option<f64>,
+    ) -> PyResult<Self> {
+        let (scene, _) = contactlab::formats::scene_file::load(&path).map_err(err)?;
+        build(scene, h, young, poisson, friction)
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        self.scene.name.clone()
+    }
+
+    #[getter]
+    fn h(&self) -> String {
+        self.finest.h().to_string()
+    }
+
+    #[getter]
+    fn n(&self) -> usize {
+        self.finest.problem.n()
+    }
+
+    /// A in CSR: (indptr, indices, data).
+    fn _a<'py>(&self, py: Python<'py>) -> Csr<'py> {
+        csr(py, self.finest.problem.a())
+    }
+
+    /// M, the mass matrix of the proximal term, in CSR.
+    fn _m<'py>(&self, py: Python<'py>) -> Csr<'py> {
+        csr(py, &self.finest.problem.mass())
+    }
+
+    #[getter]
+    fn f<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.finest.problem.f().to_vec().into_pyarray(py)
+    }
+
+    /// The contact nodes: t, s (indices of the jump and slip unknowns),
+    /// weight, coefficient (𝓕) and x, each an array.
+    fn _contact<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = self.finest.problem.contacts();
+        let d = PyDict::new(py);
+        d.set_item(
+            "t",
+            c.iter().map(|c| c.t).collect::<Vec<_>>().into_pyarray(py),
+        )?;
+        d.set_item(
+            "s",
+            c.iter().map(|c| c.s).collect::<Vec<_>>().into_pyarray(py),
+        )?;
+        d.set_item(
+            "weight",
+            c.iter()
+                .map(|c| c.weight)
+                .collect::<Vec<_>>()
+                .into_pyarray(py),
+        )?;
+        d.set_item(
+            "coefficient",
+            c.iter()
+                .map(|c| c.coefficient)
+                .collect::<Vec<_>>()
+                .into_pyarray(py),
+        )?;
+        d.set_item("x", self.finest.contact_x().into_pyarray(py))?;
+        Ok(d)
+    }
+
+    /// The upper body's vertical translation in the unknowns (A's kernel).
+    #[getter]
+    fn rigid_mode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.finest.kernel_vector().into_pyarray(py)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Problem({}, h = {}, {} unknowns, {} contact nodes)",
+            self.scene.name,
+            self.finest.h(),
+            self.finest.problem.n(),
+            self.finest.problem.contacts().len()
+        )
+    }
+}
+
+/// The registered solvers' names.
+#[pyfunction]
+fn solvers() -> Vec<&'static str> {
+    registry::names()
+}
+
+/// Settings from `{path: value}`, each as the command line's `--set
+/// path=value` (values given as text).
+fn settings_from(items: Vec<(String, String)>) -> PyResult<Settings> {
+    let mut s = Settings::default();
+    for (path, text) in items {
+        s.set_text(&path, &text).map_err(err)?;
+    }
+    s.validate().map_err(err)?;
+    Ok(s)
+}
+
+/// The certificate as a dict: passed, tolerance, summary, violations by
+/// condition.
+fn certificate_dict<'py>(
+    py: Python<'py>,
+    c: &contactlab::certificate::Certificate,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("passed", c.passed())?;
+    d.set_item("tolerance", c.tolerance)?;
+    d.set_item("summary", c.summary())?;
+    d.set_item("residual", c.residual())?;
+    let v = PyDict::new(py);
+    for (cond, x) in c.measures() {
+        v.set_item(cond.as_str(), x)?;
+    }
+    d.set_item("violations", v)?;
+    Ok(d)
+}
+
+/// One solve of the problem's Coulomb law (or the given-friction subproblem
+/// at `bound`), certified: the CLI's `solve`.
+#[pyfunction]
+#[pyo3(signature = (problem, solver=None, settings=Vec::new(), bound=None, target=None))]
+fn solve<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    solver: Option<&str>,
+    settings: Vec<(String, String)>,
+    bound: Option<Vec<f64>>,
+    target: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let entry = match solver {
+        Some(name) => solver_entry(name).map_err(anyhow_err)?,
+        None => registry::with_role(registry::Role::Oracle)
+            .ok_or_else(|| err("no oracle is registered"))?,
+    };
+    let mut settings = settings_from(settings)?;
+    if let Some(t) = target {
+        // The benchmark's rule: the solver's accuracy knob and ε at a safety
+        // factor below the target, the certificate at the target.
+        let t = contactlab::certificate::check_tolerance(t)
+            .map_err(|m| err(format!("target = {m}")))?;
+        settings = contactlab::study::benchmark::target_settings(entry, &settings, t)
+            .map_err(anyhow_err)?;
+    }
+    let m = problem.finest.problem.contacts().len();
+    if let Some(g) = &bound {
+        if g.len() != m {
+            return Err(err(format!(
+                "bound has {} values, expected one per contact node ({m})",
+                g.len()
+            )));
+        }
+        if g.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err(err("bound: give finite values ≥ 0"));
+        }
+    }
+    let scene = &problem.scene;
+    let solved = py
+        .detach(|| {
+            let friction = match &bound {
+                Some(g) => Friction::Given(g),
+                None => Friction::Coulomb,
+            };
+            solve_scene(scene, friction, entry, &settings, &mut Silent)
+        })
+        .map_err(anyhow_err)?;
+    let o = &solved.outcome;
+    let d = PyDict::new(py);
+    d.set_item("solver", entry.name)?;
+    d.set_item("status", o.status.to_string())?;
+    d.set_item("solver_status", o.claim.to_string())?;
+    d.set_item("detail", o.detail.clone())?;
+    d.set_item("certificate", certificate_dict(py, &o.certificate)?)?;
+    let s = &o.solution;
+    d.set_item("displacements", s.v.clone().into_pyarray(py))?;
+    d.set_item("pressure", s.pressure.clone().into_pyarray(py))?;
+    d.set_item(
+        "friction_traction",
+        s.friction_traction.clone().into_pyarray(py),
+    )?;
+    d.set_item("bound", o.bound.clone().into_pyarray(py))?;
+    let it = PyDict::new(py);
+    it.set_item("friction", o.friction_iterations())?;
+    it.set_item("outer", o.work.outer)?;
+    it.set_item("inner", o.work.inner)?;
+    d.set_item("iterations", it)?;
+    d.set_item("seconds", o.timing.total())?;
+    d.set_item("seconds_setup", o.timing.setup)?;
+    // The bytes `solve --out` writes to profile.csv, by the same code.
+    let profile = contactlab::io::csv::to_csv(
+        &solved.profile(),
+        &contactlab::mechanics::contact_zone::PROFILE_COLUMNS,
+    )
+    .map_err(anyhow_err)?;
+    d.set_item(
+        "profile_csv",
+        String::from_utf8_lossy(&profile).into_owned(),
+    )?;
+    Ok(d)
+}
+
+/// The certificate of an answer computed elsewhere: the CLI's `certify`.
+/// Give the displacements, or the contact forces (pressure and friction
+/// traction), or both; the missing half follows as `certify` derives it.
+#[pyfunction]
+#[pyo3(signature = (problem, displacements=None, pressure=None, friction_traction=None, bound=None, tolerance=None))]
+fn certify<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    displacements: Option<PyReadonlyArray1<'py, f64>>,
+    pressure: Option<PyReadonlyArray1<'py, f64>>,
+    friction_traction: Option<PyReadonlyArray1<'py, f64>>,
+    bound: Option<PyReadonlyArray1<'py, f64>>,
+    tolerance: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let cp = &problem.finest.problem;
+    let (n, m) = (cp.n(), cp.contacts().len());
+    let slice = |name: &str, a: &Option<PyReadonlyArray1<'py, f64>>, len: usize| {
+        a.as_ref()
+            .map(|a| -> PyResult<Vec<f64>> {
+                let v = a.as_slice().map_err(err)?.to_vec();
+                if v.len() != len {
+                    return Err(err(format!(
+                        "{name} has {} values, expected {len}",
+                        v.len()
+                    )));
+                }
+                if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                    return Err(err(format!("{name}[{i}] is {}: give finite values", v[i])));
+                }
+                Ok(v)
+            })
+            .transpose()
+    };
+    let v = slice("displacements", &displacements, n)?;
+    let p = slice("pressure", &pressure, m)?;
+    let q = slice("friction_traction", &friction_traction, m)?;
+    let g = slice("bound", &bound, m)?;
+    let forces = match (p, q) {
+        (Some(p), Some(q)) => Some((p, q)),
+        (None, None) => None,
+        _ => {
+            return Err(err("give both pressure and friction_traction, or neither"));
+        }
+    };
+    let (v, p, q) =
+        contactlab::formats::instance::complete_answer(cp, v, forces).map_err(anyhow_err)?;
+    let tolerance = match tolerance {
+        Some(t) => contactlab::certificate::check_tolerance(t)
+            .map_err(|m| err(format!("tolerance = {m}")))?,
+        None => Settings::default().certificate.tolerance,
+    };
+    let friction = match &g {
+        Some(g) => Friction::Given(g),
+        None => Friction::Coulomb,
+    };
+    let c = certify_answer(cp, friction, &v, &p, &q, tolerance);
+    let d = certificate_dict(py, &c)?;
+    d.set_item("law", friction.law().as_str())?;
+    Ok(d)
+}
+
+/// A work-precision chart of a study's trials, drawn by the charts of the
+/// command line: per solver, certified points joined, failed ones as
+/// crosses. `trials`: (solver, accuracy, seconds, certified).
+#[pyfunction]
+fn _work_precision_chart(
+    title: String,
+    x_label: String,
+    trials: Vec<(String, f64, f64, bool)>,
+    path: std::path::PathBuf,
+) -> PyResult<()> {
+    use contactlab::io::charts::{Chart, Series};
+    let mut names: Vec<&str> = Vec::new();
+    for (s, ..) in &trials {
+        if !names.contains(&s.as_str()) {
+            names.push(s);
+        }
+    }
+    let mut series = Vec::new();
+    for name in names {
+        let points = |ok: bool| {
+            let mut p: Vec<(f64, f64)> = trials
+                .iter()
+                .filter(|t| t.0 == name && t.3 == ok && t.1 > 0.0 && t.2 > 0.0)
+                .map(|t| (t.1, t.2))
+                .collect();
+            p.sort_by(|a, b| a.0.total_cmp(&b.0));
+            p
+        };
+        series.extend(Series::certified_and_failed(
+            name,
+            points(true),
+            points(false),
+        ));
+    }
+    let chart = Chart::new(&title, &x_label, "seconds", true, true, series);
+    chart.write(&path).map_err(anyhow_err)
+}
+
+#[pymodule]
+fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Problem>()?;
+    m.add_function(wrap_pyfunction!(solvers, m)?)?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(certify, m)?)?;
+    m.add_function(wrap_pyfunction!(_work_precision_chart, m)?)?;
+    m.add("Error", m.py().get_type::<Error>())?;
+    Ok(())
+}

@@ -1,0 +1,193 @@
+"""The Python package against the command line and against the mechanics.
+
+Each test names the mistake it catches.
+"""
+
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import contactlab as cl
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def cli() -> pathlib.Path:
+    """The command line built from the same checkout (built if missing)."""
+    given = os.environ.get("CONTACTLAB_BIN")
+    if given:
+        return pathlib.Path(given)
+    binary = ROOT / "target" / "release" / "contactlab"
+    if not binary.exists():
+        subprocess.run(["cargo", "build", "--release"], cwd=ROOT, check=True)
+    return binary
+
+
+def read_mtx_vector(path: pathlib.Path) -> np.ndarray:
+    """A Matrix Market coordinate column, read by scipy."""
+    import scipy.io
+
+    return np.asarray(scipy.io.mmread(str(path)).todense()).ravel()
+
+
+@pytest.fixture(scope="module")
+def p32():
+    return cl.Problem.paper(1, h="1/32")
+
+
+def test_the_registry_is_the_command_lines():
+    # A package that kept its own list of solvers would miss new ones.
+    names = cl.solvers()
+    assert "newton-coulomb" in names and "clarabel" in names and "tnnmg" in names
+    assert len(names) == len(set(names))
+
+
+def test_the_matrices_are_the_problems(p32):
+    # A wrong CSR conversion (indices and indptr swapped, a transposed
+    # block) breaks symmetry or the rigid mode.
+    A, M, f = p32.A, p32.M, p32.f
+    assert A.shape == (p32.n, p32.n) and M.shape == A.shape and f.shape == (p32.n,)
+    assert abs(A - A.T).max() <= 1e-12 * abs(A).max()
+    # A's kernel is the upper body's vertical translation (paper's
+    # semicoercive problem): A z = 0 to round-off.
+    z = p32.rigid_mode
+    assert np.linalg.norm(z) > 0
+    assert np.linalg.norm(A @ z) <= 1e-10 * abs(A).max() * np.linalg.norm(z)
+    # M is positive definite: zᵀ M z > 0 for the rigid mode.
+    assert z @ (M @ z) > 0
+    c = p32.contact
+    assert len(c) == 33  # nodes 0, 1/32, ..., 1 on Γ_K at h = 1/32
+    assert np.all(np.diff(c.x) > 0) and np.all(c.weight > 0)
+    assert set(c.t).isdisjoint(set(c.s))
+
+
+def test_a_solve_is_the_command_lines_to_the_bit(tmp_path, p32):
+    # A package that resolved settings or assembled the scene differently
+    # from `contactlab solve` gives other bits.
+    out = tmp_path / "run"
+    subprocess.run(
+        [
+            str(cli()),
+            "solve",
+            "--problem",
+            "1",
+            "--h",
+            "1/32",
+            "--solver",
+            "newton-coulomb",
+            "--set",
+            "newton-coulomb.tolerance=1e-12",
+            "--out",
+            str(out),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    r = cl.solve(p32, solver="newton-coulomb", settings={"newton-coulomb.tolerance": 1e-12})
+    assert r.status == "converged" and r.certificate.passed
+    assert (out / "profile.csv").read_text() == r.profile_csv
+    v = read_mtx_vector(out / "displacements.mtx")
+    assert v.shape == r.displacements.shape
+    assert np.array_equal(v, r.displacements)
+    forces = np.loadtxt(out / "forces.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(forces[:, 0], r.pressure)
+    assert np.array_equal(forces[:, 1], r.friction_traction)
+
+
+def test_certify_accepts_the_true_answer_and_refuses_a_wrong_one(p32):
+    # A certificate that trusted its input, or checked the wrong rows,
+    # would pass the wrong answers.
+    r = cl.solve(p32, solver="newton-coulomb", settings={"newton-coulomb.tolerance": 1e-12})
+    assert cl.certify(p32, displacements=r.displacements).passed
+    assert cl.certify(p32, forces=(r.pressure, r.friction_traction)).passed
+    assert cl.certify(
+        p32, displacements=r.displacements, forces=(r.pressure, r.friction_traction)
+    ).passed
+
+    # Push the bodies into each other at one contact node: penetration.
+    u = r.displacements.copy()
+    t = p32.contact.t
+    u[t[t.size // 2]] = 1e-3
+    c = cl.certify(p32, displacements=u)
+    assert not c.passed
+    assert c.violations["nonpenetration"] > c.tolerance
+
+    # The frictionless answer is not the Coulomb answer at 𝓕 = 0.5.
+    free = cl.solve(p32, solver="newton", bound=np.zeros(len(p32.contact)))
+    assert free.certificate.passed  # it solves its own, frictionless, problem
+    assert not cl.certify(p32, displacements=free.displacements).passed
+
+    # A pressure that pulls (p < 0) is refused even with the matching v.
+    p = r.pressure.copy()
+    p[np.argmax(p)] *= -1
+    assert not cl.certify(p32, forces=(p, r.friction_traction)).passed
+
+
+def test_errors_are_the_command_lines_one_line_messages(p32):
+    with pytest.raises(cl.Error, match="unknown solver 'nope': the registered solvers are"):
+        cl.solve(p32, solver="nope")
+    with pytest.raises(cl.Error, match=r"apgd.tolerance = 'x' is invalid"):
+        cl.solve(p32, solver="apgd", settings={"apgd.tolerance": "x"})
+    with pytest.raises(cl.Error, match="unknown problem 4"):
+        cl.Problem.paper(4)
+    with pytest.raises(cl.Error, match="displacements has 3 values, expected 2162"):
+        cl.certify(p32, displacements=np.zeros(3))
+    with pytest.raises(cl.Error, match=r"displacements\[0\] is NaN: give finite values"):
+        cl.certify(p32, displacements=np.full(p32.n, np.nan))
+    with pytest.raises(cl.Error, match="no answer given"):
+        cl.certify(p32)
+
+
+def projected_gradient(problem, target):
+    """FISTA on the given-friction subproblem (t ≤ 0 projected, w g|s|
+    soft-thresholded) inside the friction fixed point g = 𝓕 p: the README's
+    example of a solver written in numpy."""
+    import scipy.sparse.linalg as sla
+
+    A, f, c = problem.A, problem.f, problem.contact
+    L = sla.eigsh(A, k=1, return_eigenvectors=False)[0]
+    v, g = np.zeros(problem.n), np.zeros(len(c))
+    for _ in range(30):
+        y, v_old, a = v.copy(), v.copy(), 1.0
+        for _ in range(20000):
+            z = y - (A @ y - f) / L
+            z[c.t] = np.minimum(z[c.t], 0.0)
+            z[c.s] = np.sign(z[c.s]) * np.maximum(abs(z[c.s]) - c.weight * g / L, 0.0)
+            a_new = (1 + np.sqrt(1 + 4 * a * a)) / 2
+            y, v_old, v, a = z + (a - 1) / a_new * (z - v), v, z, a_new
+            if np.linalg.norm(v - v_old) <= 1e-3 * target * np.linalg.norm(v):
+                break
+        p = -(A @ v - f)[c.t] / c.weight
+        g_new = c.coefficient * np.maximum(p, 0.0)
+        if np.max(abs(g_new - g)) <= target * max(np.max(abs(g_new)), 1e-300):
+            break
+        g = g_new
+    return v
+
+
+def test_a_python_solver_passes_through_a_study(tmp_path):
+    # A study that skipped the certificate for Python solvers, or dropped
+    # them from its trials or chart, fails here.
+    p = cl.Problem.paper(1, h="1/8")
+
+    def liar(problem, target):
+        return np.zeros(problem.n)  # claims nothing, answers nothing
+
+    chart = tmp_path / "wp.svg"
+    trials = cl.work_precision(
+        p,
+        {"newton-coulomb": "newton-coulomb", "numpy FISTA": projected_gradient, "zeros": liar},
+        targets=[1e-4],
+        chart=str(chart),
+    )
+    by = {t.solver: t for t in trials}
+    assert set(by) == {"newton-coulomb", "numpy FISTA", "zeros"}
+    assert by["numpy FISTA"].python and by["numpy FISTA"].certified
+    assert by["numpy FISTA"].certificate.residual <= 1e-4
+    assert by["newton-coulomb"].certified and not by["newton-coulomb"].python
+    assert not by["zeros"].certified  # v = 0 leaves the load unbalanced
+    svg = chart.read_text()
+    assert "numpy FISTA" in svg and "zeros: not certified" in svg
