@@ -46,7 +46,7 @@ use serde::{Deserialize, Serialize};
 pub const DEFAULT_TOLERANCE: f64 = 1e-5;
 
 /// The largest tolerance the certificate may be given, wherever it is set
-/// (a scene file, `--certify-tol`, `certify --tolerance`, benchmark
+/// (a scene file, `--certify-tol`, `certify --certify-tol`, benchmark
 /// targets): a violation of 1 % of the load is already a wrong answer, and
 /// a tolerance of 1e300 switched the certificate off (contact force 0
 /// against a load of 20 was `converged`).

@@ -15,7 +15,7 @@ use crate::mechanics::mesh_size::MeshSize;
 
 mod choices;
 mod scene_args;
-mod settings_args;
+pub mod settings_args;
 
 pub use scene_args::SceneArgs;
 pub use settings_args::{AllSolvers, PapersMethod, SettingsArgs, SolverSet, knob_flag, with_flag};
@@ -36,9 +36,13 @@ pub enum Command {
     /// nonzeros of A, contact nodes, the applied load, the measured dimension
     /// of the kernel of A and the problem's scales.
     Info(InfoArgs),
+    /// Every setting of the fixed point and of each solver (or of one): its
+    /// path for --set and scene files, its flag, its default and the paper's
+    /// value. `solve --help` leaves these out.
+    Settings(SettingsListArgs),
     /// Solve a scene's Coulomb problem with one solver and certify the answer.
-    /// Prints a summary; with --out writes profile.csv and summary.json (and
-    /// field.vtu with --vtu).
+    /// Prints a summary; with --out writes profile.csv, summary.json and the
+    /// answer (displacements.mtx, forces.csv; field.vtu with --vtu).
     Solve(SolveArgs),
     /// The paper's Table 1: its method with mesh continuation on problems
     /// 1-3 at the paper's settings (--stopping paper unless told otherwise),
@@ -60,9 +64,10 @@ pub enum Command {
     /// three problems, profiles, a sweep, the stability map, the speed
     /// measurements of `bench`, the benchmark, the discretization error,
     /// charts, a manifest and a README, all into --out (default results/).
-    /// About 2.6 h on 2 cores, 1.5 h of it the paper's method at h = 1/256
-    /// to a certified 1e-6 (the manifest records the wall time; --quick: a
-    /// minute).
+    /// About 20 min on 2 cores; --long adds the studies that take hours (the
+    /// paper's method by sweeps at equal accuracy on 1/128 and 1/256, the
+    /// whole benchmark collection): about 2.5 h. It states its estimate as it
+    /// starts; the manifest records each study's time (--quick: a minute).
     Reproduce(ReproduceArgs),
     /// The stability map: each solver across stress conditions (its registry
     /// entry's, the friction coefficient, loads near and past condition
@@ -70,7 +75,8 @@ pub enum Command {
     /// or refused. Writes stability.csv, stability_friction.csv and charts
     /// into --out.
     Stability(StabilityArgs),
-    /// Measure speed: assembly, each solver's inner kernel against one SpMV,
+    /// Speed against the mesh size on problem 1 (not to be confused with
+    /// `benchmark`, success over a collection): assembly, each solver's inner kernel against one SpMV,
     /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
     /// 1/256, as medians after a warm-up on one thread and as ratios to the
     /// best sparse factorization here (faer on both cores, symbolic analysis
@@ -78,7 +84,7 @@ pub enum Command {
     /// one factorization and the fastest certified direct Coulomb solver, once
     /// each; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
     /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle
-    /// at 1/256, once each without the budget (about 2 h, 1.5 h of it the
+    /// at 1/256, once each without the time limit (about 2 h, 1.5 h of it the
     /// paper's method at 1/256; --quick: seconds); and where the fastest
     /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
     /// --quick), each in a fresh process; the multigrid goals (about 2 min):
@@ -88,8 +94,9 @@ pub enum Command {
     /// against newton-coulomb at 1/64 and 1/256. Writes performance.csv,
     /// performance_goals.md and charts into --out.
     Bench(BenchArgs),
-    /// The benchmark over the problem collection (the paper's problems over
-    /// 𝓕 and h, sideways loads, nearly unbounded loads, fine meshes): every
+    /// Success over a problem collection (not to be confused with `bench`,
+    /// speed against the mesh size), the paper's problems over
+    /// 𝓕 and h, sideways loads, nearly unbounded loads and fine meshes: every
     /// solver on every instance at each target accuracy, with a time limit
     /// per run. Writes benchmark.csv (one row per run), success rates,
     /// shifted geometric means and performance profiles into --out. With
@@ -117,6 +124,13 @@ pub enum Command {
 /// The names of the registered solvers, for clap.
 fn solver_names() -> Vec<&'static str> {
     registry::names()
+}
+
+#[derive(Debug, Args)]
+pub struct SettingsListArgs {
+    /// Only this solver's settings.
+    #[arg(value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
+    pub solver: Option<String>,
 }
 
 #[derive(Debug, Args)]
@@ -171,8 +185,9 @@ pub struct CompareArgs {
     /// Solvers to compare [default: every registered solver].
     #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
     pub solvers: Vec<String>,
-    /// Timed runs per trial after the first (times: their minimum).
-    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
+    /// Timed runs per trial after the first, warm-up run (times: their
+    /// minimum and median). Formerly `--repeats`.
+    #[arg(long = "runs", alias = "repeats", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
     /// Folder for compare.csv, compare_timing.csv and references.csv (replaced whole).
     #[arg(long, value_name = "DIR")]
@@ -205,8 +220,9 @@ pub struct SweepArgs {
     /// The registry's short value lists.
     #[arg(long)]
     pub quick: bool,
-    /// Extra timed runs of each work-precision trial.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
+    /// Timed runs of each work-precision trial after the first, warm-up
+    /// run. Formerly `--repeats`.
+    #[arg(long = "runs", alias = "repeats", default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
@@ -232,12 +248,19 @@ pub struct BenchArgs {
     /// A small run for tests (h = 1/8, 1/16, one run each).
     #[arg(long)]
     pub quick: bool,
-    /// Timed runs after the warm-up (the median is reported) [default: 3; quick: 1].
+    /// Timed runs after the first, warm-up run (the median is reported)
+    /// [default: 3; quick: 1].
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100))]
     pub runs: Option<u64>,
-    /// Seconds: a solver slower than this on one mesh (or predicted to be on
-    /// the next) is not run on finer meshes [default: 15; quick: 5].
-    #[arg(long, allow_hyphen_values = true)]
+    /// Wall-clock limit per run in seconds; a solver slower than this on one
+    /// mesh (or predicted to be on the next) is not run on finer meshes
+    /// [default: 15; quick: 5]. Formerly `--budget`.
+    #[arg(
+        long = "time-limit",
+        alias = "budget",
+        value_name = "SECONDS",
+        allow_hyphen_values = true
+    )]
     pub budget: Option<f64>,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
@@ -249,8 +272,14 @@ pub struct BenchArgs {
 #[derive(Debug, Args)]
 pub struct ReproduceArgs {
     /// A small run for tests and smoke checks (h = 1/16, fewer points).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "long")]
     pub quick: bool,
+    /// Also the studies that take hours (about 2.5 h on a 2-core machine):
+    /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
+    /// and the whole benchmark collection (73 instances, not its core 43).
+    /// Without it the run takes about 20 minutes.
+    #[arg(long)]
+    pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:
     /// results-quick, so that a smoke run never replaces the committed study].
     #[arg(long, value_name = "DIR")]
@@ -358,8 +387,10 @@ pub struct CertifyArgs {
     /// instead of the Coulomb problem.
     #[arg(long)]
     pub given_friction: bool,
-    /// The tolerance every condition's violation must meet.
-    #[arg(long, value_name = "TOL", default_value_t = crate::certificate::DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
+    /// The certificate's tolerance: the largest violation of any condition,
+    /// in the problem's scales, that certifies the answer (as `--certify-tol`
+    /// everywhere else; `--tolerance` is kept as an alias).
+    #[arg(long = "certify-tol", alias = "tolerance", value_name = "TOL", default_value_t = crate::certificate::DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
     pub tolerance: f64,
 }
 
@@ -421,6 +452,7 @@ pub fn run(cli: Cli) -> Result<()> {
     use crate::commands as c;
     match cli.command {
         Command::Info(a) => c::info::run(&a),
+        Command::Settings(a) => c::settings::run(&a),
         Command::Solve(a) => c::solve::run(&a),
         Command::Table1(a) => c::table1::run(&a),
         Command::Compare(a) => c::compare::run(&a),

@@ -321,7 +321,7 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
                 "--out",
                 "/tmp/contactlab-never-written",
             ]),
-            "--budget",
+            "--time-limit",
         ),
     ];
     for (input, expected) in &cases {

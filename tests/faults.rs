@@ -322,7 +322,7 @@ fn extreme_values_and_counts_get_one_line_naming_the_field() {
             ]
             .map(String::from)
             .to_vec(),
-            "--repeats",
+            "--runs",
         ),
         (
             [

@@ -194,7 +194,7 @@ impl Knob {
     }
 
     /// Its help with its default: `what it does [default 1e-10]`.
-    pub(crate) fn help_with_default(&self, defaults: fn(Stopping) -> Value) -> String {
+    pub fn help_with_default(&self, defaults: fn(Stopping) -> Value) -> String {
         format!("{} [default {}]", self.help, self.default_text(defaults))
     }
 }

@@ -145,7 +145,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .action(ArgAction::Append)
                     .allow_hyphen_values(true)
                     .help(format!(
-                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable)",
+                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable). Each solver's settings are also flags (--relaxation-r 1e8); `contactlab settings [SOLVER]` lists them all",
                         crate::settings::example_path()
                     )),
             );
@@ -165,7 +165,9 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                         .long(knob_flag(e.name, k))
                         .value_name("VALUE")
                         .allow_hyphen_values(true)
-                        .help_heading(format!("Settings of {}", e.name))
+                        // Listed by `contactlab settings`, not in every
+                        // command's help (which they made 150 lines long).
+                        .hide(true)
                         .help(e.help(k)),
                 );
             }

@@ -25,7 +25,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if let Some(b) = args.budget {
         if !(b > 0.0 && b <= crate::cli::MAX_SECONDS) {
             bail!(
-                "--budget = {} is invalid: give a positive number of seconds up to a week ({})",
+                "--time-limit = {} is invalid: give a positive number of seconds up to a week ({})",
                 crate::mechanics::scene::Shown::shown(&b),
                 crate::cli::MAX_SECONDS
             );

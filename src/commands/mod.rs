@@ -8,6 +8,7 @@ pub mod compare;
 pub mod export;
 pub mod info;
 pub mod reproduce;
+pub mod settings;
 pub mod solve;
 pub mod stability;
 pub mod sweep;
