@@ -24,8 +24,10 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     let settings = args.settings.resolve()?;
     let spec = if args.quick {
         ReproduceSpec::quick()
+    } else if args.long {
+        ReproduceSpec::long()
     } else {
-        ReproduceSpec::full()
+        ReproduceSpec::standard()
     };
     // A smoke run never writes over the committed study unless told to.
     let out = args.out.clone().unwrap_or_else(|| {
@@ -44,9 +46,18 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             started.elapsed().as_secs_f64()
         ))
     };
+    let (_, estimate) = reproduce::estimate(&spec, &settings);
+    log_line(&format!(
+        "{estimate}{}",
+        if spec.long || spec.quick {
+            ""
+        } else {
+            "; --long adds the studies that take hours"
+        }
+    ));
     let bars = Bars::new("reproduce");
     let mut lab = Lab::new(settings.clone(), &log_line, &bars);
-    let (findings, artifacts) = reproduce::run(&spec, &mut lab)?;
+    let (findings, artifacts, study_seconds) = reproduce::run(&spec, &mut lab)?;
     bars.finish();
     log_line("charts and README");
     let files = write_artifacts(&dir, &artifacts)?;
@@ -61,6 +72,10 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             "reproduce": spec,
             "solvers": contactlab_solvers::registry::names(),
             "wall_seconds": seconds,
+            "study_seconds": study_seconds
+                .iter()
+                .map(|(n, s)| (n.clone(), serde_json::json!(s)))
+                .collect::<serde_json::Map<_, _>>(),
         }),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;

@@ -75,6 +75,10 @@ impl Shard {
 #[derive(Clone)]
 pub struct BenchmarkSpec {
     pub quick: bool,
+    /// Only the collection's core ([`collection::in_core`]): every instance
+    /// up to h = 1/32 and one finer, the collection of a default
+    /// `reproduce`, which must finish in minutes.
+    pub core: bool,
     /// Target accuracies, in the certificate's measure.
     pub targets: Vec<f64>,
     /// Wall-clock limit per run, seconds.
@@ -88,6 +92,7 @@ impl BenchmarkSpec {
     pub fn new(quick: bool, solvers: Vec<&'static Entry>) -> Self {
         Self {
             quick,
+            core: false,
             targets: vec![1e-4, 1e-8],
             time_limit: if quick { 5.0 } else { 20.0 },
             shard: Shard::WHOLE,
@@ -191,7 +196,10 @@ pub type Planned = (Instance, TrialSpec, f64);
 
 pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<Planned>> {
     let mut out = Vec::new();
-    let instances = collection(spec.quick)?;
+    let instances: Vec<_> = collection(spec.quick)?
+        .into_iter()
+        .filter(|i| !spec.core || collection::in_core(i))
+        .collect();
     if spec.shard.of > instances.len() {
         anyhow::bail!(
             "--shard {}/{}: the {}collection has {} instances, so shards beyond the {}th would be empty; use at most {} shards",

@@ -35,6 +35,10 @@ use crate::study::table1::Table1;
 #[derive(Clone, Serialize)]
 pub struct ReproduceSpec {
     pub quick: bool,
+    /// The long run (`--long`): the paper's method with sweeps at equal
+    /// accuracy up to 1/256 and the whole benchmark collection, about
+    /// 2.5 hours on the 2-core machine of `results/`.
+    pub long: bool,
     /// Finest mesh of the problems (continuation from 1/8).
     pub h: MeshSize,
     pub problems: Vec<u32>,
@@ -53,11 +57,27 @@ pub struct ReproduceSpec {
 }
 
 impl ReproduceSpec {
-    /// The full run.
-    pub fn full() -> Self {
+    /// The default run, in minutes: every headline finding, with the
+    /// paper's method by sweeps at equal accuracy to 1/64 only (at 1/256 it
+    /// runs by multigrid in `bench`), the comparison's timings as medians
+    /// of two runs and the benchmark on its core collection.
+    pub fn standard() -> Self {
+        let mut spec = Self::long();
+        spec.long = false;
+        spec.repeats = 1;
+        spec.bench.equal_accuracy.retain(|h| h.level() <= 6);
+        spec.benchmark.core = true;
+        spec
+    }
+
+    /// The long run (`--long`): the paper's method by sweeps at equal
+    /// accuracy up to 1/256 (about an hour at 1/256 alone) and the whole
+    /// benchmark collection.
+    pub fn long() -> Self {
         let sweep_h = MeshSize::from_level(5).expect("in range");
         Self {
             quick: false,
+            long: true,
             h: MeshSize::from_level(6).expect("in range"),
             problems: vec![1, 2, 3],
             repeats: 2,
@@ -78,6 +98,7 @@ impl ReproduceSpec {
         let h = MeshSize::from_level(4).expect("in range");
         Self {
             quick: true,
+            long: false,
             h,
             problems: vec![1, 2, 3],
             repeats: 0,
@@ -136,13 +157,96 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Study>>
     ]
 }
 
-/// Runs every study of `spec` in `lab`; gives their findings and their
-/// artifacts (the charts, the manifest and the README are the caller's).
-pub fn run(spec: &ReproduceSpec, lab: &mut Lab) -> Result<(Findings, Vec<Artifact>)> {
+/// Seconds each study of a default run took on the 2-core machine of
+/// `results/` (its `manifest.json`, `study_seconds`), and of the long run
+/// where it differs: the estimate a run states as it starts.
+fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
+    let standard = match study {
+        "table1" => 100.0,
+        "compare" => 190.0,
+        "sweep" => 120.0,
+        "stability" => 150.0,
+        "bench" => 250.0,
+        "benchmark" => 400.0,
+        "discretization_error" => 120.0,
+        _ => 60.0,
+    };
+    let long = match study {
+        "compare" => 270.0,
+        "bench" => 5700.0,
+        "benchmark" => 2400.0,
+        _ => standard,
+    };
+    match (spec.quick, spec.long) {
+        (true, _) => standard / 100.0,
+        (false, true) => long,
+        (false, false) => standard,
+    }
+}
+
+/// A duration for people: seconds, minutes or hours.
+pub fn duration(seconds: f64) -> String {
+    if seconds < 90.0 {
+        format!("{seconds:.0} s")
+    } else if seconds < 5400.0 {
+        format!("{:.0} min", seconds / 60.0)
+    } else {
+        format!("{:.1} h", seconds / 3600.0)
+    }
+}
+
+/// What a run expects to take, stated as it starts.
+pub fn estimate(spec: &ReproduceSpec, settings: &Settings) -> (f64, String) {
+    let names: Vec<&str> = studies(spec, settings).iter().map(|s| s.name()).collect();
+    let total: f64 = names.iter().map(|n| estimated_seconds(n, spec)).sum();
+    let each = names
+        .iter()
+        .map(|n| format!("{n} {}", duration(estimated_seconds(n, spec))))
+        .collect::<Vec<_>>()
+        .join(", ");
+    (
+        total,
+        format!(
+            "{} studies, about {} on a 2-core machine like the one of results/ ({each})",
+            names.len(),
+            duration(total)
+        ),
+    )
+}
+
+/// Wall seconds of each study of a run, in order.
+pub type StudySeconds = Vec<(String, f64)>;
+
+/// Runs every study of `spec` in `lab`; gives their findings, their
+/// artifacts (the charts, the manifest and the README are the caller's)
+/// and the seconds each took. After each study it logs how long it took
+/// and, from the estimates scaled by how this run compares so far, the
+/// time left.
+pub fn run(spec: &ReproduceSpec, lab: &mut Lab) -> Result<(Findings, Vec<Artifact>, StudySeconds)> {
     let mut findings = Findings::default();
     let mut artifacts = Vec::new();
-    for study in studies(spec, &lab.settings) {
+    let mut seconds = Vec::new();
+    let studies = studies(spec, &lab.settings);
+    let estimates: Vec<f64> = studies
+        .iter()
+        .map(|s| estimated_seconds(s.name(), spec))
+        .collect();
+    let (mut spent, mut expected) = (0.0, 0.0);
+    for (k, study) in studies.iter().enumerate() {
+        let started = std::time::Instant::now();
         artifacts.extend(lab.run(study.as_ref(), &mut findings)?);
+        let took = started.elapsed().as_secs_f64();
+        spent += took;
+        expected += estimates[k];
+        let left: f64 = estimates[k + 1..].iter().sum::<f64>() * spent / expected;
+        lab.log(&format!(
+            "{} done in {} (estimated {}); about {} left",
+            study.name(),
+            duration(took),
+            duration(estimates[k]),
+            duration(left)
+        ));
+        seconds.push((study.name().to_string(), took));
     }
-    Ok((findings, artifacts))
+    Ok((findings, artifacts, seconds))
 }
