@@ -175,6 +175,22 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         .filter(|f| !f.starts_with('.') && out.join(f).is_file())
         .collect();
     assert_eq!(listed, written);
+    // A smoke run says so at the top of its README and in every chart's
+    // title, and says what the default run would be.
+    assert!(
+        readme.contains("\n> **A smoke run (`reproduce --quick`), not results.**"),
+        "{}",
+        &readme[..200.min(readme.len())]
+    );
+    for entry in std::fs::read_dir(out.join("charts")).unwrap() {
+        let path = entry.unwrap().path();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            svg.contains("SMOKE RUN (--quick), not results"),
+            "{} is not marked as a smoke run",
+            path.display()
+        );
+    }
     // The memory probe ran in its fresh process and its table was written.
     let goals = std::fs::read_to_string(out.join("performance_goals.md")).unwrap();
     assert!(goals.contains("### Where the memory goes"), "{goals}");
@@ -197,6 +213,10 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     }
     let manifest: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    let study_seconds = manifest["run"]["study_seconds"]
+        .as_object()
+        .expect("the manifest records each study's seconds");
+    assert_eq!(study_seconds.len(), 7, "{study_seconds:?}");
     for key in [
         "git_commit",
         "git_dirty",

@@ -59,6 +59,15 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     let mut lab = Lab::new(settings.clone(), &log_line, &bars);
     let (findings, artifacts, study_seconds) = reproduce::run(&spec, &mut lab)?;
     bars.finish();
+    let mut artifacts = artifacts;
+    if spec.quick {
+        // A smoke run cannot be mistaken for the study: every chart says so.
+        for a in &mut artifacts {
+            if let crate::study::lab::Content::Chart(c) = &mut a.content {
+                c.title = format!("SMOKE RUN (--quick), not results: {}", c.title);
+            }
+        }
+    }
     log_line("charts and README");
     let files = write_artifacts(&dir, &artifacts)?;
     let charts: Vec<String> = artifacts

@@ -76,8 +76,8 @@ impl Shard {
 pub struct BenchmarkSpec {
     pub quick: bool,
     /// Only the collection's core ([`collection::in_core`]): every instance
-    /// up to h = 1/32 and one finer, the collection of a default
-    /// `reproduce`, which must finish in minutes.
+    /// up to h = 1/32, the collection of a default `reproduce`, which must
+    /// finish in minutes.
     pub core: bool,
     /// Target accuracies, in the certificate's measure.
     pub targets: Vec<f64>,

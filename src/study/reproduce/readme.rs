@@ -41,6 +41,8 @@ struct SolverInfo {
 #[derive(Serialize)]
 struct Context {
     quick: bool,
+    long: bool,
+    benchmark_instances: usize,
     seconds: String,
     cpu: String,
     cores: usize,
@@ -110,6 +112,13 @@ pub fn render(
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
     let context = Context {
         quick: spec.quick,
+        long: spec.long,
+        benchmark_instances: {
+            let mut ids: Vec<&str> = out.benchmark.iter().map(|r| r.instance.as_str()).collect();
+            ids.sort_unstable();
+            ids.dedup();
+            ids.len()
+        },
         seconds: format!("{seconds:.0}"),
         cpu: m.cpu.clone(),
         cores: m.cores,
