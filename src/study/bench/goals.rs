@@ -285,28 +285,43 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
             .map(|r| (r.unknowns as f64, r.median_seconds))
             .collect();
         for e in registry::solvers() {
-            let pts: Vec<(f64, f64)> = rows
-                .iter()
-                .filter(|r| r.solver == e.name && r.what == what && r.median_seconds.is_finite())
-                .map(|r| (r.unknowns as f64, r.median_seconds))
-                .collect();
-            if !pts.is_empty() {
-                let slope = fit_slope(&pts)
-                    .map(|s| format!("{s:.2}"))
-                    .unwrap_or_else(|| "n/a".into());
+            let here = |certified: bool| -> Vec<(f64, f64)> {
+                rows.iter()
+                    .filter(|r| {
+                        r.solver == e.name && r.what == what && r.median_seconds.is_finite()
+                    })
+                    .filter(|r| (r.status == "converged") == certified)
+                    .map(|r| (r.unknowns as f64, r.median_seconds))
+                    .collect()
+            };
+            // The slope is fitted through certified runs only: a run stopped
+            // by the time limit or refused by the certificate is drawn as a
+            // cross and never bends the fit.
+            let (certified, failed) = (here(true), here(false));
+            if !certified.is_empty() {
                 series.push(
-                    Series::line(format!("{} (slope {slope})", e.name), pts)
-                        .with_markers()
+                    Series::line(
+                        format!("{} ({})", e.name, slope_label(&certified)),
+                        certified,
+                    )
+                    .with_markers()
+                    .of_solver(e.name),
+                );
+            }
+            if !failed.is_empty() {
+                series.push(
+                    Series::line(format!("{}: not certified", e.name), failed)
+                        .failed()
                         .of_solver(e.name),
                 );
             }
         }
-        let slope = fit_slope(&factor)
-            .map(|s| format!("{s:.2}"))
-            .unwrap_or_else(|| "n/a".into());
         series.push(
             Series::line(
-                format!("best factorization + solve, 2 threads (slope {slope})"),
+                format!(
+                    "best factorization + solve, 2 threads ({})",
+                    slope_label(&factor)
+                ),
                 factor,
             )
             .dashed()
@@ -332,6 +347,18 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
     }
     out
 }
+
+/// A fitted slope for a legend, only through at least
+/// [`MIN_POINTS_FOR_SLOPE`] points (two points always give a line).
+pub fn slope_label(points: &[(f64, f64)]) -> String {
+    match fit_slope(points) {
+        Some(s) if points.len() >= MIN_POINTS_FOR_SLOPE => format!("slope {s:.2}"),
+        _ => format!("no slope: {} points", points.len()),
+    }
+}
+
+/// The fewest points a slope in a legend is fitted through.
+pub const MIN_POINTS_FOR_SLOPE: usize = 3;
 
 /// Least-squares slope of log y against log x.
 pub fn fit_slope(points: &[(f64, f64)]) -> Option<f64> {
@@ -443,4 +470,65 @@ pub fn measure_bench(
         memory,
         goals_markdown: md,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(solver: &str, unknowns: usize, seconds: f64, status: &str) -> PerfRow {
+        PerfRow {
+            what: "coulomb".into(),
+            solver: solver.into(),
+            variant: String::new(),
+            h: String::new(),
+            unknowns,
+            runs: 1,
+            median_seconds: seconds,
+            min_seconds: seconds,
+            ratio_to_factorization: f64::NAN,
+            status: status.into(),
+            certificate: f64::NAN,
+            pressure_error: f64::NAN,
+            work: 0,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn failed_runs_are_crosses_outside_the_fit_and_two_points_give_no_slope() {
+        let solver = registry::solvers()[0].name;
+        let other = registry::solvers()[1].name;
+        let rows = vec![
+            // Time ∝ n on three certified meshes, then a run stopped by the
+            // time limit far above the line.
+            row(solver, 100, 1.0, "converged"),
+            row(solver, 1000, 10.0, "converged"),
+            row(solver, 10000, 100.0, "converged"),
+            row(solver, 100000, 5.0e4, "stopped"),
+            // Two certified points only.
+            row(other, 100, 1.0, "converged"),
+            row(other, 1000, 100.0, "converged"),
+        ];
+        let charts = performance_charts(&rows);
+        let (_, chart) = charts
+            .iter()
+            .find(|(n, _)| n == "performance_coulomb")
+            .unwrap();
+        let names: Vec<&str> = chart.series.iter().map(|s| s.name.as_str()).collect();
+        assert!(
+            names.contains(&format!("{solver} (slope 1.00)").as_str()),
+            "{names:?}"
+        );
+        let crosses = chart
+            .series
+            .iter()
+            .find(|s| s.name == format!("{solver}: not certified"))
+            .expect("the stopped run is drawn");
+        assert_eq!(crosses.points, vec![(100000.0, 5.0e4)]);
+        assert!(
+            names.contains(&format!("{other} (no slope: 2 points)").as_str()),
+            "{names:?}"
+        );
+    }
 }

@@ -38,7 +38,7 @@ pub fn intent(name: &str) -> String {
     } else if name.starts_with("stability_") {
         "How a solver's work and outcome class change under a stress condition of its registry entry."
     } else if name.starts_with("performance_") {
-        "How each solver's time grows with the number of unknowns (fitted slope in the legend), beside the best sparse factorization (faer on both cores, symbolic analysis once)."
+        "How each solver's time grows with the number of unknowns (slope in the legend, fitted through three or more certified runs; runs stopped or refused are crosses), beside the best sparse factorization (faer on both cores, symbolic analysis once)."
     } else if name.starts_with("benchmark_profile") {
         "Performance profile over the collection: the fraction of instances each solver solves (certified) within τ times the fastest solver's time."
     } else if name.starts_with("discretization_error") {
