@@ -268,7 +268,11 @@ impl Chart {
         let (y0, y1) = range(all.iter().map(|p| p.1).collect(), self.log_y, floor);
         let mut svg = String::new();
         {
-            let root = SVGBackend::with_string(&mut svg, (WIDTH, HEIGHT)).into_drawing_area();
+            // The legend widens to its longest label instead of cutting it.
+            let legend_width = self.legend_width();
+            let root =
+                SVGBackend::with_string(&mut svg, (WIDTH - LEGEND_WIDTH + legend_width, HEIGHT))
+                    .into_drawing_area();
             root.fill(&WHITE).map_err(|e| anyhow!("chart: {e}"))?;
             let (plot, legend) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
             let scales = (x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
@@ -369,17 +373,39 @@ impl Chart {
         Ok(())
     }
 
+    /// The legend's row height and font size in pixels.
+    fn legend_font(&self) -> (i32, i32) {
+        let rows = self.series.len().max(1) as i32;
+        let row = (((HEIGHT as i32) - 60) / rows).clamp(9, 17);
+        (row, (row - 3).clamp(8, 13))
+    }
+
+    /// The legend panel's width: [`LEGEND_WIDTH`], or wider so that the
+    /// longest label is written whole (a character taken as 0.62 of the
+    /// font size, generous for sans-serif).
+    fn legend_width(&self) -> u32 {
+        let (_, font) = self.legend_font();
+        let longest = self
+            .series
+            .iter()
+            .map(|s| s.name.chars().count())
+            .max()
+            .unwrap_or(0) as f64;
+        let needed = (50.0 + longest * 0.62 * font as f64).ceil() as u32;
+        LEGEND_WIDTH.max(needed)
+    }
+
     /// The legend, in its own panel: one row per series, its sample drawn
-    /// as on the plot.
+    /// as on the plot, its label whole.
     fn draw_legend(&self, area: &DrawingArea<SVGBackend<'_>, Shift>) -> Result<()> {
         let err = |e: DrawingAreaErrorKind<_>| anyhow!("chart '{}' legend: {e}", self.title);
         let rows = self.series.len().max(1) as i32;
-        let row = (((HEIGHT as i32) - 60) / rows).clamp(9, 17);
-        let font = (row - 3).clamp(8, 13);
+        let (row, font) = self.legend_font();
+        let width = self.legend_width() as i32;
         let (left, top) = (6, 40);
         let bottom = top + rows * row + 6;
         area.draw(&Rectangle::new(
-            [(left, top - 6), (LEGEND_WIDTH as i32 - 4, bottom)],
+            [(left, top - 6), (width - 4, bottom)],
             BLACK.stroke_width(1),
         ))
         .map_err(err)?;
@@ -418,14 +444,8 @@ impl Chart {
                 }
                 _ => {}
             }
-            let max_chars = ((LEGEND_WIDTH as i32 - 50) * 2 / font).max(10) as usize;
-            let mut name: String = s.name.chars().take(max_chars).collect();
-            if s.name.chars().count() > max_chars {
-                name.pop();
-                name.push('…');
-            }
             area.draw(&Text::new(
-                name,
+                s.name.clone(),
                 (b + 6, y - font / 2),
                 ("sans-serif", font).into_font().color(&BLACK),
             ))

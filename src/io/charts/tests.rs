@@ -68,3 +68,33 @@ fn round_off_is_drawn_as_zero() {
     // A real value stays.
     assert_eq!(drawn(vec![(0.0, 1e-6)]), vec![(0.0, 1e-6)]);
 }
+
+#[test]
+fn legend_labels_are_written_whole_and_the_panel_widens_for_them() {
+    let long = "clarabel-condensed: not certified (no slope: 2 points)";
+    let chart = Chart::new(
+        "t",
+        "x",
+        "y",
+        true,
+        true,
+        vec![
+            Series::line(long, vec![(1.0, 1.0), (10.0, 10.0)]).failed(),
+            Series::line("short", vec![(1.0, 2.0), (10.0, 20.0)]),
+        ],
+    );
+    let svg = chart.to_svg().unwrap();
+    assert!(svg.contains(long), "the long label is cut");
+    assert!(!svg.contains('…'));
+    assert!(chart.legend_width() > LEGEND_WIDTH);
+    // A chart of short labels keeps the standard size.
+    let short = Chart::new(
+        "t",
+        "x",
+        "y",
+        false,
+        false,
+        vec![Series::line("s", vec![(0.0, 1.0)])],
+    );
+    assert_eq!(short.legend_width(), LEGEND_WIDTH);
+}
