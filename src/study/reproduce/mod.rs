@@ -60,7 +60,8 @@ impl ReproduceSpec {
     /// The default run, in minutes: every headline finding, with the
     /// paper's method by sweeps at equal accuracy to 1/64 only (at 1/256 it
     /// runs by multigrid in `bench`), the comparison timed once (its times
-    /// are not the speed study's), `bench`'s solvers timed once after a
+    /// are not the speed study's), the sweep's work-precision trials timed
+    /// twice, `bench`'s solvers timed once after a
     /// warm-up up to 1/128 with 5 s per run (the large meshes and the
     /// multigrid goals as in the long run), and the benchmark on its core
     /// collection.
@@ -68,6 +69,7 @@ impl ReproduceSpec {
         let mut spec = Self::long();
         spec.long = false;
         spec.repeats = 0;
+        spec.sweep.repeats = 1;
         spec.bench.equal_accuracy.retain(|h| h.level() <= 6);
         spec.bench.meshes.retain(|h| h.level() <= 7);
         spec.bench.runs = 1;
@@ -163,22 +165,25 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Study>>
     ]
 }
 
-/// Seconds each study of a default run took on the 2-core machine of
-/// `results/` (its `manifest.json`, `study_seconds`), and of the long run
-/// where it differs: the estimate a run states as it starts.
+/// Seconds each study of a default run takes on the 2-core machine of
+/// `results/` (read off a trial run of this commit's default with a build
+/// beside it, and the committed long run's trials; `manifest.json` records
+/// each study's seconds, `study_seconds`, to refresh these), and of the
+/// long run where it differs: the estimate a run states as it starts.
 fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
     let standard = match study {
-        "table1" => 100.0,
-        "compare" => 190.0,
-        "sweep" => 120.0,
-        "stability" => 150.0,
-        "bench" => 250.0,
-        "benchmark" => 400.0,
+        "table1" => 15.0,
+        "compare" => 220.0,
+        "sweep" => 150.0,
+        "stability" => 180.0,
+        "bench" => 280.0,
+        "benchmark" => 220.0,
         "discretization_error" => 120.0,
         _ => 60.0,
     };
     let long = match study {
-        "compare" => 270.0,
+        "compare" => 300.0,
+        "sweep" => 175.0,
         "bench" => 5700.0,
         "benchmark" => 2400.0,
         _ => standard,
