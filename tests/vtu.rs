@@ -68,6 +68,15 @@ fn the_field_file_has_both_bodies_and_agrees_with_the_profile() {
     ] {
         assert_eq!(numbers(array(name)).len(), count, "{name}");
     }
+    // The stress's components are named, so ParaView shows σ11, σ22, σ12
+    // rather than 0, 1, 2.
+    let stress = array("stress");
+    for (i, c) in ["sigma_11", "sigma_22", "sigma_12"].iter().enumerate() {
+        assert_eq!(
+            stress.attribute(format!("ComponentName{i}").as_str()),
+            Some(*c)
+        );
+    }
     // The profile's first contact node (x = 0): the upper body's node on
     // Γ_K is node 17·9 (its row 0, column 0).
     let mut r = csv::Reader::from_path(out.join("profile.csv")).unwrap();

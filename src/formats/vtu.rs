@@ -5,7 +5,8 @@
 //! - point data `displacement` (u₁, u₂, 0); `contact_state` (−1 away from
 //!   Γ_K, else 0 stick, 1 slip, 2 open, on both nodes of a contact pair);
 //!   `contact_pressure` and `friction_traction` (0 away from Γ_K);
-//! - cell data `body` (0 lower, 1 upper); `stress` (σ₁₁, σ₂₂, σ₁₂, constant
+//! - cell data `body` (0 lower, 1 upper); `stress` (σ₁₁, σ₂₂, σ₁₂, named
+//!   sigma_11, sigma_22, sigma_12 in the file; constant
 //!   per triangle, σ = D ε); `von_mises` with σ₃₃ = ν(σ₁₁ + σ₂₂) in plane
 //!   strain and 0 in plane stress.
 
@@ -57,9 +58,27 @@ fn data_array(
     components: usize,
     values: impl Iterator<Item = String>,
 ) {
+    named_data_array(out, name, kind, components, &[], values)
+}
+
+/// A data array whose components carry names (VTK's `ComponentName<i>`
+/// attributes, which ParaView shows instead of 0, 1, 2).
+fn named_data_array(
+    out: &mut String,
+    name: &str,
+    kind: &str,
+    components: usize,
+    component_names: &[&str],
+    values: impl Iterator<Item = String>,
+) {
+    let names: String = component_names
+        .iter()
+        .enumerate()
+        .map(|(i, c)| format!(" ComponentName{i}=\"{c}\""))
+        .collect();
     let _ = writeln!(
         out,
-        "<DataArray type=\"{kind}\" Name=\"{name}\" NumberOfComponents=\"{components}\" format=\"ascii\">"
+        "<DataArray type=\"{kind}\" Name=\"{name}\" NumberOfComponents=\"{components}\"{names} format=\"ascii\">"
     );
     for v in values {
         let _ = writeln!(out, "{v}");
@@ -168,11 +187,12 @@ pub fn vtu(d: &Discretization, material: &Material, s: &Solution) -> String {
             .map(|(b, _)| (*b == Body::Upper) as i32)
             .map(|x| x.to_string()),
     );
-    data_array(
+    named_data_array(
         &mut out,
         "stress",
         "Float64",
         3,
+        &["sigma_11", "sigma_22", "sigma_12"],
         stresses
             .iter()
             .map(|(s, _)| format!("{:e} {:e} {:e}", s[0], s[1], s[2])),
