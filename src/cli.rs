@@ -276,7 +276,7 @@ pub struct ReproduceArgs {
     pub quick: bool,
     /// Also the studies that take hours (about 2.5 h on a 2-core machine):
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
-    /// bench's solvers at 1/256 with three timed runs each, and the whole
+    /// bench's solvers with three timed runs each and 15 s per run, and the whole
     /// benchmark collection (73 instances, not its core 42 up to h = 1/32).
     /// Without it the run takes about 20 minutes.
     #[arg(long)]

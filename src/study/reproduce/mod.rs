@@ -62,16 +62,15 @@ impl ReproduceSpec {
     /// runs by multigrid in `bench`), the comparison timed once (its times
     /// are not the speed study's), the sweep's work-precision trials timed
     /// twice, `bench`'s solvers timed once after a
-    /// warm-up up to 1/128 with 5 s per run (the large meshes and the
-    /// multigrid goals as in the long run), and the benchmark on its core
-    /// collection.
+    /// warm-up with 5 s per run (a solver predicted slower is not run on
+    /// the finer meshes; the large meshes and the multigrid goals as in the
+    /// long run), and the benchmark on its core collection.
     pub fn standard() -> Self {
         let mut spec = Self::long();
         spec.long = false;
         spec.repeats = 0;
         spec.sweep.repeats = 1;
         spec.bench.equal_accuracy.retain(|h| h.level() <= 6);
-        spec.bench.meshes.retain(|h| h.level() <= 7);
         spec.bench.runs = 1;
         spec.bench.budget = 5.0;
         spec.benchmark.core = true;
@@ -176,7 +175,7 @@ fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
         "compare" => 220.0,
         "sweep" => 150.0,
         "stability" => 180.0,
-        "bench" => 280.0,
+        "bench" => 330.0,
         "benchmark" => 220.0,
         "discretization_error" => 120.0,
         _ => 60.0,
@@ -252,7 +251,7 @@ pub fn run(spec: &ReproduceSpec, lab: &mut Lab) -> Result<(Findings, Vec<Artifac
         // This machine against the estimates' so far, within a factor of 2
         // either way (one short study says little about the next).
         let pace = (spent / expected).clamp(0.5, 2.0);
-        let left: f64 = estimates[k + 1..].iter().sum::<f64>() * pace;
+        let left: f64 = (estimates[k + 1..].iter().sum::<f64>() * pace).max(0.0);
         lab.log(&format!(
             "{} done in {} (estimated {}); about {} left",
             study.name(),
