@@ -11,7 +11,7 @@
 use contactlab::certificate::certify as certify_answer;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
-use contactlab::mechanics::scene::Scene;
+use contactlab::mechanics::scene::{Overrides, Scene};
 use contactlab::settings::Settings;
 use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Silent, registry};
@@ -44,29 +44,26 @@ struct Problem {
     finest: Discretization,
 }
 
-/// The scene overrides that `solve --problem/--scene` take as flags.
-#[allow(clippy::too_many_arguments)]
+/// The scene with the overrides of `solve --problem/--scene`, applied by
+/// the library's [`Overrides`] (as the command line does), and assembled.
 fn build(
-    mut scene: Scene,
+    scene: Scene,
     h: Option<&str>,
     young: Option<f64>,
     poisson: Option<f64>,
     friction: Option<f64>,
 ) -> PyResult<Problem> {
-    if let Some(h) = h {
-        let h: MeshSize = h.parse().map_err(|m| err(format!("h: {m}")))?;
-        scene.set_finest(h);
-    }
-    if let Some(e) = young {
-        scene.material.young = e;
-    }
-    if let Some(nu) = poisson {
-        scene.material.poisson = nu;
-    }
-    if let Some(f) = friction {
-        scene.friction = f;
-    }
-    scene.validate().map_err(err)?;
+    let h = h
+        .map(|h| h.parse::<MeshSize>().map_err(|m| err(format!("h: {m}"))))
+        .transpose()?;
+    let overrides = Overrides {
+        h,
+        young,
+        poisson,
+        plane: None,
+        friction,
+    };
+    let scene = overrides.apply(scene).map_err(err)?;
     let finest = Discretization::new(&scene, scene.finest()).map_err(err)?;
     Ok(Problem { scene, finest })
 }
@@ -363,7 +360,7 @@ fn certify<'py>(
     let tolerance = match tolerance {
         Some(t) => contactlab::certificate::check_tolerance(t)
             .map_err(|m| err(format!("tolerance = {m}")))?,
-        None => Settings::default().certificate.tolerance,
+        None => contactlab::certificate::DEFAULT_TOLERANCE,
     };
     let friction = match &g {
         Some(g) => Friction::Given(g),

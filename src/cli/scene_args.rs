@@ -8,7 +8,7 @@ use clap::Args;
 
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
-use crate::mechanics::scene::Scene;
+use crate::mechanics::scene::{Overrides, Scene};
 use crate::settings::Settings;
 
 /// Which scene, on which mesh, with which material: a built-in problem of the
@@ -55,29 +55,21 @@ impl SceneArgs {
     /// The scene and the settings it brings (a scene file's sections, else
     /// the defaults), with the scene overrides applied and validated.
     pub fn load(&self) -> Result<(Scene, Settings)> {
-        let (mut scene, settings) = match (&self.scene, self.problem) {
+        let (scene, settings) = match (&self.scene, self.problem) {
             (Some(path), _) => crate::formats::scene_file::load(path)?,
             (None, Some(n)) => (Scene::paper_problem(n)?, Settings::default()),
             (None, None) => anyhow::bail!(
                 "no scene given: add --problem N (the paper's problem 1, 2 or 3) or --scene FILE (a scene file)"
             ),
         };
-        if let Some(h) = self.h {
-            scene.set_finest(h);
+        let scene = Overrides {
+            h: self.h,
+            young: self.young,
+            poisson: self.poisson,
+            plane: self.plane,
+            friction: self.friction,
         }
-        if let Some(e) = self.young {
-            scene.material.young = e;
-        }
-        if let Some(nu) = self.poisson {
-            scene.material.poisson = nu;
-        }
-        if let Some(p) = self.plane {
-            scene.material.plane = p;
-        }
-        if let Some(f) = self.friction {
-            scene.friction = f;
-        }
-        scene.validate()?;
+        .apply(scene)?;
         Ok((scene, settings))
     }
 }

@@ -125,6 +125,41 @@ impl Shown for String {
     }
 }
 
+/// Changes to a scene's mesh and material, as `--h`, `--young`,
+/// `--poisson`, `--plane` and `--friction` give them (the command line and
+/// the Python package apply them here, so both build the same scene).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Overrides {
+    pub h: Option<MeshSize>,
+    pub young: Option<f64>,
+    pub poisson: Option<f64>,
+    pub plane: Option<crate::mechanics::material::PlaneModel>,
+    pub friction: Option<f64>,
+}
+
+impl Overrides {
+    /// `scene` with these changes, validated (condition (13) included).
+    pub fn apply(&self, mut scene: Scene) -> Result<Scene, SceneError> {
+        if let Some(h) = self.h {
+            scene.set_finest(h);
+        }
+        if let Some(e) = self.young {
+            scene.material.young = e;
+        }
+        if let Some(nu) = self.poisson {
+            scene.material.poisson = nu;
+        }
+        if let Some(p) = self.plane {
+            scene.material.plane = p;
+        }
+        if let Some(f) = self.friction {
+            scene.friction = f;
+        }
+        scene.validate()?;
+        Ok(scene)
+    }
+}
+
 impl Scene {
     /// The paper's problems (section 5): P''_2 = −60 on the left third of the
     /// top side (1), −120 on the left third (2), −60 on the whole top (3).
