@@ -165,22 +165,7 @@ mod tests {
     use super::*;
 
     fn row(what: &str, solver: &str, unknowns: usize, seconds: f64) -> PerfRow {
-        PerfRow {
-            what: what.into(),
-            solver: solver.into(),
-            variant: String::new(),
-            h: String::new(),
-            unknowns,
-            runs: 1,
-            median_seconds: seconds,
-            min_seconds: seconds,
-            ratio_to_factorization: f64::NAN,
-            status: "converged".into(),
-            certificate: f64::NAN,
-            pressure_error: f64::NAN,
-            work: 0,
-            note: String::new(),
-        }
+        PerfRow::sample(what, solver, unknowns, seconds, "converged")
     }
 
     #[test]

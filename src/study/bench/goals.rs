@@ -477,22 +477,7 @@ mod tests {
     use super::*;
 
     fn row(solver: &str, unknowns: usize, seconds: f64, status: &str) -> PerfRow {
-        PerfRow {
-            what: "coulomb".into(),
-            solver: solver.into(),
-            variant: String::new(),
-            h: String::new(),
-            unknowns,
-            runs: 1,
-            median_seconds: seconds,
-            min_seconds: seconds,
-            ratio_to_factorization: f64::NAN,
-            status: status.into(),
-            certificate: f64::NAN,
-            pressure_error: f64::NAN,
-            work: 0,
-            note: String::new(),
-        }
+        PerfRow::sample("coulomb", solver, unknowns, seconds, status)
     }
 
     #[test]

@@ -126,6 +126,35 @@ pub struct PerfRow {
     pub note: String,
 }
 
+#[cfg(test)]
+impl PerfRow {
+    /// A row for tests: one run of `solver` on `what` with `status`.
+    pub(crate) fn sample(
+        what: &str,
+        solver: &str,
+        unknowns: usize,
+        seconds: f64,
+        status: &str,
+    ) -> Self {
+        Self {
+            what: what.into(),
+            solver: solver.into(),
+            variant: String::new(),
+            h: String::new(),
+            unknowns,
+            runs: 1,
+            median_seconds: seconds,
+            min_seconds: seconds,
+            ratio_to_factorization: f64::NAN,
+            status: status.into(),
+            certificate: f64::NAN,
+            pressure_error: f64::NAN,
+            work: 0,
+            note: String::new(),
+        }
+    }
+}
+
 /// Times `f` once as a warm-up and `runs` more times; returns (first result, times).
 fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(T, Vec<f64>)> {
     let t = Instant::now();
