@@ -52,7 +52,16 @@ pub(crate) fn exact_step(
         }
         alpha_max
     } else {
-        let mut hi = 1.0;
+        // From the quadratic part's own minimizer |cᵀr|/cᵀAc, so that the
+        // bracket does not depend on the length of c: the rigid-mode
+        // direction is O(1) while its step is of the size of the
+        // displacements, and a bracket doubled from 1 stopped at 2⁶⁰ when
+        // the units made displacements 1e98 (the scale-invariance test).
+        let mut hi = if cac > 0.0 && cr != 0.0 {
+            cr.abs() / cac
+        } else {
+            1.0
+        };
         for _ in 0..DOUBLINGS {
             if slope(hi) > 0.0 {
                 break;
@@ -129,5 +138,24 @@ mod tests {
             let a = i as f64 * 1e-3;
             assert!(energy(alpha) <= energy(a) + 1e-12, "{alpha} vs {a}");
         }
+    }
+
+    /// Along a direction without a jump bound, the step does not depend on
+    /// the length of the direction: with c × 1e-100 (so cᵀAc × 1e-200 and
+    /// cᵀr × 1e-100) the step is × 1e100, with the laws scaled alike. A
+    /// bracket doubled from 1 stopped at 2⁶⁰ and returned 1.15e18.
+    #[test]
+    fn the_step_scales_with_the_direction() {
+        let laws = [Local::Free, Local::Slip(0.3)];
+        let (v, c) = ([0.2, 0.1], [1.0, -0.8]);
+        let alpha = exact_step(&laws, &[1], &v, &c, 2.0, 1.5);
+        assert!(alpha > 0.0);
+        let s = 1e-100;
+        let small = [c[0] * s, c[1] * s];
+        let scaled = exact_step(&laws, &[1], &v, &small, 2.0 * s * s, 1.5 * s);
+        assert!(
+            (scaled * s / alpha - 1.0).abs() < 1e-12,
+            "{alpha} vs {scaled}·1e-100"
+        );
     }
 }
