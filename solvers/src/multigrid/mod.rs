@@ -32,6 +32,7 @@
 //! It stops when an iteration moves no unknown by more than tolerance · U
 //! (U the problem's displacement scale).
 
+mod galerkin;
 pub(crate) mod iteration;
 mod line_search;
 pub(crate) mod smoother;

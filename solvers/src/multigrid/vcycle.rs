@@ -20,6 +20,7 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::smoother::{diagonal_position, linear_sweep};
 use crate::numerics::linalg::spmv_into;
 
@@ -200,10 +201,10 @@ impl Hierarchy {
     /// (coarse to fine): A⁰_{L−1} = Pᵀ A P, A⁰_l = P_lᵀ A⁰_{l+1} P_l.
     pub(crate) fn new(a: &CsrMatrix<f64>, diag: Vec<usize>, p: &[CsrMatrix<f64>]) -> Self {
         let restrict: Vec<CsrMatrix<f64>> = p.iter().map(|p| p.transpose()).collect();
-        let mut coarse = vec![&restrict[p.len() - 1] * &(a * &p[p.len() - 1])];
+        let mut coarse = vec![galerkin(&restrict[p.len() - 1], a, &p[p.len() - 1])];
         for l in (0..p.len() - 1).rev() {
             let above = coarse.last().expect("one at least");
-            let next = &restrict[l] * &(above * &p[l]);
+            let next = galerkin(&restrict[l], above, &p[l]);
             coarse.push(next);
         }
         coarse.reverse();
