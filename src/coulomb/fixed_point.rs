@@ -16,20 +16,11 @@ use serde::{Deserialize, Serialize};
 /// The stage name of the fixed point's progress events (residual max|Δg|).
 pub const STAGE: &str = "friction";
 
-/// The default forcing factor η: the inner accuracy a tenth of the last
-/// relative change of g. The fixed point contracts by about q = 0.1 on the
-/// paper's scenes, and an inner error of η·max|Δg| perturbs the step by at
-/// most about η(1 + q) of the current error, so η = 0.1 keeps the
-/// contraction near 0.2 while the first steps, whose g is far from the
-/// fixed point, are not solved to 1e-10. Measured with tnnmg (the one
-/// solver that reads it), nested schedule, problem 1: with η = 1e-3 every
-/// friction step cost two or three TNNMG iterations on the finest level
-/// (at a rate of about 0.03 per iteration); with η = 0.1 one, for the same
-/// friction steps (6 → 7) and certificates of the same order: 18.1 s →
-/// 11.8 s at h = 1/1024, 4.3 s → 2.7 s at 1/512; problems 2 and 3 and
-/// 𝓕 = 2 alike, and the fixed point that does not contract at 𝓕 = 8 fails
-/// the same way.
-pub const DEFAULT_FORCING: f64 = 0.1;
+/// The default forcing factor: the inner accuracy a thousandth of the last
+/// relative change of g, so that inner errors stay below the change they
+/// perturb while the first steps, whose g is far from the fixed point, are
+/// not solved to 1e-10.
+pub const DEFAULT_FORCING: f64 = 1e-3;
 
 /// Settings of the fixed point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
