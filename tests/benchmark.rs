@@ -279,6 +279,7 @@ static LIAR: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: None,
 };
 
 #[derive(serde::Serialize, serde::Deserialize)]

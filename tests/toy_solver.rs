@@ -190,6 +190,7 @@ static TOY: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: None,
 };
 
 fn register() {
@@ -310,4 +311,38 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         .find(|t| t.solver.name == "toy" && t.knob().0 == "toy.max_iter")
         .unwrap();
     assert_eq!(capped.class, Some(Class::Stalled), "{capped:?}");
+}
+
+/// A solver with a cap on its unknowns is refused a larger problem with a
+/// one-line error naming the cap and the way out, before any solve; within
+/// the cap it runs. Fails if `Entry::max_unknowns` is not read.
+#[test]
+fn a_solver_is_refused_a_mesh_beyond_its_cap_on_unknowns() {
+    use contactlab::solve::Assembled;
+    static CAPPED: Entry = Entry {
+        name: "toy-capped",
+        max_unknowns: Some(200),
+        ..TOY
+    };
+    let s = scene();
+    let at = |k: u32| {
+        let mut s = s.clone();
+        s.set_finest(MeshSize::from_level(k).unwrap());
+        s
+    };
+    // h = 1/8 has 158 unknowns, 1/16 has 570.
+    let small = Assembled::for_solver(&at(3), &CAPPED).expect("within the cap");
+    assert_eq!(small.finest().problem.n(), 158);
+    let e = Assembled::for_solver(&at(4), &CAPPED)
+        .err()
+        .expect("beyond the cap")
+        .to_string();
+    assert!(
+        e.contains("570 unknowns")
+            && e.contains("200")
+            && e.contains("toy-capped")
+            && !e.contains('\n'),
+        "{e}"
+    );
+    assert!(Assembled::for_solver(&at(4), &TOY).is_ok(), "no cap: runs");
 }

@@ -82,7 +82,18 @@ pub struct Entry {
     pub role: Role,
     /// Its inner iteration for the speed benchmark (None: it has none).
     pub kernel: Option<fn(&ContactProblem) -> InnerKernel>,
+    /// The most unknowns it is given (None: no cap). A solver that factors
+    /// A, or a matrix of its size, holds a factor that grows faster than
+    /// the problem; [`FACTORED_MAX_UNKNOWNS`] refuses the meshes on which
+    /// it would exhaust the machine's memory mid-run.
+    pub max_unknowns: Option<usize>,
 }
+
+/// The cap of the solvers that factor A: 2²² unknowns, between h = 1/1024
+/// of the paper's scenes (2.1 million, where newton-coulomb peaks at 4.3
+/// GiB) and 1/2048 (8.4 million, about four times the unknowns and more
+/// than four times the factor: beyond a 24 GiB machine).
+pub const FACTORED_MAX_UNKNOWNS: usize = 1 << 22;
 
 impl Entry {
     /// Whether it solves `law` directly.

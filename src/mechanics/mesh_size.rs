@@ -8,9 +8,12 @@ use thiserror::Error;
 
 /// Smallest and largest exponent k accepted for h = 1/2^k.
 pub const MIN_LEVEL: u32 = 1;
-pub const MAX_LEVEL: u32 = 10;
+pub const MAX_LEVEL: u32 = 11;
 
-/// A mesh size h = 1/2^k with 1/2 ≥ h ≥ 1/1024.
+/// A mesh size h = 1/2^k with 1/2 ≥ h ≥ 1/2048 (finer than 1/1024 for the
+/// solvers without a factorization only: [`Entry::max_unknowns`]).
+///
+/// [`Entry::max_unknowns`]: contactlab_solvers::entry::Entry::max_unknowns
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct MeshSize {
     k: u32,
@@ -155,7 +158,7 @@ mod tests {
     #[test]
     fn refuses_what_is_not_one_over_a_power_of_two() {
         for s in [
-            "1/60", "2/64", "1/0", "0", "1", "64", "abc", "1/2048", "1/-8", "-0.125",
+            "1/60", "2/64", "1/0", "0", "1", "64", "abc", "1/4096", "1/-8", "-0.125",
         ] {
             assert!(s.parse::<MeshSize>().is_err(), "{s} was accepted");
         }

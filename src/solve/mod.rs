@@ -41,16 +41,28 @@ pub struct Assembled {
 impl Assembled {
     /// Assembles `scene` (condition (13) checked) for `entry`: every level
     /// of the scene if the solver warm-starts, else the finest alone.
+    /// A solver with a cap on its unknowns ([`Entry::max_unknowns`]) is
+    /// refused a finer mesh once the finest level is assembled, before
+    /// anything else is.
     pub fn for_solver(scene: &Scene, entry: &Entry) -> Result<Self> {
-        let levels = if entry.warm_starts && scene.levels.len() > 1 {
-            scene
-                .levels
-                .iter()
-                .map(|&h| Discretization::new(scene, h))
-                .collect::<Result<Vec<_>, _>>()?
-        } else {
-            vec![Discretization::new(scene, scene.finest())?]
-        };
+        let finest = Discretization::new(scene, scene.finest())?;
+        let n = finest.problem.n();
+        if let Some(cap) = entry.max_unknowns.filter(|&cap| n > cap) {
+            anyhow::bail!(
+                "h = {} gives {n} unknowns, more than the {cap} that {} is allowed: it factors a matrix \
+                 of that size, whose factor would not fit in memory; use h ≥ 1/1024, or a solver \
+                 without a factorization (tnnmg, or relaxation with --set relaxation.inner=multigrid)",
+                scene.finest(),
+                entry.name
+            );
+        }
+        let mut levels = Vec::with_capacity(scene.levels.len());
+        if entry.warm_starts && scene.levels.len() > 1 {
+            for &h in &scene.levels[..scene.levels.len() - 1] {
+                levels.push(Discretization::new(scene, h)?);
+            }
+        }
+        levels.push(finest);
         Ok(Self { levels })
     }
 

@@ -29,7 +29,7 @@ use std::time::Instant;
 use clarabel::solver::{DefaultSettings, DefaultSettingsBuilder};
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
+use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
 use crate::observer::{Limits, Observer};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Kept, condense};
@@ -115,6 +115,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::Oracle,
     kernel: None,
+    max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
 };
 
 /// The registry entry of the oracle in its second formulation: in two

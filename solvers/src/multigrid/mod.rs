@@ -113,6 +113,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: None,
 };
 
 /// Settings of TNNMG (relative in both stopping modes).

@@ -31,7 +31,7 @@ use std::time::Instant;
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
+use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::random::Lcg;
 use crate::observer::{Control, Observer, Progress};
@@ -114,6 +114,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
 };
 
 /// Where the Newton iteration starts.

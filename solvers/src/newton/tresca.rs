@@ -25,7 +25,7 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
+use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::ncp::{billups, fb};
 use crate::observer::{Control, Observer, Progress};
@@ -80,6 +80,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
 };
 
 /// Settings of the condensed semismooth Newton solver. The same in both

@@ -120,6 +120,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::PapersMethod,
     kernel: Some(sweep_kernel),
+    max_unknowns: None,
 };
 
 /// One relaxation sweep at the default relative settings, with multipliers

@@ -31,7 +31,7 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
+use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
@@ -84,6 +84,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
 };
 
 /// Settings of ADMM (relative in both stopping modes).

@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
+use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
 use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
@@ -73,6 +73,7 @@ pub(crate) const ENTRY: Entry = Entry {
     },
     role: Role::Other,
     kernel: None,
+    max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
 };
 
 /// Settings of nonsmooth Gauss-Seidel (the same in both stopping modes:

@@ -49,6 +49,10 @@ pub struct BenchSpec {
     /// registry's direct Coulomb solver are timed, once each and cold (a
     /// solve at 1/1024 takes a minute and 6 GB).
     pub large: Vec<MeshSize>,
+    /// Meshes finer still, where only the multigrid solver runs (the
+    /// others factor A and are refused there: `Entry::max_unknowns`), on
+    /// the whole Coulomb problem, once, in a fresh process.
+    pub multigrid_only: Vec<MeshSize>,
     /// Meshes where the paper's method runs to a certified accuracy with and
     /// without over-relaxation, beside the fastest oracle variant, once each
     /// ([`equal_accuracy`]).
@@ -71,6 +75,7 @@ impl BenchSpec {
             large: (9..=10)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
+            multigrid_only: vec![MeshSize::from_level(11).expect("in range")],
             equal_accuracy: (5..=8)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
@@ -88,6 +93,7 @@ impl BenchSpec {
             runs: 1,
             budget: 5.0,
             large: Vec::new(),
+            multigrid_only: Vec::new(),
             equal_accuracy: vec![MeshSize::from_level(3).expect("in range")],
             accuracy_target: 1e-6,
             oracle_mesh: MeshSize::from_level(4).ok(),

@@ -175,7 +175,7 @@ fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
         "compare" => 220.0,
         "sweep" => 150.0,
         "stability" => 180.0,
-        "bench" => 330.0,
+        "bench" => 450.0,
         "benchmark" => 220.0,
         "discretization_error" => 120.0,
         _ => 60.0,
