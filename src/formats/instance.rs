@@ -208,12 +208,21 @@ pub fn export(
                 "z_condensed.mtx",
                 "rigid mode on the contact unknowns, 2m x k",
             ),
+            (
+                "nodes.csv",
+                "node,body,x,y,u1_plus,u1_minus,u2_plus,u2_minus per mesh node: u_k = v[uk_plus] - v[uk_minus], 0-based, an empty index absent (both: fixed zero)",
+            ),
+            (
+                "triangles.csv",
+                "body,n0,n1,n2 per P1 triangle (counterclockwise), nodes as in nodes.csv",
+            ),
         ],
         scene: scene.clone(),
         h: d.h().to_string(),
         git_commit: git_commit.to_string(),
     };
     write_atomic(&dir.join("problem.json"), &json_bytes(&description)?)?;
+    super::mesh_map::write(dir, d)?;
     Ok(())
 }
 

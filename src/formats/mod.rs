@@ -3,5 +3,6 @@
 //! answers read back for the certificate), and VTU field output.
 
 pub mod instance;
+pub mod mesh_map;
 pub mod scene_file;
 pub mod vtu;
