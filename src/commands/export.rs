@@ -23,7 +23,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     )?;
     let target = folder.commit()?;
     print(&format!(
-        "wrote {} at h = {} ({} unknowns, {} contact nodes) into {}: A.mtx, M.mtx, f.mtx, rigid_modes.mtx, contact.csv, S.mtx, b_condensed.mtx, z_condensed.mtx, problem.json\n",
+        "wrote {} at h = {} ({} unknowns, {} contact nodes) into {}: A.mtx, M.mtx, f.mtx, rigid_modes.mtx, contact.csv, S.mtx, b_condensed.mtx, z_condensed.mtx, nodes.csv, triangles.csv, problem.json\n",
         scene.name,
         d.h(),
         d.problem.n(),
