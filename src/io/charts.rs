@@ -4,7 +4,10 @@
 //! the legend in its own panel right of the plot (never over data), log
 //! axes labelled at every decade, values below the chart's resolution drawn
 //! as zero (round-off is not structure), failed points drawn as crosses, and
-//! one colour per solver across every chart ([`solver_color`]).
+//! one colour per solver across every chart ([`solver_color`]), series
+//! that coincide drawn as one whose legend names them all
+//! ([`overlap::merge_identical`]), and optional ticks at given values with
+//! their own labels (the meshes of a convergence plot).
 
 use std::path::Path;
 
@@ -127,6 +130,21 @@ pub struct Chart {
     /// On a linear y axis: values with |y| at most this are round-off, drawn
     /// as 0, and the axis spans at least ±10 times it.
     pub y_resolution: Option<f64>,
+    /// Ticks of a log x axis at these values, with these labels (instead
+    /// of decades).
+    pub x_ticks: Option<Vec<(f64, String)>>,
+}
+
+/// Whether positive values spread enough for a log axis: all positive and
+/// a decade or more between the smallest and the largest. A parameter that
+/// varies over less (a relaxation factor ω in (0, 2)) reads on a linear one.
+pub fn suits_log_axis(values: impl IntoIterator<Item = f64>) -> bool {
+    let (lo, hi) = values
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    lo > 0.0 && hi.is_finite() && hi >= 10.0 * lo
 }
 
 /// Ten distinguishable colours (Tableau 10).
@@ -190,7 +208,14 @@ impl Chart {
             log_y,
             series,
             y_resolution: None,
+            x_ticks: None,
         }
+    }
+
+    /// Ticks of the x axis at `ticks`' values, labelled by their text.
+    pub fn with_x_ticks(mut self, ticks: Vec<(f64, String)>) -> Self {
+        self.x_ticks = Some(ticks);
+        self
     }
 
     pub fn with_y_resolution(mut self, resolution: f64) -> Self {
@@ -266,6 +291,31 @@ impl Chart {
         let floor = if self.log_y { None } else { self.y_resolution };
         let (x0, x1) = range(all.iter().map(|p| p.0).collect(), self.log_x, None);
         let (y0, y1) = range(all.iter().map(|p| p.1).collect(), self.log_y, floor);
+        let unit = |v: f64, lo: f64, hi: f64, log: bool| {
+            if log {
+                (v / lo).ln() / (hi / lo).ln()
+            } else {
+                (v - lo) / (hi - lo)
+            }
+        };
+        let (series, points) = overlap::merge_identical(&self.series, &points, &|(x, y)| {
+            (unit(x, x0, x1, self.log_x), unit(y, y0, y1, self.log_y))
+        });
+        let shown = Chart {
+            series,
+            ..self.clone()
+        };
+        shown.render(&points, (x0, x1), (y0, y1))
+    }
+
+    /// Draws the chart's own series (`points`: their drawable points) on
+    /// the given axis ranges.
+    fn render(
+        &self,
+        points: &[Vec<(f64, f64)>],
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> Result<String> {
         let mut svg = String::new();
         {
             // The legend widens to its longest label instead of cutting it.
@@ -276,26 +326,30 @@ impl Chart {
             root.fill(&WHITE).map_err(|e| anyhow!("chart: {e}"))?;
             let (plot, legend) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
             let scales = (x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
-            let (kx, ky) = (decades(x0, x1), decades(y0, y1));
+            let kx = match &self.x_ticks {
+                Some(t) => t.iter().map(|p| p.0).collect(),
+                None => decades(x0, x1),
+            };
+            let ky = decades(y0, y1);
             match (self.log_x, self.log_y) {
-                (false, false) => self.draw(&plot, &points, x0..x1, y0..y1, scales),
+                (false, false) => self.draw(&plot, points, x0..x1, y0..y1, scales),
                 (true, false) => self.draw(
                     &plot,
-                    &points,
+                    points,
                     (x0..x1).log_scale().with_key_points(kx),
                     y0..y1,
                     scales,
                 ),
                 (false, true) => self.draw(
                     &plot,
-                    &points,
+                    points,
                     x0..x1,
                     (y0..y1).log_scale().with_key_points(ky),
                     scales,
                 ),
                 (true, true) => self.draw(
                     &plot,
-                    &points,
+                    points,
                     (x0..x1).log_scale().with_key_points(kx),
                     (y0..y1).log_scale().with_key_points(ky),
                     scales,
@@ -330,7 +384,14 @@ impl Chart {
             .build_cartesian_2d(x, y)
             .map_err(err)?;
         let fmt = |log: bool, scale: f64| move |v: &f64| tick_label(*v, log, scale);
-        let (fx, fy) = (fmt(self.log_x, scales.0), fmt(self.log_y, scales.1));
+        let fy = fmt(self.log_y, scales.1);
+        let fx = |v: &f64| match &self.x_ticks {
+            Some(ticks) => ticks
+                .iter()
+                .find(|t| (t.0 - v).abs() <= 1e-9 * t.0.abs())
+                .map_or_else(|| tick_label(*v, self.log_x, scales.0), |t| t.1.clone()),
+            None => tick_label(*v, self.log_x, scales.0),
+        };
         chart
             .configure_mesh()
             .x_desc(&self.x_label)
@@ -478,5 +539,6 @@ pub fn tick_label(v: f64, log: bool, scale: f64) -> String {
     text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
+pub mod overlap;
 #[cfg(test)]
 mod tests;

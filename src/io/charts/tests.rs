@@ -98,3 +98,34 @@ fn legend_labels_are_written_whole_and_the_panel_widens_for_them() {
     );
     assert_eq!(short.legend_width(), LEGEND_WIDTH);
 }
+
+#[test]
+fn a_log_axis_only_for_values_over_a_decade() {
+    // ω in (0, 2) reads on a linear axis; r from 0.1 to 1000 on a log one.
+    assert!(!suits_log_axis([0.8, 1.0, 1.2, 1.5, 1.8]));
+    assert!(suits_log_axis([0.1, 1.0, 10.0, 1000.0]));
+    assert!(!suits_log_axis([0.0, 1.0, 100.0]));
+    assert!(!suits_log_axis(std::iter::empty()));
+}
+
+#[test]
+fn series_that_coincide_are_one_legend_row_naming_them_all() {
+    let same = vec![(1.0, 1.0), (10.0, 0.1)];
+    let chart = Chart::new(
+        "t",
+        "x",
+        "y",
+        true,
+        true,
+        vec![
+            Series::line("clarabel", same.clone()).of_solver("clarabel"),
+            Series::line("clarabel-faer", same).of_solver("clarabel-faer"),
+            Series::line("newton", vec![(1.0, 2.0), (10.0, 0.5)]).of_solver("newton"),
+        ],
+    );
+    let svg = chart.to_svg().unwrap();
+    assert!(svg.contains("clarabel / clarabel-faer (same points)"));
+    // Neither has a row of its own; newton keeps its row.
+    assert!(!svg.contains("\nclarabel\n") && !svg.contains("\nclarabel-faer\n"));
+    assert!(svg.contains("\nnewton\n"));
+}

@@ -342,6 +342,7 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
                 log_y: true,
                 series,
                 y_resolution: None,
+                x_ticks: None,
             },
         ));
     }
