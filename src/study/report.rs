@@ -4,7 +4,7 @@
 use contactlab_solvers::registry;
 
 use crate::coulomb::fixed_point::STAGE;
-use crate::io::charts::{Chart, Series};
+use crate::io::charts::{Chart, Series, suits_log_axis};
 use crate::mechanics::contact_zone::ProfileRow;
 use crate::study::runner::Measured;
 use crate::study::sweep::{SCHEDULE, WORK_PRECISION, WORK_PRECISION_COULOMB};
@@ -187,6 +187,8 @@ fn variation_charts(
     errors.extend(metric("max pressure error", &|t| t.pressure_error()));
     errors.extend(metric("certificate", &|t| Some(t.residual())));
     let slug = group.replace('.', "_");
+    // A log axis for values over a decade or more, linear otherwise (ω).
+    let log_x = suits_log_axis([lo, hi]);
     vec![
         (
             format!("sweep_{slug}_iterations_{tag}"),
@@ -194,7 +196,7 @@ fn variation_charts(
                 format!("Iterations against {group}, {scene}, h = {h}"),
                 group,
                 "iterations (count)",
-                true,
+                log_x,
                 true,
                 iterations,
             ),
@@ -205,7 +207,7 @@ fn variation_charts(
                 format!("Error against {group}, vs reference, {scene}, h = {h}"),
                 group,
                 "relative error / certificate (dimensionless)",
-                true,
+                log_x,
                 true,
                 errors,
             ),
