@@ -296,26 +296,48 @@ pub fn charts(rows: &[ErrorRow]) -> Vec<(String, Chart)> {
                 .iter()
                 .find(|r| r.problem == problem)
                 .map_or(String::new(), |r| r.reference_h.clone());
-            let series = vec![
-                Series::line("displacement, L2", of(&|r| r.l2_error)).with_markers(),
-                Series::line("displacement, energy norm", of(&|r| r.energy_error)).with_markers(),
+            let (l2, energy) = (of(&|r| r.l2_error), of(&|r| r.energy_error));
+            let mut series = vec![
+                Series::line("displacement, L2", l2.clone()).with_markers(),
+                Series::line("displacement, energy norm", energy.clone()).with_markers(),
                 Series::line("pressure, max on Γ_K", of(&|r| r.pressure_error)).with_markers(),
                 Series::line("start of the separated zone", of(&|r| r.zone_start_error))
                     .with_markers(),
             ];
+            // Reference slopes through the coarsest point of the error each
+            // order is expected of (P1 elements on a smooth solution: O(h) in
+            // the energy norm, O(h²) in L2; contact may lower both).
+            series.extend(guide("O(h) reference slope", &energy, 1).map(|s| s.black()));
+            series.extend(guide("O(h²) reference slope", &l2, 2).map(|s| s.colored(7)));
+            let mut meshes: Vec<(f64, String)> = rows
+                .iter()
+                .filter(|r| r.problem == problem)
+                .filter_map(|r| Some((r.h.parse::<MeshSize>().ok()?.h(), r.h.clone())))
+                .collect();
+            meshes.dedup_by(|a, b| a.1 == b.1);
             (
                 format!("discretization_error_p{problem}"),
                 Chart::new(
                     format!("Discretization error, problem {problem}, against h = {reference}"),
-                    "h",
+                    "h (a tick at each mesh)",
                     "relative error (zone start: absolute)",
                     true,
                     true,
                     series,
-                ),
+                )
+                .with_x_ticks(meshes),
             )
         })
         .collect()
+}
+
+/// A dashed line of slope `order` on log–log axes through the point of
+/// `points` at the largest h, over their range of h; none without points.
+fn guide(name: &str, points: &[(f64, f64)], order: i32) -> Option<Series> {
+    let &(h0, e0) = points.iter().max_by(|a, b| a.0.total_cmp(&b.0))?;
+    let h1 = points.iter().map(|p| p.0).fold(h0, f64::min);
+    let at = |h: f64| (h, e0 * (h / h0).powi(order));
+    Some(Series::line(name, vec![at(h1), at(h0)]).dashed())
 }
 
 /// A Markdown table of the rows.
@@ -406,4 +428,62 @@ pub fn findings(rows: &[ErrorRow]) -> String {
         }
     }
     lines.join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(h: &str, e: f64) -> ErrorRow {
+        ErrorRow {
+            problem: 1,
+            h: h.into(),
+            reference_h: "1/256".into(),
+            solver: "newton-coulomb".into(),
+            status: "converged".into(),
+            certificate: 1e-9,
+            l2_error: e * e,
+            energy_error: e,
+            pressure_error: e,
+            zone_start: 0.8,
+            zone_start_error: e,
+            separated_fraction: 0.2,
+            l2_rate: 2.0,
+            energy_rate: 1.0,
+            pressure_rate: 1.0,
+        }
+    }
+
+    #[test]
+    fn the_chart_has_reference_slopes_and_a_tick_at_each_mesh() {
+        let rows = [row("1/16", 0.1), row("1/32", 0.05), row("1/64", 0.025)];
+        let (name, chart) = charts(&rows).remove(0);
+        assert_eq!(name, "discretization_error_p1");
+        let slope = |label: &str| {
+            let s = chart.series.iter().find(|s| s.name == label).unwrap();
+            let (a, b) = (s.points[0], s.points[1]);
+            (b.1 / a.1).ln() / (b.0 / a.0).ln()
+        };
+        assert!((slope("O(h) reference slope") - 1.0).abs() < 1e-12);
+        assert!((slope("O(h²) reference slope") - 2.0).abs() < 1e-12);
+        // Through the coarsest point of the error it is compared with.
+        let o2 = chart
+            .series
+            .iter()
+            .find(|s| s.name.starts_with("O(h²)"))
+            .unwrap();
+        assert!(o2.points.contains(&(1.0 / 16.0, 0.1 * 0.1)));
+        let ticks: Vec<String> = chart
+            .x_ticks
+            .clone()
+            .unwrap()
+            .into_iter()
+            .map(|t| t.1)
+            .collect();
+        assert_eq!(ticks, ["1/16", "1/32", "1/64"]);
+        let svg = chart.to_svg().unwrap();
+        for t in &ticks {
+            assert!(svg.contains(&format!("\n{t}\n")), "no tick label {t}");
+        }
+    }
 }
