@@ -41,10 +41,11 @@ pub struct Table1Row {
     pub mpp: usize,
     /// Uzawa iterations over all levels and friction iterations (MU).
     pub mu: usize,
-    /// Relaxation sweeps in total (MPR) and at h = 1/32 and 1/64.
+    /// Relaxation sweeps in total (MPR) and at h = 1/32 and 1/64 (none
+    /// where that level was never run: an empty cell, "not run", never 0).
     pub mpr: usize,
-    pub mpr_1_32: usize,
-    pub mpr_1_64: usize,
+    pub mpr_1_32: Option<usize>,
+    pub mpr_1_64: Option<usize>,
     #[serde(serialize_with = "fixed")]
     pub separated_fraction: f64,
     #[serde(serialize_with = "fixed")]
@@ -149,7 +150,6 @@ fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {
             .iter()
             .find(|l| l.h.to_string() == h)
             .map(|l| l.sweeps)
-            .unwrap_or(0)
     };
     let paper = PAPER_TABLE_1
         .iter()
@@ -179,6 +179,7 @@ fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {
 
 /// The table in Markdown, ours / paper in each cell.
 pub fn markdown(rows: &[Table1Row]) -> String {
+    let ran = |n: Option<usize>| n.map_or("not run".to_string(), |n| n.to_string());
     let mut out = String::from(
         "| problem | schedule | status (claim) | certificate | MPP | MU | MPR total | MPR at 1/32 | MPR at 1/64 |\n\
          |---|---|---|---|---|---|---|---|---|\n",
@@ -197,13 +198,46 @@ pub fn markdown(rows: &[Table1Row]) -> String {
             r.paper_mu,
             r.mpr,
             r.paper_mpr,
-            r.mpr_1_32,
+            ran(r.mpr_1_32),
             r.paper_mpr_1_32,
-            r.mpr_1_64,
+            ran(r.mpr_1_64),
             r.paper_mpr_1_64
         );
     }
     out + "\nEach count: ours / the paper's (Table 1). MPP: friction iterations; MU: Uzawa iterations; MPR: relaxation \
            sweeps. Status: certified (the solver's claim in parentheses); certificate: the largest violation of the \
            Coulomb law's conditions in the problem's scales.\n"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_level_never_run_reads_not_run_not_zero() {
+        let row = Table1Row {
+            problem: 1,
+            schedule: Schedule::Revisit,
+            status: "converged".into(),
+            solver_status: "converged".into(),
+            mpp: 3,
+            mu: 40,
+            mpr: 900,
+            mpr_1_32: Some(700),
+            mpr_1_64: None,
+            separated_fraction: 0.2,
+            certificate: 1e-7,
+            paper_mpp: 4,
+            paper_mu: 47,
+            paper_mpr: 27550,
+            paper_mpr_1_32: 5478,
+            paper_mpr_1_64: 21440,
+        };
+        let table = markdown(&[row]);
+        assert!(
+            table.contains("| 700 / 5478 | not run / 21440 |"),
+            "{table}"
+        );
+        assert!(!table.contains("| 0 / "), "{table}");
+    }
 }
