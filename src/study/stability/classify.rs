@@ -75,7 +75,7 @@ pub struct Context {
     pub default_work: Option<usize>,
     /// The same solver's friction iterations at 𝓕 = ½ (friction scan).
     pub default_friction_iterations: Option<usize>,
-    /// Geometric mean of the fixed point's last contraction factors.
+    /// The contraction factor of the fixed point's late steps ([`trend`]).
     pub trend: Option<f64>,
 }
 
@@ -163,14 +163,38 @@ pub fn classify(t: &Trial, cx: &Context) -> (Class, String) {
     }
 }
 
-/// The geometric mean of the last (up to four) contraction factors.
+/// The contraction factor of a fixed point's late steps: the geometric
+/// mean of the factors over the second half of its steps (at least the
+/// last two). A fixed way of taking "the last four" mixed a fast start
+/// into a stalled end: steps contracting by 0.09 and 0.13 and then stalling
+/// at 1.0 gave 0.33, and a stalled solver looked contracting.
 pub fn trend(contractions: &[Option<f64>]) -> Option<f64> {
-    let last: Vec<f64> = contractions
+    let known: Vec<f64> = contractions
         .iter()
-        .rev()
-        .take(4)
         .filter_map(|q| *q)
-        .filter(|q| *q > 0.0)
+        .filter(|q| *q > 0.0 && q.is_finite())
         .collect();
-    (!last.is_empty()).then(|| (last.iter().map(|q| q.ln()).sum::<f64>() / last.len() as f64).exp())
+    let late = &known[known.len() - (known.len() / 2).max(2).min(known.len())..];
+    (!late.is_empty()).then(|| (late.iter().map(|q| q.ln()).sum::<f64>() / late.len() as f64).exp())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::trend;
+
+    #[test]
+    fn the_trend_is_the_late_steps_contraction() {
+        // A fast start, then a stall: the trend is the stall's, not a mix.
+        let stalled = [None, Some(0.086), Some(0.129), Some(1.056), Some(1.0)];
+        let q = trend(&stalled).unwrap();
+        assert!((q - (1.056f64).sqrt()).abs() < 1e-12, "{q}");
+        let mut longer = stalled.to_vec();
+        longer.extend([Some(1.0), Some(1.0), Some(1.0)]);
+        assert!((trend(&longer).unwrap() - 1.0).abs() < 0.01);
+        // A steady contraction is itself.
+        let steady = [None, Some(0.5), Some(0.5), Some(0.5), Some(0.5), Some(0.5)];
+        assert!((trend(&steady).unwrap() - 0.5).abs() < 1e-12);
+        assert_eq!(trend(&[None]), None);
+        assert_eq!(trend(&[None, Some(0.2)]), Some(0.2));
+    }
 }

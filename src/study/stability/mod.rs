@@ -11,6 +11,7 @@
 //! - `refused`: loads that violate condition (13): refused by our check,
 //!   and (check bypassed) what each solver does with such a problem.
 
+pub mod charts;
 pub mod classify;
 pub mod uniqueness;
 pub mod views;
@@ -169,7 +170,7 @@ impl Study for Stability {
         if let Some(file) = self.references_file {
             artifacts.push(Artifact::csv(file, &lab.candidates(), &[])?);
         }
-        artifacts.extend(Artifact::charts(views::charts(&map.trials, &map.steps)));
+        artifacts.extend(Artifact::charts(charts::charts(&map.trials, &map.steps)));
         findings.stability = Some(map);
         Ok(artifacts)
     }

@@ -7,12 +7,11 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::certificate::Condition;
-use crate::io::charts::{Chart, Series};
 use crate::study::stability::classify::{Class, SLOW_FACTOR, WRONG_PRESSURE};
-use crate::study::stability::{BYPASSED, DEFAULT, FRICTION, FrictionStep, LOAD, STRESS};
+use crate::study::stability::{BYPASSED, DEFAULT, FRICTION, LOAD, STRESS};
 use crate::study::trial::Trial;
 
-fn class_of(t: &Trial) -> Class {
+pub(super) fn class_of(t: &Trial) -> Class {
     t.class.unwrap_or(Class::Converged)
 }
 
@@ -112,7 +111,7 @@ pub fn stress_findings(trials: &[Trial]) -> Vec<String> {
 }
 
 /// Each (solver, knob) of the stress groups, in the order run.
-fn stress_keys(trials: &[Trial]) -> Vec<(String, String)> {
+pub(super) fn stress_keys(trials: &[Trial]) -> Vec<(String, String)> {
     let mut keys: Vec<(String, String)> = Vec::new();
     for t in trials.iter().filter(|t| t.group == STRESS) {
         let k = (t.solver.name.to_string(), t.knob().0.to_string());
@@ -321,158 +320,4 @@ pub fn readme_section(trials: &[Trial]) -> String {
         );
     }
     s
-}
-
-/// Charts: work against each stress knob's value by class, the fixed
-/// point's contraction against 𝓕, and the certificate against the load.
-pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> {
-    let mut out = Vec::new();
-    for (solver, knob) in stress_keys(trials) {
-        let runs: Vec<&Trial> = trials
-            .iter()
-            .filter(|t| t.group == STRESS && t.solver.name == solver && t.knob().0 == knob)
-            .collect();
-        let numeric: Vec<(f64, &Trial)> = runs
-            .iter()
-            .filter_map(|t| {
-                t.setting
-                    .as_ref()
-                    .and_then(|s| s.number)
-                    .filter(|v| *v > 0.0)
-                    .map(|v| (v, *t))
-            })
-            .collect();
-        if numeric.len() < 2 {
-            continue;
-        }
-        let series = Class::ALL
-            .iter()
-            .filter_map(|&c| {
-                let pts: Vec<(f64, f64)> = numeric
-                    .iter()
-                    .filter(|(_, t)| class_of(t) == c)
-                    .map(|(v, t)| (*v, t.work.max(1) as f64))
-                    .collect();
-                (!pts.is_empty()).then(|| {
-                    let s = Series::line(c.as_str(), pts).colored(c as usize);
-                    if matches!(c, Class::Converged | Class::Slow) {
-                        s.scatter()
-                    } else {
-                        s.failed()
-                    }
-                })
-            })
-            .collect();
-        out.push((
-            format!("stability_{}", knob.replace('.', "_")),
-            Chart {
-                title: format!("Stability: {solver} against {knob}, problem 1"),
-                x_label: knob.clone(),
-                y_label: "work (events of its work stage)".into(),
-                log_x: true,
-                log_y: true,
-                series,
-                y_resolution: None,
-            },
-        ));
-    }
-    // Contraction of each fixed point against 𝓕.
-    let mut keys: Vec<(String, String)> = steps
-        .iter()
-        .map(|s| (s.scene.clone(), s.solver.clone()))
-        .collect();
-    keys.sort();
-    keys.dedup();
-    let mut series: Vec<Series> = Vec::new();
-    for (scene, solver) in keys {
-        let mut fs: Vec<f64> = steps
-            .iter()
-            .filter(|s| s.scene == scene && s.solver == solver && s.friction_coefficient > 0.0)
-            .map(|s| s.friction_coefficient)
-            .collect();
-        fs.sort_by(f64::total_cmp);
-        fs.dedup();
-        let pts: Vec<(f64, f64)> = fs
-            .iter()
-            .filter_map(|&f| {
-                let q: Vec<Option<f64>> = steps
-                    .iter()
-                    .filter(|s| {
-                        s.scene == scene && s.solver == solver && s.friction_coefficient == f
-                    })
-                    .map(|s| s.contraction)
-                    .collect();
-                (q.len() >= 5)
-                    .then(|| crate::study::stability::classify::trend(&q))
-                    .flatten()
-                    .map(|t| (f, t))
-            })
-            .collect();
-        if !pts.is_empty() {
-            // The solver's colour; the scene by style.
-            let line = Series::line(format!("{scene}, {solver}"), pts).of_solver(&solver);
-            series.push(match scene.as_str() {
-                "problem 1" => line.with_markers(),
-                "problem 2" => line.dashed(),
-                _ => line.scatter(),
-            });
-        }
-    }
-    if !series.is_empty() {
-        let xs: Vec<f64> = series
-            .iter()
-            .flat_map(|s| s.points.iter().map(|p| p.0))
-            .collect();
-        let (lo, hi) = xs
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        series.push(
-            Series::line("contraction factor 1", vec![(lo, 1.0), (hi, 1.0)])
-                .dashed()
-                .black(),
-        );
-        out.push((
-            "stability_friction".into(),
-            Chart {
-                title: "Coulomb fixed point: contraction factor against 𝓕".into(),
-                x_label: "friction coefficient 𝓕".into(),
-                y_label: "contraction of max|Δg| (last steps, geometric mean)".into(),
-                log_x: true,
-                log_y: true,
-                series,
-                y_resolution: None,
-            },
-        ));
-    }
-    let load: Vec<&Trial> = trials.iter().filter(|t| t.group == LOAD).collect();
-    if !load.is_empty() {
-        let mut solvers: Vec<&str> = load.iter().map(|t| t.solver.name).collect();
-        solvers.sort();
-        solvers.dedup();
-        let mut series = Vec::new();
-        for &s in &solvers {
-            let points = |certified: bool| -> Vec<(f64, f64)> {
-                load.iter()
-                    .filter(|t| t.solver.name == s && t.certified() == certified)
-                    .map(|t| (t.total_load.abs(), t.residual().max(1e-16)))
-                    .collect()
-            };
-            series.extend(Series::certified_and_failed(s, points(true), points(false)));
-        }
-        out.push((
-            "stability_load".into(),
-            Chart {
-                title: "Stability: total vertical load approaching 0 (condition (13))".into(),
-                x_label: "|total vertical load| [force]".into(),
-                y_label: "certificate (largest violation)".into(),
-                log_x: true,
-                log_y: true,
-                series,
-                y_resolution: None,
-            },
-        ));
-    }
-    out
 }
