@@ -188,6 +188,57 @@ fn an_interrupted_run_leaves_the_previous_run_whole() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
+/// Ctrl-C (SIGINT) and SIGTERM: the run says it was not written, exits
+/// with 130, and leaves neither its staging folder nor a change behind.
+#[test]
+fn ctrl_c_removes_the_staging_folder_and_exits_130() {
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("results");
+        let child = contactlab()
+            .args([
+                "solve",
+                "--problem",
+                "1",
+                "--h",
+                "1/128",
+                "--solver",
+                "relaxation",
+                "--out",
+            ])
+            .arg(&out)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait until the run has made its staging folder.
+        let staging = || {
+            std::fs::read_dir(dir.path())
+                .unwrap()
+                .filter(|e| {
+                    e.as_ref()
+                        .unwrap()
+                        .file_name()
+                        .to_string_lossy()
+                        .contains("staging")
+                })
+                .count()
+        };
+        let start = std::time::Instant::now();
+        while staging() == 0 && start.elapsed() < Duration::from_secs(20) {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert_eq!(staging(), 1, "the run never made its staging folder");
+        // SAFETY: kill with a valid pid of our own child and a valid signal.
+        assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, signal) }, 0);
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(130), "signal {signal}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("interrupted"));
+        assert_eq!(staging(), 0, "signal {signal} left the staging folder");
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn two_runs_at_once_leave_one_whole_run() {
     let dir = tempfile::tempdir().unwrap();

@@ -13,9 +13,15 @@
 //!
 //! The swap is made under a lock on the parent folder itself, held only
 //! for the swap, so that no lock file is left beside the run.
+//!
+//! An interrupted run (Ctrl-C, SIGTERM, SIGHUP) removes its staging folder
+//! before it exits, once the binary asks for it ([`remove_on_interrupt`]);
+//! a run killed outright leaves it, and the next run into the same place
+//! removes it ([`remove_stale_staging`]).
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use anyhow::{Context, Result, bail};
 
@@ -26,6 +32,27 @@ pub const MARKER: &str = ".contactlab-run";
 
 /// The marker's content, checked byte for byte.
 const MARK: &[u8] = b"written by contactlab\n";
+
+/// The staging folders of this process' runs not yet committed.
+static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// On Ctrl-C, SIGTERM or SIGHUP: removes every staging folder of this
+/// process, says that the target was left as it was, and exits with 130.
+/// For the binary only: a library caller (the Python package) keeps its
+/// own handling of Ctrl-C.
+pub fn remove_on_interrupt() {
+    let _ = ctrlc::set_handler(|| {
+        // Holding the list, no commit can swap a folder in meanwhile.
+        let staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
+        for p in staging.iter() {
+            let _ = std::fs::remove_dir_all(p);
+        }
+        eprintln!(
+            "interrupted: the run was not written, and its output folder is as it was before"
+        );
+        std::process::exit(130);
+    });
+}
 
 /// A run being written.
 pub struct RunFolder {
@@ -69,6 +96,10 @@ impl RunFolder {
                     "--out {shown}: the output folder cannot be written; choose a writable place"
                 )
             })?;
+        STAGING
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(staging.clone());
         let folder = Self {
             target: target.to_path_buf(),
             staging,
@@ -100,6 +131,9 @@ impl RunFolder {
         lock.lock()
             .with_context(|| format!("cannot lock {}", parent.display()))?;
         check_replaceable(&self.target)?;
+        // An interrupt waits until the swap is done (and then exits).
+        let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
+        staging.retain(|p| *p != self.staging);
         let mut old = None;
         if self.target.exists() {
             if exchange(&self.staging, &self.target).is_ok() {
@@ -119,6 +153,7 @@ impl RunFolder {
                 .with_context(|| format!("cannot move the run to {}", self.target.display()))?;
         }
         self.committed = true;
+        drop(staging);
         drop(lock);
         if let Some(old) = old {
             let _ = std::fs::remove_dir_all(old);
@@ -130,6 +165,8 @@ impl RunFolder {
 impl Drop for RunFolder {
     fn drop(&mut self) {
         if !self.committed {
+            let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
+            staging.retain(|p| *p != self.staging);
             let _ = std::fs::remove_dir_all(&self.staging);
         }
     }
