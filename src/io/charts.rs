@@ -434,9 +434,17 @@ impl Chart {
         Ok(())
     }
 
+    /// The legend's rows: a long label (merged series) takes several.
+    fn legend_rows(&self) -> usize {
+        self.series
+            .iter()
+            .map(|s| overlap::lines(&s.name).len())
+            .sum()
+    }
+
     /// The legend's row height and font size in pixels.
     fn legend_font(&self) -> (i32, i32) {
-        let rows = self.series.len().max(1) as i32;
+        let rows = self.legend_rows().max(1) as i32;
         let row = (((HEIGHT as i32) - 60) / rows).clamp(9, 17);
         (row, (row - 3).clamp(8, 13))
     }
@@ -449,7 +457,8 @@ impl Chart {
         let longest = self
             .series
             .iter()
-            .map(|s| s.name.chars().count())
+            .flat_map(|s| overlap::lines(&s.name))
+            .map(|l| l.chars().count())
             .max()
             .unwrap_or(0) as f64;
         let needed = (50.0 + longest * 0.62 * font as f64).ceil() as u32;
@@ -460,7 +469,7 @@ impl Chart {
     /// as on the plot, its label whole.
     fn draw_legend(&self, area: &DrawingArea<SVGBackend<'_>, Shift>) -> Result<()> {
         let err = |e: DrawingAreaErrorKind<_>| anyhow!("chart '{}' legend: {e}", self.title);
-        let rows = self.series.len().max(1) as i32;
+        let rows = self.legend_rows().max(1) as i32;
         let (row, font) = self.legend_font();
         let width = self.legend_width() as i32;
         let (left, top) = (6, 40);
@@ -470,8 +479,11 @@ impl Chart {
             BLACK.stroke_width(1),
         ))
         .map_err(err)?;
+        let mut at = 0;
         for (i, s) in self.series.iter().enumerate() {
-            let y = top + i as i32 * row + row / 2;
+            let lines = overlap::lines(&s.name);
+            let y = top + at * row + row / 2;
+            at += lines.len() as i32;
             let color = self.color(i);
             let (a, b) = (left + 6, left + 30);
             match s.style {
@@ -505,12 +517,14 @@ impl Chart {
                 }
                 _ => {}
             }
-            area.draw(&Text::new(
-                s.name.clone(),
-                (b + 6, y - font / 2),
-                ("sans-serif", font).into_font().color(&BLACK),
-            ))
-            .map_err(err)?;
+            for (k, line) in lines.into_iter().enumerate() {
+                area.draw(&Text::new(
+                    line,
+                    (b + 6, y - font / 2 + k as i32 * row),
+                    ("sans-serif", font).into_font().color(&BLACK),
+                ))
+                .map_err(err)?;
+            }
         }
         Ok(())
     }

@@ -93,7 +93,61 @@ pub fn joined(names: &[&str]) -> String {
         .collect();
     let head = first[..prefix_len].trim_end();
     let space = if head.is_empty() { "" } else { " " };
-    format!("{head}{space}{}{tail} {SAME_POINTS}", middles.join(" / "))
+    format!("{head}{space}{}{tail} {SAME_POINTS}", grouped(&middles))
+}
+
+/// Names joined by " / ", those that all read "group, name" written as
+/// "group, a / b; other group, c" (each group once, in order).
+fn grouped(middles: &[&str]) -> String {
+    let split: Option<Vec<(&str, &str)>> = middles.iter().map(|m| m.split_once(", ")).collect();
+    let Some(split) = split else {
+        return middles.join(" / ");
+    };
+    let mut groups: Vec<(&str, Vec<&str>)> = Vec::new();
+    for (g, name) in split {
+        match groups.iter_mut().find(|(h, _)| *h == g) {
+            Some((_, names)) => names.push(name),
+            None => groups.push((g, vec![name])),
+        }
+    }
+    groups
+        .iter()
+        .map(|(g, names)| format!("{g}, {}", names.join(" / ")))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The longest legend line a label is wrapped to, in characters.
+const LINE: usize = 46;
+
+/// A legend label in lines of at most about [`LINE`] characters, broken
+/// after " / " or "; " (where merged names are joined); later lines are
+/// indented. A label without such breaks stays whole, however long.
+pub fn lines(label: &str) -> Vec<String> {
+    if label.chars().count() <= LINE {
+        return vec![label.to_string()];
+    }
+    let mut pieces: Vec<&str> = Vec::new();
+    let mut rest = label;
+    while let Some(k) = [" / ", "; "]
+        .iter()
+        .filter_map(|sep| rest.find(sep).map(|k| k + sep.len()))
+        .min()
+    {
+        pieces.push(&rest[..k]);
+        rest = &rest[k..];
+    }
+    pieces.push(rest);
+    let mut out: Vec<String> = vec![String::new()];
+    for p in pieces {
+        let last = out.last_mut().expect("one line at least");
+        if !last.trim().is_empty() && last.chars().count() + p.chars().count() > LINE {
+            out.push(format!("  {p}"));
+        } else {
+            last.push_str(p);
+        }
+    }
+    out.into_iter().map(|l| l.trim_end().to_string()).collect()
 }
 
 #[cfg(test)]
@@ -115,6 +169,40 @@ mod tests {
             "clarabel / clarabel-qp (slope 1.20) (same points)"
         );
         assert_eq!(joined(&["a", "b"]), "a / b (same points)");
+        assert_eq!(
+            joined(&[
+                "problem 1, admm: not certified",
+                "problem 1, apgd: not certified",
+                "problem 2, admm: not certified",
+            ]),
+            "problem 1, admm / apgd; problem 2, admm: not certified (same points)"
+        );
+    }
+
+    #[test]
+    fn long_labels_wrap_where_names_are_joined_and_lose_nothing() {
+        let label = joined(&[
+            "problem 1, admm",
+            "problem 1, apgd",
+            "problem 1, clarabel",
+            "problem 1, clarabel-condensed",
+            "problem 1, clarabel-faer",
+            "problem 1, newton",
+            "problem 1, relaxation",
+        ]);
+        let wrapped = lines(&label);
+        assert!(wrapped.len() > 1);
+        assert!(
+            wrapped.iter().all(|l| l.chars().count() <= LINE + 2),
+            "{wrapped:?}"
+        );
+        let back: String = wrapped
+            .iter()
+            .map(|l| l.trim_start())
+            .collect::<Vec<_>>()
+            .join(" ");
+        assert_eq!(back.replace("/  ", "/ "), label);
+        assert_eq!(lines("short"), ["short"]);
     }
 
     #[test]
