@@ -2,7 +2,8 @@
 //!
 //! It exposes the library's own functions, not copies of them: a problem is
 //! the scene assembled by [`Discretization`] (the one the CLI solves), a
-//! solve is [`solve_scene`] with settings resolved by [`Settings::set_text`]
+//! solve is the library's [`solve_assembled`] on the problem's own finest level (not
+//! assembled again) with settings resolved by [`Settings::set_text`]
 //! (the CLI's `--set`), a certificate is [`certify`] (the CLI's `certify`).
 //! The Python layer (`contactlab/__init__.py`) turns the plain arrays given
 //! here into scipy and numpy objects. Every error is one
@@ -13,7 +14,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Overrides, Scene};
 use contactlab::settings::Settings;
-use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solve::{Assembled, Caps, Solved, solve as solve_assembled, solver_entry};
 use contactlab::solvers::{Friction, Silent, registry};
 use nalgebra_sparse::CsrMatrix;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
@@ -273,7 +274,21 @@ fn solve<'py>(
                 Some(g) => Friction::Given(g),
                 None => Friction::Coulomb,
             };
-            solve_scene(scene, friction, entry, &settings, &mut Silent)
+            // The problem's finest level, copied (far cheaper than its
+            // assembly); the coarser levels of a continuation are assembled.
+            let assembled = Assembled::with_finest(scene, entry, problem.finest.clone())?;
+            let outcome = solve_assembled(
+                &assembled,
+                friction,
+                entry,
+                &settings,
+                Caps::default(),
+                &mut Silent,
+            )?;
+            anyhow::Ok(Solved {
+                finest: assembled.into_finest(),
+                outcome,
+            })
         })
         .map_err(anyhow_err)?;
     let o = &solved.outcome;

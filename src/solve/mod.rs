@@ -45,7 +45,19 @@ impl Assembled {
     /// refused a finer mesh once the finest level is assembled, before
     /// anything else is.
     pub fn for_solver(scene: &Scene, entry: &Entry) -> Result<Self> {
-        let finest = Discretization::new(scene, scene.finest())?;
+        Self::with_finest(scene, entry, Discretization::new(scene, scene.finest())?)
+    }
+
+    /// As [`Assembled::for_solver`], with the finest level already
+    /// assembled (the Python package's problem holds it: no second
+    /// assembly of the finest mesh per solve).
+    pub fn with_finest(scene: &Scene, entry: &Entry, finest: Discretization) -> Result<Self> {
+        anyhow::ensure!(
+            finest.h() == scene.finest(),
+            "the finest level given is on h = {}, the scene's finest mesh is {}",
+            finest.h(),
+            scene.finest()
+        );
         let n = finest.problem.n();
         if let Some(cap) = entry.max_unknowns.filter(|&cap| n > cap) {
             anyhow::bail!(
