@@ -33,4 +33,4 @@ pub use relaxation::pointwise::Smoothing;
 pub use relaxation::{ProxUzawa, RelaxationSettings};
 pub use settings::Stopping;
 pub use solution::{Iterations, Solution, Status, Timing};
-pub use solver::{Friction, Law, Solver, Start};
+pub use solver::{Friction, Law, STOPPED_AT_NEED, Solver, Start};

@@ -90,10 +90,20 @@ pub struct Start<'a> {
     /// problem's scales), when it needs less than the solver's own
     /// tolerance: the friction fixed point asks a fraction of its last
     /// relative change of g (an inexact fixed point: Newton-like forcing
-    /// terms, Dembo, Eisenstat & Steihaug 1982). A solver may stop at the
-    /// looser of this and its own tolerance, or ignore it; None: its own.
+    /// terms, Dembo, Eisenstat & Steihaug 1982). It is an accuracy of the
+    /// contact pressure, relative to P (g = 𝓕p is what the caller uses). A
+    /// solver may stop at the looser of this and its own tolerance, or
+    /// ignore it; None: its own. A solver that stopped at this need says
+    /// so with the diagnostic [`STOPPED_AT_NEED`] (the need's value): the
+    /// fixed point never ends on such a step when the need was looser than
+    /// its own stopping accuracy.
     pub accuracy: Option<f64>,
 }
+
+/// The [`Solution::diagnostics`](crate::Solution) name of a solve that
+/// stopped at the caller's [`Start::accuracy`] rather than at its own
+/// tolerance; its value is that accuracy.
+pub const STOPPED_AT_NEED: &str = "stopped_at_need";
 
 /// A solver of the algebraic contact problem.
 ///

@@ -8,8 +8,8 @@ use std::time::Instant;
 
 use contactlab_solvers::settings::{Kind, Knob, Stopping, Validate, check_tree, to_tree};
 use contactlab_solvers::{
-    ContactProblem, Control, Friction, Iterations, Observer, Progress, Solution, Solver, Start,
-    Status,
+    ContactProblem, Control, Friction, Iterations, Observer, Progress, STOPPED_AT_NEED, Solution,
+    Solver, Start, Status,
 };
 use serde::{Deserialize, Serialize};
 
@@ -101,7 +101,7 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "forcing",
         fields: &["forcing"],
-        help: "inexact fixed point: ask each given-friction solve for a relative accuracy of forcing·max|Δg|/(𝓕P) of the previous step when looser than its own tolerance (solvers that read it: tnnmg); 0: never",
+        help: "inexact fixed point: ask each given-friction solve for an accuracy of its pressure of forcing·max|Δg|/(𝓕P) of the previous step, relative to P, when looser than its own tolerance (solvers that read it: tnnmg); the fixed point still ends only on a step asked for its own ε or better; 0: never",
         kind: Kind::NonNegative,
     },
     Knob {
@@ -257,6 +257,9 @@ pub fn friction_fixed_point(
         .unwrap_or_else(|| vec![0.0; coefficient.len()]);
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
+    // The steps whose change proved nothing (see `inexact` below): not a
+    // baseline of the stall test either.
+    let mut inconclusive: Vec<bool> = Vec::new();
     // The relative change of g is max|Δg| over 𝓕P.
     let bound_scale =
         coefficient.iter().fold(0.0f64, |m, c| m.max(*c)) * step.problem().scales().pressure;
@@ -329,7 +332,19 @@ pub fn friction_fixed_point(
                 history,
             );
         }
-        if change <= tolerance {
+        // A change between solves, the last of which stopped at a need
+        // looser than the stop's own accuracy, proves nothing at that
+        // accuracy: two loose solves can stop alike short of p(g) (seen
+        // with the forcing 0.1, revisit schedule, problem 3 at 1/32:
+        // max|Δg| = 1e-12 with the pressure 2e-6·P off). Such a step goes
+        // on, and its successor is asked for forcing·change, below the
+        // stop's accuracy. Solvers that ignore the need are never loose.
+        let inexact = solution
+            .diagnostics
+            .iter()
+            .any(|&(name, need)| name == STOPPED_AT_NEED && need * bound_scale > tolerance);
+        inconclusive.push(inexact && change <= tolerance);
+        if change <= tolerance && !inexact {
             let detail =
                 format!("max|Δg| = {change:.3e} ≤ {tolerance:.3e} after {m} friction iterations");
             return finish(
@@ -346,7 +361,7 @@ pub fn friction_fixed_point(
             return finish(status, Ending::Stopped, detail, solution, g, history);
         }
         let w = settings.stall_window;
-        if w > 0 && m > w && change >= history[m - 1 - w].change {
+        if w > 0 && m > w && !inconclusive[m - 1 - w] && change >= history[m - 1 - w].change {
             let detail = format!(
                 "the fixed point is not contracting: max|Δg| went from {:.3e} to {change:.3e} over the last {w} friction iterations",
                 history[m - 1 - w].change
@@ -439,105 +454,5 @@ impl GivenFrictionStep for SingleLevel<'_> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use contactlab_solvers::{ContactNode, Silent, Timing};
-    use nalgebra_sparse::CsrMatrix;
-
-    /// A step whose pressure is an affine function of g: p = p0 + k g, so the
-    /// fixed point g = 𝓕 p contracts with factor 𝓕 k (𝓕 = ½ at every node).
-    struct Affine {
-        p0: Vec<f64>,
-        k: f64,
-        problem: ContactProblem,
-    }
-
-    fn affine(p0: Vec<f64>, k: f64) -> Affine {
-        let m = p0.len();
-        let contacts = (0..m)
-            .map(|i| ContactNode {
-                t: 2 * i,
-                s: 2 * i + 1,
-                weight: 1.0,
-                coefficient: 0.5,
-            })
-            .collect();
-        let problem = ContactProblem::new(
-            CsrMatrix::identity(2 * m),
-            vec![1.0; 2 * m],
-            CsrMatrix::identity(2 * m),
-            contacts,
-            vec![],
-        )
-        .unwrap();
-        Affine { p0, k, problem }
-    }
-
-    impl GivenFrictionStep for Affine {
-        fn problem(&self) -> &ContactProblem {
-            &self.problem
-        }
-
-        fn solve_step(&mut self, g: &[f64], _: Option<f64>, _: &mut dyn Observer) -> Solution {
-            Solution {
-                v: vec![],
-                pressure: self.p0.iter().zip(g).map(|(p, g)| p + self.k * g).collect(),
-                friction_traction: vec![0.0; g.len()],
-                status: Status::Converged,
-                detail: String::new(),
-                iterations: Iterations { outer: 1, inner: 0 },
-                timing: Timing::default(),
-                diagnostics: Vec::new(),
-            }
-        }
-    }
-
-    #[test]
-    fn contracting_map_converges_with_the_expected_factor() {
-        let mut step = affine(vec![10.0, 20.0], 0.8);
-        let s = CoulombSettings {
-            epsilon: 1e-9,
-            max_iterations: 200,
-            ..CoulombSettings::defaults(Stopping::Paper)
-        };
-        let out = friction_fixed_point(&mut step, &s, &mut Silent);
-        assert_eq!(out.ending, Ending::Converged);
-        assert_eq!(out.status, Status::Converged);
-        // Fixed point g = 𝓕 (p0 + k g) ⇒ g = 𝓕 p0 / (1 − 𝓕 k).
-        for (g, p0) in out.g.iter().zip([10.0, 20.0]) {
-            assert!((g - 0.5 * p0 / (1.0 - 0.4)).abs() < 1e-8);
-        }
-        for h in &out.history[1..] {
-            assert!((h.contraction.unwrap() - 0.4).abs() < 1e-6, "{h:?}");
-        }
-    }
-
-    #[test]
-    fn expanding_map_stops_at_the_cap_with_that_status() {
-        let mut step = affine(vec![1.0], 3.0);
-        let s = CoulombSettings {
-            epsilon: 1e-4,
-            max_iterations: 7,
-            stall_window: 0,
-            stopping: Stopping::Paper,
-            forcing: 0.0,
-        };
-        let out = friction_fixed_point(&mut step, &s, &mut Silent);
-        assert_eq!(out.status, Status::MaxIterations);
-        assert_eq!(out.ending, Ending::IterationCap);
-        assert_eq!(out.history.len(), 7);
-        assert!(out.history.last().unwrap().contraction.unwrap() > 1.0);
-        // With stall detection it stops as soon as W steps bring no decrease.
-        let s = CoulombSettings {
-            epsilon: 1e-4,
-            max_iterations: 50,
-            stall_window: 3,
-            stopping: Stopping::Paper,
-            forcing: 0.0,
-        };
-        let out = friction_fixed_point(&mut step, &s, &mut Silent);
-        assert_eq!(out.status, Status::InsufficientProgress);
-        assert_eq!(out.ending, Ending::NotContracting);
-        assert_eq!(out.history.len(), 4, "{}", out.detail);
-    }
-}
+#[path = "fixed_point_tests.rs"]
+mod tests;

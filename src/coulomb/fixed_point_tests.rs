@@ -1,0 +1,154 @@
+//! Tests of the friction fixed point on affine model steps.
+
+use super::*;
+use contactlab_solvers::{ContactNode, STOPPED_AT_NEED, Silent, Timing};
+use nalgebra_sparse::CsrMatrix;
+
+/// A step whose pressure is an affine function of g: p = p0 + k g, so the
+/// fixed point g = 𝓕 p contracts with factor 𝓕 k (𝓕 = ½ at every node).
+struct Affine {
+    p0: Vec<f64>,
+    k: f64,
+    problem: ContactProblem,
+}
+
+fn affine(p0: Vec<f64>, k: f64) -> Affine {
+    let m = p0.len();
+    let contacts = (0..m)
+        .map(|i| ContactNode {
+            t: 2 * i,
+            s: 2 * i + 1,
+            weight: 1.0,
+            coefficient: 0.5,
+        })
+        .collect();
+    let problem = ContactProblem::new(
+        CsrMatrix::identity(2 * m),
+        vec![1.0; 2 * m],
+        CsrMatrix::identity(2 * m),
+        contacts,
+        vec![],
+    )
+    .unwrap();
+    Affine { p0, k, problem }
+}
+
+impl GivenFrictionStep for Affine {
+    fn problem(&self) -> &ContactProblem {
+        &self.problem
+    }
+
+    fn solve_step(&mut self, g: &[f64], _: Option<f64>, _: &mut dyn Observer) -> Solution {
+        Solution {
+            v: vec![],
+            pressure: self.p0.iter().zip(g).map(|(p, g)| p + self.k * g).collect(),
+            friction_traction: vec![0.0; g.len()],
+            status: Status::Converged,
+            detail: String::new(),
+            iterations: Iterations { outer: 1, inner: 0 },
+            timing: Timing::default(),
+            diagnostics: Vec::new(),
+        }
+    }
+}
+
+#[test]
+fn contracting_map_converges_with_the_expected_factor() {
+    let mut step = affine(vec![10.0, 20.0], 0.8);
+    let s = CoulombSettings {
+        epsilon: 1e-9,
+        max_iterations: 200,
+        ..CoulombSettings::defaults(Stopping::Paper)
+    };
+    let out = friction_fixed_point(&mut step, &s, &mut Silent);
+    assert_eq!(out.ending, Ending::Converged);
+    assert_eq!(out.status, Status::Converged);
+    // Fixed point g = 𝓕 (p0 + k g) ⇒ g = 𝓕 p0 / (1 − 𝓕 k).
+    for (g, p0) in out.g.iter().zip([10.0, 20.0]) {
+        assert!((g - 0.5 * p0 / (1.0 - 0.4)).abs() < 1e-8);
+    }
+    for h in &out.history[1..] {
+        assert!((h.contraction.unwrap() - 0.4).abs() < 1e-6, "{h:?}");
+    }
+}
+
+/// A step that, asked for a loose accuracy, returns its last pressure
+/// unchanged (as a warm-started solver may, its first iteration already
+/// within the need; the revisit schedule did, from the same coarse
+/// start): the change of g it shows is zero and proves nothing. The
+/// fixed point must go on to the true g = 𝓕 p0 / (1 − 𝓕 k), not stop
+/// at the stale one.
+struct Stale {
+    exact: Affine,
+    last: Option<Vec<f64>>,
+}
+
+impl GivenFrictionStep for Stale {
+    fn problem(&self) -> &ContactProblem {
+        &self.exact.problem
+    }
+
+    fn solve_step(&mut self, g: &[f64], accuracy: Option<f64>, o: &mut dyn Observer) -> Solution {
+        let mut s = self.exact.solve_step(g, None, o);
+        if let (Some(last), Some(a)) = (&self.last, accuracy)
+            && a > 1e-3
+        {
+            s.pressure.clone_from(last);
+            s.diagnostics.push((STOPPED_AT_NEED, a));
+        }
+        self.last = Some(s.pressure.clone());
+        s
+    }
+}
+
+#[test]
+fn a_loose_step_showing_no_change_does_not_end_the_fixed_point() {
+    let mut step = Stale {
+        exact: affine(vec![10.0, 20.0], 0.8),
+        last: None,
+    };
+    let s = CoulombSettings {
+        epsilon: 1e-9,
+        max_iterations: 200,
+        forcing: 0.1,
+        ..CoulombSettings::defaults(Stopping::Paper)
+    };
+    let out = friction_fixed_point(&mut step, &s, &mut Silent);
+    assert_eq!(out.ending, Ending::Converged, "{}", out.detail);
+    for (g, p0) in out.g.iter().zip([10.0, 20.0]) {
+        assert!(
+            (g - 0.5 * p0 / (1.0 - 0.4)).abs() < 1e-8,
+            "g = {g}: {}",
+            out.detail
+        );
+    }
+}
+
+#[test]
+fn expanding_map_stops_at_the_cap_with_that_status() {
+    let mut step = affine(vec![1.0], 3.0);
+    let s = CoulombSettings {
+        epsilon: 1e-4,
+        max_iterations: 7,
+        stall_window: 0,
+        stopping: Stopping::Paper,
+        forcing: 0.0,
+    };
+    let out = friction_fixed_point(&mut step, &s, &mut Silent);
+    assert_eq!(out.status, Status::MaxIterations);
+    assert_eq!(out.ending, Ending::IterationCap);
+    assert_eq!(out.history.len(), 7);
+    assert!(out.history.last().unwrap().contraction.unwrap() > 1.0);
+    // With stall detection it stops as soon as W steps bring no decrease.
+    let s = CoulombSettings {
+        epsilon: 1e-4,
+        max_iterations: 50,
+        stall_window: 3,
+        stopping: Stopping::Paper,
+        forcing: 0.0,
+    };
+    let out = friction_fixed_point(&mut step, &s, &mut Silent);
+    assert_eq!(out.status, Status::InsufficientProgress);
+    assert_eq!(out.ending, Ending::NotContracting);
+    assert_eq!(out.history.len(), 4, "{}", out.detail);
+}
