@@ -264,9 +264,6 @@ pub fn friction_fixed_point(
         .unwrap_or_else(|| vec![0.0; coefficient.len()]);
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
-    // The steps whose change proved nothing (see `inexact` below): not a
-    // baseline of the stall test either.
-    let mut inconclusive: Vec<bool> = Vec::new();
     // The relative change of g is max|Δg| over 𝓕P.
     let bound_scale =
         coefficient.iter().fold(0.0f64, |m, c| m.max(*c)) * step.problem().scales().pressure;
@@ -350,7 +347,6 @@ pub fn friction_fixed_point(
             .diagnostics
             .iter()
             .any(|&(name, need)| name == STOPPED_AT_NEED && need * bound_scale > tolerance);
-        inconclusive.push(inexact && change <= tolerance);
         if change <= tolerance && !inexact {
             let detail =
                 format!("max|Δg| = {change:.3e} ≤ {tolerance:.3e} after {m} friction iterations");
@@ -367,11 +363,16 @@ pub fn friction_fixed_point(
             let detail = format!("stopped by the harness after {m} friction iterations");
             return finish(status, Ending::Stopped, detail, solution, g, history);
         }
+        // A past step whose change met the tolerance without ending the
+        // fixed point was a loose one: its change proved nothing, and is
+        // no baseline of the stall test either.
         let w = settings.stall_window;
-        if w > 0 && m > w && !inconclusive[m - 1 - w] && change >= history[m - 1 - w].change {
+        let baseline = (w > 0 && m > w)
+            .then(|| history[m - 1 - w].change)
+            .filter(|&c| c > tolerance);
+        if let Some(before) = baseline.filter(|&c| change >= c) {
             let detail = format!(
-                "the fixed point is not contracting: max|Δg| went from {:.3e} to {change:.3e} over the last {w} friction iterations",
-                history[m - 1 - w].change
+                "the fixed point is not contracting: max|Δg| went from {before:.3e} to {change:.3e} over the last {w} friction iterations"
             );
             return finish(
                 Status::InsufficientProgress,

@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use nalgebra_sparse::CsrMatrix;
 
-use crate::numerics::linalg::spmv_into;
+use crate::numerics::linalg::row_dot;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::settings::{Kind, Validate, from_tree, to_tree};
@@ -189,8 +189,17 @@ pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
     Ok(&mut kept[index].1)
 }
 
-/// The contact pressure λ_i = (f − Av)_{t_i} / w_i of every contact node
-/// into `out`, from the contact rows of A alone (O(h⁻¹) work).
+/// (f − Av)_i of one row: the contact forces are these residuals at the
+/// contact rows (λ_i = (f − Av)_{t_i}/w_i, μ_i = −(f − Av)_{s_i}/w_i, the
+/// certificate's stationarity), O(h⁻¹) work for all of them. The row sum is
+/// the product's ([`row_dot`]), so it equals (f − spmv(A, v))_i to the bit.
+fn residual_at(a: &CsrMatrix<f64>, f: &[f64], v: &[f64], i: usize) -> f64 {
+    let row = a.row(i);
+    // SAFETY: a CsrMatrix keeps its column indices below ncols = v.len().
+    f[i] - unsafe { row_dot(row.col_indices(), row.values(), v) }
+}
+
+/// The contact pressure λ_i of every contact node into `out`.
 fn contact_pressure(
     a: &CsrMatrix<f64>,
     f: &[f64],
@@ -199,14 +208,7 @@ fn contact_pressure(
     out: &mut [f64],
 ) {
     for (o, c) in out.iter_mut().zip(contacts) {
-        let row = a.row(c.t);
-        let av: f64 = row
-            .col_indices()
-            .iter()
-            .zip(row.values())
-            .map(|(&j, &x)| x * v[j])
-            .sum();
-        *o = (f[c.t] - av) / c.weight;
+        *o = residual_at(a, f, v, c.t) / c.weight;
     }
 }
 
@@ -352,15 +354,12 @@ impl Solver for Tnnmg {
                 break;
             }
         }
-        let mut r = std::mem::take(&mut ws.r);
-        // The contact forces are the residual's: λ_i = (f − Av)_{t_i},
-        // μ_i = −(f − Av)_{s_i} (the certificate's stationarity).
-        spmv_into(a, &v, &mut r);
-        let (mut pressure, mut traction) = (Vec::with_capacity(m), Vec::with_capacity(m));
-        for cn in contacts {
-            pressure.push((f[cn.t] - r[cn.t]) / cn.weight);
-            traction.push(-(f[cn.s] - r[cn.s]) / cn.weight);
-        }
+        let mut pressure = vec![0.0; m];
+        contact_pressure(a, f, contacts, &v, &mut pressure);
+        let traction = contacts
+            .iter()
+            .map(|c| -residual_at(a, f, &v, c.s) / c.weight)
+            .collect();
         Solution {
             v,
             pressure,
