@@ -81,6 +81,14 @@ impl Workspace {
             shift: zeros(),
         }
     }
+
+    /// As new, for another solve of the same size: the truncated set and
+    /// the curvatures cleared (every other vector is written before it is
+    /// read).
+    pub(crate) fn reset(&mut self) {
+        self.truncated.fill(false);
+        self.shift.fill(0.0);
+    }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -99,7 +107,14 @@ pub(crate) fn iterate(
 ) {
     let (a, laws, contact) = (energy.a, energy.laws, energy.contact);
     for _ in 0..cycle.presmoothing {
-        nonlinear_sweep(a, &hierarchy.diag, energy.b, laws, v);
+        nonlinear_sweep(
+            a,
+            &hierarchy.diag,
+            hierarchy.halves.as_ref(),
+            energy.b,
+            laws,
+            v,
+        );
     }
     // The truncated set, the Newton step's curvature and its defect.
     spmv_into(a, v, &mut ws.r);

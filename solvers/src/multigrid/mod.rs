@@ -31,8 +31,15 @@
 //! iteration), and across the friction fixed point the last step's answer.
 //! It stops when an iteration moves no unknown by more than tolerance · U
 //! (U the problem's displacement scale).
+//!
+//! Both cores: above [`crate::numerics::linalg::PARALLEL_NNZ`] stored
+//! entries (h ≤ 1/128 for the paper's scenes) the products split their rows
+//! in two, and the Gauss-Seidel sweeps, nonlinear and linear, run in the
+//! two-halves ordering of [`halves`]: two blocks of unknowns that do not
+//! couple at the same time, then their separator.
 
 mod galerkin;
+mod halves;
 pub(crate) mod iteration;
 mod line_search;
 pub(crate) mod smoother;
@@ -157,6 +164,36 @@ const KEPT_HIERARCHIES: usize = 12;
 pub struct Tnnmg {
     pub settings: TnnmgSettings,
     hierarchies: Vec<(u64, Hierarchy)>,
+    /// The last solve's vectors, reused by the next of the same size (the
+    /// friction fixed point's steps on one level): at h = 1/1024 each is
+    /// 34 MB, above the size that the allocator maps afresh, and faulting
+    /// their pages in again took a sixth of a friction step.
+    buffers: Option<Buffers>,
+}
+
+/// The vectors of one solve.
+struct Buffers {
+    ws: Workspace,
+    laws: Vec<Local>,
+    previous: Vec<f64>,
+}
+
+impl Buffers {
+    /// `kept` when of size n, else new ones; the laws all `Free`.
+    fn of_size(kept: Option<Buffers>, n: usize) -> Self {
+        match kept {
+            Some(mut b) if b.previous.len() == n => {
+                b.laws.fill(Local::Free);
+                b.ws.reset();
+                b
+            }
+            _ => Self {
+                ws: Workspace::new(n),
+                laws: vec![Local::Free; n],
+                previous: vec![0.0; n],
+            },
+        }
+    }
 }
 
 impl Tnnmg {
@@ -247,7 +284,11 @@ impl Solver for Tnnmg {
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let mut laws = vec![Local::Free; n];
+        let Buffers {
+            mut ws,
+            mut laws,
+            mut previous,
+        } = Buffers::of_size(self.buffers.take(), n);
         let mut contact = Vec::with_capacity(2 * m);
         for (c, g) in contacts.iter().zip(bound) {
             laws[c.t] = Local::Jump;
@@ -287,13 +328,11 @@ impl Solver for Tnnmg {
         if v.len() != n {
             v = vec![0.0; n];
         }
-        let mut previous = v.clone();
         let mut pressure_now = vec![0.0; m];
         let mut pressure_before = vec![0.0; m];
         if pressure_tol.is_some() {
             contact_pressure(a, f, contacts, &v, &mut pressure_before);
         }
-        let mut ws = Workspace::new(n);
         let mut status = Status::MaxIterations;
         let mut detail = format!("iteration cap {} reached", self.settings.max_iter);
         let mut iterations = 0;
@@ -356,6 +395,7 @@ impl Solver for Tnnmg {
         }
         let mut pressure = vec![0.0; m];
         contact_pressure(a, f, contacts, &v, &mut pressure);
+        self.buffers = Some(Buffers { ws, laws, previous });
         let traction = contacts
             .iter()
             .map(|c| -residual_at(a, f, &v, c.s) / c.weight)

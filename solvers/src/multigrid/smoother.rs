@@ -16,6 +16,7 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use super::halves::{Halves, Shared, sweep};
 use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 
 /// The contact law along one coordinate.
@@ -92,15 +93,19 @@ pub(crate) fn diagonal_positions(a: &CsrMatrix<f64>) -> Result<Vec<usize>, Strin
         .collect()
 }
 
-/// c_k = b_k − Σ_{j≠k} A_kj x_j.
+/// c_k = b_k − Σ_{j≠k} A_kj x_j, the row's sum in the order of the
+/// product's ([`crate::numerics::linalg::row_dot`]).
+///
+/// # Safety
+/// A's column indices are below x's length, and no other thread writes the
+/// unknowns of row k's pattern meanwhile (see [`Halves`]).
 #[inline]
-fn off_diagonal_rhs(a: &CsrMatrix<f64>, k: usize, diag: usize, b: f64, x: &[f64]) -> f64 {
+unsafe fn off_diagonal_rhs(a: &CsrMatrix<f64>, k: usize, diag: usize, b: f64, x: Shared) -> f64 {
     let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
-    let mut sum = 0.0;
-    for p in offsets[k]..offsets[k + 1] {
-        sum += vals[p] * x[cols[p]];
-    }
-    b - (sum - vals[diag] * x[k])
+    let (lo, hi) = (offsets[k], offsets[k + 1]);
+    // SAFETY: by the contract.
+    let sum = unsafe { x.row_dot(&cols[lo..hi], &vals[lo..hi]) };
+    b - (sum - vals[diag] * unsafe { x.get(k) })
 }
 
 /// The exact minimizer of ½ a x² − c x + φ(x).
@@ -115,43 +120,68 @@ pub(crate) fn local_minimizer(law: Local, a: f64, c: f64) -> f64 {
     }
 }
 
-/// One forward sweep of the nonlinear Gauss-Seidel on J (see the module).
+/// A's row count against the vectors of a sweep: the sweeps read x at A's
+/// column indices without bounds checks.
+fn check_sizes(a: &CsrMatrix<f64>, diag: &[usize], b: &[f64], x: &[f64]) {
+    assert!(
+        a.nrows() == x.len() && a.ncols() == x.len() && diag.len() == x.len() && b.len() == x.len(),
+        "a sweep: A, its diagonal, b and x of one size"
+    );
+}
+
+/// One forward sweep of the nonlinear Gauss-Seidel on J (see the module),
+/// on two threads in the ordering of `halves` when given.
 pub(crate) fn nonlinear_sweep(
     a: &CsrMatrix<f64>,
     diag: &[usize],
+    halves: Option<&Halves>,
     f: &[f64],
     laws: &[Local],
     v: &mut [f64],
 ) {
+    check_sizes(a, diag, f, v);
     let vals = a.values();
-    for k in 0..v.len() {
-        let c = off_diagonal_rhs(a, k, diag[k], f[k], v);
-        v[k] = local_minimizer(laws[k], vals[diag[k]], c);
-    }
+    sweep(halves, v, true, |k, x| {
+        // SAFETY: sizes checked above; the halves' ordering keeps the other
+        // thread off row k's pattern.
+        unsafe {
+            let c = off_diagonal_rhs(a, k, diag[k], f[k], x);
+            x.set(k, local_minimizer(laws[k], vals[diag[k]], c));
+        }
+    });
 }
 
 /// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,
 /// D = diag(`shift`) (empty: none), keeping x_k = 0 where `fixed` says so
-/// (the truncated coordinates).
+/// (the truncated coordinates); on two threads in the ordering of `halves`
+/// when given.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn linear_sweep(
     a: &CsrMatrix<f64>,
     diag: &[usize],
+    halves: Option<&Halves>,
     shift: &[f64],
     b: &[f64],
     x: &mut [f64],
     fixed: &[bool],
     forward: bool,
 ) {
+    check_sizes(a, diag, b, x);
+    assert_eq!(fixed.len(), x.len(), "a sweep: one flag per unknown");
     let vals = a.values();
-    let n = x.len();
-    for step in 0..n {
-        let k = if forward { step } else { n - 1 - step };
+    sweep(halves, x, forward, |k, x| {
         if fixed[k] {
-            continue;
+            return;
         }
-        let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
-        x[k] = c / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
-    }
+        // SAFETY: as in the nonlinear sweep.
+        unsafe {
+            let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
+            x.set(
+                k,
+                c / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0)),
+            );
+        }
+    });
 }
 
 #[cfg(test)]

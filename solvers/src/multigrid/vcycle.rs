@@ -21,6 +21,7 @@
 use nalgebra_sparse::CsrMatrix;
 
 use crate::multigrid::galerkin::galerkin;
+use crate::multigrid::halves::Halves;
 use crate::multigrid::smoother::{diagonal_position, linear_sweep};
 use crate::numerics::linalg::spmv_into;
 
@@ -97,6 +98,8 @@ struct Level {
     a: CsrMatrix<f64>,
     untruncated: Vec<f64>,
     diag: Vec<usize>,
+    /// The two-core Gauss-Seidel ordering of `a`'s rows, if it has one.
+    halves: Option<Halves>,
     fixed: Vec<bool>,
     touched: Vec<usize>,
 }
@@ -110,6 +113,7 @@ impl Level {
         let diag = found.into_iter().map(|p| p.unwrap_or(0)).collect();
         Self {
             untruncated: a.values().to_vec(),
+            halves: Halves::new(&a),
             a,
             diag,
             fixed,
@@ -183,6 +187,8 @@ fn galerkin_triplets(p: &CsrMatrix<f64>, c: &[(usize, usize, f64)]) -> Vec<(usiz
 pub(crate) struct Hierarchy {
     /// The positions of A's diagonal entries.
     pub(crate) diag: Vec<usize>,
+    /// The two-core Gauss-Seidel ordering of A's rows, if it has one.
+    pub(crate) halves: Option<Halves>,
     /// P_lᵀ for each prolongation.
     restrict: Vec<CsrMatrix<f64>>,
     truncated: Vec<bool>,
@@ -218,6 +224,7 @@ impl Hierarchy {
         let coarsest = CoarsestSolve::new(&levels[0]);
         Self {
             diag,
+            halves: Halves::new(a),
             restrict,
             truncated: vec![false; a.nrows()],
             shift: vec![0.0; a.nrows()],
@@ -285,6 +292,7 @@ impl Hierarchy {
     ) {
         let Self {
             diag,
+            halves,
             restrict,
             truncated,
             shift,
@@ -296,18 +304,24 @@ impl Hierarchy {
         } = self;
         let top = levels.len();
         let level = |l: usize| match levels.get(l) {
-            Some(lv) => (&lv.a, &lv.diag[..], &[][..], &lv.fixed[..]),
-            None => (a, &diag[..], &shift[..], &truncated[..]),
+            Some(lv) => (
+                &lv.a,
+                &lv.diag[..],
+                lv.halves.as_ref(),
+                &[][..],
+                &lv.fixed[..],
+            ),
+            None => (a, &diag[..], halves.as_ref(), &shift[..], &truncated[..]),
         };
         b[top].copy_from_slice(d);
         // Down: smooth, restrict the residual (zero on the truncated set,
         // so Pᵀ r = P_Tᵀ r on the finest level).
         for l in (1..=top).rev() {
-            let (matrix, dg, dk, fixed) = level(l);
+            let (matrix, dg, split, dk, fixed) = level(l);
             let xl = &mut x[l];
             xl.fill(0.0);
             for _ in 0..sweeps {
-                linear_sweep(matrix, dg, dk, &b[l], xl, fixed, true);
+                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true);
             }
             let rl = &mut r[l];
             spmv_into(matrix, xl, rl);
@@ -321,7 +335,7 @@ impl Hierarchy {
         // Up: prolongate (P_T = T P on the finest level), add, smooth
         // backward.
         for l in 1..=top {
-            let (matrix, dg, dk, fixed) = level(l);
+            let (matrix, dg, split, dk, fixed) = level(l);
             let (below, here) = x.split_at_mut(l);
             let xl = &mut here[0];
             spmv_into(&p[l - 1], &below[l - 1], &mut r[l]);
@@ -331,7 +345,7 @@ impl Hierarchy {
                 }
             }
             for _ in 0..sweeps {
-                linear_sweep(matrix, dg, dk, &b[l], xl, fixed, false);
+                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, false);
             }
         }
         c.copy_from_slice(&x[top]);
