@@ -211,3 +211,34 @@ fn the_nested_schedule_needs_less_work_on_the_finest_mesh() {
     assert!(gap <= 1e-5, "nested: pressures differ by {gap:e}·P");
     assert!(nested < finest_only, "{nested} vs {finest_only}");
 }
+
+/// The nested schedule solves the coarse levels only to
+/// `coulomb.coarse_epsilon` (their answers start the next level), the
+/// finest to ε: fewer friction steps below the finest than with the coarse
+/// levels at ε, and the finest answer the same to well within ε. Fails if
+/// the coarse tolerance is not used (equal steps) or reaches the finest
+/// level (its answer would move by about the coarse tolerance).
+#[test]
+fn the_nested_schedule_solves_the_coarse_levels_to_their_own_epsilon() {
+    let scene = problem(1, 6);
+    let run = |coarse_epsilon: f64| {
+        let mut settings = Settings::default();
+        settings.set_text("schedule", "nested").unwrap();
+        settings
+            .set("coulomb.coarse_epsilon", json!(coarse_epsilon))
+            .unwrap();
+        let entry = solver_entry("tnnmg").unwrap();
+        let solved = solve_scene(&scene, Friction::Coulomb, entry, &settings, &mut Silent).unwrap();
+        let o = solved.outcome;
+        assert!(o.status.is_converged(), "{coarse_epsilon}: {}", o.detail);
+        let (coarse, _) = o.levels.split_at(o.levels.len() - 1);
+        let steps: usize = coarse.iter().map(|l| l.visits).sum();
+        (steps, o.solution.pressure)
+    };
+    let (tight, p_tight) = run(1e-7);
+    let (loose, p_loose) = run(1e-3);
+    let gap = pressure_gap(&scene, &p_loose, &p_tight);
+    eprintln!("coarse friction steps: {tight} at 1e-7, {loose} at 1e-3; finest gap {gap:e}·P");
+    assert!(loose < tight, "{loose} vs {tight}");
+    assert!(gap <= 1e-6, "the finest answers differ by {gap:e}·P");
+}

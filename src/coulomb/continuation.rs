@@ -201,8 +201,9 @@ impl GivenFrictionStep for Continuation<'_> {
         unreachable!("the loop returns at the finest level")
     }
 
-    /// The nested schedule: the fixed point on each coarse level in turn;
-    /// returns 𝓕p⁺ of the level below the finest, on the finest, and keeps
+    /// The nested schedule: the fixed point on each coarse level in turn,
+    /// to the larger of ε and `coarse_epsilon` (each level's answer only
+    /// starts the next: nested iteration); returns 𝓕p⁺ of the level below the finest, on the finest, and keeps
     /// that level's answer as the finest level's start. None (g⁰ = 0, the
     /// usual first step) for the other schedules, one level, or a coarse
     /// fixed point that did not converge.
@@ -215,6 +216,10 @@ impl GivenFrictionStep for Continuation<'_> {
         if self.schedule != Schedule::Nested || top == 0 {
             return None;
         }
+        let coarse = CoulombSettings {
+            epsilon: settings.epsilon.max(settings.coarse_epsilon),
+            ..settings.clone()
+        };
         let (mut work, mut time) = (Iterations::default(), Timing::default());
         let mut carry: Option<(Vec<f64>, Vec<f64>)> = None;
         for idx in 0..top {
@@ -224,7 +229,7 @@ impl GivenFrictionStep for Continuation<'_> {
                 inner: SingleLevel::starting(&level.problem, &mut *self.solver, carry.take()),
                 g0,
             };
-            let c = friction_fixed_point(&mut single, settings, observer);
+            let c = friction_fixed_point(&mut single, &coarse, observer);
             let done = c.total_iterations();
             let count = &mut self.counts[idx];
             count.visits += c.history.len();

@@ -127,12 +127,15 @@ fn a_loose_step_showing_no_change_does_not_end_the_fixed_point() {
 #[test]
 fn expanding_map_stops_at_the_cap_with_that_status() {
     let mut step = affine(vec![1.0], 3.0);
-    let s = CoulombSettings {
+    let exact = CoulombSettings {
         epsilon: 1e-4,
+        forcing: 0.0,
+        ..CoulombSettings::defaults(Stopping::Paper)
+    };
+    let s = CoulombSettings {
         max_iterations: 7,
         stall_window: 0,
-        stopping: Stopping::Paper,
-        forcing: 0.0,
+        ..exact.clone()
     };
     let out = friction_fixed_point(&mut step, &s, &mut Silent);
     assert_eq!(out.status, Status::MaxIterations);
@@ -141,11 +144,9 @@ fn expanding_map_stops_at_the_cap_with_that_status() {
     assert!(out.history.last().unwrap().contraction.unwrap() > 1.0);
     // With stall detection it stops as soon as W steps bring no decrease.
     let s = CoulombSettings {
-        epsilon: 1e-4,
         max_iterations: 50,
         stall_window: 3,
-        stopping: Stopping::Paper,
-        forcing: 0.0,
+        ..exact
     };
     let out = friction_fixed_point(&mut step, &s, &mut Silent);
     assert_eq!(out.status, Status::InsufficientProgress);
