@@ -58,6 +58,8 @@ pub(crate) struct Workspace {
     pub r: Vec<f64>,
     d: Vec<f64>,
     c: Vec<f64>,
+    /// A c, kept along the conjugate gradients (no product of its own).
+    w: Vec<f64>,
     ac: Vec<f64>,
     lin_r: Vec<f64>,
     lin_z: Vec<f64>,
@@ -73,6 +75,7 @@ impl Workspace {
             r: zeros(),
             d: zeros(),
             c: zeros(),
+            w: zeros(),
             ac: zeros(),
             lin_r: zeros(),
             lin_z: zeros(),
@@ -147,6 +150,7 @@ pub(crate) fn iterate(
     // the free unknowns).
     let Workspace {
         c,
+        w,
         ac,
         lin_r,
         lin_z,
@@ -157,6 +161,7 @@ pub(crate) fn iterate(
         r,
     } = ws;
     c.fill(0.0);
+    w.fill(0.0);
     lin_r.copy_from_slice(d);
     hierarchy.v_cycle(a, p, lin_r, cycle.linear_sweeps, lin_z);
     lin_p.copy_from_slice(lin_z);
@@ -175,12 +180,14 @@ pub(crate) fn iterate(
             break;
         }
         let step_length = rz / pq;
-        for ((ck, rk), (pk, qk)) in c
+        for (((ck, wk), rk), (pk, qk)) in c
             .iter_mut()
+            .zip(w.iter_mut())
             .zip(lin_r.iter_mut())
             .zip(lin_p.iter().zip(&*ac))
         {
             *ck += step_length * pk;
+            *wk += step_length * qk;
             *rk -= step_length * qk;
         }
         if step + 1 == cycle.linear_steps {
@@ -196,14 +203,23 @@ pub(crate) fn iterate(
     }
     // The projection onto the admissible set: v + c keeps t ≤ 0, so that a
     // full step is admissible (Gräser & Sander 2019, Algorithm 1, step 4).
+    // A c follows the few entries the projection moved: A is symmetric, so
+    // its column k is its row k.
     for &k in contact {
         if laws[k] == Local::Jump {
-            c[k] = (v[k] + c[k]).min(0.0) - v[k];
+            let projected = (v[k] + c[k]).min(0.0) - v[k];
+            let moved = projected - c[k];
+            if moved != 0.0 {
+                c[k] = projected;
+                let row = a.row(k);
+                for (&j, &akj) in row.col_indices().iter().zip(row.values()) {
+                    w[j] += akj * moved;
+                }
+            }
         }
     }
-    spmv_into(a, c, ac);
-    let alpha = exact_step(laws, contact, v, c, dot(c, ac), dot(c, r));
-    for ((vk, ck), (rk, qk)) in v.iter_mut().zip(&*c).zip(r.iter_mut().zip(&*ac)) {
+    let alpha = exact_step(laws, contact, v, c, dot(c, w), dot(c, r));
+    for ((vk, ck), (rk, qk)) in v.iter_mut().zip(&*c).zip(r.iter_mut().zip(&*w)) {
         *vk += alpha * ck;
         *rk -= alpha * qk;
     }
@@ -214,12 +230,31 @@ pub(crate) fn iterate(
     // moves the body as a whole until the next jump closes. From a start
     // with every node open (problem 1 at 1/32) it took TNNMG from 56 to 35
     // iterations.
+    //
+    // Its curvature needs no product: A z = 0, so with e = z − T z (z on
+    // the truncated set only) (T z)ᵀ A (T z) = eᵀ A e, a sum over the
+    // truncated rows, and free of the cancellation of the product's
+    // (T z is the low-energy direction).
     if let (false, Some((z, _))) = (kernel_free, energy.kernel) {
         for ((ck, zk), &cut) in c.iter_mut().zip(z).zip(&*truncated) {
             *ck = if cut { 0.0 } else { *zk };
         }
-        spmv_into(a, c, ac);
-        let (cac, cr) = (dot(c, ac), dot(c, r));
+        let cac: f64 = contact
+            .iter()
+            .filter(|&&k| truncated[k] && z[k] != 0.0)
+            .map(|&k| {
+                let row = a.row(k);
+                let ae_k: f64 = row
+                    .col_indices()
+                    .iter()
+                    .zip(row.values())
+                    .filter(|&(&j, _)| truncated[j])
+                    .map(|(&j, &akj)| akj * z[j])
+                    .sum();
+                z[k] * ae_k
+            })
+            .sum();
+        let cr = dot(c, r);
         if cr < 0.0 {
             for ck in c.iter_mut() {
                 *ck = -*ck;
