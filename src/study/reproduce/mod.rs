@@ -177,7 +177,7 @@ fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
         "stability" => 180.0,
         "bench" => 450.0,
         "benchmark" => 220.0,
-        "discretization_error" => 120.0,
+        "discretization_error" => 150.0,
         _ => 60.0,
     };
     let long = match study {

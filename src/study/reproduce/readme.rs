@@ -82,6 +82,7 @@ struct Context {
     benchmark_charts: Vec<ChartRef>,
     errors_reference: String,
     errors_solver: String,
+    errors_solver_note: &'static str,
     errors_table: String,
     errors_text: String,
     errors_charts: Vec<ChartRef>,
@@ -202,6 +203,9 @@ pub fn render(
             .errors
             .first()
             .map_or(String::new(), |r| r.solver.clone()),
+        errors_solver_note: out.errors.first().map_or("", |r| {
+            crate::study::discretization_error::solver_note(&r.solver)
+        }),
         errors_table: crate::study::discretization_error::markdown(&out.errors),
         errors_text: crate::study::discretization_error::findings(&out.errors),
         errors_charts: named(chart_names, "discretization_error_"),

@@ -1,0 +1,309 @@
+//! The discretization error: how the discrete Coulomb solution converges as
+//! h → 0, against the finest mesh as the reference.
+//!
+//! The meshes h = 1/2^k are nested (same diagonal direction), so a coarse P1
+//! field is also a fine P1 field: it is interpolated onto the reference mesh
+//! exactly, and with e = u_h − u_ref there
+//!
+//! ```text
+//! ‖e‖²_L2 = eᵀ M e,   ‖e‖²_energy = A(e, e) = eᵀ A e
+//! ```
+//!
+//! exactly, with the reference's mass and stiffness matrices. The pressure
+//! is compared at the coarse contact nodes (which are reference nodes too),
+//! the separated zone by its start. Every solution is certified. The
+//! standard study's reference is the finest mesh this machine holds,
+//! h = 1/2048 (8.4 million unknowns), which only the multigrid solver
+//! reaches: `tnnmg` under the nested schedule solves every mesh, the friction
+//! fixed point to its default ε = 1e-7 of 𝓕P, more than two decades below
+//! the smallest error measured (3e-5 in L2 at 1/512); it agrees with the
+//! direct `newton-coulomb` to about 1e-11 of P at 1/256 (the speed study's
+//! goal row).
+//! Without a solver of its own a spec uses a direct Coulomb solver, so that
+//! no fixed-point tolerance enters (in `reproduce --quick`, the fastest of
+//! the speed study).
+
+use anyhow::{Context, Result};
+use serde::Serialize;
+
+use crate::coulomb::continuation::Schedule;
+use crate::io::csv::fixed;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
+use crate::solve::{Solved, solve_scene, solver_entry};
+use crate::solvers::{Friction, Law, Silent, registry};
+use crate::study::lab::{Artifact, Findings, Lab, Study};
+
+mod views;
+pub use views::{PAPERS_ZONE_START, charts, findings, markdown};
+
+/// Which problems, on which meshes, against which reference mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct ErrorSpec {
+    pub problems: Vec<u32>,
+    pub meshes: Vec<MeshSize>,
+    pub reference: MeshSize,
+    /// The solver (None: the registry's first direct Coulomb solver).
+    pub solver: Option<&'static str>,
+    /// The mesh continuation it runs with (None: the settings').
+    pub schedule: Option<Schedule>,
+}
+
+impl ErrorSpec {
+    /// Problems 1 and 3, h = 1/16 to 1/512 against 1/2048, by `tnnmg`
+    /// under the nested schedule (about 2 minutes and 8.4 GB at 1/2048).
+    pub fn standard() -> Self {
+        Self {
+            problems: vec![1, 3],
+            meshes: (4..=9).map(level).collect(),
+            reference: level(11),
+            solver: Some(MULTIGRID),
+            schedule: Some(Schedule::Nested),
+        }
+    }
+
+    /// 1/8 and 1/16 against 1/32: for tests.
+    pub fn quick() -> Self {
+        Self {
+            problems: vec![1, 3],
+            meshes: vec![level(3), level(4)],
+            reference: level(5),
+            solver: None,
+            schedule: None,
+        }
+    }
+}
+
+fn level(k: u32) -> MeshSize {
+    MeshSize::from_level(k).expect("in range")
+}
+
+/// One problem on one mesh against the reference.
+#[derive(Clone, Debug, Serialize)]
+pub struct ErrorRow {
+    pub problem: u32,
+    pub h: String,
+    pub reference_h: String,
+    pub solver: String,
+    pub status: String,
+    #[serde(serialize_with = "fixed")]
+    pub certificate: f64,
+    /// ‖u_h − u_ref‖_L2 / ‖u_ref‖_L2.
+    #[serde(serialize_with = "fixed")]
+    pub l2_error: f64,
+    /// ‖u_h − u_ref‖_A / ‖u_ref‖_A.
+    #[serde(serialize_with = "fixed")]
+    pub energy_error: f64,
+    /// max over the contact nodes of |p_h − p_ref| / max p_ref.
+    #[serde(serialize_with = "fixed")]
+    pub pressure_error: f64,
+    /// Start of the separated zone (NaN: none).
+    #[serde(serialize_with = "fixed")]
+    pub zone_start: f64,
+    /// |zone start − the reference's|.
+    #[serde(serialize_with = "fixed")]
+    pub zone_start_error: f64,
+    #[serde(serialize_with = "fixed")]
+    pub separated_fraction: f64,
+    /// Observed orders log2(e(2h)/e(h)) against the next coarser mesh
+    /// (NaN on the coarsest).
+    #[serde(serialize_with = "fixed")]
+    pub l2_rate: f64,
+    #[serde(serialize_with = "fixed")]
+    pub energy_rate: f64,
+    #[serde(serialize_with = "fixed")]
+    pub pressure_rate: f64,
+}
+
+/// The solver of the standard study: the one that reaches its reference.
+pub const MULTIGRID: &str = "tnnmg";
+
+/// What the report says of the study's solver (after its name).
+pub fn solver_note(solver: &str) -> &'static str {
+    if solver == MULTIGRID {
+        ", under the nested schedule, the one solver that reaches the reference mesh here; its friction fixed point ends at the default ε = 1e-7 of 𝓕P, far below the smallest error measured, and it agrees with `newton-coulomb` to about 1e-11 of P (the speed study's goal row)"
+    } else {
+        ", the fastest direct Coulomb solver of the speed study, so that no fixed-point tolerance enters"
+    }
+}
+
+/// The solver the study uses: the spec's (the Coulomb law directly or
+/// through the friction fixed point), or the registry's first direct
+/// Coulomb solver.
+fn solver(spec: &ErrorSpec) -> Result<&'static str> {
+    if let Some(name) = spec.solver {
+        let e = registry::by_name(name).context("unknown solver")?;
+        anyhow::ensure!(
+            e.solves(Law::Coulomb) || e.solves(Law::GivenFriction),
+            "{name} solves neither the Coulomb law nor the given-friction problem"
+        );
+        return Ok(e.name);
+    }
+    registry::solvers()
+        .into_iter()
+        .find(|e| e.solves(Law::Coulomb))
+        .map(|e| e.name)
+        .context("no registered solver solves the Coulomb law directly")
+}
+
+fn solve(problem: u32, h: MeshSize, solver: &str, settings: &Settings) -> Result<Solved> {
+    let scene = Scene::paper_problem_to(problem, h)?;
+    solve_scene(
+        &scene,
+        Friction::Coulomb,
+        solver_entry(solver)?,
+        settings,
+        &mut Silent,
+    )
+}
+
+fn zone_start(run: &Solved) -> f64 {
+    run.separation()
+        .intervals
+        .first()
+        .map_or(f64::NAN, |iv| iv[0])
+}
+
+/// The errors of `coarse` against `reference` for `problem`, without rates.
+fn errors(problem: u32, coarse: &Solved, reference: &Solved) -> ErrorRow {
+    let (dc, df) = (&coarse.finest, &reference.finest);
+    let uc = dc.displacements(&coarse.outcome.solution.v);
+    let uf = df.displacements(&reference.outcome.solution.v);
+    let e: Vec<[f64; 2]> = (0..df.mesh.num_nodes())
+        .map(|node| {
+            let (body, _, _) = df.mesh.locate(node);
+            let [x, y] = df.mesh.coords(node);
+            let at = dc.evaluate(&uc, body, x, y);
+            [at[0] - uf[node][0], at[1] - uf[node][1]]
+        })
+        .collect();
+    let ev = df.dofs.from_physical(&e);
+    let vf = &reference.outcome.solution.v;
+    let p = &df.problem;
+    let norm = |m, v: &[f64]| {
+        let mv = crate::solvers::numerics::linalg::spmv(m, v);
+        v.iter()
+            .zip(&mv)
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            .max(0.0)
+            .sqrt()
+    };
+    let mass = p.mass();
+    let (l2, energy) = (
+        norm(&mass, &ev) / norm(&mass, vf),
+        norm(p.a(), &ev) / norm(p.a(), vf),
+    );
+    // Coarse contact node i sits at reference contact node i·ratio.
+    let ratio = 1usize << (df.h().level() - dc.h().level());
+    let pf: Vec<f64> = reference.outcome.solution.pressure.clone();
+    let p_max = pf.iter().fold(0.0f64, |m, x| m.max(*x));
+    let pressure_error = coarse
+        .outcome
+        .solution
+        .pressure
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p - pf[i * ratio]).abs())
+        .fold(0.0f64, f64::max)
+        / p_max;
+    let (start, start_ref) = (zone_start(coarse), zone_start(reference));
+    ErrorRow {
+        problem,
+        h: dc.h().to_string(),
+        reference_h: df.h().to_string(),
+        solver: coarse.outcome.solver.name.to_string(),
+        status: coarse.outcome.status.as_str().to_string(),
+        certificate: coarse.outcome.certificate.residual(),
+        l2_error: l2,
+        energy_error: energy,
+        pressure_error,
+        zone_start: start,
+        zone_start_error: (start - start_ref).abs(),
+        separated_fraction: coarse.separation().fraction,
+        l2_rate: f64::NAN,
+        energy_rate: f64::NAN,
+        pressure_rate: f64::NAN,
+    }
+}
+
+/// Solves every problem on every mesh and on the reference mesh, and
+/// measures the errors. `log` receives a line per solve.
+pub fn run(spec: &ErrorSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<Vec<ErrorRow>> {
+    let mut rows = Vec::new();
+    let solver = solver(spec)?;
+    let mut settings = settings.clone();
+    if let Some(schedule) = spec.schedule {
+        settings.schedule = schedule;
+    }
+    let settings = &settings;
+    for &problem in &spec.problems {
+        log(&format!(
+            "problem {problem}: reference at h = {}",
+            spec.reference
+        ));
+        let reference = solve(problem, spec.reference, solver, settings)?;
+        anyhow::ensure!(
+            reference.outcome.certificate.passed(),
+            "the reference of problem {problem} at h = {} is not certified: {}",
+            spec.reference,
+            reference.outcome.certificate.summary()
+        );
+        let mut previous: Option<ErrorRow> = None;
+        for &h in &spec.meshes {
+            log(&format!("problem {problem}: h = {h}"));
+            let coarse = solve(problem, h, solver, settings)?;
+            let mut row = errors(problem, &coarse, &reference);
+            if let Some(prev) = &previous {
+                let rate = |a: f64, b: f64| (a / b).log2();
+                row.l2_rate = rate(prev.l2_error, row.l2_error);
+                row.energy_rate = rate(prev.energy_error, row.energy_error);
+                row.pressure_rate = rate(prev.pressure_error, row.pressure_error);
+            }
+            previous = Some(row.clone());
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+/// The discretization error as a study: discretization_error.csv and its
+/// charts. Its solver is the spec's, else the direct one certified on the
+/// reference mesh in the speed study run before it, else the fastest
+/// certified on that study's finest mesh.
+pub struct Errors {
+    pub spec: ErrorSpec,
+}
+
+impl Study for Errors {
+    fn name(&self) -> &'static str {
+        "discretization_error"
+    }
+
+    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+        lab.log(&format!(
+            "discretization error against h = {}",
+            self.spec.reference
+        ));
+        let mut spec = self.spec.clone();
+        if let (None, Some(bench)) = (spec.solver, &findings.bench) {
+            let finest = bench
+                .meshes
+                .last()
+                .map(|h| h.to_string())
+                .unwrap_or_default();
+            spec.solver =
+                crate::study::bench::certified_direct(&bench.rows, &spec.reference.to_string())
+                    .or_else(|| crate::study::bench::certified_direct(&bench.rows, &finest));
+        }
+        let log = lab.logger();
+        let errors = run(&spec, &lab.settings, &|l| {
+            log(&format!("discretization error: {l}"))
+        })?;
+        let mut artifacts = vec![Artifact::csv("discretization_error.csv", &errors, &[])?];
+        artifacts.extend(Artifact::charts(charts(&errors)));
+        findings.errors = errors;
+        Ok(artifacts)
+    }
+}
