@@ -242,3 +242,64 @@ fn the_nested_schedule_solves_the_coarse_levels_to_their_own_epsilon() {
     assert!(loose < tight, "{loose} vs {tight}");
     assert!(gap <= 1e-6, "the finest answers differ by {gap:e}·P");
 }
+
+/// A solver that records what it is asked: the unknowns of each problem and
+/// where the harness released what it keeps.
+struct Recording {
+    inner: contactlab::solvers::multigrid::Tnnmg,
+    log: Vec<Option<usize>>,
+}
+
+impl contactlab::solvers::Solver for Recording {
+    fn solve(
+        &mut self,
+        problem: &ContactProblem,
+        friction: Friction<'_>,
+        start: Option<Start<'_>>,
+        observer: &mut dyn contactlab::solvers::Observer,
+    ) -> contactlab::solvers::Solution {
+        self.log.push(Some(problem.n()));
+        self.inner.solve(problem, friction, start, observer)
+    }
+
+    fn release(&mut self) {
+        self.log.push(None);
+        self.inner.release();
+    }
+}
+
+/// The nested schedule releases what the solver keeps for the coarse levels
+/// (their multigrid hierarchies) once it is done with them, and solves only
+/// the finest level after: a release missing, too early or repeated shows.
+#[test]
+fn the_nested_schedule_releases_the_coarse_levels_once_done_with_them() {
+    use contactlab::coulomb::continuation::{Continuation, Schedule};
+    use contactlab::coulomb::fixed_point::{CoulombSettings, friction_fixed_point};
+
+    let scene = problem(1, 5);
+    let levels: Vec<Discretization> = scene
+        .levels
+        .iter()
+        .map(|&h| Discretization::new(&scene, h).unwrap())
+        .collect();
+    let finest = levels.last().unwrap().problem.n();
+    let mut solver = Recording {
+        inner: Default::default(),
+        log: Vec::new(),
+    };
+    let mut step = Continuation::new(&levels, &mut solver, Schedule::Nested);
+    let out = friction_fixed_point(&mut step, &CoulombSettings::default(), &mut Silent);
+    drop(step);
+    assert!(out.status.is_converged(), "{}", out.detail);
+    let released: Vec<usize> = (0..solver.log.len())
+        .filter(|&k| solver.log[k].is_none())
+        .collect();
+    assert_eq!(released.len(), 1, "{:?}", solver.log);
+    let (before, after) = solver.log.split_at(released[0]);
+    assert!(
+        before.iter().all(|n| n.is_some_and(|n| n < finest)),
+        "{before:?}"
+    );
+    assert!(after[1..].iter().all(|&n| n == Some(finest)), "{after:?}");
+    assert!(after.len() > 1, "the finest level is solved after");
+}

@@ -123,4 +123,11 @@ pub trait Solver {
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution;
+
+    /// Drops what the solver keeps across calls for the problems solved so
+    /// far (multigrid hierarchies, vectors): the harness calls it when it
+    /// will not solve them again, as the nested schedule leaving its coarse
+    /// levels. What is kept changes no answer, only the work of a repeated
+    /// solve; by default nothing is kept.
+    fn release(&mut self) {}
 }

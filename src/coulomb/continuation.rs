@@ -248,6 +248,9 @@ impl GivenFrictionStep for Continuation<'_> {
                 fine.transfer_contact(level, &c.solution.pressure),
             ));
         }
+        // The coarse levels are done with: what the solver kept for them
+        // would only add to the finest level's peak.
+        self.solver.release();
         let (v, p) = carry?;
         let g = bound_of(&self.levels[top].problem, &p);
         self.nested = Some((v, p, work, time));

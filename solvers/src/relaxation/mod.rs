@@ -454,6 +454,11 @@ fn friction_traction(
 }
 
 impl Solver for ProxUzawa {
+    /// The multigrid hierarchies of `relaxation.inner = multigrid`.
+    fn release(&mut self) {
+        self.hierarchies.clear();
+    }
+
     fn solve(
         &mut self,
         problem: &ContactProblem,
