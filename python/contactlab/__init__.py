@@ -15,6 +15,8 @@ arrays into numpy and scipy objects.
 
 from __future__ import annotations
 
+import json
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Union
@@ -36,6 +38,9 @@ __all__ = [
     "solve",
     "certify",
     "work_precision",
+    "benchmark",
+    "BenchmarkResult",
+    "BenchmarkSummary",
 ]
 
 
@@ -291,6 +296,17 @@ class Trial:
     seconds: float
     status: str
     python: bool = False
+    #: The problem's name and mesh (``benchmark`` runs several).
+    problem: str = ""
+    #: The solver's own claim (a registered solver's status before the
+    #: certificate; "answered" for a Python function).
+    solver_status: str = ""
+
+    @property
+    def claimed(self) -> bool:
+        """Whether the solver claimed an answer: a registered solver that
+        says converged, or a Python function that returned one."""
+        return self.python or self.solver_status == "converged"
 
 
 def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) -> Trial:
@@ -314,6 +330,29 @@ def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) 
         seconds=seconds,
         status="converged" if c.passed else "inaccurate",
         python=True,
+        problem=_instance(problem),
+        solver_status="answered",
+    )
+
+
+def _instance(problem: Problem) -> str:
+    return f"{problem.name}, h = {problem.h}"
+
+
+def _trial(name: str, how: Union[str, PythonSolver], problem: Problem, target: float) -> Trial:
+    """One solver (registered, or a Python function) at one target, certified."""
+    if callable(how):
+        return _python_trial(name, how, problem, target)
+    r = solve(problem, solver=how, target=target)
+    return Trial(
+        solver=name,
+        target=target,
+        certified=r.certificate.passed,
+        certificate=r.certificate,
+        seconds=r.seconds,
+        status=r.status,
+        problem=_instance(problem),
+        solver_status=r.solver_status,
     )
 
 
@@ -336,23 +375,11 @@ def work_precision(
     """
     if not isinstance(solvers, Mapping):
         solvers = {name: name for name in solvers}
-    trials: List[Trial] = []
-    for name, how in solvers.items():
-        for target in targets:
-            if callable(how):
-                trials.append(_python_trial(name, how, problem, float(target)))
-            else:
-                r = solve(problem, solver=how, target=float(target))
-                trials.append(
-                    Trial(
-                        solver=name,
-                        target=float(target),
-                        certified=r.certificate.passed,
-                        certificate=r.certificate,
-                        seconds=r.seconds,
-                        status=r.status,
-                    )
-                )
+    trials: List[Trial] = [
+        _trial(name, how, problem, float(target))
+        for name, how in solvers.items()
+        for target in targets
+    ]
     if chart is not None:
         _contactlab._work_precision_chart(
             f"Work against precision: {problem.name}, h = {problem.h}",
@@ -361,3 +388,111 @@ def work_precision(
             str(chart),
         )
     return trials
+
+
+@dataclass(frozen=True)
+class BenchmarkSummary:
+    """One solver at one target accuracy over every problem of a benchmark,
+    as ``benchmark_summary.csv`` has it: success rate, runs its solver
+    claimed but the certificate refused, and the shifted geometric mean of
+    its time (shift 0.1 s, a failure counted at the time limit), also
+    relative to the best solver's."""
+
+    target: float
+    solver: str
+    runs: int
+    successes: int
+    success_rate: float
+    claimed_but_failed: int
+    shifted_geometric_mean: float
+    relative_to_best: float
+
+
+@dataclass(frozen=True)
+class BenchmarkResult:
+    """A benchmark's runs and the command line's views of them."""
+
+    trials: List[Trial]
+    summaries: List[BenchmarkSummary]
+    #: The report ``benchmark.md`` holds: per target the table, the runs
+    #: claimed but refused, which solver wins by how much.
+    report: str
+
+
+def benchmark(
+    problems: Iterable[Problem],
+    solvers: Union[Iterable[str], Mapping[str, Union[str, PythonSolver]]],
+    targets: Sequence[float] = (1e-4, 1e-8),
+    time_limit: float = 60.0,
+    out: Optional[str] = None,
+) -> BenchmarkResult:
+    """A benchmark over ``problems``: every solver at every target accuracy
+    on every problem, each answer certified at the target, timed; the
+    summaries, report and performance profiles are computed by the code of
+    ``contactlab benchmark``, so a Python solver stands in the same tables
+    and charts as the registered ones.
+
+    ``solvers`` is as for ``work_precision``. A registered solver runs with
+    the benchmark's rule (its accuracy knob and ε below the target); a
+    Python function is called as ``fn(problem, target)``. A run succeeds if
+    its answer passes the certificate at the target within ``time_limit``
+    seconds (a Python function is not interrupted: a slower run counts as
+    failed). A Python function's answer counts as its claim of convergence,
+    so a refused one is "claimed but failed". With ``out`` (a folder,
+    replaced whole, only if empty or a contactlab run) it writes what the
+    command line writes: benchmark.csv, benchmark_summary.csv, benchmark.md,
+    a LaTeX table per target and the performance profiles.
+    """
+    if not isinstance(solvers, Mapping):
+        solvers = {name: name for name in solvers}
+    if not (isinstance(time_limit, (int, float)) and math.isfinite(time_limit) and time_limit > 0):
+        raise Error(f"time_limit = {time_limit!r}: give a positive number of seconds")
+    trials: List[Trial] = []
+    rows = []
+    for problem in problems:
+        friction = float(np.max(problem.contact.coefficient, initial=0.0))
+        for name, how in solvers.items():
+            for target in targets:
+                t = _trial(name, how, problem, float(target))
+                trials.append(t)
+                in_time = t.seconds <= time_limit
+                rows.append(
+                    {
+                        "instance": t.problem,
+                        "family": "python",
+                        "h": problem.h,
+                        "unknowns": problem.n,
+                        "friction_coefficient": friction,
+                        "solver": name,
+                        "target": t.target,
+                        "status": t.status if in_time else "time limit",
+                        "solver_status": t.solver_status,
+                        "success": bool(t.certified and in_time),
+                        "claimed_but_failed": bool(t.claimed and not t.certified),
+                        "certificate": repr(float(t.certificate.residual)),
+                        "failing": ";".join(
+                            k for k, v in t.certificate.violations.items() if v > t.target
+                        ),
+                        "seconds": t.seconds,
+                        "time_limit": float(time_limit),
+                        "work": 0,
+                        "detail": t.certificate.summary,
+                    }
+                )
+    summaries_json, report = _contactlab._benchmark_report(
+        json.dumps(rows), None if out is None else str(out)
+    )
+    summaries = [
+        BenchmarkSummary(
+            target=float(d["target"]),
+            solver=str(d["solver"]),
+            runs=int(d["runs"]),
+            successes=int(d["successes"]),
+            success_rate=float(d["success_rate"]),
+            claimed_but_failed=int(d["claimed_but_failed"]),
+            shifted_geometric_mean=float(d["shifted_geometric_mean"]),
+            relative_to_best=float(d["relative_to_best"]),
+        )
+        for d in json.loads(summaries_json)
+    ]
+    return BenchmarkResult(trials=trials, summaries=summaries, report=report)

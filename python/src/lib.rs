@@ -425,6 +425,40 @@ fn _work_precision_chart(
     chart.write(&path).map_err(anyhow_err)
 }
 
+/// The benchmark's views of runs made in Python (registered solvers and
+/// Python functions alike), by the code of `contactlab benchmark`: the
+/// per-solver summaries (JSON) and the report (markdown). With `out`, the
+/// run folder the command line writes (benchmark.csv, benchmark_summary.csv,
+/// benchmark.md, a LaTeX table per target, the performance profiles),
+/// replaced whole and only if it is empty or a contactlab run. `rows_json`:
+/// the rows as `benchmark.csv` has them (`BenchmarkRow`), the certificate
+/// as a string.
+#[pyfunction]
+#[pyo3(signature = (rows_json, out=None))]
+fn _benchmark_report(
+    rows_json: &str,
+    out: Option<std::path::PathBuf>,
+) -> PyResult<(String, String)> {
+    use contactlab::study::benchmark::{BenchmarkRow, views};
+    use contactlab::study::lab::{Artifact, write_artifacts};
+    let rows: Vec<BenchmarkRow> =
+        serde_json::from_str(rows_json).map_err(|e| err(format!("benchmark rows: {e}")))?;
+    if rows.is_empty() {
+        return Err(err(
+            "benchmark: no runs; give at least one problem, solver and target",
+        ));
+    }
+    if let Some(dir) = out {
+        let folder = contactlab::io::run_folder::RunFolder::create(&dir).map_err(anyhow_err)?;
+        let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[]).map_err(anyhow_err)?];
+        artifacts.extend(views::artifacts(&rows).map_err(anyhow_err)?);
+        write_artifacts(folder.path(), &artifacts).map_err(anyhow_err)?;
+        folder.commit().map_err(anyhow_err)?;
+    }
+    let summaries = serde_json::to_string(&views::summaries(&rows)).map_err(err)?;
+    Ok((summaries, views::report(&rows)))
+}
+
 #[pymodule]
 fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Problem>()?;
@@ -432,6 +466,7 @@ fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(certify, m)?)?;
     m.add_function(wrap_pyfunction!(_work_precision_chart, m)?)?;
+    m.add_function(wrap_pyfunction!(_benchmark_report, m)?)?;
     m.add("Error", m.py().get_type::<Error>())?;
     Ok(())
 }

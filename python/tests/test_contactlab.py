@@ -191,3 +191,45 @@ def test_a_python_solver_passes_through_a_study(tmp_path):
     assert not by["zeros"].certified  # v = 0 leaves the load unbalanced
     svg = chart.read_text()
     assert "numpy FISTA" in svg and "zeros: not certified" in svg
+
+
+def test_a_python_solver_stands_in_the_benchmarks_tables(tmp_path):
+    # The benchmark's views must count a Python solver's runs as the
+    # command line counts its own: a wrong answer claimed and refused, a
+    # right one too slow for the time limit failed, the rows and the
+    # performance profile written. A benchmark that trusted a Python
+    # answer, ignored the limit or dropped the Python rows fails here.
+    import csv
+    import time as clock
+
+    problems = [cl.Problem.paper(1, h="1/8"), cl.Problem.paper(3, h="1/8")]
+
+    def liar(problem, target):
+        return np.zeros(problem.n)
+
+    def slow_but_right(problem, target):
+        clock.sleep(0.3)
+        return cl.solve(problem, solver="newton-coulomb", target=target).displacements
+
+    out = tmp_path / "bench"
+    r = cl.benchmark(
+        problems,
+        {"newton-coulomb": "newton-coulomb", "zeros": liar, "slow": slow_but_right},
+        targets=[1e-6],
+        time_limit=0.2,
+        out=str(out),
+    )
+    assert len(r.trials) == 6
+    by = {s.solver: s for s in r.summaries}
+    assert by["newton-coulomb"].successes == 2 and by["newton-coulomb"].relative_to_best == 1.0
+    assert by["zeros"].successes == 0 and by["zeros"].claimed_but_failed == 2
+    # Certified, but not within the limit: failed, and not a false claim.
+    slow = [t for t in r.trials if t.solver == "slow"]
+    assert all(t.certified and t.seconds > 0.2 for t in slow)
+    assert by["slow"].successes == 0 and by["slow"].claimed_but_failed == 0
+    rows = list(csv.DictReader((out / "benchmark.csv").open()))
+    assert {row["solver"] for row in rows} == {"newton-coulomb", "zeros", "slow"}
+    assert sum(row["success"] == "true" for row in rows) == 2
+    assert "zeros" in (out / "benchmark.md").read_text()
+    svg = (out / "charts" / "benchmark_profile_1e-6.svg").read_text()
+    assert "newton-coulomb" in svg and "slow" in svg
