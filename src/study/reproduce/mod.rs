@@ -171,13 +171,13 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Study>>
 /// long run where it differs: the estimate a run states as it starts.
 fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
     let standard = match study {
-        "table1" => 15.0,
-        "compare" => 220.0,
-        "sweep" => 150.0,
-        "stability" => 180.0,
-        "bench" => 450.0,
-        "benchmark" => 220.0,
-        "discretization_error" => 150.0,
+        "table1" => 10.0,
+        "compare" => 120.0,
+        "sweep" => 75.0,
+        "stability" => 135.0,
+        "bench" => 390.0,
+        "benchmark" => 130.0,
+        "discretization_error" => 140.0,
         _ => 60.0,
     };
     let long = match study {
