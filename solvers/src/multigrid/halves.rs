@@ -19,7 +19,7 @@
 
 use nalgebra_sparse::CsrMatrix;
 
-use crate::numerics::linalg::PARALLEL_NNZ;
+use crate::numerics::linalg::{PARALLEL_NNZ, row_dot_by};
 
 /// Above this share of the stored entries in the separator the split is
 /// not worth a thread (a matrix numbered without locality).
@@ -69,7 +69,7 @@ impl Shared {
         unsafe { *self.0.add(k) = value }
     }
 
-    /// Σ_q vals[q]·x[cols[q]] with four partial sums, the order of
+    /// Σ_q vals[q]·x[cols[q]], the partial sums of
     /// [`crate::numerics::linalg::row_dot`].
     ///
     /// # Safety
@@ -77,23 +77,8 @@ impl Shared {
     /// least as long as `cols`, and no other thread writes x at `cols`.
     #[inline]
     pub(crate) unsafe fn row_dot(self, cols: &[usize], vals: &[f64]) -> f64 {
-        let n = cols.len();
-        let mut acc = [0.0f64; 4];
-        let mut k = 0;
         // SAFETY: by the contract.
-        unsafe {
-            while k + 3 < n {
-                for (q, a) in acc.iter_mut().enumerate() {
-                    *a += vals.get_unchecked(k + q) * self.get(*cols.get_unchecked(k + q));
-                }
-                k += 4;
-            }
-            while k < n {
-                acc[0] += vals.get_unchecked(k) * self.get(*cols.get_unchecked(k));
-                k += 1;
-            }
-        }
-        (acc[0] + acc[1]) + (acc[2] + acc[3])
+        unsafe { row_dot_by(cols, vals, |c| self.get(c)) }
     }
 }
 

@@ -87,19 +87,32 @@ pub const PARALLEL_NNZ: usize = 1 << 18;
 #[inline]
 pub unsafe fn row_dot(cols: &[usize], vals: &[f64], x: &[f64]) -> f64 {
     debug_assert!(vals.len() >= cols.len() && cols.iter().all(|&c| c < x.len()));
+    // SAFETY: cols[k] < x.len() by the contract.
+    unsafe { row_dot_by(cols, vals, |c| *x.get_unchecked(c)) }
+}
+
+/// [`row_dot`] with x read through `x_at` (the two-core sweeps read a
+/// vector that the other thread writes elsewhere through a raw pointer):
+/// the same partial sums in the same order, so the same bits.
+///
+/// # Safety
+/// `vals` must be at least as long as `cols`, and `x_at` sound at every
+/// entry of `cols`.
+#[inline(always)]
+pub(crate) unsafe fn row_dot_by(cols: &[usize], vals: &[f64], x_at: impl Fn(usize) -> f64) -> f64 {
     let n = cols.len();
     let mut acc = [0.0f64; 4];
     let mut k = 0;
-    // SAFETY: k + q < n ≤ vals.len(), and cols[k + q] < x.len() by the contract.
+    // SAFETY: k + q < n ≤ vals.len() by the contract.
     unsafe {
         while k + 3 < n {
             for (q, a) in acc.iter_mut().enumerate() {
-                *a += vals.get_unchecked(k + q) * x.get_unchecked(*cols.get_unchecked(k + q));
+                *a += vals.get_unchecked(k + q) * x_at(*cols.get_unchecked(k + q));
             }
             k += 4;
         }
         while k < n {
-            acc[0] += vals.get_unchecked(k) * x.get_unchecked(*cols.get_unchecked(k));
+            acc[0] += vals.get_unchecked(k) * x_at(*cols.get_unchecked(k));
             k += 1;
         }
     }
