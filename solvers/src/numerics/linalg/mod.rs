@@ -1,0 +1,205 @@
+//! Sparse linear algebra shared by the solvers: products (here), and sparse
+//! Cholesky through faer ([`cholesky`]).
+
+mod cholesky;
+
+pub(crate) use cholesky::lower_part;
+pub use cholesky::{CholeskyAnalysis, SparseCholesky, kernel_dimension};
+
+use nalgebra_sparse::CsrMatrix;
+use thiserror::Error;
+
+/// A failed factorization.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum LinalgError {
+    #[error("sparse Cholesky: the matrix is not numerically positive definite (pivot {index})")]
+    NotPositiveDefinite { index: usize },
+    #[error("sparse Cholesky: {0}")]
+    Faer(String),
+}
+
+/// y = A x for a CSR matrix.
+pub fn spmv(a: &CsrMatrix<f64>, x: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; a.nrows()];
+    spmv_into(a, x, &mut y);
+    y
+}
+
+/// y = A x for a CSR matrix, into a caller's buffer (no allocation).
+pub fn spmv_into(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
+    spmv_values_into(a, a.values(), x, y);
+}
+
+/// y = B x where B has the pattern of `pattern` and the stored values
+/// `values` (one per stored entry, in its order): the product with a matrix
+/// kept as values on another's pattern, such as the mass matrix on the
+/// stiffness's. No allocation.
+pub(crate) fn spmv_values_into(pattern: &CsrMatrix<f64>, values: &[f64], x: &[f64], y: &mut [f64]) {
+    assert_eq!(x.len(), pattern.ncols(), "spmv: x has the wrong length");
+    assert_eq!(y.len(), pattern.nrows(), "spmv: y has the wrong length");
+    assert_eq!(
+        values.len(),
+        pattern.nnz(),
+        "spmv: one value per stored entry"
+    );
+    let (offsets, cols) = (pattern.row_offsets(), pattern.col_indices());
+    let rows = |first: usize, y: &mut [f64]| {
+        for (i, yi) in (first..).zip(y.iter_mut()) {
+            let (lo, hi) = (offsets[i], offsets[i + 1]);
+            // SAFETY: a CsrMatrix keeps its column indices below ncols =
+            // x.len(), and values has one entry per stored index.
+            *yi = unsafe { row_dot(&cols[lo..hi], &values[lo..hi], x) };
+        }
+    };
+    if pattern.nnz() < PARALLEL_NNZ {
+        rows(0, y);
+    } else {
+        // Each row is the same sum on either thread: the product is the
+        // same to the bit as the sequential one.
+        let half = y.len() / 2;
+        let (lower, upper) = y.split_at_mut(half);
+        std::thread::scope(|scope| {
+            scope.spawn(|| rows(half, upper));
+            rows(0, lower);
+        });
+    }
+}
+
+/// Stored entries from which a matrix-vector product runs on both cores:
+/// below it (h ≥ 1/64 for the paper's scenes) the thread's start costs more
+/// than it saves, and a product stays the single-thread one that the
+/// sweep-against-product goal compares.
+pub const PARALLEL_NNZ: usize = 1 << 18;
+
+/// Σ_k vals[k]·x[cols[k]] of one sparse row, with four independent partial
+/// sums: a Gauss-Seidel sweep waits for each row before the next, so the
+/// latency of one long chain of additions would dominate it. Used by both
+/// the sweep and the product, so that they are compared like with like.
+///
+/// # Safety
+/// Every entry of `cols` must be below `x.len()`, and `vals` must be at least
+/// as long as `cols`.
+#[inline]
+pub unsafe fn row_dot(cols: &[usize], vals: &[f64], x: &[f64]) -> f64 {
+    debug_assert!(vals.len() >= cols.len() && cols.iter().all(|&c| c < x.len()));
+    // SAFETY: cols[k] < x.len() by the contract.
+    unsafe { row_dot_by(cols, vals, |c| *x.get_unchecked(c)) }
+}
+
+/// [`row_dot`] with x read through `x_at` (the two-core sweeps read a
+/// vector that the other thread writes elsewhere through a raw pointer):
+/// the same partial sums in the same order, so the same bits.
+///
+/// # Safety
+/// `vals` must be at least as long as `cols`, and `x_at` sound at every
+/// entry of `cols`.
+#[inline(always)]
+pub(crate) unsafe fn row_dot_by(cols: &[usize], vals: &[f64], x_at: impl Fn(usize) -> f64) -> f64 {
+    let n = cols.len();
+    let mut acc = [0.0f64; 4];
+    let mut k = 0;
+    // SAFETY: k + q < n ≤ vals.len() by the contract.
+    unsafe {
+        while k + 3 < n {
+            for (q, a) in acc.iter_mut().enumerate() {
+                *a += vals.get_unchecked(k + q) * x_at(*cols.get_unchecked(k + q));
+            }
+            k += 4;
+        }
+        while k < n {
+            acc[0] += vals.get_unchecked(k) * x_at(*cols.get_unchecked(k));
+            k += 1;
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// Maximum norm of a vector (0 for an empty one).
+pub fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// The largest |x_i| (0 for an empty slice), or None when some x_i is not
+/// finite. Eight independent lanes, so that the maxima do not wait on each
+/// other in one chain of comparisons: this pass over a matrix's values was a
+/// tenth of a 1/64 assembly as one chain.
+pub(crate) fn max_abs_if_finite(x: &[f64]) -> Option<f64> {
+    const LANES: usize = 8;
+    let (mut max, mut bad) = ([0.0f64; LANES], [false; LANES]);
+    let chunks = x.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    let mut lane = |l: usize, v: f64| {
+        let a = v.abs();
+        bad[l] |= !a.is_finite();
+        // NaN fails the comparison and is caught by `bad`.
+        max[l] = if a > max[l] { a } else { max[l] };
+    };
+    for chunk in chunks {
+        for (l, &v) in chunk.iter().enumerate() {
+            lane(l, v);
+        }
+    }
+    for (l, &v) in rest.iter().enumerate() {
+        lane(l, v);
+    }
+    if bad.iter().any(|&b| b) {
+        None
+    } else {
+        Some(max.into_iter().fold(0.0, f64::max))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lanes must agree with one plain chain, find a bad value in any
+    /// lane and in the remainder, and count −x like x.
+    #[test]
+    fn max_abs_if_finite_sees_every_lane_and_the_remainder() {
+        for len in [0, 1, 7, 8, 9, 17, 23] {
+            let x: Vec<f64> = (0..len)
+                .map(|i| ((i * 37 % 11) as f64 - 5.0) * 1.5)
+                .collect();
+            assert_eq!(max_abs_if_finite(&x), Some(max_abs(&x)), "len {len}");
+            for at in 0..len {
+                for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    let mut y = x.clone();
+                    y[at] = bad;
+                    assert_eq!(max_abs_if_finite(&y), None, "len {len}, {bad} at {at}");
+                }
+                let mut y = x.clone();
+                y[at] = -1e300;
+                assert_eq!(
+                    max_abs_if_finite(&y),
+                    Some(1e300),
+                    "len {len}, −1e300 at {at}"
+                );
+            }
+        }
+    }
+
+    /// The product with values on another matrix's pattern is the product
+    /// with the matrix those values make.
+    #[test]
+    fn spmv_with_values_on_a_pattern_is_the_matrix_product() {
+        let mut coo = nalgebra_sparse::CooMatrix::new(3, 3);
+        for (i, j, v) in [
+            (0, 0, 2.0),
+            (0, 2, -1.0),
+            (1, 1, 3.0),
+            (2, 0, -1.0),
+            (2, 2, 4.0),
+        ] {
+            coo.push(i, j, v);
+        }
+        let a = CsrMatrix::from(&coo);
+        let m = [1.0, 0.5, 2.0, 0.5, 1.0];
+        let b = CsrMatrix::try_from_pattern_and_values(a.pattern().clone(), m.to_vec()).unwrap();
+        let x = [1.0, -2.0, 3.0];
+        let mut y = [0.0; 3];
+        spmv_values_into(&a, &m, &x, &mut y);
+        assert_eq!(y.to_vec(), spmv(&b, &x));
+        assert_eq!(y, [2.5, -4.0, 3.5]);
+    }
+}
