@@ -381,4 +381,3 @@ pub fn kernel_dimension(a: &CsrMatrix<f64>, rel_tol: f64) -> Result<usize, Linal
             }
         })
 }
-
