@@ -6,3 +6,4 @@
 
 pub mod coulomb;
 pub mod tresca;
+mod tresca_system;
