@@ -6,13 +6,17 @@ use anyhow::Result;
 use contactlab_solvers::registry::{self, Role};
 use serde::Serialize;
 
-use crate::io::charts::{Chart, Series};
+use crate::io::charts::Chart;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow, bench, multigrid};
 use crate::study::lab::{Artifact, Findings, Lab, Study};
+
+pub use crate::study::bench::charts::{
+    MIN_POINTS_FOR_SLOPE, fit_slope, performance_charts, slope_label,
+};
 
 /// One goal, measured.
 #[derive(Clone, Debug, Serialize)]
@@ -271,114 +275,6 @@ pub fn goals_markdown(goals: &[Goal]) -> String {
         s += &format!("| {} | {} | {result} |\n", g.goal, g.measured);
     }
     s
-}
-
-/// Time against unknowns (log-log), one series per solver with its fitted
-/// slope, and one factorization for scale.
-pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
-    let mut out = Vec::new();
-    for what in ["coulomb", "given_friction"] {
-        let mut series = Vec::new();
-        let factor: Vec<(f64, f64)> = rows
-            .iter()
-            .filter(|r| r.what == "factorization")
-            .map(|r| (r.unknowns as f64, r.median_seconds))
-            .collect();
-        for e in registry::solvers() {
-            let here = |certified: bool| -> Vec<(f64, f64)> {
-                rows.iter()
-                    .filter(|r| {
-                        r.solver == e.name && r.what == what && r.median_seconds.is_finite()
-                    })
-                    .filter(|r| (r.status == "converged") == certified)
-                    .map(|r| (r.unknowns as f64, r.median_seconds))
-                    .collect()
-            };
-            // The slope is fitted through certified runs only: a run stopped
-            // by the time limit or refused by the certificate is drawn as a
-            // cross and never bends the fit.
-            let (certified, failed) = (here(true), here(false));
-            if !certified.is_empty() {
-                series.push(
-                    Series::line(
-                        format!("{} ({})", e.name, slope_label(&certified)),
-                        certified,
-                    )
-                    .with_markers()
-                    .of_solver(e.name),
-                );
-            }
-            if !failed.is_empty() {
-                series.push(
-                    Series::line(format!("{}: not certified", e.name), failed)
-                        .failed()
-                        .of_solver(e.name),
-                );
-            }
-        }
-        series.push(
-            Series::line(
-                format!(
-                    "best factorization + solve, 2 threads ({})",
-                    slope_label(&factor)
-                ),
-                factor,
-            )
-            .dashed()
-            .black(),
-        );
-        let title = if what == "coulomb" {
-            "Whole Coulomb problem: time against unknowns (problem 1)"
-        } else {
-            "Given-friction subproblem: time against unknowns (problem 1)"
-        };
-        out.push((
-            format!("performance_{what}"),
-            Chart {
-                title: title.into(),
-                x_label: "unknowns".into(),
-                y_label: "median time [s], one thread".into(),
-                log_x: true,
-                log_y: true,
-                series,
-                y_resolution: None,
-                x_ticks: None,
-            },
-        ));
-    }
-    out
-}
-
-/// A fitted slope for a legend, only through at least
-/// [`MIN_POINTS_FOR_SLOPE`] points (two points always give a line).
-pub fn slope_label(points: &[(f64, f64)]) -> String {
-    match fit_slope(points) {
-        Some(s) if points.len() >= MIN_POINTS_FOR_SLOPE => format!("slope {s:.2}"),
-        _ => format!("no slope: {} points", points.len()),
-    }
-}
-
-/// The fewest points a slope in a legend is fitted through.
-pub const MIN_POINTS_FOR_SLOPE: usize = 3;
-
-/// Least-squares slope of log y against log x.
-pub fn fit_slope(points: &[(f64, f64)]) -> Option<f64> {
-    let pts: Vec<(f64, f64)> = points
-        .iter()
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
-        .map(|(x, y)| (x.ln(), y.ln()))
-        .collect();
-    if pts.len() < 2 {
-        return None;
-    }
-    let n = pts.len() as f64;
-    let (mx, my) = (
-        pts.iter().map(|p| p.0).sum::<f64>() / n,
-        pts.iter().map(|p| p.1).sum::<f64>() / n,
-    );
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 /// What one benchmark run wrote.

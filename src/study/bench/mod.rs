@@ -10,21 +10,24 @@
 //! timing study, its file is a timing file); each solver's inner kernel
 //! (from its registry entry) is timed against one product with its operator.
 
+mod charts;
 pub mod equal_accuracy;
 pub mod goals;
 pub mod memory;
 pub mod multigrid;
+mod set_up;
+
+pub use set_up::{FACTORIZATION_THREADS, pinned};
+use set_up::{MeshRows, assemble_and_factor, push_set_up};
 
 use std::time::Instant;
 
 use anyhow::Result;
-use contactlab_solvers::numerics::linalg::{CholeskyAnalysis, SparseCholesky, spmv_into};
+use contactlab_solvers::numerics::linalg::spmv_into;
 use contactlab_solvers::{Law, registry};
-use nalgebra_sparse::{CooMatrix, CsrMatrix};
 use serde::Serialize;
 
 use crate::io::csv::fixed;
-use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
@@ -158,151 +161,6 @@ impl PerfRow {
             work: 0,
             note: String::new(),
         }
-    }
-}
-
-/// Times `f` once as a warm-up and `runs` more times; returns (first result, times).
-fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(T, Vec<f64>)> {
-    let t = Instant::now();
-    let first = f()?;
-    let warm = t.elapsed().as_secs_f64();
-    let mut times = Vec::with_capacity(runs);
-    for _ in 0..runs {
-        let t = Instant::now();
-        f()?;
-        times.push(t.elapsed().as_secs_f64());
-    }
-    if times.is_empty() {
-        times.push(warm);
-    }
-    Ok((first, times))
-}
-
-/// A with one jump pinned by a spring: the stiffness with the semicoercive
-/// mode removed, same size and pattern.
-pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
-    let a = d.problem.a();
-    let t = d.problem.contacts()[0].t;
-    let k = d.problem.scales().stiffness;
-    let mut coo = CooMatrix::new(a.nrows(), a.ncols());
-    for (i, j, &v) in a.triplet_iter() {
-        coo.push(i, j, v);
-    }
-    coo.push(t, t, k);
-    CsrMatrix::from(&coo)
-}
-
-/// Seconds of one mesh's set-up measurements, each timed `runs` times after
-/// a warm-up (0: the warm-up alone, cold).
-struct SetUp {
-    /// Assembly: both matrices, the loads and the problem with its checks.
-    assembly: Vec<f64>,
-    /// A fresh copy of A and of M's values on its pattern: the memory the assembly must at least write
-    /// (allocation, first touch of its pages, the copy), the floor under it.
-    output: Vec<f64>,
-    /// The best factorization here: numeric LLᵀ of A (rigid mode pinned)
-    /// and one solve on both cores, the symbolic analysis done once apart.
-    factorization: Vec<f64>,
-    /// That symbolic analysis (AMD, supernodes).
-    symbolic: Vec<f64>,
-    /// Symbolic and numeric factorization and one solve on one thread.
-    sequential: Vec<f64>,
-}
-
-/// The threads of the best factorization: the machine's two cores.
-pub const FACTORIZATION_THREADS: usize = 2;
-
-/// Assembles `scene` at `h`, copies its matrices and factors its stiffness
-/// (rigid mode pinned) with one solve; see [`SetUp`].
-fn assemble_and_factor(scene: &Scene, h: MeshSize, runs: usize) -> Result<(Discretization, SetUp)> {
-    let (d, assembly) = timed(runs, || Ok(Discretization::new(scene, h)?))?;
-    let (_, output) = timed(runs, || {
-        let m = d.problem.mass_on_stiffness_pattern().map(<[f64]>::to_vec);
-        let copy = (d.problem.a().clone(), m);
-        Ok(std::hint::black_box(copy).0.nnz())
-    })?;
-    let a = pinned(&d);
-    let (_, sequential) = timed(runs, || {
-        let c = SparseCholesky::new(&a)?;
-        let mut b = d.problem.f().to_vec();
-        c.solve_vec(&mut b);
-        Ok(b[0])
-    })?;
-    let (analysis, symbolic) = timed(runs, || Ok(CholeskyAnalysis::new(&a)?))?;
-    let (_, factorization) = timed(runs, || {
-        let mut b = d.problem.f().to_vec();
-        analysis.factor_and_solve(FACTORIZATION_THREADS, &mut b)?;
-        Ok(b[0])
-    })?;
-    let times = SetUp {
-        assembly,
-        output,
-        factorization,
-        symbolic,
-        sequential,
-    };
-    Ok((d, times))
-}
-
-/// Pushes one mesh's set-up rows.
-fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, once: bool) {
-    let once = |note: &str| match (once, note) {
-        (true, "") => "once".to_string(),
-        (true, _) => format!("{note}, once"),
-        (false, _) => note.to_string(),
-    };
-    let f = once(
-        "the unit of every ratio: numeric LLᵀ + one solve on 2 threads, the symbolic analysis done once (row symbolic)",
-    );
-    mesh.push(
-        "factorization",
-        "faer LLᵀ, 2 threads",
-        &times.factorization,
-        "done",
-        f,
-    );
-    let f = once("AMD ordering and supernodal analysis, once per pattern");
-    mesh.push("symbolic", "faer", &times.symbolic, "done", f);
-    let f = once("symbolic + numeric + one solve on one thread");
-    mesh.push(
-        "factorization_sequential",
-        "faer LLᵀ, 1 thread",
-        &times.sequential,
-        "done",
-        f,
-    );
-    mesh.push("assembly", "-", &times.assembly, "done", once(""));
-    let copy = once("a fresh copy of A and M: what the assembly must write");
-    mesh.push("output", "-", &times.output, "done", copy);
-}
-
-/// Rows of one mesh's measurements, with the factorization as the unit.
-struct MeshRows<'a> {
-    rows: &'a mut Vec<PerfRow>,
-    h: MeshSize,
-    unknowns: usize,
-    factorization: f64,
-}
-
-impl MeshRows<'_> {
-    fn push(&mut self, what: &str, solver: &str, times: &[f64], status: &str, note: String) {
-        let m = median(times);
-        self.rows.push(PerfRow {
-            what: what.into(),
-            solver: solver.into(),
-            variant: String::new(),
-            h: self.h.to_string(),
-            unknowns: self.unknowns,
-            runs: times.len(),
-            median_seconds: m,
-            min_seconds: times.iter().copied().fold(f64::INFINITY, f64::min),
-            ratio_to_factorization: m / self.factorization,
-            status: status.into(),
-            certificate: f64::NAN,
-            pressure_error: f64::NAN,
-            work: 0,
-            note,
-        });
     }
 }
 
