@@ -48,8 +48,11 @@ pub(crate) struct Cycle {
     pub presmoothing: usize,
     /// Conjugate-gradient steps on the truncated Newton system.
     pub linear_steps: usize,
-    /// Linear Gauss-Seidel sweeps before and after each coarse correction.
+    /// Linear Gauss-Seidel sweeps before and after each coarse correction
+    /// below the finest level.
     pub linear_sweeps: usize,
+    /// The same on the finest level.
+    pub finest_sweeps: usize,
 }
 
 /// The iteration's vectors, allocated once per solve.
@@ -91,6 +94,13 @@ impl Workspace {
     pub(crate) fn reset(&mut self) {
         self.truncated.fill(false);
         self.shift.fill(0.0);
+    }
+}
+
+impl Cycle {
+    /// The V-cycle's sweeps: (below the finest level, on it).
+    fn sweeps(&self) -> (usize, usize) {
+        (self.linear_sweeps, self.finest_sweeps)
     }
 }
 
@@ -163,7 +173,7 @@ pub(crate) fn iterate(
     c.fill(0.0);
     w.fill(0.0);
     lin_r.copy_from_slice(d);
-    hierarchy.v_cycle(a, p, lin_r, cycle.linear_sweeps, lin_z);
+    hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z);
     lin_p.copy_from_slice(lin_z);
     let mut rz = dot(lin_r, lin_z);
     for step in 0..cycle.linear_steps {
@@ -193,7 +203,7 @@ pub(crate) fn iterate(
         if step + 1 == cycle.linear_steps {
             break;
         }
-        hierarchy.v_cycle(a, p, lin_r, cycle.linear_sweeps, lin_z);
+        hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z);
         let rz_next = dot(lin_r, lin_z);
         let beta = rz_next / rz;
         rz = rz_next;

@@ -279,15 +279,16 @@ impl Hierarchy {
     }
 
     /// One V-cycle from zero for A_T c = d (d zero on the truncated set),
-    /// `sweeps` symmetric Gauss-Seidel sweeps before and after each coarse
-    /// correction; the correction is written to `c` (zero on the truncated
-    /// set). `a` is the finest level's matrix, `p` the prolongations.
+    /// `sweeps` = (below, finest): that many Gauss-Seidel sweeps before and
+    /// after each coarse correction below the finest level, and on it; the
+    /// correction is written to `c` (zero on the truncated set). `a` is the
+    /// finest level's matrix, `p` the prolongations.
     pub(crate) fn v_cycle(
         &mut self,
         a: &CsrMatrix<f64>,
         p: &[CsrMatrix<f64>],
         d: &[f64],
-        sweeps: usize,
+        (coarse_sweeps, finest_sweeps): (usize, usize),
         c: &mut [f64],
     ) {
         let Self {
@@ -313,6 +314,13 @@ impl Hierarchy {
             ),
             None => (a, &diag[..], halves.as_ref(), &shift[..], &truncated[..]),
         };
+        let sweeps = |l: usize| {
+            if l == top {
+                finest_sweeps
+            } else {
+                coarse_sweeps
+            }
+        };
         b[top].copy_from_slice(d);
         // Down: smooth, restrict the residual (zero on the truncated set,
         // so Pᵀ r = P_Tᵀ r on the finest level).
@@ -320,7 +328,7 @@ impl Hierarchy {
             let (matrix, dg, split, dk, fixed) = level(l);
             let xl = &mut x[l];
             xl.fill(0.0);
-            for _ in 0..sweeps {
+            for _ in 0..sweeps(l) {
                 linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true);
             }
             let rl = &mut r[l];
@@ -344,7 +352,7 @@ impl Hierarchy {
                     *xk += rk;
                 }
             }
-            for _ in 0..sweeps {
+            for _ in 0..sweeps(l) {
                 linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, false);
             }
         }
