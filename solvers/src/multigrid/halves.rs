@@ -49,6 +49,12 @@ unsafe impl Send for Shared {}
 unsafe impl Sync for Shared {}
 
 impl Shared {
+    /// The vector `x`, to be written through while `x` is borrowed by the
+    /// sweep that uses it.
+    pub(crate) fn of(x: &mut [f64]) -> Self {
+        Shared(x.as_mut_ptr())
+    }
+
     /// x[k].
     ///
     /// # Safety
@@ -147,6 +153,11 @@ impl Halves {
         })
     }
 
+    /// Whether each row is in the separator (swept after both halves).
+    pub(crate) fn in_separator(&self) -> &[bool] {
+        &self.in_separator
+    }
+
     /// One Gauss-Seidel sweep over x in this ordering (see the module),
     /// `update(k, x)` setting x[k] from the others; the halves on two
     /// threads. `update` must read only the unknowns of row k's pattern.
@@ -206,12 +217,12 @@ where
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use nalgebra_sparse::CooMatrix;
 
     /// The 5-point Laplacian of a q × q grid, numbered row by row.
-    fn grid(q: usize) -> CsrMatrix<f64> {
+    pub(crate) fn grid(q: usize) -> CsrMatrix<f64> {
         let mut coo = CooMatrix::new(q * q, q * q);
         for i in 0..q {
             for j in 0..q {

@@ -24,7 +24,7 @@
 use nalgebra_sparse::CsrMatrix;
 
 use super::line_search::exact_step;
-use super::smoother::{Local, nonlinear_sweep};
+use super::smoother::{Local, nonlinear_sweep, nonlinear_sweep_with_defect};
 use super::vcycle::Hierarchy;
 use crate::numerics::linalg::spmv_into;
 
@@ -119,22 +119,22 @@ pub(crate) fn iterate(
     v: &mut [f64],
 ) {
     let (a, laws, contact) = (energy.a, energy.laws, energy.contact);
-    for _ in 0..cycle.presmoothing {
-        nonlinear_sweep(
-            a,
-            &hierarchy.diag,
-            hierarchy.halves.as_ref(),
-            energy.b,
-            laws,
-            v,
-        );
+    // The presmoothing; its last sweep leaves the defect b − A v behind
+    // (without one, a product computes it).
+    let halves = hierarchy.halves.as_ref();
+    for _ in 1..cycle.presmoothing {
+        nonlinear_sweep(a, &hierarchy.diag, halves, energy.b, laws, v);
+    }
+    if cycle.presmoothing > 0 {
+        nonlinear_sweep_with_defect(a, &hierarchy.diag, halves, energy.b, laws, v, &mut ws.r);
+    } else {
+        spmv_into(a, v, &mut ws.r);
+        for (rk, bk) in ws.r.iter_mut().zip(energy.b) {
+            *rk = bk - *rk;
+        }
     }
     // The truncated set, the Newton step's curvature and its defect.
-    spmv_into(a, v, &mut ws.r);
-    for ((rk, bk), dk) in ws.r.iter_mut().zip(energy.b).zip(ws.d.iter_mut()) {
-        *rk = bk - *rk;
-        *dk = *rk;
-    }
+    ws.d.copy_from_slice(&ws.r);
     let mut kernel_free = energy.kernel.is_some();
     for &k in contact {
         let law = laws[k];

@@ -151,6 +151,138 @@ pub(crate) fn nonlinear_sweep(
     });
 }
 
+/// r_j −= A_jk·δ for the rows j ≠ k of row k's pattern that a forward sweep
+/// visits before k (A symmetric: A_jk = A_kj): after x_k moved by δ, the
+/// residuals those rows left are brought up to date, so that a forward
+/// sweep leaves b − A x behind without a product of its own. In the
+/// ordering of `separator` ([`Halves::in_separator`]) a half's row follows
+/// the rows of its half below it, a separator's row every half and the
+/// separator's rows below it; without one, the rows below it. Column
+/// indices ascend within a row, so the rows below k end at its diagonal.
+///
+/// # Safety
+/// A's column indices are below r's length, and no other thread touches r
+/// at the rows written (the halves' own rows: see [`Halves`]).
+#[inline]
+unsafe fn scatter_to_swept(
+    a: &CsrMatrix<f64>,
+    k: usize,
+    diag: usize,
+    delta: f64,
+    separator: Option<&[bool]>,
+    r: Shared,
+) {
+    if delta == 0.0 {
+        return;
+    }
+    let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
+    // SAFETY (every r access below): by the contract.
+    match separator {
+        Some(sep) if sep[k] => {
+            for q in offsets[k]..offsets[k + 1] {
+                let j = cols[q];
+                if j != k && (!sep[j] || j < k) {
+                    unsafe { r.set(j, r.get(j) - vals[q] * delta) };
+                }
+            }
+        }
+        Some(sep) => {
+            for q in offsets[k]..diag {
+                let j = cols[q];
+                if !sep[j] {
+                    unsafe { r.set(j, r.get(j) - vals[q] * delta) };
+                }
+            }
+        }
+        None => {
+            for q in offsets[k]..diag {
+                let j = cols[q];
+                unsafe { r.set(j, r.get(j) - vals[q] * delta) };
+            }
+        }
+    }
+}
+
+/// [`nonlinear_sweep`] that also leaves the defect f − A v of the swept v
+/// in `r`, in the same pass over A: row k's defect is c − A_kk v_k when it
+/// is swept, and each later move of a neighbour is scattered into it
+/// ([`scatter_to_swept`]). It replaces the product that followed the
+/// presmoothing (one of the fourteen passes over A of an iteration).
+pub(crate) fn nonlinear_sweep_with_defect(
+    a: &CsrMatrix<f64>,
+    diag: &[usize],
+    halves: Option<&Halves>,
+    f: &[f64],
+    laws: &[Local],
+    v: &mut [f64],
+    r: &mut [f64],
+) {
+    check_sizes(a, diag, f, v);
+    assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
+    let vals = a.values();
+    let separator = halves.map(Halves::in_separator);
+    let rs = Shared::of(r);
+    sweep(halves, v, true, |k, x| {
+        // SAFETY: sizes checked above; the halves' ordering keeps the other
+        // thread off row k's pattern and off the defects it writes.
+        unsafe {
+            let c = off_diagonal_rhs(a, k, diag[k], f[k], x);
+            let akk = vals[diag[k]];
+            let new = local_minimizer(laws[k], akk, c);
+            let delta = new - x.get(k);
+            x.set(k, new);
+            rs.set(k, c - akk * new);
+            scatter_to_swept(a, k, diag[k], delta, separator, rs);
+        }
+    });
+}
+
+/// A forward [`linear_sweep`] that also leaves the residual b − (A + D) x
+/// of the swept x in `r` (zero where `fixed`), in the same pass over A (see
+/// [`nonlinear_sweep_with_defect`]): the V-cycle's presmoothing and its
+/// residual, one pass instead of two.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn linear_sweep_with_residual(
+    a: &CsrMatrix<f64>,
+    diag: &[usize],
+    halves: Option<&Halves>,
+    shift: &[f64],
+    b: &[f64],
+    x: &mut [f64],
+    fixed: &[bool],
+    r: &mut [f64],
+) {
+    check_sizes(a, diag, b, x);
+    assert!(
+        fixed.len() == x.len() && r.len() == x.len(),
+        "a sweep: one flag and one residual per unknown"
+    );
+    let vals = a.values();
+    let separator = halves.map(Halves::in_separator);
+    let rs = Shared::of(r);
+    sweep(halves, x, true, |k, x| {
+        // SAFETY: as in the nonlinear sweep.
+        unsafe {
+            if fixed[k] {
+                rs.set(k, 0.0);
+                return;
+            }
+            let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
+            let new = c / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
+            let delta = new - x.get(k);
+            x.set(k, new);
+            rs.set(k, 0.0);
+            scatter_to_swept(a, k, diag[k], delta, separator, rs);
+        }
+    });
+    // A later row's move reached the fixed rows' residuals too.
+    for (rk, &cut) in r.iter_mut().zip(fixed) {
+        if cut {
+            *rk = 0.0;
+        }
+    }
+}
+
 /// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,
 /// D = diag(`shift`) (empty: none), keeping x_k = 0 where `fixed` says so
 /// (the truncated coordinates); on two threads in the ordering of `halves`
@@ -187,6 +319,81 @@ pub(crate) fn linear_sweep(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::multigrid::halves::tests::grid;
+    use crate::numerics::linalg::spmv_into;
+
+    /// b − (A + D) x, zero where `fixed`, by a product.
+    fn residual(
+        a: &CsrMatrix<f64>,
+        shift: &[f64],
+        b: &[f64],
+        x: &[f64],
+        fixed: &[bool],
+    ) -> Vec<f64> {
+        let mut ax = vec![0.0; x.len()];
+        spmv_into(a, x, &mut ax);
+        (0..x.len())
+            .map(|k| {
+                let d = shift.get(k).copied().unwrap_or(0.0);
+                if fixed[k] {
+                    0.0
+                } else {
+                    b[k] - ax[k] - d * x[k]
+                }
+            })
+            .collect()
+    }
+
+    fn largest_gap(p: &[f64], q: &[f64]) -> f64 {
+        p.iter()
+            .zip(q)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    }
+
+    /// The fused sweeps move x exactly as the plain ones (same bits) and
+    /// leave the residual a product computes afterwards, to rounding: in
+    /// the two-halves ordering (separator rows last) and in the natural
+    /// one, from a nonzero start, with fixed rows, a shift and every law.
+    /// A scatter to a row swept later, or none to a separator row swept
+    /// earlier, leaves residuals off by O(1).
+    #[test]
+    fn fused_sweeps_leave_the_residual_of_a_product() {
+        let a = grid(300);
+        let n = a.nrows();
+        let diag = diagonal_positions(&a).expect("a grid has its diagonal");
+        let b: Vec<f64> = (0..n).map(|k| ((k * 37) % 11) as f64 - 5.0).collect();
+        let start: Vec<f64> = (0..n).map(|k| ((k * 13) % 7) as f64 * 0.1).collect();
+        let fixed: Vec<bool> = (0..n).map(|k| k % 97 == 0).collect();
+        let shift: Vec<f64> = (0..n).map(|k| if k % 5 == 0 { 0.5 } else { 0.0 }).collect();
+        let laws: Vec<Local> = (0..n)
+            .map(|k| match k % 4 {
+                0 => Local::Jump,
+                1 => Local::Slip(1.5),
+                2 => Local::Huber {
+                    wg: 1.0,
+                    delta: 0.1,
+                },
+                _ => Local::Free,
+            })
+            .collect();
+        let halves = Halves::new(&a).expect("a grid splits");
+        for split in [Some(&halves), None] {
+            let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
+            linear_sweep(&a, &diag, split, &shift, &b, &mut plain, &fixed, true);
+            linear_sweep_with_residual(&a, &diag, split, &shift, &b, &mut fused, &fixed, &mut r);
+            assert_eq!(plain, fused, "split {}", split.is_some());
+            let gap = largest_gap(&r, &residual(&a, &shift, &b, &fused, &fixed));
+            assert!(gap < 1e-12, "linear, split {}: {gap:e}", split.is_some());
+
+            let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
+            nonlinear_sweep(&a, &diag, split, &b, &laws, &mut plain);
+            nonlinear_sweep_with_defect(&a, &diag, split, &b, &laws, &mut fused, &mut r);
+            assert_eq!(plain, fused, "split {}", split.is_some());
+            let none = vec![false; n];
+            let gap = largest_gap(&r, &residual(&a, &[], &b, &fused, &none));
+            assert!(gap < 1e-12, "nonlinear, split {}: {gap:e}", split.is_some());
+        }
+    }
 
     /// Each local minimizer is the minimum of its 1-D energy: no sampled
     /// admissible point is lower.

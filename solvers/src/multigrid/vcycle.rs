@@ -22,7 +22,7 @@ use nalgebra_sparse::CsrMatrix;
 
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::halves::Halves;
-use crate::multigrid::smoother::{diagonal_position, linear_sweep};
+use crate::multigrid::smoother::{diagonal_position, linear_sweep, linear_sweep_with_residual};
 use crate::numerics::linalg::spmv_into;
 
 /// Eigenvalues below this fraction of the largest are the coarsest
@@ -328,14 +328,21 @@ impl Hierarchy {
             let (matrix, dg, split, dk, fixed) = level(l);
             let xl = &mut x[l];
             xl.fill(0.0);
-            for _ in 0..sweeps(l) {
-                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true);
-            }
             let rl = &mut r[l];
-            spmv_into(matrix, xl, rl);
-            for (k, ((rk, bk), &cut)) in rl.iter_mut().zip(&b[l]).zip(fixed).enumerate() {
-                let d = dk.get(k).copied().unwrap_or(0.0);
-                *rk = if cut { 0.0 } else { bk - *rk - d * xl[k] };
+            // The last sweep leaves the residual behind (one pass over
+            // the level's matrix instead of two); none: x = 0, r = b.
+            match sweeps(l) {
+                0 => {
+                    for ((rk, bk), &cut) in rl.iter_mut().zip(&b[l]).zip(fixed) {
+                        *rk = if cut { 0.0 } else { *bk };
+                    }
+                }
+                s => {
+                    for _ in 1..s {
+                        linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true);
+                    }
+                    linear_sweep_with_residual(matrix, dg, split, dk, &b[l], xl, fixed, rl);
+                }
             }
             spmv_into(&restrict[l - 1], rl, &mut b[l - 1]);
         }
