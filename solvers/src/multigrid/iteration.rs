@@ -66,6 +66,8 @@ pub(crate) struct Workspace {
     ac: Vec<f64>,
     lin_r: Vec<f64>,
     lin_z: Vec<f64>,
+    /// A_T z of the V-cycle's z (its last sweep leaves it).
+    lin_az: Vec<f64>,
     lin_p: Vec<f64>,
     truncated: Vec<bool>,
     shift: Vec<f64>,
@@ -82,6 +84,7 @@ impl Workspace {
             ac: zeros(),
             lin_r: zeros(),
             lin_z: zeros(),
+            lin_az: zeros(),
             lin_p: zeros(),
             truncated: vec![false; n],
             shift: zeros(),
@@ -164,27 +167,23 @@ pub(crate) fn iterate(
         ac,
         lin_r,
         lin_z,
+        lin_az,
         lin_p,
         truncated,
-        shift,
+        shift: _,
         d,
         r,
     } = ws;
     c.fill(0.0);
     w.fill(0.0);
     lin_r.copy_from_slice(d);
-    hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z);
+    // Each V-cycle also returns A_T z (its last sweep leaves it), and the
+    // search directions' products follow: A_T p = A_T z + β A_T p.
+    hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);
     lin_p.copy_from_slice(lin_z);
+    ac.copy_from_slice(lin_az);
     let mut rz = dot(lin_r, lin_z);
     for step in 0..cycle.linear_steps {
-        spmv_into(a, lin_p, ac);
-        for &k in contact {
-            ac[k] = if truncated[k] {
-                0.0
-            } else {
-                ac[k] + shift[k] * lin_p[k]
-            };
-        }
         let pq = dot(lin_p, ac);
         if !(pq > 0.0 && rz > 0.0) {
             break;
@@ -203,12 +202,17 @@ pub(crate) fn iterate(
         if step + 1 == cycle.linear_steps {
             break;
         }
-        hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z);
+        hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);
         let rz_next = dot(lin_r, lin_z);
         let beta = rz_next / rz;
         rz = rz_next;
-        for (pk, zk) in lin_p.iter_mut().zip(&*lin_z) {
+        for ((pk, zk), (qk, azk)) in lin_p
+            .iter_mut()
+            .zip(&*lin_z)
+            .zip(ac.iter_mut().zip(&*lin_az))
+        {
             *pk = zk + beta * *pk;
+            *qk = azk + beta * *qk;
         }
     }
     // The projection onto the admissible set: v + c keeps t ≤ 0, so that a

@@ -151,14 +151,16 @@ pub(crate) fn nonlinear_sweep(
     });
 }
 
-/// r_j −= A_jk·δ for the rows j ≠ k of row k's pattern that a forward sweep
-/// visits before k (A symmetric: A_jk = A_kj): after x_k moved by δ, the
-/// residuals those rows left are brought up to date, so that a forward
-/// sweep leaves b − A x behind without a product of its own. In the
-/// ordering of `separator` ([`Halves::in_separator`]) a half's row follows
-/// the rows of its half below it, a separator's row every half and the
-/// separator's rows below it; without one, the rows below it. Column
-/// indices ascend within a row, so the rows below k end at its diagonal.
+/// r_j −= A_jk·δ for the rows j ≠ k of row k's pattern that a sweep
+/// (`forward` or backward) visits before k (A symmetric: A_jk = A_kj):
+/// after x_k moved by δ, the residuals those rows left are brought up to
+/// date, so that a sweep leaves b − A x behind without a product of its
+/// own. In the ordering of `separator` ([`Halves::in_separator`]) a forward
+/// sweep visits a half's rows ascending, then the separator's; a backward
+/// one the separator's descending, then each half's. Without one, the
+/// natural order. Column indices ascend within a row, so the rows below k
+/// end at its diagonal and those above start after it. (A row not yet
+/// visited may be written too: its own visit sets its residual afresh.)
 ///
 /// # Safety
 /// A's column indices are below r's length, and no other thread touches r
@@ -169,36 +171,40 @@ unsafe fn scatter_to_swept(
     k: usize,
     diag: usize,
     delta: f64,
-    separator: Option<&[bool]>,
+    (separator, forward): (Option<&[bool]>, bool),
     r: Shared,
 ) {
     if delta == 0.0 {
         return;
     }
     let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
-    // SAFETY (every r access below): by the contract.
+    let (below, above) = (offsets[k]..diag, diag + 1..offsets[k + 1]);
+    // SAFETY: by the contract.
+    let update = |q: usize| unsafe { r.set(cols[q], r.get(cols[q]) - vals[q] * delta) };
     match separator {
+        None if forward => below.for_each(update),
+        None => above.for_each(update),
+        // A separator's row: every half's row (forward) and the separator's
+        // rows below it; backward, the separator's rows above it.
         Some(sep) if sep[k] => {
-            for q in offsets[k]..offsets[k + 1] {
-                let j = cols[q];
-                if j != k && (!sep[j] || j < k) {
-                    unsafe { r.set(j, r.get(j) - vals[q] * delta) };
+            let swept = |j: usize| {
+                if forward {
+                    !sep[j] || j < k
+                } else {
+                    sep[j] && j > k
                 }
-            }
+            };
+            below
+                .chain(above)
+                .filter(|&q| swept(cols[q]))
+                .for_each(update);
         }
+        // A half's row: its half's rows below it (forward); backward, its
+        // half's rows above it and every separator row.
+        Some(sep) if forward => below.filter(|&q| !sep[cols[q]]).for_each(update),
         Some(sep) => {
-            for q in offsets[k]..diag {
-                let j = cols[q];
-                if !sep[j] {
-                    unsafe { r.set(j, r.get(j) - vals[q] * delta) };
-                }
-            }
-        }
-        None => {
-            for q in offsets[k]..diag {
-                let j = cols[q];
-                unsafe { r.set(j, r.get(j) - vals[q] * delta) };
-            }
+            below.filter(|&q| sep[cols[q]]).for_each(update);
+            above.for_each(update);
         }
     }
 }
@@ -232,15 +238,17 @@ pub(crate) fn nonlinear_sweep_with_defect(
             let delta = new - x.get(k);
             x.set(k, new);
             rs.set(k, c - akk * new);
-            scatter_to_swept(a, k, diag[k], delta, separator, rs);
+            scatter_to_swept(a, k, diag[k], delta, (separator, true), rs);
         }
     });
 }
 
-/// A forward [`linear_sweep`] that also leaves the residual b − (A + D) x
-/// of the swept x in `r` (zero where `fixed`), in the same pass over A (see
-/// [`nonlinear_sweep_with_defect`]): the V-cycle's presmoothing and its
-/// residual, one pass instead of two.
+/// A [`linear_sweep`] (`forward` or backward) that also leaves the
+/// residual b − (A + D) x of the swept x in `r` (zero where `fixed`), in
+/// the same pass over A (see [`nonlinear_sweep_with_defect`]): the
+/// V-cycle's presmoothing and its residual, one pass instead of two; and
+/// after its last postsmoothing (A + D) x = b − r, the product the
+/// conjugate gradients need.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear_sweep_with_residual(
     a: &CsrMatrix<f64>,
@@ -250,6 +258,7 @@ pub(crate) fn linear_sweep_with_residual(
     b: &[f64],
     x: &mut [f64],
     fixed: &[bool],
+    forward: bool,
     r: &mut [f64],
 ) {
     check_sizes(a, diag, b, x);
@@ -260,7 +269,7 @@ pub(crate) fn linear_sweep_with_residual(
     let vals = a.values();
     let separator = halves.map(Halves::in_separator);
     let rs = Shared::of(r);
-    sweep(halves, x, true, |k, x| {
+    sweep(halves, x, forward, |k, x| {
         // SAFETY: as in the nonlinear sweep.
         unsafe {
             if fixed[k] {
@@ -272,7 +281,7 @@ pub(crate) fn linear_sweep_with_residual(
             let delta = new - x.get(k);
             x.set(k, new);
             rs.set(k, 0.0);
-            scatter_to_swept(a, k, diag[k], delta, separator, rs);
+            scatter_to_swept(a, k, diag[k], delta, (separator, forward), rs);
         }
     });
     // A later row's move reached the fixed rows' residuals too.
@@ -378,12 +387,20 @@ mod tests {
             .collect();
         let halves = Halves::new(&a).expect("a grid splits");
         for split in [Some(&halves), None] {
-            let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
-            linear_sweep(&a, &diag, split, &shift, &b, &mut plain, &fixed, true);
-            linear_sweep_with_residual(&a, &diag, split, &shift, &b, &mut fused, &fixed, &mut r);
-            assert_eq!(plain, fused, "split {}", split.is_some());
-            let gap = largest_gap(&r, &residual(&a, &shift, &b, &fused, &fixed));
-            assert!(gap < 1e-12, "linear, split {}: {gap:e}", split.is_some());
+            for forward in [true, false] {
+                let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
+                linear_sweep(&a, &diag, split, &shift, &b, &mut plain, &fixed, forward);
+                linear_sweep_with_residual(
+                    &a, &diag, split, &shift, &b, &mut fused, &fixed, forward, &mut r,
+                );
+                assert_eq!(plain, fused, "split {}", split.is_some());
+                let gap = largest_gap(&r, &residual(&a, &shift, &b, &fused, &fixed));
+                assert!(
+                    gap < 1e-12,
+                    "linear, split {}, forward {forward}: {gap:e}",
+                    split.is_some()
+                );
+            }
 
             let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
             nonlinear_sweep(&a, &diag, split, &b, &laws, &mut plain);

@@ -281,8 +281,10 @@ impl Hierarchy {
     /// One V-cycle from zero for A_T c = d (d zero on the truncated set),
     /// `sweeps` = (below, finest): that many Gauss-Seidel sweeps before and
     /// after each coarse correction below the finest level, and on it; the
-    /// correction is written to `c` (zero on the truncated set). `a` is the
-    /// finest level's matrix, `p` the prolongations.
+    /// correction is written to `c` (zero on the truncated set) and A_T c,
+    /// A_T = T(A + D)T, to `ac`: the last sweep leaves it, so that the
+    /// conjugate gradients need no product of their own. `a` is the finest
+    /// level's matrix, `p` the prolongations.
     pub(crate) fn v_cycle(
         &mut self,
         a: &CsrMatrix<f64>,
@@ -290,6 +292,7 @@ impl Hierarchy {
         d: &[f64],
         (coarse_sweeps, finest_sweeps): (usize, usize),
         c: &mut [f64],
+        ac: &mut [f64],
     ) {
         let Self {
             diag,
@@ -341,7 +344,7 @@ impl Hierarchy {
                     for _ in 1..s {
                         linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true);
                     }
-                    linear_sweep_with_residual(matrix, dg, split, dk, &b[l], xl, fixed, rl);
+                    linear_sweep_with_residual(matrix, dg, split, dk, &b[l], xl, fixed, true, rl);
                 }
             }
             spmv_into(&restrict[l - 1], rl, &mut b[l - 1]);
@@ -359,10 +362,30 @@ impl Hierarchy {
                     *xk += rk;
                 }
             }
-            for _ in 0..sweeps(l) {
+            let last = if l == top { sweeps(l) } else { 0 };
+            for _ in last.min(1)..sweeps(l) {
                 linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, false);
+            }
+            if last > 0 {
+                // The last sweep on the finest level leaves its residual
+                // in r[top] (free again once prolongated): A_T c = b − r.
+                let rl = &mut r[l];
+                linear_sweep_with_residual(matrix, dg, split, dk, &b[l], xl, fixed, false, rl);
+                for ((q, bk), rk) in ac.iter_mut().zip(&b[l]).zip(&*rl) {
+                    *q = bk - rk;
+                }
             }
         }
         c.copy_from_slice(&x[top]);
+        if sweeps(top) == 0 {
+            spmv_into(a, c, ac);
+            for (k, q) in ac.iter_mut().enumerate() {
+                *q = if truncated[k] {
+                    0.0
+                } else {
+                    *q + shift[k] * c[k]
+                };
+            }
+        }
     }
 }
