@@ -80,8 +80,9 @@ pub struct Entry {
     pub build: fn(&Value) -> Result<Box<dyn Solver>, String>,
     pub accuracy: Accuracy,
     pub role: Role,
-    /// Its inner iteration for the speed benchmark (None: it has none).
-    pub kernel: Option<fn(&ContactProblem) -> InnerKernel>,
+    /// Its inner iteration for the speed benchmark (None: it has none; the
+    /// function's None: not for this problem).
+    pub kernel: Option<fn(&ContactProblem) -> Option<InnerKernel>>,
     /// The most unknowns it is given (None: no cap). A solver that factors
     /// A, or a matrix of its size, holds a factor that grows faster than
     /// the problem; [`FACTORED_MAX_UNKNOWNS`] refuses the meshes on which

@@ -41,6 +41,7 @@
 mod galerkin;
 mod halves;
 pub(crate) mod iteration;
+mod kernel;
 mod line_search;
 pub(crate) mod smoother;
 pub(crate) mod vcycle;
@@ -125,7 +126,7 @@ pub(crate) const ENTRY: Entry = Entry {
         exact: false,
     },
     role: Role::Other,
-    kernel: None,
+    kernel: Some(kernel::iteration_kernel),
     max_unknowns: None,
 };
 

@@ -125,7 +125,7 @@ pub(crate) const ENTRY: Entry = Entry {
 
 /// One relaxation sweep at the default relative settings, with multipliers
 /// l = 1 and bounds g = ½ at every contact node so that every branch runs.
-pub(crate) fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
+pub(crate) fn sweep_kernel(problem: &ContactProblem) -> Option<InnerKernel> {
     let resolved = RelaxationSettings::default().resolve(problem);
     let op = RelaxationOperator::new(problem, resolved.proximal);
     let matrix = op.h.clone();
@@ -133,7 +133,7 @@ pub(crate) fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
     let wg: Vec<f64> = problem.contacts().iter().map(|c| 0.5 * c.weight).collect();
     let b = problem.f().to_vec();
     let mut v = vec![0.0; problem.n()];
-    InnerKernel {
+    Some(InnerKernel {
         name: SWEEP,
         matrix,
         step: Box::new(move || {
@@ -147,5 +147,5 @@ pub(crate) fn sweep_kernel(problem: &ContactProblem) -> InnerKernel {
             };
             std::hint::black_box(op.sweep(&mut v, &data));
         }),
-    }
+    })
 }

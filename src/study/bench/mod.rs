@@ -189,7 +189,10 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             let Some(prepare) = entry.kernel else {
                 continue;
             };
-            let (kernel, product) = kernel_against_spmv(prepare(&d.problem), spec.runs)?;
+            let Some(kernel) = prepare(&d.problem) else {
+                continue;
+            };
+            let (kernel, product) = kernel_against_spmv(kernel, spec.runs)?;
             let ratio = median(&kernel.1) / median(&product);
             mesh.push(
                 "kernel",

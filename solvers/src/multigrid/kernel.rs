@@ -1,0 +1,80 @@
+//! One TNNMG iteration as the registry's inner kernel: `bench` times it
+//! against one product with A, so that the cost of an iteration is read in
+//! products on the same run (a quantity the machine's noise barely moves),
+//! and its passes over A can be counted against the code: one nonlinear
+//! sweep that leaves the defect, and per conjugate-gradient step one
+//! V-cycle whose finest level is one fused presmoothing sweep and one
+//! fused postsmoothing sweep (see [`super::iteration`]).
+//!
+//! The problem is the given-friction subproblem at the uniform bound
+//! g_i = ½ 𝓕_i P (P the problem's pressure scale), iterated from zero with
+//! the default settings; after the first few iterations the truncated set
+//! settles and each step does the same work.
+
+use std::hint::black_box;
+
+use super::TnnmgSettings;
+use super::iteration::{Cycle, Energy, Workspace, iterate};
+use super::smoother::{Local, diagonal_positions};
+use super::vcycle::Hierarchy;
+use crate::entry::InnerKernel;
+use crate::problem::ContactProblem;
+
+/// The bound of the kernel's subproblem, as a fraction of 𝓕P.
+const BOUND_OF_SCALE: f64 = 0.5;
+
+/// The kernel (None for a problem without a mesh hierarchy).
+pub(crate) fn iteration_kernel(problem: &ContactProblem) -> Option<InnerKernel> {
+    if problem.prolongations().is_empty() {
+        return None;
+    }
+    let problem = problem.clone();
+    let n = problem.n();
+    let mut hierarchy = Hierarchy::new(
+        problem.a(),
+        diagonal_positions(problem.a()).ok()?,
+        problem.prolongations(),
+    );
+    let pressure = problem.scales().pressure;
+    let mut laws = vec![Local::Free; n];
+    let mut contact = Vec::new();
+    for c in problem.contacts() {
+        laws[c.t] = Local::Jump;
+        laws[c.s] = Local::Slip(c.weight * BOUND_OF_SCALE * c.coefficient * pressure);
+        contact.extend([c.t, c.s]);
+    }
+    contact.sort_unstable();
+    let z = problem.rigid_modes().first().cloned();
+    let zz = z.as_ref().map_or(0.0, |z| z.iter().map(|x| x * x).sum());
+    let s = TnnmgSettings::default();
+    let cycle = Cycle {
+        presmoothing: s.presmoothing,
+        linear_steps: s.linear_steps,
+        linear_sweeps: s.linear_sweeps,
+        finest_sweeps: s.finest_sweeps,
+    };
+    let mut ws = Workspace::new(n);
+    let mut v = vec![0.0; n];
+    Some(InnerKernel {
+        name: super::ITERATION,
+        matrix: problem.a().clone(),
+        step: Box::new(move || {
+            let energy = Energy {
+                a: problem.a(),
+                b: problem.f(),
+                laws: &laws,
+                contact: &contact,
+                kernel: z.as_deref().map(|z| (z, zz)),
+            };
+            iterate(
+                &energy,
+                &mut hierarchy,
+                problem.prolongations(),
+                cycle,
+                &mut ws,
+                &mut v,
+            );
+            black_box(&v);
+        }),
+    })
+}
