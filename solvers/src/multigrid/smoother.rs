@@ -276,8 +276,9 @@ pub(crate) fn linear_sweep_with_residual(
                 rs.set(k, 0.0);
                 return;
             }
+            let inverse = 1.0 / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
             let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
-            let new = c / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
+            let new = c * inverse;
             let delta = new - x.get(k);
             x.set(k, new);
             rs.set(k, 0.0);
@@ -316,11 +317,12 @@ pub(crate) fn linear_sweep(
         }
         // SAFETY: as in the nonlinear sweep.
         unsafe {
+            // The reciprocal first: it depends on nothing the sweep moves,
+            // so it leaves the chain of rows (each waits for the unknown
+            // the row before set) a multiplication instead of a division.
+            let inverse = 1.0 / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
             let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
-            x.set(
-                k,
-                c / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0)),
-            );
+            x.set(k, c * inverse);
         }
     });
 }
