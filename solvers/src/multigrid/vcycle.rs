@@ -91,17 +91,21 @@ impl CoarsestSolve {
     }
 }
 
-/// A coarse level: its Galerkin matrix for the current truncated set, the
-/// untruncated values, the positions of the diagonal entries, the unknowns
-/// left at zero, and the value positions the current truncation changed.
+/// A coarse level: its Galerkin matrix for the current truncated set, its
+/// untruncated diagonal, the positions of the diagonal entries, the
+/// unknowns left at zero, and the untruncated values of the entries the
+/// current truncation changed (only those: a truncation touches O(h⁻¹)
+/// entries near Γ_K, and a copy of every value was a twelfth of the peak
+/// memory at h = 1/1024).
 struct Level {
     a: CsrMatrix<f64>,
-    untruncated: Vec<f64>,
+    untruncated_diagonal: Vec<f64>,
     diag: Vec<usize>,
     /// The two-core Gauss-Seidel ordering of `a`'s rows, if it has one.
     halves: Option<Halves>,
     fixed: Vec<bool>,
-    touched: Vec<usize>,
+    /// (position, untruncated value) of each entry changed.
+    touched: Vec<(usize, f64)>,
 }
 
 impl Level {
@@ -110,9 +114,9 @@ impl Level {
             .map(|k| diagonal_position(&a, k, 0.0))
             .collect();
         let fixed = found.iter().map(Option::is_none).collect();
-        let diag = found.into_iter().map(|p| p.unwrap_or(0)).collect();
+        let diag: Vec<usize> = found.into_iter().map(|p| p.unwrap_or(0)).collect();
         Self {
-            untruncated: a.values().to_vec(),
+            untruncated_diagonal: diag.iter().map(|&p| a.values()[p]).collect(),
             halves: Halves::new(&a),
             a,
             diag,
@@ -121,11 +125,12 @@ impl Level {
         }
     }
 
-    /// Back to the untruncated matrix.
+    /// Back to the untruncated matrix (latest change first, so that an
+    /// entry changed twice gets its first saved value).
     fn restore(&mut self) {
         let values = self.a.values_mut();
-        for p in self.touched.drain(..) {
-            values[p] = self.untruncated[p];
+        for (p, value) in self.touched.drain(..).rev() {
+            values[p] = value;
         }
     }
 
@@ -139,12 +144,13 @@ impl Level {
                 + row
                     .binary_search(&j)
                     .expect("a Galerkin correction lies on the Galerkin pattern");
-            self.a.values_mut()[p] -= value;
-            self.touched.push(p);
+            let entry = &mut self.a.values_mut()[p];
+            self.touched.push((p, *entry));
+            *entry -= value;
         }
         let values = self.a.values();
         for (k, fixed) in self.fixed.iter_mut().enumerate() {
-            let full = self.untruncated[self.diag[k]];
+            let full = self.untruncated_diagonal[k];
             *fixed = !(full > 0.0 && values[self.diag[k]] > FIXED_FRACTION * full);
         }
     }
