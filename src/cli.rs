@@ -80,16 +80,17 @@ pub enum Command {
     /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
     /// 1/256, as medians after a warm-up on one thread and as ratios to the
     /// best sparse factorization here (faer on both cores, symbolic analysis
-    /// once); at 1/512 and 1/1024 (not with --quick) assembly,
-    /// one factorization and the fastest certified direct Coulomb solver, once
-    /// each; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
+    /// once); at 1/512 and 1/1024 (not with --quick) assembly and the
+    /// fastest certified direct Coulomb solver once each, the factorization
+    /// as the median of 3 runs after a warm-up; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
     /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle
     /// at 1/256, once each without the time limit (about 2 h, 1.5 h of it the
     /// paper's method at 1/256; --quick: seconds); and where the fastest
     /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
     /// --quick), each in a fresh process; the multigrid goals (about 2 min):
     /// tnnmg's iterations from zero at every mesh, the whole Coulomb problem
-    /// by tnnmg (nested schedule) on the large meshes in a fresh process, the
+    /// by tnnmg (nested schedule) on the large meshes, the median of 3 runs
+    /// each in a fresh process (1/2048: one), the
     /// paper's method with relaxation.inner = multigrid at 1/256, and tnnmg
     /// against newton-coulomb at 1/64 and 1/256. Writes performance.csv,
     /// performance_goals.md and charts into --out.

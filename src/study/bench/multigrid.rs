@@ -44,8 +44,11 @@ const BOUND_OF_SCALE: f64 = 0.5;
 pub struct MultigridRows {
     /// (h, iterations, certified) from zero on the given-friction problem.
     pub iterations: Vec<(MeshSize, usize, bool)>,
-    /// The whole Coulomb problem, nested schedule, in a fresh process.
+    /// The whole Coulomb problem, nested schedule, each run in a fresh
+    /// process: the run of median time, with the largest peak of the runs.
     pub coulomb: Vec<MemoryUse>,
+    /// The runs behind each of `coulomb`.
+    pub coulomb_runs: usize,
     /// The same on the meshes only the multigrid solver runs on.
     pub finest: Vec<MemoryUse>,
     /// The paper's method with multigrid inside: (h, seconds, status).
@@ -82,6 +85,29 @@ fn meshes(spec: &BenchSpec) -> (Vec<MeshSize>, Vec<MeshSize>, MeshSize, Vec<Mesh
     (all, large, paper, agreement)
 }
 
+/// Fresh-process runs of the whole Coulomb problem on the large meshes
+/// (1/2048, at 40 s a run, runs once): one run moved by a third from one
+/// `bench` to the next (1/1024: 5.9 s, 4.2 s, 2.9 s).
+pub const COULOMB_RUNS: usize = 3;
+
+/// The run of median time (the slower of the middle two when even), with
+/// the largest peak of all and the worst status: a status that is not
+/// converged in any run is the measurement's.
+fn median_run(mut uses: Vec<MemoryUse>) -> Option<MemoryUse> {
+    uses.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+    let peak = uses.iter().map(|u| u.peak_kb).max()?;
+    let failed = uses
+        .iter()
+        .find(|u| u.status != "converged")
+        .map(|u| u.status.clone());
+    let mut used = uses.swap_remove(uses.len() / 2);
+    used.peak_kb = peak;
+    if let Some(status) = failed {
+        used.status = status;
+    }
+    Some(used)
+}
+
 /// Runs the measurements (none if no multigrid solver is registered).
 pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
     let mut out = MultigridRows::default();
@@ -98,15 +124,24 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         .map(|h| (h, false))
         .chain(spec.multigrid_only.iter().map(|h| (h, true)))
     {
-        log(&format!(
-            "{SOLVER} on the Coulomb problem at h = {h} (fresh process)"
-        ));
-        match measure_in_fresh_process(spec.problem, h, SOLVER, Schedule::Nested) {
-            Ok(used) if finest => out.finest.push(used),
-            Ok(used) => out.coulomb.push(used),
-            Err(e) => log(&format!("not measured: {e:#}")),
+        let runs = if finest { 1 } else { COULOMB_RUNS };
+        let mut uses = Vec::new();
+        for run in 1..=runs {
+            log(&format!(
+                "{SOLVER} on the Coulomb problem at h = {h} (fresh process, run {run} of {runs})"
+            ));
+            match measure_in_fresh_process(spec.problem, h, SOLVER, Schedule::Nested) {
+                Ok(used) => uses.push(used),
+                Err(e) => log(&format!("not measured: {e:#}")),
+            }
+        }
+        match median_run(uses) {
+            Some(used) if finest => out.finest.push(used),
+            Some(used) => out.coulomb.push(used),
+            None => {}
         }
     }
+    out.coulomb_runs = COULOMB_RUNS;
     log(&format!("the paper's method with multigrid at h = {paper}"));
     let scene = Scene::paper_problem_to(spec.problem, paper)?;
     let mut settings = Settings::default();
@@ -221,11 +256,12 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
                 used.h
             ),
             measured: format!(
-                "{:.1} s = {ratio:.1} × factorization ({}), peak {:.2} GiB, {}",
+                "{:.1} s = {ratio:.1} × factorization ({}), peak {:.2} GiB, {} (median of {} runs, each in a fresh process)",
                 used.seconds,
                 f.map_or("not measured".into(), |f| format!("{f:.1} s")),
                 used.peak_kb as f64 / (1024.0 * 1024.0),
-                used.status
+                used.status,
+                m.coulomb_runs,
             ),
             pass: Some(
                 used.status == "converged"
@@ -306,4 +342,50 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(seconds: f64, peak_kb: u64, status: &str) -> MemoryUse {
+        MemoryUse {
+            h: MeshSize::from_level(10).unwrap(),
+            solver: SOLVER.into(),
+            status: status.into(),
+            seconds,
+            peak_kb,
+            assembly_peak_kb: 0,
+            problem_kb: 0,
+            factor_values_bytes: None,
+            schur_bytes: None,
+        }
+    }
+
+    /// The median run's time, whatever the order of the runs; the largest
+    /// peak of any run; a failure in any run is the measurement's. Taking
+    /// the first or fastest run, the median run's own peak or the median
+    /// run's status fails it.
+    #[test]
+    fn the_median_run_keeps_the_worst_peak_and_status() {
+        let used = median_run(vec![
+            run(5.0, 100, "converged"),
+            run(3.0, 300, "converged"),
+            run(4.0, 200, "converged"),
+        ])
+        .unwrap();
+        assert_eq!((used.seconds, used.peak_kb), (4.0, 300));
+        assert_eq!(used.status, "converged");
+        let used = median_run(vec![
+            run(4.0, 100, "converged"),
+            run(9.0, 100, "max_iterations"),
+            run(3.0, 100, "converged"),
+        ])
+        .unwrap();
+        assert_eq!(
+            (used.seconds, used.status.as_str()),
+            (4.0, "max_iterations")
+        );
+        assert!(median_run(Vec::new()).is_none());
+    }
 }

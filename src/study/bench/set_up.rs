@@ -73,6 +73,7 @@ pub(super) fn assemble_and_factor(
     scene: &Scene,
     h: MeshSize,
     runs: usize,
+    factorization_runs: usize,
 ) -> Result<(Discretization, SetUp)> {
     let (d, assembly) = timed(runs, || Ok(Discretization::new(scene, h)?))?;
     let (_, output) = timed(runs, || {
@@ -88,7 +89,7 @@ pub(super) fn assemble_and_factor(
         Ok(b[0])
     })?;
     let (analysis, symbolic) = timed(runs, || Ok(CholeskyAnalysis::new(&a)?))?;
-    let (_, factorization) = timed(runs, || {
+    let (_, factorization) = timed(factorization_runs, || {
         let mut b = d.problem.f().to_vec();
         analysis.factor_and_solve(FACTORIZATION_THREADS, &mut b)?;
         Ok(b[0])
@@ -104,15 +105,21 @@ pub(super) fn assemble_and_factor(
 }
 
 /// Pushes one mesh's set-up rows.
-pub(super) fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, once: bool) {
-    let once = |note: &str| match (once, note) {
+pub(super) fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, large: bool) {
+    let once = |note: &str| match (large, note) {
         (true, "") => "once".to_string(),
         (true, _) => format!("{note}, once"),
         (false, _) => note.to_string(),
     };
-    let f = once(
-        "the unit of every ratio: numeric LLᵀ + one solve on 2 threads, the symbolic analysis done once (row symbolic)",
-    );
+    let unit = "the unit of every ratio: numeric LLᵀ + one solve on 2 threads, the symbolic analysis done once (row symbolic)";
+    let f = if large && times.factorization.len() > 1 {
+        format!(
+            "{unit}, median of {} after a warm-up",
+            times.factorization.len()
+        )
+    } else {
+        once(unit)
+    };
     mesh.push(
         "factorization",
         "faer LLᵀ, 2 threads",
