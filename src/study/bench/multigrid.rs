@@ -256,9 +256,9 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
                 used.h
             ),
             measured: format!(
-                "{:.1} s = {ratio:.1} × factorization ({}), peak {:.2} GiB, {} (median of {} runs, each in a fresh process)",
+                "{:.2} s = {ratio:.2} × factorization ({}), peak {:.2} GiB, {} (median of {} runs, each in a fresh process)",
                 used.seconds,
-                f.map_or("not measured".into(), |f| format!("{f:.1} s")),
+                f.map_or("not measured".into(), |f| format!("{f:.2} s")),
                 used.peak_kb as f64 / (1024.0 * 1024.0),
                 used.status,
                 m.coulomb_runs,
