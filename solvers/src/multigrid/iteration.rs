@@ -24,7 +24,7 @@
 use nalgebra_sparse::CsrMatrix;
 
 use super::line_search::exact_step;
-use super::smoother::{Local, nonlinear_sweep, nonlinear_sweep_with_defect};
+use super::smoother::{Local, nonlinear_sweep};
 use super::vcycle::Hierarchy;
 use crate::numerics::linalg::spmv_into;
 
@@ -125,12 +125,11 @@ pub(crate) fn iterate(
     // The presmoothing; its last sweep leaves the defect b − A v behind
     // (without one, a product computes it).
     let halves = hierarchy.halves.as_ref();
-    for _ in 1..cycle.presmoothing {
-        nonlinear_sweep(a, &hierarchy.diag, halves, energy.b, laws, v);
+    for sweep in 1..=cycle.presmoothing {
+        let last = (sweep == cycle.presmoothing).then_some(&mut ws.r[..]);
+        nonlinear_sweep(a, &hierarchy.diag, halves, energy.b, laws, v, last);
     }
-    if cycle.presmoothing > 0 {
-        nonlinear_sweep_with_defect(a, &hierarchy.diag, halves, energy.b, laws, v, &mut ws.r);
-    } else {
+    if cycle.presmoothing == 0 {
         spmv_into(a, v, &mut ws.r);
         for (rk, bk) in ws.r.iter_mut().zip(energy.b) {
             *rk = bk - *rk;

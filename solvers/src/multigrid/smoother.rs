@@ -129,28 +129,6 @@ fn check_sizes(a: &CsrMatrix<f64>, diag: &[usize], b: &[f64], x: &[f64]) {
     );
 }
 
-/// One forward sweep of the nonlinear Gauss-Seidel on J (see the module),
-/// on two threads in the ordering of `halves` when given.
-pub(crate) fn nonlinear_sweep(
-    a: &CsrMatrix<f64>,
-    diag: &[usize],
-    halves: Option<&Halves>,
-    f: &[f64],
-    laws: &[Local],
-    v: &mut [f64],
-) {
-    check_sizes(a, diag, f, v);
-    let vals = a.values();
-    sweep(halves, v, true, |k, x| {
-        // SAFETY: sizes checked above; the halves' ordering keeps the other
-        // thread off row k's pattern.
-        unsafe {
-            let c = off_diagonal_rhs(a, k, diag[k], f[k], x);
-            x.set(k, local_minimizer(laws[k], vals[diag[k]], c));
-        }
-    });
-}
-
 /// r_j −= A_jk·δ for the rows j ≠ k of row k's pattern that a sweep
 /// (`forward` or backward) visits before k (A symmetric: A_jk = A_kj):
 /// after x_k moved by δ, the residuals those rows left are brought up to
@@ -209,25 +187,28 @@ unsafe fn scatter_to_swept(
     }
 }
 
-/// [`nonlinear_sweep`] that also leaves the defect f − A v of the swept v
-/// in `r`, in the same pass over A: row k's defect is c − A_kk v_k when it
-/// is swept, and each later move of a neighbour is scattered into it
-/// ([`scatter_to_swept`]). It replaces the product that followed the
-/// presmoothing (one of the fourteen passes over A of an iteration).
-pub(crate) fn nonlinear_sweep_with_defect(
+/// One forward sweep of the nonlinear Gauss-Seidel on J (see the module),
+/// on two threads in the ordering of `halves` when given. With `defect`
+/// it also leaves f − A v of the swept v there, in the same pass over A:
+/// row k's defect is c − A_kk v_k when it is swept, and each later move of
+/// a neighbour is scattered into it ([`scatter_to_swept`]); this replaced
+/// the product that followed the presmoothing.
+pub(crate) fn nonlinear_sweep(
     a: &CsrMatrix<f64>,
     diag: &[usize],
     halves: Option<&Halves>,
     f: &[f64],
     laws: &[Local],
     v: &mut [f64],
-    r: &mut [f64],
+    defect: Option<&mut [f64]>,
 ) {
     check_sizes(a, diag, f, v);
-    assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
+    if let Some(r) = &defect {
+        assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
+    }
     let vals = a.values();
     let separator = halves.map(Halves::in_separator);
-    let rs = Shared::of(r);
+    let rs = defect.map(Shared::of);
     sweep(halves, v, true, |k, x| {
         // SAFETY: sizes checked above; the halves' ordering keeps the other
         // thread off row k's pattern and off the defects it writes.
@@ -237,66 +218,22 @@ pub(crate) fn nonlinear_sweep_with_defect(
             let new = local_minimizer(laws[k], akk, c);
             let delta = new - x.get(k);
             x.set(k, new);
-            rs.set(k, c - akk * new);
-            scatter_to_swept(a, k, diag[k], delta, (separator, true), rs);
-        }
-    });
-}
-
-/// A [`linear_sweep`] (`forward` or backward) that also leaves the
-/// residual b − (A + D) x of the swept x in `r` (zero where `fixed`), in
-/// the same pass over A (see [`nonlinear_sweep_with_defect`]): the
-/// V-cycle's presmoothing and its residual, one pass instead of two; and
-/// after its last postsmoothing (A + D) x = b − r, the product the
-/// conjugate gradients need.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn linear_sweep_with_residual(
-    a: &CsrMatrix<f64>,
-    diag: &[usize],
-    halves: Option<&Halves>,
-    shift: &[f64],
-    b: &[f64],
-    x: &mut [f64],
-    fixed: &[bool],
-    forward: bool,
-    r: &mut [f64],
-) {
-    check_sizes(a, diag, b, x);
-    assert!(
-        fixed.len() == x.len() && r.len() == x.len(),
-        "a sweep: one flag and one residual per unknown"
-    );
-    let vals = a.values();
-    let separator = halves.map(Halves::in_separator);
-    let rs = Shared::of(r);
-    sweep(halves, x, forward, |k, x| {
-        // SAFETY: as in the nonlinear sweep.
-        unsafe {
-            if fixed[k] {
-                rs.set(k, 0.0);
-                return;
+            if let Some(rs) = rs {
+                rs.set(k, c - akk * new);
+                scatter_to_swept(a, k, diag[k], delta, (separator, true), rs);
             }
-            let inverse = 1.0 / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
-            let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
-            let new = c * inverse;
-            let delta = new - x.get(k);
-            x.set(k, new);
-            rs.set(k, 0.0);
-            scatter_to_swept(a, k, diag[k], delta, (separator, forward), rs);
         }
     });
-    // A later row's move reached the fixed rows' residuals too.
-    for (rk, &cut) in r.iter_mut().zip(fixed) {
-        if cut {
-            *rk = 0.0;
-        }
-    }
 }
 
 /// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,
 /// D = diag(`shift`) (empty: none), keeping x_k = 0 where `fixed` says so
 /// (the truncated coordinates); on two threads in the ordering of `halves`
-/// when given.
+/// when given. With `residual` it also leaves b − (A + D) x of the swept x
+/// there (zero where `fixed`), in the same pass over A (see
+/// [`nonlinear_sweep`]): the V-cycle's presmoothing and its residual, one
+/// pass instead of two; and after its last postsmoothing (A + D) x = b − r,
+/// the product the conjugate gradients need.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear_sweep(
     a: &CsrMatrix<f64>,
@@ -307,24 +244,47 @@ pub(crate) fn linear_sweep(
     x: &mut [f64],
     fixed: &[bool],
     forward: bool,
+    mut residual: Option<&mut [f64]>,
 ) {
     check_sizes(a, diag, b, x);
     assert_eq!(fixed.len(), x.len(), "a sweep: one flag per unknown");
+    if let Some(r) = &residual {
+        assert_eq!(r.len(), x.len(), "a sweep: one residual per unknown");
+    }
     let vals = a.values();
+    let separator = halves.map(Halves::in_separator);
+    let rs = residual.as_deref_mut().map(Shared::of);
     sweep(halves, x, forward, |k, x| {
-        if fixed[k] {
-            return;
-        }
         // SAFETY: as in the nonlinear sweep.
         unsafe {
+            if fixed[k] {
+                if let Some(rs) = rs {
+                    rs.set(k, 0.0);
+                }
+                return;
+            }
             // The reciprocal first: it depends on nothing the sweep moves,
             // so it leaves the chain of rows (each waits for the unknown
             // the row before set) a multiplication instead of a division.
             let inverse = 1.0 / (vals[diag[k]] + shift.get(k).copied().unwrap_or(0.0));
             let c = off_diagonal_rhs(a, k, diag[k], b[k], x);
-            x.set(k, c * inverse);
+            let new = c * inverse;
+            let delta = new - x.get(k);
+            x.set(k, new);
+            if let Some(rs) = rs {
+                rs.set(k, 0.0);
+                scatter_to_swept(a, k, diag[k], delta, (separator, forward), rs);
+            }
         }
     });
+    // A later row's move reached the fixed rows' residuals too.
+    if let Some(r) = residual {
+        for (rk, &cut) in r.iter_mut().zip(fixed) {
+            if cut {
+                *rk = 0.0;
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -361,7 +321,7 @@ mod tests {
             .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
     }
 
-    /// The fused sweeps move x exactly as the plain ones (same bits) and
+    /// The sweeps that leave a residual move x exactly as the plain ones (same bits) and
     /// leave the residual a product computes afterwards, to rounding: in
     /// the two-halves ordering (separator rows last) and in the natural
     /// one, from a nonzero start, with fixed rows, a shift and every law.
@@ -391,9 +351,19 @@ mod tests {
         for split in [Some(&halves), None] {
             for forward in [true, false] {
                 let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
-                linear_sweep(&a, &diag, split, &shift, &b, &mut plain, &fixed, forward);
-                linear_sweep_with_residual(
-                    &a, &diag, split, &shift, &b, &mut fused, &fixed, forward, &mut r,
+                linear_sweep(
+                    &a, &diag, split, &shift, &b, &mut plain, &fixed, forward, None,
+                );
+                linear_sweep(
+                    &a,
+                    &diag,
+                    split,
+                    &shift,
+                    &b,
+                    &mut fused,
+                    &fixed,
+                    forward,
+                    Some(&mut r),
                 );
                 assert_eq!(plain, fused, "split {}", split.is_some());
                 let gap = largest_gap(&r, &residual(&a, &shift, &b, &fused, &fixed));
@@ -405,8 +375,8 @@ mod tests {
             }
 
             let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
-            nonlinear_sweep(&a, &diag, split, &b, &laws, &mut plain);
-            nonlinear_sweep_with_defect(&a, &diag, split, &b, &laws, &mut fused, &mut r);
+            nonlinear_sweep(&a, &diag, split, &b, &laws, &mut plain, None);
+            nonlinear_sweep(&a, &diag, split, &b, &laws, &mut fused, Some(&mut r));
             assert_eq!(plain, fused, "split {}", split.is_some());
             let none = vec![false; n];
             let gap = largest_gap(&r, &residual(&a, &[], &b, &fused, &none));

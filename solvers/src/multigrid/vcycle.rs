@@ -22,7 +22,7 @@ use nalgebra_sparse::CsrMatrix;
 
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::halves::Halves;
-use crate::multigrid::smoother::{diagonal_position, linear_sweep, linear_sweep_with_residual};
+use crate::multigrid::smoother::{diagonal_position, linear_sweep};
 use crate::numerics::linalg::spmv_into;
 
 /// Eigenvalues below this fraction of the largest are the coarsest
@@ -340,17 +340,14 @@ impl Hierarchy {
             let rl = &mut r[l];
             // The last sweep leaves the residual behind (one pass over
             // the level's matrix instead of two); none: x = 0, r = b.
-            match sweeps(l) {
-                0 => {
-                    for ((rk, bk), &cut) in rl.iter_mut().zip(&b[l]).zip(fixed) {
-                        *rk = if cut { 0.0 } else { *bk };
-                    }
-                }
-                s => {
-                    for _ in 1..s {
-                        linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true);
-                    }
-                    linear_sweep_with_residual(matrix, dg, split, dk, &b[l], xl, fixed, true, rl);
+            let s = sweeps(l);
+            for sweep in 1..=s {
+                let last = (sweep == s).then_some(&mut rl[..]);
+                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true, last);
+            }
+            if s == 0 {
+                for ((rk, bk), &cut) in rl.iter_mut().zip(&b[l]).zip(fixed) {
+                    *rk = if cut { 0.0 } else { *bk };
                 }
             }
             spmv_into(&restrict[l - 1], rl, &mut b[l - 1]);
@@ -368,16 +365,15 @@ impl Hierarchy {
                     *xk += rk;
                 }
             }
-            let last = if l == top { sweeps(l) } else { 0 };
-            for _ in last.min(1)..sweeps(l) {
-                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, false);
+            // The last sweep on the finest level leaves its residual in
+            // r[top] (free again once prolongated): A_T c = b − r.
+            let s = sweeps(l);
+            for sweep in 1..=s {
+                let last = (l == top && sweep == s).then_some(&mut r[l][..]);
+                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, false, last);
             }
-            if last > 0 {
-                // The last sweep on the finest level leaves its residual
-                // in r[top] (free again once prolongated): A_T c = b − r.
-                let rl = &mut r[l];
-                linear_sweep_with_residual(matrix, dg, split, dk, &b[l], xl, fixed, false, rl);
-                for ((q, bk), rk) in ac.iter_mut().zip(&b[l]).zip(&*rl) {
+            if l == top && s > 0 {
+                for ((q, bk), rk) in ac.iter_mut().zip(&b[l]).zip(&r[l]) {
                     *q = bk - rk;
                 }
             }
