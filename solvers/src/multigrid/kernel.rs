@@ -13,10 +13,10 @@
 
 use std::hint::black_box;
 
-use super::TnnmgSettings;
-use super::iteration::{Cycle, Energy, Workspace, iterate};
+use super::iteration::{Energy, Workspace, iterate};
 use super::smoother::{Local, diagonal_positions};
 use super::vcycle::Hierarchy;
+use super::{TnnmgSettings, dot, given_friction_laws};
 use crate::entry::InnerKernel;
 use crate::problem::ContactProblem;
 
@@ -36,23 +36,16 @@ pub(crate) fn iteration_kernel(problem: &ContactProblem) -> Option<InnerKernel> 
         problem.prolongations(),
     );
     let pressure = problem.scales().pressure;
+    let bound: Vec<f64> = problem
+        .contacts()
+        .iter()
+        .map(|c| BOUND_OF_SCALE * c.coefficient * pressure)
+        .collect();
     let mut laws = vec![Local::Free; n];
-    let mut contact = Vec::new();
-    for c in problem.contacts() {
-        laws[c.t] = Local::Jump;
-        laws[c.s] = Local::Slip(c.weight * BOUND_OF_SCALE * c.coefficient * pressure);
-        contact.extend([c.t, c.s]);
-    }
-    contact.sort_unstable();
+    let contact = given_friction_laws(problem.contacts(), &bound, &mut laws);
     let z = problem.rigid_modes().first().cloned();
-    let zz = z.as_ref().map_or(0.0, |z| z.iter().map(|x| x * x).sum());
-    let s = TnnmgSettings::default();
-    let cycle = Cycle {
-        presmoothing: s.presmoothing,
-        linear_steps: s.linear_steps,
-        linear_sweeps: s.linear_sweeps,
-        finest_sweeps: s.finest_sweeps,
-    };
+    let zz = z.as_deref().map_or(0.0, |z| dot(z, z));
+    let cycle = TnnmgSettings::default().cycle();
     let mut ws = Workspace::new(n);
     let mut v = vec![0.0; n];
     Some(InnerKernel {

@@ -165,6 +165,36 @@ impl Default for TnnmgSettings {
 /// took 10 iterations instead of 8: the cheap coarse levels keep theirs.
 pub const DEFAULT_FINEST_SWEEPS: usize = 1;
 
+impl TnnmgSettings {
+    /// The work of one iteration these settings ask for.
+    pub(crate) fn cycle(&self) -> Cycle {
+        Cycle {
+            presmoothing: self.presmoothing,
+            linear_steps: self.linear_steps,
+            linear_sweeps: self.linear_sweeps,
+            finest_sweeps: self.finest_sweeps,
+        }
+    }
+}
+
+/// The laws of the given-friction subproblem with nodal bounds `bound`
+/// (paper (10)): t_i ≤ 0 on each jump, w_i g_i |s_i| on each slip, written
+/// into `laws`; returns the contact unknowns, ascending.
+pub(crate) fn given_friction_laws(
+    contacts: &[crate::problem::ContactNode],
+    bound: &[f64],
+    laws: &mut [Local],
+) -> Vec<usize> {
+    let mut contact = Vec::with_capacity(2 * contacts.len());
+    for (c, g) in contacts.iter().zip(bound) {
+        laws[c.t] = Local::Jump;
+        laws[c.s] = Local::Slip(c.weight * g);
+        contact.extend([c.t, c.s]);
+    }
+    contact.sort_unstable();
+    contact
+}
+
 impl Validate for TnnmgSettings {
     /// Checked by the kinds of its registry entry's knobs.
     fn validate(&self) -> Result<(), String> {
@@ -316,13 +346,7 @@ impl Solver for Tnnmg {
             mut laws,
             mut previous,
         } = Buffers::of_size(self.buffers.take(), n);
-        let mut contact = Vec::with_capacity(2 * m);
-        for (c, g) in contacts.iter().zip(bound) {
-            laws[c.t] = Local::Jump;
-            laws[c.s] = Local::Slip(c.weight * g);
-            contact.extend([c.t, c.s]);
-        }
-        contact.sort_unstable();
+        let contact = given_friction_laws(contacts, bound, &mut laws);
         let f = problem.f();
         let z = problem.rigid_modes().first().map(|z| &z[..]);
         let fz = z.map_or(0.0, |z| dot(f, z));
@@ -333,12 +357,7 @@ impl Solver for Tnnmg {
             contact: &contact,
             kernel: z.map(|z| (z, dot(z, z))),
         };
-        let cycle = Cycle {
-            presmoothing: self.settings.presmoothing,
-            linear_steps: self.settings.linear_steps,
-            linear_sweeps: self.settings.linear_sweeps,
-            finest_sweeps: self.settings.finest_sweeps,
-        };
+        let cycle = self.settings.cycle();
         let scales = problem.scales();
         let (u, tol) = (scales.displacement, self.settings.tolerance);
         // The caller's need, when looser than its own tolerance, is an
