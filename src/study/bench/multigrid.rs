@@ -47,8 +47,6 @@ pub struct MultigridRows {
     /// The whole Coulomb problem, nested schedule, each run in a fresh
     /// process: the run of median time, with the largest peak of the runs.
     pub coulomb: Vec<MemoryUse>,
-    /// The runs behind each of `coulomb`.
-    pub coulomb_runs: usize,
     /// The same on the meshes only the multigrid solver runs on.
     pub finest: Vec<MemoryUse>,
     /// The paper's method with multigrid inside: (h, seconds, status).
@@ -141,7 +139,6 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
             None => {}
         }
     }
-    out.coulomb_runs = COULOMB_RUNS;
     log(&format!("the paper's method with multigrid at h = {paper}"));
     let scene = Scene::paper_problem_to(spec.problem, paper)?;
     let mut settings = Settings::default();
@@ -261,7 +258,7 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
                 f.map_or("not measured".into(), |f| format!("{f:.2} s")),
                 used.peak_kb as f64 / (1024.0 * 1024.0),
                 used.status,
-                m.coulomb_runs,
+                COULOMB_RUNS,
             ),
             pass: Some(
                 used.status == "converged"
