@@ -59,7 +59,6 @@ pub(crate) struct Cycle {
 pub(crate) struct Workspace {
     /// b − A v after the presmoothing.
     pub r: Vec<f64>,
-    d: Vec<f64>,
     c: Vec<f64>,
     /// A c, kept along the conjugate gradients (no product of its own).
     w: Vec<f64>,
@@ -70,6 +69,8 @@ pub(crate) struct Workspace {
     lin_az: Vec<f64>,
     lin_p: Vec<f64>,
     truncated: Vec<bool>,
+    /// D's diagonal; empty while every curvature is zero (the
+    /// given-friction laws), so that no vector of n is spent on it.
     shift: Vec<f64>,
 }
 
@@ -78,7 +79,6 @@ impl Workspace {
         let zeros = || vec![0.0; n];
         Self {
             r: zeros(),
-            d: zeros(),
             c: zeros(),
             w: zeros(),
             ac: zeros(),
@@ -87,7 +87,7 @@ impl Workspace {
             lin_az: zeros(),
             lin_p: zeros(),
             truncated: vec![false; n],
-            shift: zeros(),
+            shift: Vec::new(),
         }
     }
 
@@ -96,7 +96,7 @@ impl Workspace {
     /// read).
     pub(crate) fn reset(&mut self) {
         self.truncated.fill(false);
-        self.shift.fill(0.0);
+        self.shift.clear();
     }
 }
 
@@ -135,15 +135,22 @@ pub(crate) fn iterate(
             *rk = bk - *rk;
         }
     }
-    // The truncated set, the Newton step's curvature and its defect.
-    ws.d.copy_from_slice(&ws.r);
+    // The truncated set, the Newton step's curvature and its defect d (the
+    // conjugate gradients' first residual, kept in their vector).
+    ws.lin_r.copy_from_slice(&ws.r);
     let mut kernel_free = energy.kernel.is_some();
     for &k in contact {
         let law = laws[k];
         let cut = law.at_kink(v[k]);
         ws.truncated[k] = cut;
-        ws.shift[k] = if cut { 0.0 } else { law.curvature(v[k]) };
-        ws.d[k] = if cut {
+        let curvature = if cut { 0.0 } else { law.curvature(v[k]) };
+        if curvature != 0.0 && ws.shift.is_empty() {
+            ws.shift.resize(v.len(), 0.0);
+        }
+        if let Some(d) = ws.shift.get_mut(k) {
+            *d = curvature;
+        }
+        ws.lin_r[k] = if cut {
             kernel_free &= law != Local::Jump;
             0.0
         } else {
@@ -151,8 +158,8 @@ pub(crate) fn iterate(
         };
     }
     if let (true, Some((z, zz))) = (kernel_free, energy.kernel) {
-        let along = dot(&ws.d, z) / zz;
-        for (dk, zk) in ws.d.iter_mut().zip(z) {
+        let along = dot(&ws.lin_r, z) / zz;
+        for (dk, zk) in ws.lin_r.iter_mut().zip(z) {
             *dk -= along * zk;
         }
     }
@@ -170,12 +177,10 @@ pub(crate) fn iterate(
         lin_p,
         truncated,
         shift: _,
-        d,
         r,
     } = ws;
     c.fill(0.0);
     w.fill(0.0);
-    lin_r.copy_from_slice(d);
     // Each V-cycle also returns A_T z (its last sweep leaves it), and the
     // search directions' products follow: A_T p = A_T z + β A_T p.
     hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);

@@ -23,7 +23,7 @@ use nalgebra_sparse::CsrMatrix;
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::halves::Halves;
 use crate::multigrid::smoother::{diagonal_position, linear_sweep};
-use crate::numerics::linalg::spmv_into;
+use crate::numerics::linalg::{spmv_into, spmv_transpose_into};
 
 /// Eigenvalues below this fraction of the largest are the coarsest
 /// operator's kernel (the rigid mode, when no jump is truncated): its
@@ -195,16 +195,17 @@ pub(crate) struct Hierarchy {
     pub(crate) diag: Vec<usize>,
     /// The two-core Gauss-Seidel ordering of A's rows, if it has one.
     pub(crate) halves: Option<Halves>,
-    /// P_lᵀ for each prolongation.
-    restrict: Vec<CsrMatrix<f64>>,
     truncated: Vec<bool>,
     /// The diagonal D added to A on the finest level.
     shift: Vec<f64>,
     /// Levels 0 … L−1, coarse to fine, below the finest.
     levels: Vec<Level>,
     coarsest: CoarsestSolve,
+    /// Each coarse level's correction and right-hand side (the finest
+    /// level's are the V-cycle's own arguments).
     x: Vec<Vec<f64>>,
     b: Vec<Vec<f64>>,
+    /// Each level's residual, the finest included.
     r: Vec<Vec<f64>>,
 }
 
@@ -212,33 +213,36 @@ impl Hierarchy {
     /// The untruncated Galerkin hierarchy of `a` for the prolongations `p`
     /// (coarse to fine): A⁰_{L−1} = Pᵀ A P, A⁰_l = P_lᵀ A⁰_{l+1} P_l.
     pub(crate) fn new(a: &CsrMatrix<f64>, diag: Vec<usize>, p: &[CsrMatrix<f64>]) -> Self {
-        let restrict: Vec<CsrMatrix<f64>> = p.iter().map(|p| p.transpose()).collect();
-        let mut coarse = vec![galerkin(&restrict[p.len() - 1], a, &p[p.len() - 1])];
-        for l in (0..p.len() - 1).rev() {
+        // Pᵀ only while its product is formed: the V-cycle restricts with P
+        // itself (at h = 1/1024 the stored transposes were 150 MB).
+        let top = p.len() - 1;
+        let mut coarse = vec![galerkin(&p[top].transpose(), a, &p[top])];
+        for l in (0..top).rev() {
             let above = coarse.last().expect("one at least");
-            let next = galerkin(&restrict[l], above, &p[l]);
+            let next = galerkin(&p[l].transpose(), above, &p[l]);
             coarse.push(next);
         }
         coarse.reverse();
         let levels: Vec<Level> = coarse.into_iter().map(Level::new).collect();
-        let sizes: Vec<usize> = levels
-            .iter()
-            .map(|l| l.a.nrows())
-            .chain([a.nrows()])
-            .collect();
-        let zeros = || sizes.iter().map(|&n| vec![0.0; n]).collect::<Vec<_>>();
+        let zeros = || {
+            levels
+                .iter()
+                .map(|l| vec![0.0; l.a.nrows()])
+                .collect::<Vec<_>>()
+        };
+        let mut r = zeros();
+        r.push(vec![0.0; a.nrows()]);
         let coarsest = CoarsestSolve::new(&levels[0]);
         Self {
             diag,
             halves: Halves::new(a),
-            restrict,
             truncated: vec![false; a.nrows()],
-            shift: vec![0.0; a.nrows()],
+            shift: Vec::new(),
             coarsest,
-            levels,
             x: zeros(),
             b: zeros(),
-            r: zeros(),
+            r,
+            levels,
         }
     }
 
@@ -252,11 +256,19 @@ impl Hierarchy {
         truncated: &[bool],
         shift: &[f64],
     ) {
+        // An all-zero D is kept as none (the given-friction laws have no
+        // curvature): no vector of the finest size for it.
+        let shift = if shift.iter().all(|&d| d == 0.0) {
+            &[][..]
+        } else {
+            shift
+        };
         if self.truncated == truncated && self.shift == shift {
             return;
         }
         self.truncated.copy_from_slice(truncated);
-        self.shift.copy_from_slice(shift);
+        self.shift.clear();
+        self.shift.extend_from_slice(shift);
         // E: the entries of A in a truncated row or column (A symmetric).
         let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
         let mut e = Vec::new();
@@ -290,7 +302,8 @@ impl Hierarchy {
     /// correction is written to `c` (zero on the truncated set) and A_T c,
     /// A_T = T(A + D)T, to `ac`: the last sweep leaves it, so that the
     /// conjugate gradients need no product of their own. `a` is the finest
-    /// level's matrix, `p` the prolongations.
+    /// level's matrix, `p` the prolongations. The finest level works in `d`
+    /// and `c` themselves (no copies of the finest size).
     pub(crate) fn v_cycle(
         &mut self,
         a: &CsrMatrix<f64>,
@@ -303,7 +316,6 @@ impl Hierarchy {
         let Self {
             diag,
             halves,
-            restrict,
             truncated,
             shift,
             levels,
@@ -330,12 +342,17 @@ impl Hierarchy {
                 coarse_sweeps
             }
         };
-        b[top].copy_from_slice(d);
         // Down: smooth, restrict the residual (zero on the truncated set,
         // so Pᵀ r = P_Tᵀ r on the finest level).
         for l in (1..=top).rev() {
             let (matrix, dg, split, dk, fixed) = level(l);
-            let xl = &mut x[l];
+            let (x_below, x_here) = x.split_at_mut(l);
+            let (b_below, b_here) = b.split_at_mut(l);
+            let (xl, bl): (&mut [f64], &[f64]) = if l == top {
+                (&mut *c, d)
+            } else {
+                (&mut x_here[0], &b_here[0])
+            };
             xl.fill(0.0);
             let rl = &mut r[l];
             // The last sweep leaves the residual behind (one pass over
@@ -343,14 +360,16 @@ impl Hierarchy {
             let s = sweeps(l);
             for sweep in 1..=s {
                 let last = (sweep == s).then_some(&mut rl[..]);
-                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, true, last);
+                linear_sweep(matrix, dg, split, dk, bl, xl, fixed, true, last);
             }
             if s == 0 {
-                for ((rk, bk), &cut) in rl.iter_mut().zip(&b[l]).zip(fixed) {
+                for ((rk, bk), &cut) in rl.iter_mut().zip(bl).zip(fixed) {
                     *rk = if cut { 0.0 } else { *bk };
                 }
             }
-            spmv_into(&restrict[l - 1], rl, &mut b[l - 1]);
+            // x below is free until the coarse solve: the scratch of the
+            // two-core restriction.
+            spmv_transpose_into(&p[l - 1], rl, &mut b_below[l - 1], &mut x_below[l - 1]);
         }
         coarsest.solve(&b[0], &mut x[0]);
         // Up: prolongate (P_T = T P on the finest level), add, smooth
@@ -358,7 +377,11 @@ impl Hierarchy {
         for l in 1..=top {
             let (matrix, dg, split, dk, fixed) = level(l);
             let (below, here) = x.split_at_mut(l);
-            let xl = &mut here[0];
+            let (xl, bl): (&mut [f64], &[f64]) = if l == top {
+                (&mut *c, d)
+            } else {
+                (&mut here[0], &b[l])
+            };
             spmv_into(&p[l - 1], &below[l - 1], &mut r[l]);
             for ((xk, rk), &cut) in xl.iter_mut().zip(&r[l]).zip(fixed) {
                 if !cut {
@@ -370,22 +393,21 @@ impl Hierarchy {
             let s = sweeps(l);
             for sweep in 1..=s {
                 let last = (l == top && sweep == s).then_some(&mut r[l][..]);
-                linear_sweep(matrix, dg, split, dk, &b[l], xl, fixed, false, last);
+                linear_sweep(matrix, dg, split, dk, bl, xl, fixed, false, last);
             }
             if l == top && s > 0 {
-                for ((q, bk), rk) in ac.iter_mut().zip(&b[l]).zip(&r[l]) {
+                for ((q, bk), rk) in ac.iter_mut().zip(bl).zip(&r[l]) {
                     *q = bk - rk;
                 }
             }
         }
-        c.copy_from_slice(&x[top]);
         if sweeps(top) == 0 {
             spmv_into(a, c, ac);
             for (k, q) in ac.iter_mut().enumerate() {
                 *q = if truncated[k] {
                     0.0
                 } else {
-                    *q + shift[k] * c[k]
+                    *q + shift.get(k).copied().unwrap_or(0.0) * c[k]
                 };
             }
         }
