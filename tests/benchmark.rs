@@ -280,6 +280,7 @@ static LIAR: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: None,
+    uses_mass: false,
 };
 
 #[derive(serde::Serialize, serde::Deserialize)]

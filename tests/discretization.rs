@@ -329,7 +329,7 @@ fn mass_matrix_integrates_a_constant_to_each_bodys_area() {
     let z = d.kernel_vector();
     let zz: f64 = z
         .iter()
-        .zip(spmv(&d.problem.mass(), &z))
+        .zip(spmv(&d.problem.mass().unwrap(), &z))
         .map(|(a, b)| a * b)
         .sum();
     assert!((zz - 0.5).abs() < 1e-14);

@@ -41,7 +41,10 @@ fn an_exported_problem_reads_back_and_certify_judges_answers_from_it() {
     assert_eq!(p.contacts(), d.problem.contacts());
     assert_eq!(p.rigid_modes(), d.problem.rigid_modes());
     assert_eq!(p.a().csr_data(), d.problem.a().csr_data());
-    assert_eq!(p.mass().csr_data(), d.problem.mass().csr_data());
+    assert_eq!(
+        p.mass().unwrap().csr_data(),
+        d.problem.mass().unwrap().csr_data()
+    );
     // Solve the read-back problem (as another code would) and certify.
     let entry = registry::by_name("newton-coulomb").unwrap();
     let mut solver = Settings::default().build(entry).unwrap();

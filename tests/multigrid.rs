@@ -79,8 +79,8 @@ fn prolongations_are_those_of_nested_p1_spaces() {
                 ("A", coarse.problem.a().clone(), fine.problem.a().clone()),
                 (
                     "M",
-                    coarse.problem.mass().into_owned(),
-                    fine.problem.mass().into_owned(),
+                    coarse.problem.mass().unwrap().into_owned(),
+                    fine.problem.mass().unwrap().into_owned(),
                 ),
             ] {
                 let (c, f) = (bilinear(&ac, &x, &y), bilinear(&af, &px, &py));

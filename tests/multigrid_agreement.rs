@@ -283,12 +283,16 @@ fn the_nested_schedule_releases_the_coarse_levels_once_done_with_them() {
         .map(|&h| Discretization::new(&scene, h).unwrap())
         .collect();
     let finest = levels.last().unwrap().problem.n();
+    let finest_h = levels.last().unwrap().h();
     let mut solver = Recording {
         inner: Default::default(),
         log: Vec::new(),
     };
-    let mut step = Continuation::new(&levels, &mut solver, Schedule::Nested);
+    let mut step = Continuation::new(levels, &mut solver, Schedule::Nested);
     let out = friction_fixed_point(&mut step, &CoulombSettings::default(), &mut Silent);
+    // The coarse levels themselves are dropped too, not only what the
+    // solver kept for them.
+    assert_eq!(step.kept_levels(), vec![finest_h]);
     drop(step);
     assert!(out.status.is_converged(), "{}", out.detail);
     let released: Vec<usize> = (0..solver.log.len())

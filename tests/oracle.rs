@@ -249,7 +249,7 @@ fn the_coulomb_certificate_is_taken_at_the_bound_of_the_solutions_own_pressure()
         ContactProblem::new(
             problem.a().clone(),
             problem.f().to_vec(),
-            problem.mass().into_owned(),
+            problem.mass().unwrap().into_owned(),
             contacts,
             vec![],
         )
@@ -287,7 +287,7 @@ fn an_unbounded_problem_is_not_reported_solved() {
     let p = ContactProblem::new(
         d.problem.a().clone(),
         f,
-        d.problem.mass().into_owned(),
+        d.problem.mass().unwrap().into_owned(),
         d.problem.contacts().to_vec(),
         d.problem.rigid_modes().to_vec(),
     )

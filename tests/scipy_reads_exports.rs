@@ -95,7 +95,7 @@ fn scipy_reads_every_export_bit_for_bit() {
     let read = read_with_scipy(py, &dir, &["A", "M", "f", "rigid_modes"]);
     let p = &d.problem;
     let n = p.n();
-    let mass = p.mass();
+    let mass = p.mass().expect("export assembles M");
     for (k, (what, matrix)) in [("A", p.a()), ("M", &*mass)].into_iter().enumerate() {
         let (rows, cols, entries) = &read[k];
         assert_eq!((*rows, *cols), (n, n), "{what}");

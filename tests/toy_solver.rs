@@ -191,6 +191,7 @@ static TOY: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: None,
+    uses_mass: false,
 };
 
 fn register() {
@@ -322,6 +323,7 @@ fn a_solver_is_refused_a_mesh_beyond_its_cap_on_unknowns() {
     static CAPPED: Entry = Entry {
         name: "toy-capped",
         max_unknowns: Some(200),
+        uses_mass: false,
         ..TOY
     };
     let s = scene();

@@ -14,7 +14,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Overrides, Scene};
 use contactlab::settings::Settings;
-use contactlab::solve::{Assembled, Caps, Solved, solve as solve_assembled, solver_entry};
+use contactlab::solve::{Assembled, Caps, solve as solve_assembled, solver_entry};
 use contactlab::solvers::{Friction, Silent, registry};
 use nalgebra_sparse::CsrMatrix;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
@@ -136,8 +136,11 @@ impl Problem {
     }
 
     /// M, the mass matrix of the proximal term, in CSR.
-    fn _m<'py>(&self, py: Python<'py>) -> Csr<'py> {
-        csr(py, &self.finest.problem.mass())
+    fn _m<'py>(&self, py: Python<'py>) -> PyResult<Csr<'py>> {
+        let m = self.finest.problem.mass().ok_or_else(|| {
+            err("this problem was assembled without its mass matrix M")
+        })?;
+        Ok(csr(py, &m))
     }
 
     #[getter]
@@ -277,18 +280,14 @@ fn solve<'py>(
             // The problem's finest level, copied (far cheaper than its
             // assembly); the coarser levels of a continuation are assembled.
             let assembled = Assembled::with_finest(scene, entry, problem.finest.clone())?;
-            let outcome = solve_assembled(
-                &assembled,
+            solve_assembled(
+                assembled,
                 friction,
                 entry,
                 &settings,
                 Caps::default(),
                 &mut Silent,
-            )?;
-            anyhow::Ok(Solved {
-                finest: assembled.into_finest(),
-                outcome,
-            })
+            )
         })
         .map_err(anyhow_err)?;
     let o = &solved.outcome;

@@ -79,9 +79,13 @@ pub struct LevelCount {
     pub seconds: f64,
 }
 
-/// The given-friction step by mesh continuation over `levels` (coarse to fine).
+/// The given-friction step by mesh continuation over `levels` (coarse to
+/// fine), which it owns: the nested schedule drops the coarse levels once it
+/// is done with them, so that they do not add to the finest solve's peak
+/// (a third of the finest level's memory).
 pub struct Continuation<'a> {
-    levels: &'a [Discretization],
+    /// None: a coarse level dropped.
+    levels: Vec<Option<Discretization>>,
     solver: &'a mut dyn Solver,
     schedule: Schedule,
     last: Option<Solution>,
@@ -93,7 +97,7 @@ pub struct Continuation<'a> {
 
 impl<'a> Continuation<'a> {
     pub fn new(
-        levels: &'a [Discretization],
+        levels: Vec<Discretization>,
         solver: &'a mut dyn Solver,
         schedule: Schedule,
     ) -> Self {
@@ -108,7 +112,7 @@ impl<'a> Continuation<'a> {
             })
             .collect();
         Self {
-            levels,
+            levels: levels.into_iter().map(Some).collect(),
             solver,
             schedule,
             last: None,
@@ -119,8 +123,32 @@ impl<'a> Continuation<'a> {
 
     /// The finest level.
     pub fn finest(&self) -> &Discretization {
-        self.levels.last().expect("at least one level")
+        at(&self.levels, self.levels.len() - 1)
     }
+
+    /// The meshes of the levels it still holds, coarse to fine.
+    pub fn kept_levels(&self) -> Vec<MeshSize> {
+        self.levels
+            .iter()
+            .flatten()
+            .map(Discretization::h)
+            .collect()
+    }
+
+    /// The finest level, the continuation done.
+    pub fn into_finest(mut self) -> Discretization {
+        self.levels
+            .pop()
+            .flatten()
+            .expect("the finest level is never dropped")
+    }
+}
+
+/// Level `idx`; the schedules visit no level they dropped.
+fn at(levels: &[Option<Discretization>], idx: usize) -> &Discretization {
+    levels[idx]
+        .as_ref()
+        .expect("a schedule visits only the levels it keeps")
 }
 
 impl GivenFrictionStep for Continuation<'_> {
@@ -148,17 +176,17 @@ impl GivenFrictionStep for Continuation<'_> {
                 (v, l)
             }
             Some(s) => (
-                self.levels[first].transfer_from(&self.levels[top], &s.v),
-                self.levels[first].transfer_contact(&self.levels[top], &s.pressure),
+                at(&self.levels, first).transfer_from(at(&self.levels, top), &s.v),
+                at(&self.levels, first).transfer_contact(at(&self.levels, top), &s.pressure),
             ),
             None => (
-                vec![0.0; self.levels[first].problem.n()],
-                vec![0.0; self.levels[first].problem.contacts().len()],
+                vec![0.0; at(&self.levels, first).problem.n()],
+                vec![0.0; at(&self.levels, first).problem.contacts().len()],
             ),
         };
         for idx in first..=top {
-            let g_level = self.levels[idx].transfer_contact(&self.levels[top], g);
-            let level = &self.levels[idx];
+            let g_level = at(&self.levels, idx).transfer_contact(at(&self.levels, top), g);
+            let level = at(&self.levels, idx);
             let mut s = self.solver.solve(
                 &level.problem,
                 Friction::Given(&g_level),
@@ -181,8 +209,8 @@ impl GivenFrictionStep for Continuation<'_> {
             if !s.status.is_converged() || idx == top {
                 if idx < top {
                     // Report on the finest level whatever level failed.
-                    s.detail = format!("at h = {}: {}", self.levels[idx].h(), s.detail);
-                    let (here, finest) = (&self.levels[idx], &self.levels[top]);
+                    s.detail = format!("at h = {}: {}", at(&self.levels, idx).h(), s.detail);
+                    let (here, finest) = (at(&self.levels, idx), at(&self.levels, top));
                     s.v = finest.transfer_from(here, &s.v);
                     s.pressure = finest.transfer_contact(here, &s.pressure);
                     s.friction_traction = finest.transfer_contact(here, &s.friction_traction);
@@ -194,7 +222,7 @@ impl GivenFrictionStep for Continuation<'_> {
                 }
                 return s;
             }
-            let (coarse, fine) = (&self.levels[idx], &self.levels[idx + 1]);
+            let (coarse, fine) = (at(&self.levels, idx), at(&self.levels, idx + 1));
             v = fine.transfer_from(coarse, &s.v);
             l = fine.transfer_contact(coarse, &s.pressure);
         }
@@ -223,7 +251,7 @@ impl GivenFrictionStep for Continuation<'_> {
         let (mut work, mut time) = (Iterations::default(), Timing::default());
         let mut carry: Option<(Vec<f64>, Vec<f64>)> = None;
         for idx in 0..top {
-            let level = &self.levels[idx];
+            let level = at(&self.levels, idx);
             let g0 = carry.as_ref().map(|(_, p)| bound_of(&level.problem, p));
             let mut single = NestedLevel {
                 inner: SingleLevel::starting(&level.problem, &mut *self.solver, carry.take()),
@@ -242,17 +270,20 @@ impl GivenFrictionStep for Continuation<'_> {
             if !c.status.is_converged() {
                 return None;
             }
-            let fine = &self.levels[idx + 1];
+            let fine = at(&self.levels, idx + 1);
             carry = Some((
                 fine.transfer_from(level, &c.solution.v),
                 fine.transfer_contact(level, &c.solution.pressure),
             ));
         }
-        // The coarse levels are done with: what the solver kept for them
-        // would only add to the finest level's peak.
+        // The coarse levels are done with: they, and what the solver kept
+        // for them, would only add to the finest level's peak.
         self.solver.release();
+        for level in &mut self.levels[..top] {
+            *level = None;
+        }
         let (v, p) = carry?;
-        let g = bound_of(&self.levels[top].problem, &p);
+        let g = bound_of(&at(&self.levels, top).problem, &p);
         self.nested = Some((v, p, work, time));
         Some(g)
     }

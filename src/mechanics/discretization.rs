@@ -45,39 +45,47 @@ impl Discretization {
     /// Validates the scene (condition (13) included) and assembles it on mesh `h`.
     pub fn new(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
         scene.validate()?;
-        Self::assemble(scene, h)
+        Self::assemble(scene, h, true)
+    }
+
+    /// As [`Discretization::new`], without the mass matrix M
+    /// ([`Mass::Omitted`]): for a solver that does not read it
+    /// (`Entry::uses_mass`). A is the same to the bit.
+    pub fn new_without_mass(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
+        scene.validate()?;
+        Self::assemble(scene, h, false)
     }
 
     /// Assembles a scene without checking condition (13): only for showing
     /// what a solver does with a problem that has no solution (the stability
     /// map). Everything else should go through [`Discretization::new`].
     pub fn new_unchecked(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
-        Self::assemble(scene, h)
+        Self::assemble(scene, h, true)
     }
 
-    fn assemble(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
+    fn assemble(scene: &Scene, h: MeshSize, with_mass: bool) -> Result<Self, BuildError> {
         let mesh = Mesh::new(h);
         let dofs = DofMap::new(&mesh);
-        let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.material);
+        let (a, mass) = if with_mass {
+            let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.material);
+            (a, Mass::OnStiffnessPattern(m))
+        } else {
+            let a = assembly::stiffness(&mesh, &dofs, &scene.material);
+            (a, Mass::Omitted)
+        };
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
         let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
-        let problem = ContactProblem::new(
-            a,
-            f,
-            Mass::OnStiffnessPattern(m),
-            contacts,
-            vec![rigid_mode],
-        )
-        .and_then(|p| p.with_hierarchy(crate::mechanics::hierarchy::prolongations(h)))
-        .map_err(|e| match e {
-            ProblemError::Scale { .. } => BuildError::Scales(e),
-            ProblemError::NonFinite { what: "A" } => BuildError::Overflow {
-                young: scene.material.young,
-            },
-            other => BuildError::Problem(other),
-        })?;
+        let problem = ContactProblem::new(a, f, mass, contacts, vec![rigid_mode])
+            .and_then(|p| p.with_hierarchy(crate::mechanics::hierarchy::prolongations(h)))
+            .map_err(|e| match e {
+                ProblemError::Scale { .. } => BuildError::Scales(e),
+                ProblemError::NonFinite { what: "A" } => BuildError::Overflow {
+                    young: scene.material.young,
+                },
+                other => BuildError::Problem(other),
+            })?;
         Ok(Self {
             mesh,
             dofs,

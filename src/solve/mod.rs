@@ -26,6 +26,7 @@ use crate::coulomb::continuation::{Continuation, LevelCount};
 use crate::coulomb::fixed_point::{GivenFrictionStep, SingleLevel, friction_fixed_point};
 use crate::mechanics::contact_zone::{ProfileRow, Separation, contact_profile, separation_of};
 use crate::mechanics::discretization::Discretization;
+use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 
@@ -44,8 +45,10 @@ impl Assembled {
     /// A solver with a cap on its unknowns ([`Entry::max_unknowns`]) is
     /// refused a finer mesh once the finest level is assembled, before
     /// anything else is.
+    /// The levels carry the mass matrix M only if the solver reads it
+    /// ([`Entry::uses_mass`]).
     pub fn for_solver(scene: &Scene, entry: &Entry) -> Result<Self> {
-        Self::with_finest(scene, entry, Discretization::new(scene, scene.finest())?)
+        Self::with_finest(scene, entry, level_for(scene, scene.finest(), entry)?)
     }
 
     /// As [`Assembled::for_solver`], with the finest level already
@@ -71,7 +74,7 @@ impl Assembled {
         let mut levels = Vec::with_capacity(scene.levels.len());
         if entry.warm_starts && scene.levels.len() > 1 {
             for &h in &scene.levels[..scene.levels.len() - 1] {
-                levels.push(Discretization::new(scene, h)?);
+                levels.push(level_for(scene, h, entry)?);
             }
         }
         levels.push(finest);
@@ -96,6 +99,15 @@ impl Assembled {
     }
 }
 
+/// One level of `scene` assembled for `entry`: with M only if it reads it.
+pub fn level_for(scene: &Scene, h: MeshSize, entry: &Entry) -> Result<Discretization> {
+    Ok(if entry.uses_mass {
+        Discretization::new(scene, h)?
+    } else {
+        Discretization::new_without_mass(scene, h)?
+    })
+}
+
 /// Caps on a solve's work (events of the solver's work stage, over the
 /// whole solve) and wall-clock time, enforced through the observer hook.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -107,20 +119,22 @@ pub struct Caps {
 /// Solves `problem` under `friction` (the Coulomb law, or the
 /// given-friction subproblem at a bound on the finest level) with the
 /// solver of `entry` at `settings` (validated where they were resolved),
-/// within `caps`, and certifies the answer on the finest level.
+/// within `caps`, and certifies the answer on the finest level. The solve
+/// takes the assembled levels (the nested schedule drops the coarse ones
+/// once done with them) and gives the finest back with the outcome.
 pub fn solve(
-    problem: &Assembled,
+    problem: Assembled,
     friction: Friction<'_>,
     entry: &'static Entry,
     settings: &Settings,
     caps: Caps,
     observer: &mut dyn Observer,
-) -> Result<Outcome> {
+) -> Result<Solved> {
     let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
     let mut budget = Budget::new(entry, caps.work, caps.seconds, observer);
-    let finest = problem.finest();
     let start = Instant::now();
-    let done = if friction == Friction::Coulomb && entry.solves(Law::Coulomb) {
+    let (done, finest) = if friction == Friction::Coulomb && entry.solves(Law::Coulomb) {
+        let finest = problem.into_finest();
         let s = solver.solve(&finest.problem, Friction::Coulomb, None, &mut budget);
         let bound = finest
             .problem
@@ -129,19 +143,22 @@ pub fn solve(
             .zip(&s.pressure)
             .map(|(c, p)| c.coefficient * p.max(0.0))
             .collect();
-        Done::direct(problem, s, bound, start.elapsed().as_secs_f64())
+        let done = Done::direct(&finest, s, bound, start.elapsed().as_secs_f64());
+        (done, finest)
     } else if problem.levels.len() > 1 {
-        let mut step = Continuation::new(&problem.levels, solver.as_mut(), settings.schedule);
+        let mut step = Continuation::new(problem.levels, solver.as_mut(), settings.schedule);
         let done = steps(&mut step, friction, settings, &mut budget, start)?;
-        Done {
+        let done = Done {
             levels: step.counts.clone(),
             ..done
-        }
+        };
+        (done, step.into_finest())
     } else {
+        let finest = problem.into_finest();
         let mut step = SingleLevel::new(&finest.problem, solver.as_mut());
         let mut done = steps(&mut step, friction, settings, &mut budget, start)?;
-        done.levels = vec![done.one_level_count(problem)];
-        done
+        done.levels = vec![done.one_level_count(&finest)];
+        (done, finest)
     };
     let certificate = certify_solution(
         &finest.problem,
@@ -168,7 +185,7 @@ pub fn solve(
         Some(fp) => (fp.work(), fp.timing(done.seconds)),
         None => (Work::of(&done.solution), done.solution.timing),
     };
-    Ok(Outcome {
+    let outcome = Outcome {
         solver: entry,
         law: friction.law(),
         bound: done.bound,
@@ -184,7 +201,8 @@ pub fn solve(
         fixed_point: done.fixed_point,
         levels: done.levels,
         solution: done.solution,
-    })
+    };
+    Ok(Solved { finest, outcome })
 }
 
 /// What the solver, or the fixed point around it, gave before the
@@ -203,7 +221,7 @@ struct Done {
 
 impl Done {
     /// A direct solve of the Coulomb problem on the finest level.
-    fn direct(problem: &Assembled, solution: Solution, bound: Vec<f64>, seconds: f64) -> Self {
+    fn direct(finest: &Discretization, solution: Solution, bound: Vec<f64>, seconds: f64) -> Self {
         let mut done = Self {
             claim: solution.status,
             solution,
@@ -212,13 +230,13 @@ impl Done {
             levels: Vec::new(),
             seconds,
         };
-        done.levels = vec![done.one_level_count(problem)];
+        done.levels = vec![done.one_level_count(finest)];
         done
     }
 
     /// The work on the finest level when it is the only one.
-    fn one_level_count(&self, problem: &Assembled) -> LevelCount {
-        let h = problem.finest().h();
+    fn one_level_count(&self, finest: &Discretization) -> LevelCount {
+        let h = finest.h();
         match &self.fixed_point {
             Some(fp) => {
                 let work = fp.work();
@@ -293,18 +311,14 @@ pub fn solve_scene(
     observer: &mut dyn Observer,
 ) -> Result<Solved> {
     let problem = Assembled::for_solver(scene, entry)?;
-    let outcome = solve(
-        &problem,
+    solve(
+        problem,
         friction,
         entry,
         settings,
         Caps::default(),
         observer,
-    )?;
-    Ok(Solved {
-        finest: problem.into_finest(),
-        outcome,
-    })
+    )
 }
 
 /// A solve with the finest level it was certified on: what reports need.

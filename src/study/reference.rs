@@ -95,21 +95,21 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     for &entry in &exact {
         let settings = reference_settings(entry, base)?;
         let problem = Assembled::for_solver(scene, entry)?;
-        let outcome = solve(
-            &problem,
+        let solved = solve(
+            problem,
             Friction::Coulomb,
             entry,
             &settings,
             caps,
             &mut Silent,
         )?;
-        candidates.push(candidate(scene, Law::Coulomb, entry, &outcome));
+        let outcome = &solved.outcome;
+        candidates.push(candidate(scene, Law::Coulomb, entry, outcome));
         let better = best
             .as_ref()
             .is_none_or(|(_, b)| outcome.certificate.residual() < b.outcome.certificate.residual());
         if outcome.status == Status::Converged && better {
-            let finest = problem.into_finest();
-            best = Some((entry, Solved { finest, outcome }));
+            best = Some((entry, solved));
         }
     }
     let Some((entry, coulomb)) = best else {
@@ -122,13 +122,14 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
         let settings = reference_settings(e, base)?;
         let problem = Assembled::for_solver(scene, e)?;
         let outcome = solve(
-            &problem,
+            problem,
             Friction::Given(&g),
             e,
             &settings,
             caps,
             &mut Silent,
-        )?;
+        )?
+        .outcome;
         candidates.push(candidate(scene, Law::GivenFriction, e, &outcome));
         let better = gf_best
             .as_ref()

@@ -120,15 +120,15 @@ fn solve_once(
         };
         (Assembled::for_solver(&spec.scene, spec.solver)?, friction)
     };
-    let outcome = solve(
-        &problem,
+    let solved = solve(
+        problem,
         friction,
         spec.solver,
         &spec.settings,
         caps,
         observer,
     )?;
-    Ok((problem.into_finest(), outcome))
+    Ok((solved.finest, solved.outcome))
 }
 
 /// Measures one trial against `reference` (its Coulomb or given-friction

@@ -116,6 +116,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Oracle,
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
+    uses_mass: false,
 };
 
 /// The registry entry of the oracle in its second formulation: in two

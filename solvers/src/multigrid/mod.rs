@@ -128,6 +128,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Other,
     kernel: Some(kernel::iteration_kernel),
     max_unknowns: None,
+    uses_mass: false,
 };
 
 /// Settings of TNNMG (relative in both stopping modes).

@@ -115,6 +115,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
+    uses_mass: false,
 };
 
 /// Where the Newton iteration starts.

@@ -79,6 +79,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
+    uses_mass: false,
 };
 
 /// Settings of the condensed semismooth Newton solver. The same in both

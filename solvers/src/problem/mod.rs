@@ -105,6 +105,10 @@ pub enum Mass {
     OnStiffnessPattern(Vec<f64>),
     /// M with a pattern of its own.
     Matrix(CsrMatrix<f64>),
+    /// No M: the problem was built for a solver that does not read it
+    /// ([`crate::entry::Entry::uses_mass`]). M's values are a third of an
+    /// assembled problem (235 MB at h = 1/1024).
+    Omitted,
 }
 
 impl From<CsrMatrix<f64>> for Mass {
@@ -268,19 +272,26 @@ impl ContactProblem {
     }
 
     /// The consistent mass matrix M (L2 inner product of displacement
-    /// fields). When M lives on A's pattern this builds the matrix, a copy of
-    /// A's pattern: for products use [`ContactProblem::mass_times_into`].
-    pub fn mass(&self) -> Cow<'_, CsrMatrix<f64>> {
+    /// fields); None if the problem was built without it ([`Mass::Omitted`]).
+    /// When M lives on A's pattern this builds the matrix, a copy of A's
+    /// pattern: for products use [`ContactProblem::mass_times_into`].
+    pub fn mass(&self) -> Option<Cow<'_, CsrMatrix<f64>>> {
         match &self.mass {
-            Mass::Matrix(m) => Cow::Borrowed(m),
+            Mass::Matrix(m) => Some(Cow::Borrowed(m)),
             Mass::OnStiffnessPattern(values) => {
                 let pattern = self.a.pattern().clone();
-                Cow::Owned(
+                Some(Cow::Owned(
                     CsrMatrix::try_from_pattern_and_values(pattern, values.clone())
                         .expect("checked: one value per stored entry of A"),
-                )
+                ))
             }
+            Mass::Omitted => None,
         }
+    }
+
+    /// Whether the problem carries M.
+    pub fn has_mass(&self) -> bool {
+        !matches!(self.mass, Mass::Omitted)
     }
 
     /// M's stored values when M lives on A's pattern (in the order of A's
@@ -288,15 +299,20 @@ impl ContactProblem {
     pub fn mass_on_stiffness_pattern(&self) -> Option<&[f64]> {
         match &self.mass {
             Mass::OnStiffnessPattern(values) => Some(values),
-            Mass::Matrix(_) => None,
+            Mass::Matrix(_) | Mass::Omitted => None,
         }
     }
 
-    /// y = M x into a caller's buffer, without building M.
+    /// y = M x into a caller's buffer, without building M. A solver that
+    /// reads M checks [`ContactProblem::has_mass`] first.
+    ///
+    /// # Panics
+    /// If the problem was built without M.
     pub(crate) fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
         match &self.mass {
             Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values, x, y),
             Mass::Matrix(m) => crate::numerics::linalg::spmv_into(m, x, y),
+            Mass::Omitted => panic!("M x on a problem built without M"),
         }
     }
 
@@ -440,7 +456,7 @@ mod tests {
             let expected = if shares { &on_pattern } else { &own };
             let p = problem(m);
             assert_eq!(p.mass_on_stiffness_pattern().is_some(), shares);
-            assert_eq!(p.mass().csr_data(), expected.csr_data());
+            assert_eq!(p.mass().unwrap().csr_data(), expected.csr_data());
             let mut y = [0.0; 2];
             p.mass_times_into(&x, &mut y);
             assert_eq!(y.to_vec(), spmv(expected, &x));

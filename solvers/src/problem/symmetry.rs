@@ -20,6 +20,7 @@ pub(super) fn check_stiffness_and_mass(
             check_square_symmetric(a, [("A", a.values())], n)?;
             check_square_symmetric(m, [("M", m.values())], n)
         }
+        Mass::Omitted => check_square_symmetric(a, [("A", a.values())], n),
     }
 }
 

@@ -121,6 +121,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::PapersMethod,
     kernel: Some(sweep_kernel),
     max_unknowns: None,
+    uses_mass: true,
 };
 
 /// One relaxation sweep at the default relative settings, with multipliers

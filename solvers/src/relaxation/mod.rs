@@ -311,6 +311,14 @@ impl Solver for ProxUzawa {
         let t0 = Instant::now();
         let settings = self.settings.clone();
         let resolved = settings.resolve(problem);
+        if resolved.proximal != 0.0 && !problem.has_mass() {
+            return Solution::failed(
+                problem.n(),
+                problem.contacts().len(),
+                Status::NotRun,
+                "the proximal term of paper (15) needs the mass matrix M, and this problem was built without it (set relaxation.rho = 0, or assemble the problem for the relaxation)",
+            );
+        }
         let op = operator(&mut self.cache, problem, resolved.proximal);
         let mut inner = match settings.inner {
             Inner::Sweeps => InnerSolver::Sweeps,

@@ -192,7 +192,12 @@ impl RelaxationOperator {
                 }
                 h
             }
-            None => a + &(&*problem.mass() * rho),
+            None => {
+                let m = problem
+                    .mass()
+                    .expect("the relaxation refuses a problem without M before it gets here");
+                a + &(&*m * rho)
+            }
         };
         let diag: Vec<f64> = (0..h.nrows())
             .map(|i| h.get_entry(i, i).map(|e| e.into_value()).unwrap_or(0.0))

@@ -85,6 +85,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
+    uses_mass: false,
 };
 
 /// Settings of ADMM (relative in both stopping modes).

@@ -80,6 +80,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
+    uses_mass: false,
 };
 
 /// Settings of APGD (relative in both stopping modes).

@@ -74,6 +74,7 @@ pub(crate) const ENTRY: Entry = Entry {
     role: Role::Other,
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
+    uses_mass: false,
 };
 
 /// Settings of nonsmooth Gauss-Seidel (the same in both stopping modes:

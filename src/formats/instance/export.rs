@@ -44,7 +44,10 @@ pub fn export(
     write_atomic(&dir.join("A.mtx"), &mtx_symmetric(&CooMatrix::from(p.a())))?;
     write_atomic(
         &dir.join("M.mtx"),
-        &mtx_symmetric(&CooMatrix::from(&*p.mass())),
+        &mtx_symmetric(&CooMatrix::from(
+            &*p.mass()
+                .context("the problem to export was assembled without M")?,
+        )),
     )?;
     write_atomic(&dir.join("f.mtx"), &mtx(&dense(n, 1, |i, _| p.f()[i])))?;
     let modes = p.rigid_modes();

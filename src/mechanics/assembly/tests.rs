@@ -73,3 +73,22 @@ fn sums_by_nodes_are_the_sums_by_unknowns_bit_for_bit() {
         }
     }
 }
+
+/// The matrix-free L2 norm is vᵀ M v with the assembled M, in the problem's
+/// own unknowns (the change of variables on Γ_K included).
+#[test]
+fn l2_norm_without_m_is_the_mass_matrix_form() {
+    let mesh = Mesh::new(MeshSize::from_level(3).unwrap());
+    let dofs = DofMap::new(&mesh);
+    let m = mass(&mesh, &dofs);
+    let v: Vec<f64> = (0..dofs.n())
+        .map(|i| ((i * 29 % 23) as f64 - 11.0) / 7.0)
+        .collect();
+    let mv = contactlab_solvers::numerics::linalg::spmv(&m, &v);
+    let expected: f64 = v.iter().zip(&mv).map(|(a, b)| a * b).sum();
+    let got = l2_norm_squared(&mesh, &dofs.to_physical(&v));
+    assert!(
+        (got - expected).abs() <= 1e-12 * expected,
+        "{got} vs {expected}"
+    );
+}

@@ -12,11 +12,10 @@ use serde::{Deserialize, Serialize};
 use contactlab_solvers::{Friction, Law};
 
 use crate::coulomb::continuation::Schedule;
-use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::solve::{Assembled, Caps, solve, solver_entry};
+use crate::solve::{Assembled, Caps, level_for, solve, solver_entry};
 
 /// One solve's memory, measured in a fresh process.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -67,7 +66,9 @@ pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<M
     let entry = solver_entry(solver)?;
     crate::allocator::return_freed_memory();
     let before = status_kb("VmRSS").ok_or_else(unread)?;
-    let d = Discretization::new(scene, scene.finest())?;
+    // Assembled as the solve gets it (with M only for a solver that reads
+    // it), so that the problem's size is the one the solve holds.
+    let d = level_for(scene, scene.finest(), entry)?;
     let assembly_peak_kb = peak_memory_kb().ok_or_else(unread)?;
     // The assembly's freed temporaries are kept by the allocator policy:
     // return them, so that the resident size grows by the problem alone.
@@ -85,13 +86,14 @@ pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<M
         Assembled::for_solver(scene, entry)?
     };
     let run = solve(
-        &problem,
+        problem,
         Friction::Coulomb,
         entry,
         &settings,
         Caps::default(),
         silent,
-    )?;
+    )?
+    .outcome;
     let diagnostic = |name: &str| {
         run.solution
             .diagnostics

@@ -24,10 +24,12 @@
 //! the speed study).
 
 use anyhow::{Context, Result};
+use nalgebra_sparse::CsrMatrix;
 use serde::Serialize;
 
 use crate::coulomb::continuation::Schedule;
 use crate::io::csv::fixed;
+use crate::mechanics::assembly::l2_norm_squared;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
@@ -181,7 +183,7 @@ fn errors(problem: u32, coarse: &Solved, reference: &Solved) -> ErrorRow {
     let ev = df.dofs.from_physical(&e);
     let vf = &reference.outcome.solution.v;
     let p = &df.problem;
-    let norm = |m, v: &[f64]| {
+    let norm = |m: &CsrMatrix<f64>, v: &[f64]| {
         let mv = crate::solvers::numerics::linalg::spmv(m, v);
         v.iter()
             .zip(&mv)
@@ -190,9 +192,15 @@ fn errors(problem: u32, coarse: &Solved, reference: &Solved) -> ErrorRow {
             .max(0.0)
             .sqrt()
     };
-    let mass = p.mass();
+    // The L2 norms element by element: the reference's problem was
+    // assembled for its solver, without M.
+    let l2_norm = |v: &[f64]| {
+        l2_norm_squared(&df.mesh, &df.dofs.to_physical(v))
+            .max(0.0)
+            .sqrt()
+    };
     let (l2, energy) = (
-        norm(&mass, &ev) / norm(&mass, vf),
+        l2_norm(&ev) / l2_norm(vf),
         norm(p.a(), &ev) / norm(p.a(), vf),
     );
     // Coarse contact node i sits at reference contact node i·ratio.
