@@ -23,6 +23,7 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use super::laws::Laws;
 use super::line_search::exact_step;
 use super::smoother::{Local, nonlinear_sweep};
 use super::vcycle::Hierarchy;
@@ -33,7 +34,7 @@ pub(crate) struct Energy<'a> {
     pub a: &'a CsrMatrix<f64>,
     pub b: &'a [f64],
     /// φ_k of every unknown (`Local::Free` without a contact term).
-    pub laws: &'a [Local],
+    pub laws: &'a Laws,
     /// The unknowns whose law is not `Free`.
     pub contact: &'a [usize],
     /// A's kernel vector z with zᵀz, when A is singular (the upper body's

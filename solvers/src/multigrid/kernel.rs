@@ -14,7 +14,8 @@
 use std::hint::black_box;
 
 use super::iteration::{Energy, Workspace, iterate};
-use super::smoother::{Local, diagonal_positions};
+use super::laws::Laws;
+use super::smoother::diagonal_positions;
 use super::vcycle::Hierarchy;
 use super::{TnnmgSettings, dot, given_friction_laws};
 use crate::entry::InnerKernel;
@@ -41,7 +42,7 @@ pub(crate) fn iteration_kernel(problem: &ContactProblem) -> Option<InnerKernel> 
         .iter()
         .map(|c| BOUND_OF_SCALE * c.coefficient * pressure)
         .collect();
-    let mut laws = vec![Local::Free; n];
+    let mut laws = Laws::free(n);
     let contact = given_friction_laws(problem.contacts(), &bound, &mut laws);
     let z = problem.rigid_modes().first().cloned();
     let zz = z.as_deref().map_or(0.0, |z| dot(z, z));

@@ -2,6 +2,7 @@
 //! (Gräser & Sander 2019, Algorithm 1, steps 4-5): along the multigrid
 //! correction, and along the upper body's rigid mode.
 
+use crate::multigrid::laws::Laws;
 use crate::multigrid::smoother::Local;
 
 /// Bisections of the line search: the step is then exact to 2⁻⁶⁰ of its
@@ -19,7 +20,7 @@ const DOUBLINGS: usize = 60;
 /// minimizer is found by bisection on its sign; 0 when c is no descent
 /// direction.
 pub(crate) fn exact_step(
-    laws: &[Local],
+    laws: &Laws,
     contact: &[usize],
     v: &[f64],
     c: &[f64],
@@ -89,7 +90,7 @@ pub(crate) fn exact_step(
 /// the gap where it is smallest. None when z moves a slip or the load does
 /// not push.
 pub(crate) fn closing_translation(
-    laws: &[Local],
+    laws: &Laws,
     contact: &[usize],
     v: &[f64],
     z: &[f64],
@@ -132,7 +133,7 @@ mod tests {
             }
             e
         };
-        let alpha = exact_step(&laws, &[1, 2, 3], &v, &c, cac, cr);
+        let alpha = exact_step(&Laws::of(&laws), &[1, 2, 3], &v, &c, cac, cr);
         assert!(alpha <= 0.5 / 0.4 + 1e-15, "t stays ≤ 0");
         for i in 0..=1250 {
             let a = i as f64 * 1e-3;
@@ -148,11 +149,11 @@ mod tests {
     fn the_step_scales_with_the_direction() {
         let laws = [Local::Free, Local::Slip(0.3)];
         let (v, c) = ([0.2, 0.1], [1.0, -0.8]);
-        let alpha = exact_step(&laws, &[1], &v, &c, 2.0, 1.5);
+        let alpha = exact_step(&Laws::of(&laws), &[1], &v, &c, 2.0, 1.5);
         assert!(alpha > 0.0);
         let s = 1e-100;
         let small = [c[0] * s, c[1] * s];
-        let scaled = exact_step(&laws, &[1], &v, &small, 2.0 * s * s, 1.5 * s);
+        let scaled = exact_step(&Laws::of(&laws), &[1], &v, &small, 2.0 * s * s, 1.5 * s);
         assert!(
             (scaled * s / alpha - 1.0).abs() < 1e-12,
             "{alpha} vs {scaled}·1e-100"

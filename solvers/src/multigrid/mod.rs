@@ -42,6 +42,7 @@ mod galerkin;
 mod halves;
 pub(crate) mod iteration;
 mod kernel;
+pub(crate) mod laws;
 mod line_search;
 pub(crate) mod smoother;
 pub(crate) mod vcycle;
@@ -60,6 +61,7 @@ use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 use iteration::{Cycle, Energy, Workspace, iterate};
+use laws::Laws;
 use line_search::closing_translation;
 use smoother::{Local, diagonal_positions};
 use vcycle::Hierarchy;
@@ -184,12 +186,12 @@ impl TnnmgSettings {
 pub(crate) fn given_friction_laws(
     contacts: &[crate::problem::ContactNode],
     bound: &[f64],
-    laws: &mut [Local],
+    laws: &mut Laws,
 ) -> Vec<usize> {
     let mut contact = Vec::with_capacity(2 * contacts.len());
     for (c, g) in contacts.iter().zip(bound) {
-        laws[c.t] = Local::Jump;
-        laws[c.s] = Local::Slip(c.weight * g);
+        laws.set(c.t, Local::Jump);
+        laws.set(c.s, Local::Slip(c.weight * g));
         contact.extend([c.t, c.s]);
     }
     contact.sort_unstable();
@@ -224,7 +226,7 @@ pub struct Tnnmg {
 /// The vectors of one solve.
 struct Buffers {
     ws: Workspace,
-    laws: Vec<Local>,
+    laws: Laws,
     previous: Vec<f64>,
 }
 
@@ -233,13 +235,13 @@ impl Buffers {
     fn of_size(kept: Option<Buffers>, n: usize) -> Self {
         match kept {
             Some(mut b) if b.previous.len() == n => {
-                b.laws.fill(Local::Free);
+                b.laws.clear();
                 b.ws.reset();
                 b
             }
             _ => Self {
                 ws: Workspace::new(n),
-                laws: vec![Local::Free; n],
+                laws: Laws::free(n),
                 previous: vec![0.0; n],
             },
         }

@@ -17,6 +17,7 @@
 use nalgebra_sparse::CsrMatrix;
 
 use super::halves::{Halves, Shared, sweep};
+use super::laws::Laws;
 use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 
 /// The contact law along one coordinate.
@@ -198,7 +199,7 @@ pub(crate) fn nonlinear_sweep(
     diag: &[usize],
     halves: Option<&Halves>,
     f: &[f64],
-    laws: &[Local],
+    laws: &Laws,
     v: &mut [f64],
     defect: Option<&mut [f64]>,
 ) {
@@ -347,6 +348,7 @@ mod tests {
                 _ => Local::Free,
             })
             .collect();
+        let laws = Laws::of(&laws);
         let halves = Halves::new(&a).expect("a grid splits");
         for split in [Some(&halves), None] {
             for forward in [true, false] {

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::pointwise::{RelaxationOperator, Smoothing, SweepData};
 use crate::multigrid::iteration::{Cycle, Energy, Workspace, iterate};
+use crate::multigrid::laws::Laws;
 use crate::multigrid::smoother::Local;
 use crate::multigrid::vcycle::Hierarchy;
 use crate::problem::ContactNode;
@@ -51,7 +52,7 @@ pub(crate) enum InnerSolver<'h> {
 pub(crate) struct MultigridInner<'h> {
     hierarchy: &'h mut Hierarchy,
     p: &'h [CsrMatrix<f64>],
-    laws: Vec<Local>,
+    laws: Laws,
     contact: Vec<usize>,
     ws: Workspace,
     previous: Vec<f64>,
@@ -69,7 +70,7 @@ impl<'h> MultigridInner<'h> {
         Self {
             hierarchy,
             p,
-            laws: vec![Local::Free; n],
+            laws: Laws::free(n),
             contact,
             ws: Workspace::new(n),
             previous: vec![0.0; n],
@@ -82,18 +83,22 @@ impl InnerSolver<'_> {
     pub(crate) fn begin(&mut self, contacts: &[ContactNode], data: &SweepData<'_>) {
         if let InnerSolver::Multigrid(mg) = self {
             for (i, c) in contacts.iter().enumerate() {
-                mg.laws[c.t] = Local::Penalty {
-                    w: c.weight,
-                    l: data.l[i],
-                    r: data.r,
-                };
-                mg.laws[c.s] = match data.smoothing {
+                mg.laws.set(
+                    c.t,
+                    Local::Penalty {
+                        w: c.weight,
+                        l: data.l[i],
+                        r: data.r,
+                    },
+                );
+                let slip = match data.smoothing {
                     Smoothing::Exact => Local::Slip(data.wg[i]),
                     Smoothing::Huber { delta } => Local::Huber {
                         wg: data.wg[i],
                         delta,
                     },
                 };
+                mg.laws.set(c.s, slip);
             }
         }
     }
