@@ -175,6 +175,13 @@ impl GivenFrictionStep for Continuation<'_> {
                 (total, timing) = (work, time);
                 (v, l)
             }
+            // On the finest level the last answer is the start as it is (no
+            // copy, no round trip through the nodal displacements); the
+            // loop below returns at that level and keeps its answer.
+            Some(_) if first == top => {
+                let s = self.last.take().expect("just matched");
+                (s.v, s.pressure)
+            }
             Some(s) => (
                 at(&self.levels, first).transfer_from(at(&self.levels, top), &s.v),
                 at(&self.levels, first).transfer_contact(at(&self.levels, top), &s.pressure),
