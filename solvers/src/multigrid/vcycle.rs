@@ -22,7 +22,7 @@ use nalgebra_sparse::CsrMatrix;
 
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::halves::Halves;
-use crate::multigrid::smoother::{diagonal_position, linear_sweep};
+use crate::multigrid::smoother::{Position, diagonal_position, linear_sweep};
 use crate::numerics::linalg::{spmv_into, spmv_transpose_into};
 
 /// Eigenvalues below this fraction of the largest are the coarsest
@@ -100,7 +100,7 @@ impl CoarsestSolve {
 struct Level {
     a: CsrMatrix<f64>,
     untruncated_diagonal: Vec<f64>,
-    diag: Vec<usize>,
+    diag: Vec<Position>,
     /// The two-core Gauss-Seidel ordering of `a`'s rows, if it has one.
     halves: Option<Halves>,
     fixed: Vec<bool>,
@@ -114,9 +114,16 @@ impl Level {
             .map(|k| diagonal_position(&a, k, 0.0))
             .collect();
         let fixed = found.iter().map(Option::is_none).collect();
-        let diag: Vec<usize> = found.into_iter().map(|p| p.unwrap_or(0)).collect();
+        let diag: Vec<Position> = found
+            .into_iter()
+            .map(|p| {
+                p.map_or(0, |p| {
+                    Position::try_from(p).expect("a coarse level's entries fit 32 bits")
+                })
+            })
+            .collect();
         Self {
-            untruncated_diagonal: diag.iter().map(|&p| a.values()[p]).collect(),
+            untruncated_diagonal: diag.iter().map(|&p| a.values()[p as usize]).collect(),
             halves: Halves::new(&a),
             a,
             diag,
@@ -151,7 +158,7 @@ impl Level {
         let values = self.a.values();
         for (k, fixed) in self.fixed.iter_mut().enumerate() {
             let full = self.untruncated_diagonal[k];
-            *fixed = !(full > 0.0 && values[self.diag[k]] > FIXED_FRACTION * full);
+            *fixed = !(full > 0.0 && values[self.diag[k] as usize] > FIXED_FRACTION * full);
         }
     }
 }
@@ -192,7 +199,7 @@ fn galerkin_triplets(p: &CsrMatrix<f64>, c: &[(usize, usize, f64)]) -> Vec<(usiz
 /// (allocated once, not per cycle).
 pub(crate) struct Hierarchy {
     /// The positions of A's diagonal entries.
-    pub(crate) diag: Vec<usize>,
+    pub(crate) diag: Vec<Position>,
     /// The two-core Gauss-Seidel ordering of A's rows, if it has one.
     pub(crate) halves: Option<Halves>,
     truncated: Vec<bool>,
@@ -212,7 +219,7 @@ pub(crate) struct Hierarchy {
 impl Hierarchy {
     /// The untruncated Galerkin hierarchy of `a` for the prolongations `p`
     /// (coarse to fine): A⁰_{L−1} = Pᵀ A P, A⁰_l = P_lᵀ A⁰_{l+1} P_l.
-    pub(crate) fn new(a: &CsrMatrix<f64>, diag: Vec<usize>, p: &[CsrMatrix<f64>]) -> Self {
+    pub(crate) fn new(a: &CsrMatrix<f64>, diag: Vec<Position>, p: &[CsrMatrix<f64>]) -> Self {
         // Pᵀ only while its product is formed: the V-cycle restricts with P
         // itself (at h = 1/1024 the stored transposes were 150 MB).
         let top = p.len() - 1;
