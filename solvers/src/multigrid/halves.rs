@@ -158,6 +158,11 @@ impl Halves {
         &self.in_separator
     }
 
+    /// The separator's rows, ascending.
+    pub(crate) fn separator(&self) -> &[usize] {
+        &self.separator
+    }
+
     /// One Gauss-Seidel sweep over x in this ordering (see the module),
     /// `update(k, x)` setting x[k] from the others; the halves on two
     /// threads. `update` must read only the unknowns of row k's pattern.

@@ -141,6 +141,27 @@ fn check_sizes(a: &CsrMatrix<f64>, diag: &[Position], b: &[f64], x: &[f64]) {
     );
 }
 
+/// r_j = b_j − ((A + D) x)_j afresh for the separator's rows: after a
+/// backward sweep on two threads, whose halves leave them alone (see
+/// [`scatter_to_swept`]). The separator is O(h⁻¹) rows of O(h⁻²): the
+/// sums cost a small fraction of the sweep. Fixed rows are zeroed after.
+fn separator_residuals(
+    a: &CsrMatrix<f64>,
+    halves: &Halves,
+    shift: &[f64],
+    b: &[f64],
+    x: &[f64],
+    r: &mut [f64],
+) {
+    for &j in halves.separator() {
+        let row = a.row(j);
+        // SAFETY: a CsrMatrix keeps its column indices below ncols =
+        // x.len() (checked by the sweep).
+        let ax = unsafe { crate::numerics::linalg::row_dot(row.col_indices(), row.values(), x) };
+        r[j] = b[j] - ax - shift.get(j).copied().unwrap_or(0.0) * x[j];
+    }
+}
+
 /// r_j −= A_jk·δ for the rows j ≠ k of row k's pattern that a sweep
 /// (`forward` or backward) visits before k (A symmetric: A_jk = A_kj):
 /// after x_k moved by δ, the residuals those rows left are brought up to
@@ -190,12 +211,13 @@ unsafe fn scatter_to_swept(
                 .for_each(update);
         }
         // A half's row: its half's rows below it (forward); backward, its
-        // half's rows above it and every separator row.
+        // half's rows above it, and not the separator's rows, although swept
+        // before: both halves' rows reach them, and the two threads would
+        // race on their residuals (lost updates: the residuals, and the
+        // runs, differed from one run to the next). The sweep recomputes
+        // them once both halves are done ([`separator_residuals`]).
         Some(sep) if forward => below.filter(|&q| !sep[cols[q]]).for_each(update),
-        Some(sep) => {
-            below.filter(|&q| sep[cols[q]]).for_each(update);
-            above.for_each(update);
-        }
+        Some(sep) => above.filter(|&q| !sep[cols[q]]).for_each(update),
     }
 }
 
@@ -291,6 +313,9 @@ pub(crate) fn linear_sweep(
             }
         }
     });
+    if let (Some(h), Some(r), false) = (halves, residual.as_deref_mut(), forward) {
+        separator_residuals(a, h, shift, b, x, r);
+    }
     // A later row's move reached the fixed rows' residuals too.
     if let Some(r) = residual {
         for (rk, &cut) in r.iter_mut().zip(fixed) {
