@@ -29,8 +29,9 @@ pub struct MemoryUse {
     /// Peak resident memory once the problem is assembled, before any
     /// solve: the assembly with its temporaries, KiB.
     pub assembly_peak_kb: u64,
-    /// Resident memory the assembled problem holds (A, M, f, mesh and
-    /// unknowns: the growth of VmRSS across the assembly), KiB.
+    /// Resident memory the assembled problem holds (A, f, mesh and
+    /// unknowns, M only for a solver that reads it: the growth of VmRSS
+    /// across the assembly), KiB.
     pub problem_kb: u64,
     /// The values of the factor of A_II, as the solver reports (bytes).
     pub factor_values_bytes: Option<f64>,
@@ -174,6 +175,6 @@ pub fn markdown(uses: &[MemoryUse]) -> String {
             rest / 1048576.0,
         );
     }
-    md += "\nThe rest is the factor's indices and workspace, the solver's other arrays and the program itself; the assembly's peak includes the program.\n";
+    md += "\nThe assembled problem is the one the solver gets: with the mass matrix M only for a solver that reads it (`Entry::uses_mass`). The rest is the factor's indices and workspace, the solver's other arrays (for tnnmg its Galerkin hierarchy and vectors) and the program itself; the assembly's peak includes the program.\n";
     md
 }
