@@ -195,20 +195,16 @@ unsafe fn scatter_to_swept(
     match separator {
         None if forward => below.for_each(update),
         None => above.for_each(update),
-        // A separator's row: every half's row (forward) and the separator's
-        // rows below it; backward, the separator's rows above it.
+        // A separator's row, forward: every half's row and the separator's
+        // rows below it. Backward, none: the separator's residuals are
+        // recomputed after the halves ([`separator_residuals`]).
         Some(sep) if sep[k] => {
-            let swept = |j: usize| {
-                if forward {
-                    !sep[j] || j < k
-                } else {
-                    sep[j] && j > k
-                }
-            };
-            below
-                .chain(above)
-                .filter(|&q| swept(cols[q]))
-                .for_each(update);
+            if forward {
+                below
+                    .chain(above)
+                    .filter(|&q| !sep[cols[q]] || cols[q] < k)
+                    .for_each(update);
+            }
         }
         // A half's row: its half's rows below it (forward); backward, its
         // half's rows above it, and not the separator's rows, although swept
