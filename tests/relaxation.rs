@@ -331,3 +331,34 @@ fn the_certified_stopping_rule_reaches_its_tolerance_at_every_h() {
         assert!(!c.passed(), "h = 1/{}: {detail}; {c:?}", 1 << k);
     }
 }
+
+/// A problem built without the mass matrix M (for solvers that do not read
+/// it) is refused by the relaxation while its proximal term is on, with a
+/// status and a reason instead of a panic, and solved once ρ = 0. Reading
+/// M unchecked, or refusing the problem whatever ρ, fails it.
+#[test]
+fn the_relaxation_refuses_a_problem_without_m_only_when_its_proximal_term_reads_it() {
+    use contactlab::mechanics::discretization::Discretization;
+    use contactlab::solvers::{ProxUzawa, RelaxationSettings, Solver};
+
+    let d =
+        Discretization::new_without_mass(&scene(1, 3), MeshSize::from_level(3).unwrap()).unwrap();
+    assert!(!d.problem.has_mass());
+    let g = vec![0.0; d.problem.contacts().len()];
+    let settings = RelaxationSettings::default();
+    assert!(settings.proximal > 0.0, "the default has a proximal term");
+    let refused =
+        ProxUzawa::new(settings.clone()).solve(&d.problem, Friction::Given(&g), None, &mut Silent);
+    assert_eq!(refused.status, Status::NotRun, "{}", refused.detail);
+    assert!(
+        refused.detail.contains("mass matrix M"),
+        "{}",
+        refused.detail
+    );
+    let solved = ProxUzawa::new(RelaxationSettings {
+        proximal: 0.0,
+        ..settings
+    })
+    .solve(&d.problem, Friction::Given(&g), None, &mut Silent);
+    assert!(solved.status.is_converged(), "{}", solved.detail);
+}

@@ -125,9 +125,13 @@ pub(crate) const ENTRY: Entry = Entry {
 };
 
 /// One relaxation sweep at the default relative settings, with multipliers
-/// l = 1 and bounds g = ½ at every contact node so that every branch runs.
+/// l = 1 and bounds g = ½ at every contact node so that every branch runs
+/// (None for a problem built without the M its proximal term reads).
 pub(crate) fn sweep_kernel(problem: &ContactProblem) -> Option<InnerKernel> {
     let resolved = RelaxationSettings::default().resolve(problem);
+    if !RelaxationOperator::can_form(problem, resolved.proximal) {
+        return None;
+    }
     let op = RelaxationOperator::new(problem, resolved.proximal);
     let matrix = op.h.clone();
     let l = vec![1.0; problem.contacts().len()];

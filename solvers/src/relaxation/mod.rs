@@ -311,12 +311,12 @@ impl Solver for ProxUzawa {
         let t0 = Instant::now();
         let settings = self.settings.clone();
         let resolved = settings.resolve(problem);
-        if resolved.proximal != 0.0 && !problem.has_mass() {
+        if !RelaxationOperator::can_form(problem, resolved.proximal) {
             return Solution::failed(
                 problem.n(),
                 problem.contacts().len(),
                 Status::NotRun,
-                "the proximal term of paper (15) needs the mass matrix M, and this problem was built without it (set relaxation.rho = 0, or assemble the problem for the relaxation)",
+                "the proximal term of paper (15) needs the mass matrix M, and this problem was built without it (set relaxation.proximal = 0, or assemble the problem for the relaxation)",
             );
         }
         let op = operator(&mut self.cache, problem, resolved.proximal);

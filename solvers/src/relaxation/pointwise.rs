@@ -180,7 +180,15 @@ pub(crate) struct SweepData<'a> {
 }
 
 impl RelaxationOperator {
-    /// Prepares H = A + ρ M for a problem: on A's pattern when M lives there.
+    /// Whether H = A + ρ M can be formed for a problem: ρ = 0, or the
+    /// problem carries M (one built for a solver that does not read it has
+    /// none).
+    pub fn can_form(problem: &crate::ContactProblem, rho: f64) -> bool {
+        rho == 0.0 || problem.has_mass()
+    }
+
+    /// Prepares H = A + ρ M for a problem: on A's pattern when M lives there
+    /// ([`RelaxationOperator::can_form`] first).
     pub fn new(problem: &crate::ContactProblem, rho: f64) -> Self {
         let (a, contacts) = (problem.a(), problem.contacts());
         let h = match problem.mass_on_stiffness_pattern() {
