@@ -192,15 +192,12 @@ fn errors(problem: u32, coarse: &Solved, reference: &Solved) -> ErrorRow {
             .max(0.0)
             .sqrt()
     };
-    // The L2 norms element by element: the reference's problem was
-    // assembled for its solver, without M.
-    let l2_norm = |v: &[f64]| {
-        l2_norm_squared(&df.mesh, &df.dofs.to_physical(v))
-            .max(0.0)
-            .sqrt()
-    };
+    // The L2 norms element by element, of nodal fields: the reference's
+    // problem was assembled for its solver, without M (its own field is
+    // `uf`, already nodal).
+    let l2_norm = |u: &[[f64; 2]]| l2_norm_squared(&df.mesh, u).max(0.0).sqrt();
     let (l2, energy) = (
-        l2_norm(&ev) / l2_norm(vf),
+        l2_norm(&df.dofs.to_physical(&ev)) / l2_norm(&uf),
         norm(p.a(), &ev) / norm(p.a(), vf),
     );
     // Coarse contact node i sits at reference contact node i·ratio.
