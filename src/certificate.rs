@@ -296,7 +296,7 @@ pub fn certify(
         let (offsets, cols, vals) = problem.a().csr_data();
         for (i, ri) in r.iter_mut().enumerate() {
             *ri = (offsets[i]..offsets[i + 1])
-                .map(|k| vals[k] * v[cols[k]])
+                .map(|k| vals[k] * v[cols[k] as usize])
                 .sum::<f64>()
                 - problem.f()[i];
         }

@@ -76,7 +76,11 @@ fn prolongations_are_those_of_nested_p1_spaces() {
             y[cx] = y[cs];
             let (px, py) = (apply(p, &x), apply(p, &y));
             for (what, ac, af) in [
-                ("A", coarse.problem.a().clone(), fine.problem.a().clone()),
+                (
+                    "A",
+                    coarse.problem.a().to_nalgebra(),
+                    fine.problem.a().to_nalgebra(),
+                ),
                 (
                     "M",
                     coarse.problem.mass().unwrap().into_owned(),

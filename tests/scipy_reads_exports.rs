@@ -96,7 +96,8 @@ fn scipy_reads_every_export_bit_for_bit() {
     let p = &d.problem;
     let n = p.n();
     let mass = p.mass().expect("export assembles M");
-    for (k, (what, matrix)) in [("A", p.a()), ("M", &*mass)].into_iter().enumerate() {
+    let a = p.a().to_nalgebra();
+    for (k, (what, matrix)) in [("A", &a), ("M", &*mass)].into_iter().enumerate() {
         let (rows, cols, entries) = &read[k];
         assert_eq!((*rows, *cols), (n, n), "{what}");
         let mut expected: Vec<(usize, usize, f64)> =

@@ -70,7 +70,7 @@ impl Solver for Toy {
             (0..n)
                 .map(|i| {
                     (offsets[i]..offsets[i + 1])
-                        .map(|k| vals[k] * v[cols[k]])
+                        .map(|k| vals[k] * v[cols[k] as usize])
                         .sum::<f64>()
                         - p.f()[i]
                 })

@@ -15,8 +15,8 @@ use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Overrides, Scene};
 use contactlab::settings::Settings;
 use contactlab::solve::{Assembled, Caps, solve as solve_assembled, solver_entry};
+use contactlab::solvers::numerics::linalg::{ColumnIndex, SparseRows};
 use contactlab::solvers::{Friction, Silent, registry};
-use nalgebra_sparse::CsrMatrix;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
@@ -76,12 +76,12 @@ type Csr<'py> = (
     Bound<'py, PyArray1<f64>>,
 );
 
-fn csr<'py>(py: Python<'py>, a: &CsrMatrix<f64>) -> Csr<'py> {
-    let (offsets, cols, vals) = a.csr_data();
+fn csr<'py, A: SparseRows>(py: Python<'py>, a: &A) -> Csr<'py> {
+    let cols: Vec<usize> = a.col_indices().iter().map(|&c| c.at()).collect();
     (
-        offsets.to_vec().into_pyarray(py),
-        cols.to_vec().into_pyarray(py),
-        vals.to_vec().into_pyarray(py),
+        a.row_offsets().to_vec().into_pyarray(py),
+        cols.into_pyarray(py),
+        a.values().to_vec().into_pyarray(py),
     )
 }
 
@@ -137,10 +137,12 @@ impl Problem {
 
     /// M, the mass matrix of the proximal term, in CSR.
     fn _m<'py>(&self, py: Python<'py>) -> PyResult<Csr<'py>> {
-        let m = self.finest.problem.mass().ok_or_else(|| {
-            err("this problem was assembled without its mass matrix M")
-        })?;
-        Ok(csr(py, &m))
+        let m = self
+            .finest
+            .problem
+            .mass()
+            .ok_or_else(|| err("this problem was assembled without its mass matrix M"))?;
+        Ok(csr(py, &*m))
     }
 
     #[getter]

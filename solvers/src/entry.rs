@@ -4,7 +4,6 @@
 //! solver defines its [`Entry`] beside its code; the list of solvers is in
 //! [`crate::registry`], which is the only module that names them all.
 
-use nalgebra_sparse::CsrMatrix;
 use serde_json::Value;
 
 use crate::problem::ContactProblem;
@@ -27,7 +26,7 @@ pub enum Role {
 /// product with `matrix` (the operator it iterates with).
 pub struct InnerKernel {
     pub name: &'static str,
-    pub matrix: CsrMatrix<f64>,
+    pub matrix: crate::numerics::linalg::Csr,
     pub step: Box<dyn FnMut()>,
 }
 

@@ -14,8 +14,9 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     let h = scene.finest();
     let d = Discretization::new(&scene, h).context("building the discretization")?;
     let p = &d.problem;
-    let kernel = crate::solvers::numerics::linalg::kernel_dimension(p.a(), KERNEL_PIVOT_TOL)
-        .context("measuring the kernel of A")?;
+    let kernel =
+        crate::solvers::numerics::linalg::kernel_dimension(&p.a().to_nalgebra(), KERNEL_PIVOT_TOL)
+            .context("measuring the kernel of A")?;
     let applied: f64 = d.forces.iter().map(|f| f[1]).sum();
     let sc = p.scales();
     let m = &scene.material;

@@ -5,7 +5,6 @@
 use std::collections::HashMap;
 
 use nalgebra_sparse::CsrMatrix;
-use nalgebra_sparse::pattern::SparsityPattern;
 
 pub use crate::mechanics::element::{element_mass, element_stiffness, strain_matrix};
 
@@ -13,6 +12,7 @@ use crate::mechanics::dofs::DofExpansion;
 use crate::mechanics::material::Material;
 use crate::mechanics::mesh::{Body, Mesh};
 use crate::mechanics::scene::Traction;
+use crate::solvers::Csr;
 
 /// The triangles of the mesh (optionally one body's), as node triples.
 /// Pushed from `for_each`, which drives the mesh's nested iterator from the
@@ -265,8 +265,26 @@ pub fn assemble_all<const K: usize>(
     dofs: &impl DofExpansion,
     only: Option<Body>,
     elements: [&ElementMatrix<'_>; K],
-) -> (SparsityPattern, [Vec<f64>; K]) {
+) -> (Pattern, [Vec<f64>; K]) {
     assemble_rows(mesh, dofs, only, elements, Sum::ByNodesWherePossible)
+}
+
+/// The stored positions of an assembled matrix: row offsets and sorted
+/// 32-bit column indices (the [`Csr`] layout, half the index memory of a
+/// nalgebra pattern).
+#[derive(Debug, PartialEq)]
+pub struct Pattern {
+    offsets: Vec<usize>,
+    columns: Vec<u32>,
+}
+
+impl Pattern {
+    /// The matrix with these positions and `values` (one per position).
+    pub fn with_values(self, values: Vec<f64>) -> Csr {
+        let n = self.offsets.len() - 1;
+        Csr::try_from_csr_data(n, n, self.offsets, self.columns, values)
+            .expect("an assembly's rows are sorted, distinct, in range, one value each")
+    }
 }
 
 /// How [`assemble_rows`] sums the blocks' rows.
@@ -286,8 +304,12 @@ fn assemble_rows<const K: usize>(
     only: Option<Body>,
     elements: [&ElementMatrix<'_>; K],
     sum: Sum,
-) -> (SparsityPattern, [Vec<f64>; K]) {
+) -> (Pattern, [Vec<f64>; K]) {
     let n = dofs.n();
+    assert!(
+        u32::try_from(n).is_ok(),
+        "{n} unknowns: more than 32-bit column indices hold (the mesh sizes stop far below)"
+    );
     let tris = triangles(mesh, only);
     let table = ElementTable::new(mesh, &tris, elements);
     // Around each node, its triangles as 3·e + (the node's corner in e).
@@ -319,7 +341,7 @@ fn assemble_rows<const K: usize>(
     let capacity = 16 * n;
     let mut offsets = Vec::with_capacity(n + 1);
     offsets.push(0);
-    let mut columns: Vec<usize> = Vec::with_capacity(capacity);
+    let mut columns: Vec<u32> = Vec::with_capacity(capacity);
     let mut values: [Vec<f64>; K] = [(); K].map(|_| Vec::with_capacity(capacity));
     let mut block = BlockSums {
         dofs,
@@ -362,7 +384,7 @@ fn assemble_rows<const K: usize>(
         // Each output array written in a loop of its own: one reservation
         // per row, not a capacity check and a length store per entry.
         for r in 0..1 + usize::from(paired) {
-            append(&mut columns, &block.found, |(j, _)| *j);
+            append(&mut columns, &block.found, |(j, _)| *j as u32);
             for (m, v) in values.iter_mut().enumerate() {
                 append(v, &block.found, |(_, sums)| sums[r][m]);
             }
@@ -370,18 +392,11 @@ fn assemble_rows<const K: usize>(
         }
         i += 1 + usize::from(paired);
     }
-    debug_assert!((0..n).all(|i| {
-        let row = &columns[offsets[i]..offsets[i + 1]];
-        row.windows(2).all(|w| w[0] < w[1]) && row.iter().all(|&j| j < n)
-    }));
-    // SAFETY: offsets grow from 0 to columns.len(), one per row; each row's
-    // columns are unknowns (< n), sorted and distinct (by the marker, or
-    // checked after the sums by nodes). Validating them again was 3 % of a
-    // 1/64 assembly; the entry-by-entry test against the triplet assembly
-    // checks the pattern.
-    let pattern =
-        unsafe { SparsityPattern::from_offset_and_indices_unchecked(n, n, offsets, columns) };
-    (pattern, values)
+    // Offsets grow from 0 to columns.len(), one per row; each row's columns
+    // are unknowns (< n), sorted and distinct (by the marker, or checked
+    // after the sums by nodes): [`Pattern::with_values`] checks them again
+    // in one pass.
+    (Pattern { offsets, columns }, values)
 }
 
 /// Appends `get` of each of `from` to `v`: one reservation, then a loop
@@ -409,13 +424,16 @@ pub fn assemble(
     element: impl Fn([[f64; 2]; 3]) -> [[f64; 6]; 6],
 ) -> CsrMatrix<f64> {
     let (pattern, [values]) = assemble_all(mesh, dofs, only, [&element]);
-    CsrMatrix::try_from_pattern_and_values(pattern, values).expect("one value per stored entry")
+    pattern.with_values(values).to_nalgebra()
 }
 
-/// Stiffness matrix of both bodies.
-pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, material: &Material) -> CsrMatrix<f64> {
+/// Stiffness matrix of both bodies, with 32-bit column indices (the
+/// problem's A).
+pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, material: &Material) -> Csr {
     let d = material.elasticity_matrix();
-    assemble(mesh, dofs, None, |p| element_stiffness(p, &d))
+    let element = |p| element_stiffness(p, &d);
+    let (pattern, [values]) = assemble_all(mesh, dofs, None, [&element]);
+    pattern.with_values(values)
 }
 
 /// Mass matrix of both bodies (L2 product of displacement fields).
@@ -445,7 +463,7 @@ pub fn stiffness_and_mass(
     mesh: &Mesh,
     dofs: &impl DofExpansion,
     material: &Material,
-) -> (CsrMatrix<f64>, Vec<f64>) {
+) -> (Csr, Vec<f64>) {
     let d = material.elasticity_matrix();
     let (pattern, [a, m]) = assemble_all(
         mesh,
@@ -453,8 +471,7 @@ pub fn stiffness_and_mass(
         None,
         [&|p| element_stiffness(p, &d), &element_mass],
     );
-    let a = CsrMatrix::try_from_pattern_and_values(pattern, a).expect("one value per stored entry");
-    (a, m)
+    (pattern.with_values(a), m)
 }
 
 /// Physical nodal forces (per node, x and y) of tractions (P''_1, P''_2) on

@@ -365,8 +365,8 @@ impl Solver for ConicSolver {
             upper: (0..n)
                 .flat_map(|j| {
                     (offsets[j]..offsets[j + 1])
-                        .filter(move |&k| cols[k] <= j)
-                        .map(move |k| (cols[k], j, vals[k]))
+                        .filter(move |&k| cols[k] as usize <= j)
+                        .map(move |k| (cols[k] as usize, j, vals[k]))
                 })
                 .collect(),
             load: problem.f(),

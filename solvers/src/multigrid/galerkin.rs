@@ -11,13 +11,15 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use crate::numerics::linalg::Csr;
+
 /// One block of consecutive coarse rows: offsets (from 0), columns, values.
-type Rows = (Vec<usize>, Vec<usize>, Vec<f64>);
+type Rows = (Vec<usize>, Vec<u32>, Vec<f64>);
 
 /// Rows `rows` of R A P, R = Pᵀ given as CSR, with `nc` columns.
 fn rows_of_product(
     r: &CsrMatrix<f64>,
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     p: &CsrMatrix<f64>,
     rows: std::ops::Range<usize>,
     nc: usize,
@@ -35,7 +37,7 @@ fn rows_of_product(
         for q in ro[row]..ro[row + 1] {
             let (i, r_i) = (rc[q], rv[q]);
             for s in ao[i]..ao[i + 1] {
-                let (j, ra) = (ac[s], r_i * av[s]);
+                let (j, ra) = (ac[s] as usize, r_i * av[s]);
                 for t in po[j]..po[j + 1] {
                     let col = pc[t];
                     if !seen[col] {
@@ -48,7 +50,7 @@ fn rows_of_product(
         }
         touched.sort_unstable();
         for &col in &touched {
-            cols.push(col);
+            cols.push(col as u32);
             vals.push(acc[col]);
             acc[col] = 0.0;
             seen[col] = false;
@@ -60,11 +62,7 @@ fn rows_of_product(
 }
 
 /// R A P for R = Pᵀ (CSR), on two threads (the rows in two halves).
-pub(crate) fn galerkin(
-    r: &CsrMatrix<f64>,
-    a: &CsrMatrix<f64>,
-    p: &CsrMatrix<f64>,
-) -> CsrMatrix<f64> {
+pub(crate) fn galerkin(r: &CsrMatrix<f64>, a: &Csr, p: &CsrMatrix<f64>) -> Csr {
     let (n, nc) = (r.nrows(), p.ncols());
     let half = n / 2;
     let (lower, upper) = std::thread::scope(|scope| {
@@ -80,9 +78,15 @@ pub(crate) fn galerkin(
     let (mut offsets, mut cols, mut vals) = lower;
     let base = cols.len();
     offsets.extend(upper.0[1..].iter().map(|o| o + base));
+    // Exact capacities: the halves grew by doubling, and a level keeps its
+    // matrix for the whole solve.
+    cols.reserve_exact(upper.1.len());
+    vals.reserve_exact(upper.2.len());
     cols.extend(upper.1);
     vals.extend(upper.2);
-    CsrMatrix::try_from_csr_data(n, nc, offsets, cols, vals)
+    cols.shrink_to_fit();
+    vals.shrink_to_fit();
+    Csr::try_from_csr_data(n, nc, offsets, cols, vals)
         .expect("the rows of a product are sorted and in range")
 }
 
@@ -126,7 +130,7 @@ mod tests {
         let (a, p) = (CsrMatrix::from(&a), CsrMatrix::from(&p));
         let r = p.transpose();
         let expected = &r * &(&a * &p);
-        let got = galerkin(&r, &a, &p);
+        let got = galerkin(&r, &Csr::try_from(&a).unwrap(), &p).to_nalgebra();
         assert_eq!(got.row_offsets(), expected.row_offsets());
         assert_eq!(got.col_indices(), expected.col_indices());
         for (x, y) in got.values().iter().zip(expected.values()) {

@@ -17,9 +17,7 @@
 //! reverse (S descending, then both halves descending), so that a forward
 //! and a backward sweep make a symmetric Gauss-Seidel as before.
 
-use nalgebra_sparse::CsrMatrix;
-
-use crate::numerics::linalg::{PARALLEL_NNZ, row_dot_by};
+use crate::numerics::linalg::{Csr, PARALLEL_NNZ, row_dot_by};
 
 /// Above this share of the stored entries in the separator the split is
 /// not worth a thread (a matrix numbered without locality).
@@ -82,7 +80,7 @@ impl Shared {
     /// Every entry of `cols` is below the vector's length, `vals` is at
     /// least as long as `cols`, and no other thread writes x at `cols`.
     #[inline]
-    pub(crate) unsafe fn row_dot(self, cols: &[usize], vals: &[f64]) -> f64 {
+    pub(crate) unsafe fn row_dot(self, cols: &[u32], vals: &[f64]) -> f64 {
         // SAFETY: by the contract.
         unsafe { row_dot_by(cols, vals, |c| self.get(c)) }
     }
@@ -92,7 +90,7 @@ impl Halves {
     /// The split of `a`'s rows, or None when `a` is too small for a second
     /// thread to pay (fewer than [`PARALLEL_NNZ`] stored entries, as for the
     /// product) or has no split with a small separator.
-    pub(crate) fn new(a: &CsrMatrix<f64>) -> Option<Self> {
+    pub(crate) fn new(a: &Csr) -> Option<Self> {
         let n = a.nrows();
         if a.nnz() < PARALLEL_NNZ || n != a.ncols() {
             return None;
@@ -103,7 +101,10 @@ impl Halves {
         // arrays of |S(m)|'s work over every m at once.
         let mut in_s = vec![0i64; n + 2];
         for k in 0..n {
-            let Some(&first) = cols[offsets[k]..offsets[k + 1]].first() else {
+            let Some(first) = cols[offsets[k]..offsets[k + 1]]
+                .first()
+                .map(|&j| j as usize)
+            else {
                 continue;
             };
             if first < k {
@@ -128,7 +129,7 @@ impl Halves {
         for (k, flag) in in_separator.iter_mut().enumerate().skip(split) {
             *flag = cols[offsets[k]..offsets[k + 1]]
                 .first()
-                .is_some_and(|&j| j < split);
+                .is_some_and(|&j| (j as usize) < split);
         }
         let separator: Vec<usize> = (split..n).filter(|&k| in_separator[k]).collect();
         let separator_work: i64 = separator.iter().map(|&k| work(k)).sum();
@@ -141,9 +142,10 @@ impl Halves {
         let sound = (0..n).all(|k| {
             let row = &cols[offsets[k]..offsets[k + 1]];
             if k < split {
-                row.iter().all(|&j| j < split || in_separator[j])
+                row.iter()
+                    .all(|&j| (j as usize) < split || in_separator[j as usize])
             } else {
-                in_separator[k] || row.iter().all(|&j| j >= split)
+                in_separator[k] || row.iter().all(|&j| j as usize >= split)
             }
         });
         sound.then_some(Self {
@@ -224,10 +226,10 @@ where
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use nalgebra_sparse::CooMatrix;
+    use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
     /// The 5-point Laplacian of a q × q grid, numbered row by row.
-    pub(crate) fn grid(q: usize) -> CsrMatrix<f64> {
+    pub(crate) fn grid(q: usize) -> Csr {
         let mut coo = CooMatrix::new(q * q, q * q);
         for i in 0..q {
             for j in 0..q {
@@ -243,7 +245,7 @@ pub(crate) mod tests {
                 }
             }
         }
-        CsrMatrix::from(&coo)
+        Csr::try_from(CsrMatrix::from(&coo)).expect("a small grid")
     }
 
     /// On a grid numbered row by row the separator is one grid row in the
@@ -274,7 +276,7 @@ pub(crate) mod tests {
                 coo.push(k + 1, k, -0.5);
             }
         }
-        assert!(Halves::new(&CsrMatrix::from(&coo)).is_none());
+        assert!(Halves::new(&Csr::try_from(CsrMatrix::from(&coo)).unwrap()).is_none());
     }
 
     /// A split sweep is the Gauss-Seidel sweep of its ordering: the same

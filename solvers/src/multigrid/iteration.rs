@@ -23,6 +23,8 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use crate::numerics::linalg::Csr;
+
 use super::laws::Laws;
 use super::line_search::exact_step;
 use super::smoother::{Local, nonlinear_sweep};
@@ -31,7 +33,7 @@ use crate::numerics::linalg::spmv_into;
 
 /// The energy: its quadratic part, its laws and A's kernel.
 pub(crate) struct Energy<'a> {
-    pub a: &'a CsrMatrix<f64>,
+    pub a: &'a Csr,
     pub b: &'a [f64],
     /// φ_k of every unknown (`Local::Free` without a contact term).
     pub laws: &'a Laws,
@@ -231,8 +233,8 @@ pub(crate) fn iterate(
             if moved != 0.0 {
                 c[k] = projected;
                 let row = a.row(k);
-                for (&j, &akj) in row.col_indices().iter().zip(row.values()) {
-                    w[j] += akj * moved;
+                for (&j, &akj) in row.0.iter().zip(row.1) {
+                    w[j as usize] += akj * moved;
                 }
             }
         }
@@ -264,11 +266,11 @@ pub(crate) fn iterate(
             .map(|&k| {
                 let row = a.row(k);
                 let ae_k: f64 = row
-                    .col_indices()
+                    .0
                     .iter()
-                    .zip(row.values())
-                    .filter(|&(&j, _)| truncated[j])
-                    .map(|(&j, &akj)| akj * z[j])
+                    .zip(row.1)
+                    .filter(|&(&j, _)| truncated[j as usize])
+                    .map(|(&j, &akj)| akj * z[j as usize])
                     .sum();
                 z[k] * ae_k
             })

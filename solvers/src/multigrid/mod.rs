@@ -54,6 +54,8 @@ use serde::{Deserialize, Serialize};
 use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use nalgebra_sparse::CsrMatrix;
 
+use crate::numerics::linalg::Csr;
+
 use crate::numerics::linalg::row_dot;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
@@ -262,7 +264,7 @@ impl Tnnmg {
 pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
     kept: &'k mut Vec<(K, Hierarchy)>,
     id: K,
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     p: &[CsrMatrix<f64>],
 ) -> Result<&'k mut Hierarchy, String> {
     let index = match kept.iter().position(|(k, _)| *k == id) {
@@ -282,15 +284,15 @@ pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
 /// contact rows (λ_i = (f − Av)_{t_i}/w_i, μ_i = −(f − Av)_{s_i}/w_i, the
 /// certificate's stationarity), O(h⁻¹) work for all of them. The row sum is
 /// the product's ([`row_dot`]), so it equals (f − spmv(A, v))_i to the bit.
-fn residual_at(a: &CsrMatrix<f64>, f: &[f64], v: &[f64], i: usize) -> f64 {
+fn residual_at(a: &Csr, f: &[f64], v: &[f64], i: usize) -> f64 {
     let row = a.row(i);
-    // SAFETY: a CsrMatrix keeps its column indices below ncols = v.len().
-    f[i] - unsafe { row_dot(row.col_indices(), row.values(), v) }
+    // SAFETY: a Csr keeps its column indices below ncols = v.len().
+    f[i] - unsafe { row_dot(row.0, row.1, v) }
 }
 
 /// The contact pressure λ_i of every contact node into `out`.
 fn contact_pressure(
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     f: &[f64],
     contacts: &[crate::problem::ContactNode],
     v: &[f64],

@@ -14,7 +14,7 @@
 //! or the Huber smoothing of w_i g_i |s_i|; their minimizers are the
 //! relaxation's own ([`crate::relaxation::pointwise`]).
 
-use nalgebra_sparse::CsrMatrix;
+use crate::numerics::linalg::Csr;
 
 use super::halves::{Halves, Shared, sweep};
 use super::laws::Laws;
@@ -77,10 +77,10 @@ impl Local {
 
 /// The position of row k's diagonal entry among A's stored entries, if it
 /// is stored and above `floor`.
-pub(crate) fn diagonal_position(a: &CsrMatrix<f64>, k: usize, floor: f64) -> Option<usize> {
+pub(crate) fn diagonal_position(a: &Csr, k: usize, floor: f64) -> Option<usize> {
     let offsets = a.row_offsets();
     (offsets[k]..offsets[k + 1])
-        .find(|&p| a.col_indices()[p] == k)
+        .find(|&p| a.col_indices()[p] as usize == k)
         .filter(|&p| a.values()[p] > floor)
 }
 
@@ -90,7 +90,7 @@ pub(crate) fn diagonal_position(a: &CsrMatrix<f64>, k: usize, floor: f64) -> Opt
 pub(crate) type Position = u32;
 
 /// The position of each row's diagonal entry among A's stored entries.
-pub(crate) fn diagonal_positions(a: &CsrMatrix<f64>) -> Result<Vec<Position>, String> {
+pub(crate) fn diagonal_positions(a: &Csr) -> Result<Vec<Position>, String> {
     (0..a.nrows())
         .map(|k| {
             let p = diagonal_position(a, k, 0.0)
@@ -112,7 +112,7 @@ pub(crate) fn diagonal_positions(a: &CsrMatrix<f64>) -> Result<Vec<Position>, St
 /// A's column indices are below x's length, and no other thread writes the
 /// unknowns of row k's pattern meanwhile (see [`Halves`]).
 #[inline]
-unsafe fn off_diagonal_rhs(a: &CsrMatrix<f64>, k: usize, diag: usize, b: f64, x: Shared) -> f64 {
+unsafe fn off_diagonal_rhs(a: &Csr, k: usize, diag: usize, b: f64, x: Shared) -> f64 {
     let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
     let (lo, hi) = (offsets[k], offsets[k + 1]);
     // SAFETY: by the contract.
@@ -134,7 +134,7 @@ pub(crate) fn local_minimizer(law: Local, a: f64, c: f64) -> f64 {
 
 /// A's row count against the vectors of a sweep: the sweeps read x at A's
 /// column indices without bounds checks.
-fn check_sizes(a: &CsrMatrix<f64>, diag: &[Position], b: &[f64], x: &[f64]) {
+fn check_sizes(a: &Csr, diag: &[Position], b: &[f64], x: &[f64]) {
     assert!(
         a.nrows() == x.len() && a.ncols() == x.len() && diag.len() == x.len() && b.len() == x.len(),
         "a sweep: A, its diagonal, b and x of one size"
@@ -146,7 +146,7 @@ fn check_sizes(a: &CsrMatrix<f64>, diag: &[Position], b: &[f64], x: &[f64]) {
 /// [`scatter_to_swept`]). The separator is O(h⁻¹) rows of O(h⁻²): the
 /// sums cost a small fraction of the sweep. Fixed rows are zeroed after.
 fn separator_residuals(
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     halves: &Halves,
     shift: &[f64],
     b: &[f64],
@@ -155,9 +155,9 @@ fn separator_residuals(
 ) {
     for &j in halves.separator() {
         let row = a.row(j);
-        // SAFETY: a CsrMatrix keeps its column indices below ncols =
+        // SAFETY: a Csr keeps its column indices below ncols =
         // x.len() (checked by the sweep).
-        let ax = unsafe { crate::numerics::linalg::row_dot(row.col_indices(), row.values(), x) };
+        let ax = unsafe { crate::numerics::linalg::row_dot(row.0, row.1, x) };
         r[j] = b[j] - ax - shift.get(j).copied().unwrap_or(0.0) * x[j];
     }
 }
@@ -178,7 +178,7 @@ fn separator_residuals(
 /// at the rows written (the halves' own rows: see [`Halves`]).
 #[inline]
 unsafe fn scatter_to_swept(
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     k: usize,
     diag: usize,
     delta: f64,
@@ -191,7 +191,10 @@ unsafe fn scatter_to_swept(
     let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
     let (below, above) = (offsets[k]..diag, diag + 1..offsets[k + 1]);
     // SAFETY: by the contract.
-    let update = |q: usize| unsafe { r.set(cols[q], r.get(cols[q]) - vals[q] * delta) };
+    let update = |q: usize| {
+        let j = cols[q] as usize;
+        unsafe { r.set(j, r.get(j) - vals[q] * delta) }
+    };
     match separator {
         None if forward => below.for_each(update),
         None => above.for_each(update),
@@ -202,7 +205,7 @@ unsafe fn scatter_to_swept(
             if forward {
                 below
                     .chain(above)
-                    .filter(|&q| !sep[cols[q]] || cols[q] < k)
+                    .filter(|&q| !sep[cols[q] as usize] || (cols[q] as usize) < k)
                     .for_each(update);
             }
         }
@@ -212,8 +215,8 @@ unsafe fn scatter_to_swept(
         // race on their residuals (lost updates: the residuals, and the
         // runs, differed from one run to the next). The sweep recomputes
         // them once both halves are done ([`separator_residuals`]).
-        Some(sep) if forward => below.filter(|&q| !sep[cols[q]]).for_each(update),
-        Some(sep) => above.filter(|&q| !sep[cols[q]]).for_each(update),
+        Some(sep) if forward => below.filter(|&q| !sep[cols[q] as usize]).for_each(update),
+        Some(sep) => above.filter(|&q| !sep[cols[q] as usize]).for_each(update),
     }
 }
 
@@ -224,7 +227,7 @@ unsafe fn scatter_to_swept(
 /// a neighbour is scattered into it ([`scatter_to_swept`]); this replaced
 /// the product that followed the presmoothing.
 pub(crate) fn nonlinear_sweep(
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     diag: &[Position],
     halves: Option<&Halves>,
     f: &[f64],
@@ -267,7 +270,7 @@ pub(crate) fn nonlinear_sweep(
 /// the product the conjugate gradients need.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear_sweep(
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     diag: &[Position],
     halves: Option<&Halves>,
     shift: &[f64],
@@ -329,13 +332,7 @@ mod tests {
     use crate::numerics::linalg::spmv_into;
 
     /// b − (A + D) x, zero where `fixed`, by a product.
-    fn residual(
-        a: &CsrMatrix<f64>,
-        shift: &[f64],
-        b: &[f64],
-        x: &[f64],
-        fixed: &[bool],
-    ) -> Vec<f64> {
+    fn residual(a: &Csr, shift: &[f64], b: &[f64], x: &[f64], fixed: &[bool]) -> Vec<f64> {
         let mut ax = vec![0.0; x.len()];
         spmv_into(a, x, &mut ax);
         (0..x.len())

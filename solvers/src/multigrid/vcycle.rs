@@ -20,6 +20,8 @@
 
 use nalgebra_sparse::CsrMatrix;
 
+use crate::numerics::linalg::Csr;
+
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::halves::Halves;
 use crate::multigrid::smoother::{Position, diagonal_position, linear_sweep};
@@ -98,7 +100,7 @@ impl CoarsestSolve {
 /// entries near Γ_K, and a copy of every value was a twelfth of the peak
 /// memory at h = 1/1024).
 struct Level {
-    a: CsrMatrix<f64>,
+    a: Csr,
     untruncated_diagonal: Vec<f64>,
     diag: Vec<Position>,
     /// The two-core Gauss-Seidel ordering of `a`'s rows, if it has one.
@@ -109,7 +111,7 @@ struct Level {
 }
 
 impl Level {
-    fn new(a: CsrMatrix<f64>) -> Self {
+    fn new(a: Csr) -> Self {
         let found: Vec<Option<usize>> = (0..a.nrows())
             .map(|k| diagonal_position(&a, k, 0.0))
             .collect();
@@ -144,13 +146,11 @@ impl Level {
     /// Subtracts the correction `c` (merged triplets, all on the pattern)
     /// and marks the unknowns whose diagonal vanished.
     fn subtract(&mut self, c: &[(usize, usize, f64)]) {
-        let offsets = self.a.row_offsets().to_vec();
         for &(i, j, value) in c {
-            let row = &self.a.col_indices()[offsets[i]..offsets[i + 1]];
-            let p = offsets[i]
-                + row
-                    .binary_search(&j)
-                    .expect("a Galerkin correction lies on the Galerkin pattern");
+            let p = self
+                .a
+                .position(i, j)
+                .expect("a Galerkin correction lies on the Galerkin pattern");
             let entry = &mut self.a.values_mut()[p];
             self.touched.push((p, *entry));
             *entry -= value;
@@ -219,7 +219,7 @@ pub(crate) struct Hierarchy {
 impl Hierarchy {
     /// The untruncated Galerkin hierarchy of `a` for the prolongations `p`
     /// (coarse to fine): A⁰_{L−1} = Pᵀ A P, A⁰_l = P_lᵀ A⁰_{l+1} P_l.
-    pub(crate) fn new(a: &CsrMatrix<f64>, diag: Vec<Position>, p: &[CsrMatrix<f64>]) -> Self {
+    pub(crate) fn new(a: &Csr, diag: Vec<Position>, p: &[CsrMatrix<f64>]) -> Self {
         // Pᵀ only while its product is formed: the V-cycle restricts with P
         // itself (at h = 1/1024 the stored transposes were 150 MB).
         let top = p.len() - 1;
@@ -258,7 +258,7 @@ impl Hierarchy {
     /// when they are the current ones.
     pub(crate) fn truncate(
         &mut self,
-        a: &CsrMatrix<f64>,
+        a: &Csr,
         p: &[CsrMatrix<f64>],
         truncated: &[bool],
         shift: &[f64],
@@ -281,7 +281,7 @@ impl Hierarchy {
         let mut e = Vec::new();
         for (j, _) in truncated.iter().enumerate().filter(|(_, cut)| **cut) {
             for q in offsets[j]..offsets[j + 1] {
-                let i = cols[q];
+                let i = cols[q] as usize;
                 e.push((j, i, vals[q]));
                 if !truncated[i] {
                     e.push((i, j, vals[q]));
@@ -313,7 +313,7 @@ impl Hierarchy {
     /// and `c` themselves (no copies of the finest size).
     pub(crate) fn v_cycle(
         &mut self,
-        a: &CsrMatrix<f64>,
+        a: &Csr,
         p: &[CsrMatrix<f64>],
         d: &[f64],
         (coarse_sweeps, finest_sweeps): (usize, usize),

@@ -24,7 +24,7 @@ use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::numerics::linalg::{max_abs, max_abs_if_finite, spmv, spmv_values_into};
+use crate::numerics::linalg::{Csr, CsrError, max_abs, max_abs_if_finite, spmv, spmv_values_into};
 
 mod scales;
 mod symmetry;
@@ -83,6 +83,8 @@ pub enum ProblemError {
          the contact forces must carry it (condition (13)), and a load so nearly balanced cannot be certified in double precision"
     )]
     NetLoad { index: usize, fraction: f64 },
+    #[error("A: {0}")]
+    Stiffness(#[from] CsrError),
     #[error("the problem's {what} scale is {value:e}: {why}")]
     Scale {
         what: &'static str,
@@ -92,6 +94,35 @@ pub enum ProblemError {
 }
 
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
+
+/// What [`ContactProblem::new`] takes as A: a [`Csr`] as it is, or a
+/// nalgebra matrix, converted to 32-bit column indices.
+pub trait IntoStiffness {
+    fn into_stiffness(self) -> Result<Csr, CsrError>;
+}
+
+impl IntoStiffness for Csr {
+    fn into_stiffness(self) -> Result<Csr, CsrError> {
+        Ok(self)
+    }
+}
+
+impl IntoStiffness for CsrMatrix<f64> {
+    fn into_stiffness(self) -> Result<Csr, CsrError> {
+        Csr::try_from(self)
+    }
+}
+
+/// Whether M has exactly A's pattern.
+fn on_pattern_of(m: &CsrMatrix<f64>, a: &Csr) -> bool {
+    m.nrows() == a.nrows()
+        && m.ncols() == a.ncols()
+        && m.row_offsets() == a.row_offsets()
+        && m.col_indices()
+            .iter()
+            .zip(a.col_indices())
+            .all(|(&x, &y)| x == y as usize)
+}
 
 /// The mass matrix M as a problem is given it.
 ///
@@ -121,7 +152,7 @@ impl From<CsrMatrix<f64>> for Mass {
 /// mesh.
 #[derive(Clone, Debug)]
 pub struct ContactProblem {
-    a: CsrMatrix<f64>,
+    a: Csr,
     f: Vec<f64>,
     mass: Mass,
     contacts: Vec<ContactNode>,
@@ -139,19 +170,19 @@ impl ContactProblem {
     /// it is at least [`MIN_NET_LOAD_FRACTION`] of the gross load, and that
     /// the scales are representable.
     /// M is a matrix or its values on A's pattern ([`Mass`]); a matrix on
-    /// exactly A's pattern is kept as its values.
+    /// exactly A's pattern is kept as its values. A is kept with 32-bit
+    /// column indices ([`Csr`]); a nalgebra matrix is converted.
     pub fn new(
-        a: CsrMatrix<f64>,
+        a: impl IntoStiffness,
         f: Vec<f64>,
         mass: impl Into<Mass>,
         contacts: Vec<ContactNode>,
         rigid_modes: Vec<Vec<f64>>,
     ) -> Result<Self, ProblemError> {
+        let a = a.into_stiffness()?;
         let n = a.nrows();
         let mass = match mass.into() {
-            Mass::Matrix(m) if m.pattern() == a.pattern() => {
-                Mass::OnStiffnessPattern(m.disassemble().2)
-            }
+            Mass::Matrix(m) if on_pattern_of(&m, &a) => Mass::OnStiffnessPattern(m.disassemble().2),
             other => other,
         };
         check_stiffness_and_mass(&a, &mass, n)?;
@@ -261,8 +292,9 @@ impl ContactProblem {
         self.f.len()
     }
 
-    /// The stiffness matrix A in the (v', t, s) variables (full symmetric storage).
-    pub fn a(&self) -> &CsrMatrix<f64> {
+    /// The stiffness matrix A in the (v', t, s) variables (full symmetric
+    /// storage, 32-bit column indices).
+    pub fn a(&self) -> &Csr {
         &self.a
     }
 
@@ -279,11 +311,7 @@ impl ContactProblem {
         match &self.mass {
             Mass::Matrix(m) => Some(Cow::Borrowed(m)),
             Mass::OnStiffnessPattern(values) => {
-                let pattern = self.a.pattern().clone();
-                Some(Cow::Owned(
-                    CsrMatrix::try_from_pattern_and_values(pattern, values.clone())
-                        .expect("checked: one value per stored entry of A"),
-                ))
+                Some(Cow::Owned(self.a.nalgebra_with_values(values.clone())))
             }
             Mass::Omitted => None,
         }

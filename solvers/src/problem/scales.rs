@@ -1,10 +1,9 @@
 //! The problem's own scales, from its data alone (see [`Scales`]).
 
-use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 
 use super::{ContactNode, ProblemError};
-use crate::numerics::linalg::max_abs;
+use crate::numerics::linalg::{Csr, max_abs};
 
 /// The smallest net load, relative to the gross load F = Σ|f_i|, that a
 /// problem with rigid modes may carry along each of them. The contact
@@ -45,7 +44,7 @@ pub struct Scales {
 
 impl Scales {
     pub(super) fn of(
-        a: &CsrMatrix<f64>,
+        a: &Csr,
         f: &[f64],
         contacts: &[ContactNode],
         rigid_modes: &[Vec<f64>],
@@ -72,9 +71,12 @@ impl Scales {
         }
         let length = or_one(contacts.iter().map(|c| c.weight).sum());
         let stiffness = or_one(
-            a.row_iter()
-                .enumerate()
-                .filter_map(|(i, row)| row.get_entry(i).map(|e| e.into_value().abs()))
+            (0..a.nrows())
+                .filter_map(|i| {
+                    let (cols, vals) = a.row(i);
+                    let k = cols.binary_search(&(i as u32)).ok()?;
+                    Some(vals[k].abs())
+                })
                 .fold(0.0, f64::max),
         );
         let scales = Self {

@@ -78,7 +78,7 @@ impl Condensed {
         for (i, c) in contacts.iter().enumerate() {
             for (k, r) in [(2 * i, c.t), (2 * i + 1, c.s)] {
                 for p in offsets[r]..offsets[r + 1] {
-                    match position[cols[p]] {
+                    match position[cols[p] as usize] {
                         Ok(j) => a_ci[k].push((j, vals[p])),
                         Err(l) => s[(k, l)] += vals[p],
                     }

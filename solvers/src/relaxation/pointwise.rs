@@ -10,8 +10,9 @@
 //! function is piecewise quadratic and is minimized exactly for any r; along a
 //! slip coordinate φ is |·| (exact: soft thresholding) or its Huber smoothing.
 
-use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
+
+use crate::numerics::linalg::Csr;
 
 /// How the non-smooth friction term w g |s| is treated along a slip
 /// coordinate. In settings it is the word `exact` or a Huber width (a number;
@@ -154,7 +155,7 @@ pub enum Coordinate {
 /// diagonal, and the role of each unknown.
 #[derive(Clone, Debug)]
 pub(crate) struct RelaxationOperator {
-    pub h: CsrMatrix<f64>,
+    pub h: Csr,
     pub diag: Vec<f64>,
     /// 1 / diag, so that free coordinates cost a multiplication.
     pub inv_diag: Vec<f64>,
@@ -204,11 +205,12 @@ impl RelaxationOperator {
                 let m = problem
                     .mass()
                     .expect("the relaxation refuses a problem without M before it gets here");
-                a + &(&*m * rho)
+                Csr::try_from(&a.to_nalgebra() + &(&*m * rho))
+                    .expect("A + ρM has A's size, which a Csr holds")
             }
         };
         let diag: Vec<f64> = (0..h.nrows())
-            .map(|i| h.get_entry(i, i).map(|e| e.into_value()).unwrap_or(0.0))
+            .map(|i| h.position(i, i).map_or(0.0, |p| h.values()[p]))
             .collect();
         let inv_diag = diag.iter().map(|a| 1.0 / a).collect();
         let mut role = vec![Coordinate::Free; h.nrows()];
@@ -235,7 +237,7 @@ impl RelaxationOperator {
         let mut max_change = 0.0f64;
         for j in 0..v.len() {
             let (lo, hi) = (offsets[j], offsets[j + 1]);
-            // SAFETY: a CsrMatrix keeps its column indices below ncols = v.len().
+            // SAFETY: a Csr keeps its column indices below ncols = v.len().
             let sum = unsafe { crate::numerics::linalg::row_dot(&cols[lo..hi], &vals[lo..hi], v) };
             let a = self.diag[j];
             let old = v[j];
@@ -284,7 +286,7 @@ impl RelaxationOperator {
     pub(crate) fn gradient_at(&self, v: &[f64], b: &[f64], j: usize) -> f64 {
         let (offsets, cols, vals) = self.h.csr_data();
         (offsets[j]..offsets[j + 1])
-            .map(|k| vals[k] * v[cols[k]])
+            .map(|k| vals[k] * v[cols[k] as usize])
             .sum::<f64>()
             - b[j]
     }

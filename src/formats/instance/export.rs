@@ -41,7 +41,10 @@ pub fn export(
 ) -> Result<()> {
     let p = &d.problem;
     let n = p.n();
-    write_atomic(&dir.join("A.mtx"), &mtx_symmetric(&CooMatrix::from(p.a())))?;
+    write_atomic(
+        &dir.join("A.mtx"),
+        &mtx_symmetric(&CooMatrix::from(&p.a().to_nalgebra())),
+    )?;
     write_atomic(
         &dir.join("M.mtx"),
         &mtx_symmetric(&CooMatrix::from(

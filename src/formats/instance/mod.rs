@@ -349,7 +349,7 @@ pub fn complete_answer(
             let (offsets, cols, vals) = problem.a().csr_data();
             let row = |i: usize| -> f64 {
                 (offsets[i]..offsets[i + 1])
-                    .map(|k| vals[k] * v[cols[k]])
+                    .map(|k| vals[k] * v[cols[k] as usize])
                     .sum::<f64>()
                     - problem.f()[i]
             };

@@ -7,7 +7,7 @@ fn both_sums(
     mesh: &Mesh,
     dofs: &impl DofExpansion,
     only: Option<Body>,
-) -> [(SparsityPattern, Vec<Vec<u64>>); 2] {
+) -> [(Pattern, Vec<Vec<u64>>); 2] {
     let d = Material::default().elasticity_matrix();
     let elements: [&ElementMatrix<'_>; 2] = [&|p| element_stiffness(p, &d), &element_mass];
     [Sum::ByNodesWherePossible, Sum::ByUnknowns].map(|sum| {

@@ -24,7 +24,6 @@
 //! the speed study).
 
 use anyhow::{Context, Result};
-use nalgebra_sparse::CsrMatrix;
 use serde::Serialize;
 
 use crate::coulomb::continuation::Schedule;
@@ -183,7 +182,7 @@ fn errors(problem: u32, coarse: &Solved, reference: &Solved) -> ErrorRow {
     let ev = df.dofs.from_physical(&e);
     let vf = &reference.outcome.solution.v;
     let p = &df.problem;
-    let norm = |m: &CsrMatrix<f64>, v: &[f64]| {
+    let norm = |m: &crate::solvers::Csr, v: &[f64]| {
         let mv = crate::solvers::numerics::linalg::spmv(m, v);
         v.iter()
             .zip(&mv)

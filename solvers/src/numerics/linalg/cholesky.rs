@@ -48,10 +48,10 @@ fn lower_of(a: &CsrMatrix<f64>) -> CscMatrix<f64> {
 /// for a symmetric matrix, line j's entries at or beyond j are column j of
 /// the lower triangle, either way. One pass, no intermediate copy: at
 /// h = 1/1024 the triplet route held two more copies of A at once.
-pub(crate) fn lower_part(
+pub(crate) fn lower_part<I: super::ColumnIndex>(
     k: usize,
     offsets: &[usize],
-    indices: &[usize],
+    indices: &[I],
     values: &[f64],
     map: &[usize],
 ) -> CscMatrix<f64> {
@@ -64,7 +64,7 @@ pub(crate) fn lower_part(
             continue;
         }
         for p in offsets[j]..offsets[j + 1] {
-            let i = indices[p];
+            let i = indices[p].at();
             if i >= j && map[i] != usize::MAX {
                 rows.push(map[i]);
                 vals.push(values[p]);

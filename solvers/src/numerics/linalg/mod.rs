@@ -2,11 +2,12 @@
 //! Cholesky through faer ([`cholesky`]).
 
 mod cholesky;
+mod csr;
 
 pub(crate) use cholesky::lower_part;
 pub use cholesky::{CholeskyAnalysis, SparseCholesky, kernel_dimension};
+pub use csr::{ColumnIndex, Csr, CsrError, SparseRows};
 
-use nalgebra_sparse::CsrMatrix;
 use thiserror::Error;
 
 /// A failed factorization.
@@ -19,14 +20,14 @@ pub enum LinalgError {
 }
 
 /// y = A x for a CSR matrix.
-pub fn spmv(a: &CsrMatrix<f64>, x: &[f64]) -> Vec<f64> {
+pub fn spmv(a: &impl SparseRows, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; a.nrows()];
     spmv_into(a, x, &mut y);
     y
 }
 
 /// y = A x for a CSR matrix, into a caller's buffer (no allocation).
-pub fn spmv_into(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
+pub fn spmv_into(a: &impl SparseRows, x: &[f64], y: &mut [f64]) {
     spmv_values_into(a, a.values(), x, y);
 }
 
@@ -34,7 +35,12 @@ pub fn spmv_into(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
 /// `values` (one per stored entry, in its order): the product with a matrix
 /// kept as values on another's pattern, such as the mass matrix on the
 /// stiffness's. No allocation.
-pub(crate) fn spmv_values_into(pattern: &CsrMatrix<f64>, values: &[f64], x: &[f64], y: &mut [f64]) {
+pub(crate) fn spmv_values_into(
+    pattern: &impl SparseRows,
+    values: &[f64],
+    x: &[f64],
+    y: &mut [f64],
+) {
     assert_eq!(x.len(), pattern.ncols(), "spmv: x has the wrong length");
     assert_eq!(y.len(), pattern.nrows(), "spmv: y has the wrong length");
     assert_eq!(
@@ -46,7 +52,7 @@ pub(crate) fn spmv_values_into(pattern: &CsrMatrix<f64>, values: &[f64], x: &[f6
     let rows = |first: usize, y: &mut [f64]| {
         for (i, yi) in (first..).zip(y.iter_mut()) {
             let (lo, hi) = (offsets[i], offsets[i + 1]);
-            // SAFETY: a CsrMatrix keeps its column indices below ncols =
+            // SAFETY: a SparseRows keeps its column indices below ncols =
             // x.len(), and values has one entry per stored index.
             *yi = unsafe { row_dot(&cols[lo..hi], &values[lo..hi], x) };
         }
@@ -71,7 +77,7 @@ pub(crate) fn spmv_values_into(pattern: &CsrMatrix<f64>, values: &[f64], x: &[f6
 /// which is then added: a half's columns may overlap the other's. Bits
 /// depend only on the matrix, not on the machine. No allocation.
 pub(crate) fn spmv_transpose_into(
-    p: &CsrMatrix<f64>,
+    p: &impl SparseRows,
     x: &[f64],
     y: &mut [f64],
     scratch: &mut [f64],
@@ -84,7 +90,7 @@ pub(crate) fn spmv_transpose_into(
         for i in rows {
             let xi = x[i];
             for q in offsets[i]..offsets[i + 1] {
-                y[cols[q]] += vals[q] * xi;
+                y[cols[q].at()] += vals[q] * xi;
             }
         }
     };
@@ -123,8 +129,8 @@ pub const PARALLEL_NNZ: usize = 1 << 18;
 /// Every entry of `cols` must be below `x.len()`, and `vals` must be at least
 /// as long as `cols`.
 #[inline]
-pub unsafe fn row_dot(cols: &[usize], vals: &[f64], x: &[f64]) -> f64 {
-    debug_assert!(vals.len() >= cols.len() && cols.iter().all(|&c| c < x.len()));
+pub unsafe fn row_dot<I: ColumnIndex>(cols: &[I], vals: &[f64], x: &[f64]) -> f64 {
+    debug_assert!(vals.len() >= cols.len() && cols.iter().all(|&c| c.at() < x.len()));
     // SAFETY: cols[k] < x.len() by the contract.
     unsafe { row_dot_by(cols, vals, |c| *x.get_unchecked(c)) }
 }
@@ -137,7 +143,11 @@ pub unsafe fn row_dot(cols: &[usize], vals: &[f64], x: &[f64]) -> f64 {
 /// `vals` must be at least as long as `cols`, and `x_at` sound at every
 /// entry of `cols`.
 #[inline(always)]
-pub(crate) unsafe fn row_dot_by(cols: &[usize], vals: &[f64], x_at: impl Fn(usize) -> f64) -> f64 {
+pub(crate) unsafe fn row_dot_by<I: ColumnIndex>(
+    cols: &[I],
+    vals: &[f64],
+    x_at: impl Fn(usize) -> f64,
+) -> f64 {
     let n = cols.len();
     let mut acc = [0.0f64; 4];
     let mut k = 0;
@@ -145,12 +155,12 @@ pub(crate) unsafe fn row_dot_by(cols: &[usize], vals: &[f64], x_at: impl Fn(usiz
     unsafe {
         while k + 3 < n {
             for (q, a) in acc.iter_mut().enumerate() {
-                *a += vals.get_unchecked(k + q) * x_at(*cols.get_unchecked(k + q));
+                *a += vals.get_unchecked(k + q) * x_at(cols.get_unchecked(k + q).at());
             }
             k += 4;
         }
         while k < n {
-            acc[0] += vals.get_unchecked(k) * x_at(*cols.get_unchecked(k));
+            acc[0] += vals.get_unchecked(k) * x_at(cols.get_unchecked(k).at());
             k += 1;
         }
     }
@@ -195,6 +205,7 @@ pub(crate) fn max_abs_if_finite(x: &[f64]) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra_sparse::CsrMatrix;
 
     /// The lanes must agree with one plain chain, find a bad value in any
     /// lane and in the remainder, and count −x like x.

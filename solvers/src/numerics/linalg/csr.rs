@@ -1,0 +1,345 @@
+//! Compressed sparse rows with 32-bit column indices: the stiffness matrix
+//! A of a contact problem and the multigrid's own matrices.
+//!
+//! Why not `nalgebra_sparse::CsrMatrix`: its column indices are `usize`, 8
+//! bytes beside each 8-byte value. At h = 1/1024 A has 33.6 million stored
+//! entries, so its indices were 269 MB of a 1.2 GiB solve, and every
+//! Gauss–Seidel sweep and product streams them. 32 bits hold any column of
+//! a mesh up to 2³² − 1 unknowns (h = 1/4096 has 3.4·10⁷); row offsets stay
+//! `usize`, since the entries can outnumber 2³². Solvers that factorize or
+//! hand the matrix to another library convert it ([`Csr::to_nalgebra`]):
+//! they need many times its memory anyway.
+
+use nalgebra_sparse::CsrMatrix;
+use thiserror::Error;
+
+/// A matrix that cannot be held as a [`Csr`].
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CsrError {
+    #[error(
+        "a sparse matrix with {0} columns: column indices are 32-bit, at most {max} columns",
+        max = u32::MAX
+    )]
+    TooManyColumns(usize),
+    #[error("sparse matrix: {0}")]
+    Malformed(&'static str),
+}
+
+/// A column index as stored: `usize` (nalgebra's matrices) or `u32`
+/// ([`Csr`]), so that one product kernel serves both.
+pub trait ColumnIndex: Copy + Send + Sync + 'static {
+    /// The index as a `usize`.
+    fn at(self) -> usize;
+}
+
+impl ColumnIndex for usize {
+    #[inline(always)]
+    fn at(self) -> usize {
+        self
+    }
+}
+
+impl ColumnIndex for u32 {
+    #[inline(always)]
+    fn at(self) -> usize {
+        self as usize
+    }
+}
+
+/// Read access to a matrix in compressed rows whose column indices are
+/// sorted within each row and below [`SparseRows::ncols`].
+pub trait SparseRows: Sync {
+    /// The stored column index type.
+    type Index: ColumnIndex;
+    fn nrows(&self) -> usize;
+    fn ncols(&self) -> usize;
+    /// nrows + 1 offsets into the stored entries, from 0.
+    fn row_offsets(&self) -> &[usize];
+    fn col_indices(&self) -> &[Self::Index];
+    fn values(&self) -> &[f64];
+    /// Number of stored entries.
+    fn nnz(&self) -> usize {
+        self.col_indices().len()
+    }
+}
+
+impl SparseRows for CsrMatrix<f64> {
+    type Index = usize;
+    fn nrows(&self) -> usize {
+        CsrMatrix::nrows(self)
+    }
+    fn ncols(&self) -> usize {
+        CsrMatrix::ncols(self)
+    }
+    fn row_offsets(&self) -> &[usize] {
+        CsrMatrix::row_offsets(self)
+    }
+    fn col_indices(&self) -> &[usize] {
+        CsrMatrix::col_indices(self)
+    }
+    fn values(&self) -> &[f64] {
+        CsrMatrix::values(self)
+    }
+}
+
+/// A sparse matrix in compressed rows, 32-bit column indices, sorted and
+/// without duplicates within each row (checked on construction).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Csr {
+    ncols: usize,
+    offsets: Vec<usize>,
+    cols: Vec<u32>,
+    values: Vec<f64>,
+}
+
+impl Csr {
+    /// From its three arrays, checked: nrows + 1 nondecreasing offsets from
+    /// 0 to the number of entries, one value per column index, and the
+    /// columns of each row strictly increasing and below `ncols`.
+    pub fn try_from_csr_data(
+        nrows: usize,
+        ncols: usize,
+        offsets: Vec<usize>,
+        cols: Vec<u32>,
+        values: Vec<f64>,
+    ) -> Result<Self, CsrError> {
+        if ncols > u32::MAX as usize {
+            return Err(CsrError::TooManyColumns(ncols));
+        }
+        if offsets.len() != nrows + 1 || offsets[0] != 0 || offsets[nrows] != cols.len() {
+            return Err(CsrError::Malformed(
+                "the row offsets must run from 0 to the number of entries, one per row and one more",
+            ));
+        }
+        if values.len() != cols.len() {
+            return Err(CsrError::Malformed("one value per stored column index"));
+        }
+        for row in offsets.windows(2) {
+            let (lo, hi) = (row[0], row[1]);
+            if lo > hi || hi > cols.len() {
+                return Err(CsrError::Malformed("the row offsets must not decrease"));
+            }
+            let row = &cols[lo..hi];
+            if row.windows(2).any(|w| w[0] >= w[1]) || row.last().is_some_and(|&c| c.at() >= ncols)
+            {
+                return Err(CsrError::Malformed(
+                    "the columns of a row must increase strictly and stay below the column count",
+                ));
+            }
+        }
+        Ok(Self {
+            ncols,
+            offsets,
+            cols,
+            values,
+        })
+    }
+
+    /// The same matrix as a nalgebra one (a copy with 64-bit indices), for
+    /// a solver that factorizes or hands it to another library.
+    pub fn to_nalgebra(&self) -> CsrMatrix<f64> {
+        self.nalgebra_with_values(self.values.clone())
+    }
+
+    /// The nalgebra matrix with this pattern and other `values` (one per
+    /// stored entry, in order), such as the mass matrix kept on A's pattern.
+    ///
+    /// # Panics
+    /// If `values` does not have one entry per stored entry.
+    pub fn nalgebra_with_values(&self, values: Vec<f64>) -> CsrMatrix<f64> {
+        assert_eq!(values.len(), self.nnz(), "one value per stored entry");
+        let cols = self.cols.iter().map(|&c| c.at()).collect();
+        CsrMatrix::try_from_csr_data(self.nrows(), self.ncols, self.offsets.clone(), cols, values)
+            .expect("checked on construction: sorted rows, columns in range")
+    }
+
+    pub fn nrows(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    pub fn ncols(&self) -> usize {
+        self.ncols
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.cols.len()
+    }
+
+    pub fn row_offsets(&self) -> &[usize] {
+        &self.offsets
+    }
+
+    pub fn col_indices(&self) -> &[u32] {
+        &self.cols
+    }
+
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// The stored values, to change in place (the pattern stays).
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
+    /// Offsets, column indices and values.
+    pub fn csr_data(&self) -> (&[usize], &[u32], &[f64]) {
+        (&self.offsets, &self.cols, &self.values)
+    }
+
+    /// Row i's column indices and values.
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        (&self.cols[lo..hi], &self.values[lo..hi])
+    }
+
+    /// The position of entry (i, j) among the stored entries, if stored.
+    pub fn position(&self, i: usize, j: usize) -> Option<usize> {
+        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        let j = u32::try_from(j).ok()?;
+        self.cols[lo..hi].binary_search(&j).ok().map(|q| lo + q)
+    }
+
+    /// Whether both have the same rows, columns and stored positions.
+    pub fn same_pattern(&self, other: &Csr) -> bool {
+        self.ncols == other.ncols && self.offsets == other.offsets && self.cols == other.cols
+    }
+
+    /// The stored entries as (row, column, value), row by row.
+    pub fn triplet_iter(&self) -> impl Iterator<Item = (usize, usize, &f64)> {
+        self.offsets.windows(2).enumerate().flat_map(move |(i, w)| {
+            self.cols[w[0]..w[1]]
+                .iter()
+                .zip(&self.values[w[0]..w[1]])
+                .map(move |(&c, v)| (i, c.at(), v))
+        })
+    }
+
+    /// The transpose (a new matrix).
+    pub fn transpose(&self) -> Csr {
+        let (m, n) = (self.nrows(), self.ncols);
+        let mut offsets = vec![0usize; n + 1];
+        for &c in &self.cols {
+            offsets[c.at() + 1] += 1;
+        }
+        for j in 0..n {
+            offsets[j + 1] += offsets[j];
+        }
+        let mut next = offsets[..n].to_vec();
+        let (mut cols, mut values) = (vec![0u32; self.nnz()], vec![0.0; self.nnz()]);
+        for i in 0..m {
+            for q in self.offsets[i]..self.offsets[i + 1] {
+                let j = self.cols[q].at();
+                cols[next[j]] = i as u32;
+                values[next[j]] = self.values[q];
+                next[j] += 1;
+            }
+        }
+        Csr {
+            ncols: m,
+            offsets,
+            cols,
+            values,
+        }
+    }
+}
+
+impl TryFrom<CsrMatrix<f64>> for Csr {
+    type Error = CsrError;
+
+    /// Takes the offsets and values over; the 64-bit column indices are
+    /// converted, then freed.
+    fn try_from(m: CsrMatrix<f64>) -> Result<Self, CsrError> {
+        let (nrows, ncols) = (m.nrows(), m.ncols());
+        if ncols > u32::MAX as usize || nrows > u32::MAX as usize {
+            return Err(CsrError::TooManyColumns(ncols.max(nrows)));
+        }
+        let (offsets, cols, values) = m.disassemble();
+        let cols = cols.into_iter().map(|c| c as u32).collect();
+        Ok(Self {
+            ncols,
+            offsets,
+            cols,
+            values,
+        })
+    }
+}
+
+impl TryFrom<&CsrMatrix<f64>> for Csr {
+    type Error = CsrError;
+
+    fn try_from(m: &CsrMatrix<f64>) -> Result<Self, CsrError> {
+        Csr::try_from(m.clone())
+    }
+}
+
+impl SparseRows for Csr {
+    type Index = u32;
+    fn nrows(&self) -> usize {
+        Csr::nrows(self)
+    }
+    fn ncols(&self) -> usize {
+        self.ncols
+    }
+    fn row_offsets(&self) -> &[usize] {
+        &self.offsets
+    }
+    fn col_indices(&self) -> &[u32] {
+        &self.cols
+    }
+    fn values(&self) -> &[f64] {
+        &self.values
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra_sparse::CooMatrix;
+
+    fn example() -> CsrMatrix<f64> {
+        let mut coo = CooMatrix::new(3, 4);
+        for (i, j, v) in [(0, 0, 2.0), (0, 3, -1.0), (2, 1, 3.0), (2, 2, 0.5)] {
+            coo.push(i, j, v);
+        }
+        CsrMatrix::from(&coo)
+    }
+
+    /// To and from nalgebra the matrix is the same, entry by entry; the
+    /// transpose agrees with nalgebra's.
+    #[test]
+    fn round_trips_through_nalgebra_and_transposes_like_it() {
+        let m = example();
+        let c = Csr::try_from(&m).unwrap();
+        assert_eq!(c.to_nalgebra(), m);
+        assert_eq!(c.transpose().to_nalgebra(), m.transpose());
+        let triplets: Vec<_> = c.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
+        let expected: Vec<_> = m.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
+        assert_eq!(triplets, expected);
+        assert_eq!(c.row(2), (&[1u32, 2][..], &[3.0, 0.5][..]));
+    }
+
+    /// Each malformed input is refused, with the reason.
+    #[test]
+    fn refuses_malformed_arrays() {
+        let ok = |o: Vec<usize>, c: Vec<u32>| {
+            Csr::try_from_csr_data(2, 3, o, c.clone(), vec![1.0; c.len()])
+        };
+        assert!(ok(vec![0, 1, 2], vec![0, 2]).is_ok());
+        assert!(ok(vec![0, 1], vec![0]).is_err(), "too few offsets");
+        assert!(ok(vec![1, 1, 2], vec![0, 2]).is_err(), "not from 0");
+        assert!(ok(vec![0, 2, 1], vec![0, 2]).is_err(), "decreasing");
+        assert!(ok(vec![0, 2, 2], vec![2, 1]).is_err(), "unsorted");
+        assert!(ok(vec![0, 2, 2], vec![1, 1]).is_err(), "duplicate");
+        assert!(
+            ok(vec![0, 1, 2], vec![0, 3]).is_err(),
+            "column out of range"
+        );
+        assert!(Csr::try_from_csr_data(1, 1, vec![0, 1], vec![0], vec![]).is_err());
+        assert!(matches!(
+            Csr::try_from_csr_data(0, 1 << 33, vec![0], vec![], vec![]),
+            Err(CsrError::TooManyColumns(_))
+        ));
+    }
+}
