@@ -45,7 +45,7 @@ fn bilinear(a: &CsrMatrix<f64>, x: &[f64], y: &[f64]) -> f64 {
     a.triplet_iter().map(|(r, c, v)| x[r] * v * y[c]).sum()
 }
 
-fn apply(p: &CsrMatrix<f64>, x: &[f64]) -> Vec<f64> {
+fn apply(p: &contactlab::solvers::Csr, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; p.nrows()];
     for (r, c, v) in p.triplet_iter() {
         y[r] += v * x[c];

@@ -27,9 +27,9 @@ pub mod splitting;
 
 pub use conic::{ConicSettings, ConicSolver};
 pub use newton::tresca::{CondensedNewton, NewtonSettings};
-pub use numerics::linalg::{Csr, CsrError};
+pub use numerics::linalg::{Csr, CsrError, IntoCsr};
 pub use observer::{Control, History, Limits, Observer, Progress, Silent};
-pub use problem::{ContactNode, ContactProblem, IntoStiffness, Mass, ProblemError, Scales};
+pub use problem::{ContactNode, ContactProblem, Mass, ProblemError, Scales};
 pub use relaxation::pointwise::Smoothing;
 pub use relaxation::{ProxUzawa, RelaxationSettings};
 pub use settings::Stopping;

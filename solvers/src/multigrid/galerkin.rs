@@ -9,37 +9,58 @@
 //! (an entry that cancels to zero is kept), so that a truncation's
 //! correction always lies on it.
 
-use nalgebra_sparse::CsrMatrix;
-
 use crate::numerics::linalg::Csr;
 
-/// One block of consecutive coarse rows: offsets (from 0), columns, values.
-type Rows = (Vec<usize>, Vec<u32>, Vec<f64>);
+/// One block of consecutive coarse rows, offsets from 0, with the dense
+/// accumulator of its product. Allocated by the calling thread, also for
+/// the rows of the second thread: glibc keeps what a thread allocates in
+/// that thread's arena, and the half of a coarse level that the second
+/// thread built by doubling stayed there after it was copied out (the
+/// peak at h = 1/1024 rose with it).
+struct Rows {
+    offsets: Vec<usize>,
+    cols: Vec<u32>,
+    vals: Vec<f64>,
+    acc: Vec<f64>,
+    seen: Vec<bool>,
+    touched: Vec<usize>,
+}
 
-/// Rows `rows` of R A P, R = Pᵀ given as CSR, with `nc` columns.
-fn rows_of_product(
-    r: &CsrMatrix<f64>,
-    a: &Csr,
-    p: &CsrMatrix<f64>,
-    rows: std::ops::Range<usize>,
-    nc: usize,
-) -> Rows {
+impl Rows {
+    /// For `rows` rows of `nc` columns, about `per_row` entries each.
+    fn new(rows: usize, nc: usize, per_row: usize) -> Self {
+        Self {
+            offsets: Vec::with_capacity(rows + 1),
+            cols: Vec::with_capacity(rows * per_row),
+            vals: Vec::with_capacity(rows * per_row),
+            acc: vec![0.0; nc],
+            seen: vec![false; nc],
+            touched: Vec::with_capacity(8 * per_row),
+        }
+    }
+}
+
+/// Rows `rows` of R A P, R = Pᵀ given as CSR, into `out`.
+fn rows_of_product(r: &Csr, a: &Csr, p: &Csr, rows: std::ops::Range<usize>, out: &mut Rows) {
     let (ro, rc, rv) = (r.row_offsets(), r.col_indices(), r.values());
     let (ao, ac, av) = (a.row_offsets(), a.col_indices(), a.values());
     let (po, pc, pv) = (p.row_offsets(), p.col_indices(), p.values());
-    let mut acc = vec![0.0; nc];
-    let mut seen = vec![false; nc];
-    let mut touched: Vec<usize> = Vec::new();
-    let mut offsets = Vec::with_capacity(rows.len() + 1);
+    let Rows {
+        offsets,
+        cols,
+        vals,
+        acc,
+        seen,
+        touched,
+    } = out;
     offsets.push(0);
-    let (mut cols, mut vals) = (Vec::new(), Vec::new());
     for row in rows {
         for q in ro[row]..ro[row + 1] {
-            let (i, r_i) = (rc[q], rv[q]);
+            let (i, r_i) = (rc[q] as usize, rv[q]);
             for s in ao[i]..ao[i + 1] {
                 let (j, ra) = (ac[s] as usize, r_i * av[s]);
                 for t in po[j]..po[j + 1] {
-                    let col = pc[t];
+                    let col = pc[t] as usize;
                     if !seen[col] {
                         seen[col] = true;
                         touched.push(col);
@@ -49,7 +70,7 @@ fn rows_of_product(
             }
         }
         touched.sort_unstable();
-        for &col in &touched {
+        for &col in touched.iter() {
             cols.push(col as u32);
             vals.push(acc[col]);
             acc[col] = 0.0;
@@ -58,32 +79,37 @@ fn rows_of_product(
         touched.clear();
         offsets.push(cols.len());
     }
-    (offsets, cols, vals)
 }
 
 /// R A P for R = Pᵀ (CSR), on two threads (the rows in two halves).
-pub(crate) fn galerkin(r: &CsrMatrix<f64>, a: &Csr, p: &CsrMatrix<f64>) -> Csr {
+pub(crate) fn galerkin(r: &Csr, a: &Csr, p: &Csr) -> Csr {
     let (n, nc) = (r.nrows(), p.ncols());
     let half = n / 2;
-    let (lower, upper) = std::thread::scope(|scope| {
-        let upper = scope.spawn(|| rows_of_product(r, a, p, half..n, nc));
-        let lower = rows_of_product(r, a, p, 0..half, nc);
-        (
-            lower,
-            upper
-                .join()
-                .expect("the Galerkin product's thread ran to its end"),
-        )
+    // On nested P1 meshes a coarse row has about as many entries as a
+    // fine one; a wrong guess only costs a reallocation.
+    let per_row = a.nnz().div_ceil(a.nrows().max(1)) + 2;
+    let (mut lower, mut upper) = (
+        Rows::new(half, nc, per_row),
+        Rows::new(n - half, nc, per_row),
+    );
+    std::thread::scope(|scope| {
+        let upper = &mut upper;
+        scope.spawn(move || rows_of_product(r, a, p, half..n, upper));
+        rows_of_product(r, a, p, 0..half, &mut lower);
     });
-    let (mut offsets, mut cols, mut vals) = lower;
+    let Rows {
+        mut offsets,
+        mut cols,
+        mut vals,
+        ..
+    } = lower;
     let base = cols.len();
-    offsets.extend(upper.0[1..].iter().map(|o| o + base));
-    // Exact capacities: the halves grew by doubling, and a level keeps its
-    // matrix for the whole solve.
-    cols.reserve_exact(upper.1.len());
-    vals.reserve_exact(upper.2.len());
-    cols.extend(upper.1);
-    vals.extend(upper.2);
+    offsets.extend(upper.offsets[1..].iter().map(|o| o + base));
+    // Exact capacities: a level keeps its matrix for the whole solve.
+    cols.reserve_exact(upper.cols.len());
+    vals.reserve_exact(upper.vals.len());
+    cols.extend(upper.cols);
+    vals.extend(upper.vals);
     cols.shrink_to_fit();
     vals.shrink_to_fit();
     Csr::try_from_csr_data(n, nc, offsets, cols, vals)
@@ -93,7 +119,7 @@ pub(crate) fn galerkin(r: &CsrMatrix<f64>, a: &Csr, p: &CsrMatrix<f64>) -> Csr {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra_sparse::CooMatrix;
+    use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
     /// Equals the two general products on a small matrix, entry by entry
     /// and pattern by pattern (a cancelling entry included).
@@ -130,7 +156,8 @@ mod tests {
         let (a, p) = (CsrMatrix::from(&a), CsrMatrix::from(&p));
         let r = p.transpose();
         let expected = &r * &(&a * &p);
-        let got = galerkin(&r, &Csr::try_from(&a).unwrap(), &p).to_nalgebra();
+        let csr = |m: &CsrMatrix<f64>| Csr::try_from(m).unwrap();
+        let got = galerkin(&csr(&r), &csr(&a), &csr(&p)).to_nalgebra();
         assert_eq!(got.row_offsets(), expected.row_offsets());
         assert_eq!(got.col_indices(), expected.col_indices());
         for (x, y) in got.values().iter().zip(expected.values()) {

@@ -21,8 +21,6 @@
 //! [`vcycle`]: super::vcycle
 //! [`line_search`]: super::line_search
 
-use nalgebra_sparse::CsrMatrix;
-
 use crate::numerics::linalg::Csr;
 
 use super::laws::Laws;
@@ -119,7 +117,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 pub(crate) fn iterate(
     energy: &Energy<'_>,
     hierarchy: &mut Hierarchy,
-    p: &[CsrMatrix<f64>],
+    p: &[Csr],
     cycle: Cycle,
     ws: &mut Workspace,
     v: &mut [f64],

@@ -52,7 +52,6 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
-use nalgebra_sparse::CsrMatrix;
 
 use crate::numerics::linalg::Csr;
 
@@ -265,7 +264,7 @@ pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
     kept: &'k mut Vec<(K, Hierarchy)>,
     id: K,
     a: &Csr,
-    p: &[CsrMatrix<f64>],
+    p: &[Csr],
 ) -> Result<&'k mut Hierarchy, String> {
     let index = match kept.iter().position(|(k, _)| *k == id) {
         Some(i) => i,

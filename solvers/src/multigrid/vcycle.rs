@@ -18,8 +18,6 @@
 //! of rebuilding the products (which was a fifth of a 1/256 solve). A
 //! coarse unknown whose fine support is truncated entirely is left at zero.
 
-use nalgebra_sparse::CsrMatrix;
-
 use crate::numerics::linalg::Csr;
 
 use crate::multigrid::galerkin::galerkin;
@@ -178,19 +176,19 @@ fn merge(mut t: Vec<(usize, usize, f64)>) -> Vec<(usize, usize, f64)> {
 
 /// Pᵀ C P for C given by merged triplets: two sparse products, (C P) then
 /// Pᵀ (C P), each merged.
-fn galerkin_triplets(p: &CsrMatrix<f64>, c: &[(usize, usize, f64)]) -> Vec<(usize, usize, f64)> {
+fn galerkin_triplets(p: &Csr, c: &[(usize, usize, f64)]) -> Vec<(usize, usize, f64)> {
     let row = |k: usize| {
-        let (o, cols, vals) = (p.row_offsets(), p.col_indices(), p.values());
-        cols[o[k]..o[k + 1]].iter().zip(&vals[o[k]..o[k + 1]])
+        let (cols, vals) = p.row(k);
+        cols.iter().map(|&c| c as usize).zip(vals)
     };
     let cp = merge(
         c.iter()
-            .flat_map(|&(i, j, v)| row(j).map(move |(&b, &pjb)| (i, b, v * pjb)))
+            .flat_map(|&(i, j, v)| row(j).map(move |(b, &pjb)| (i, b, v * pjb)))
             .collect(),
     );
     merge(
         cp.iter()
-            .flat_map(|&(i, b, v)| row(i).map(move |(&a, &pia)| (a, b, pia * v)))
+            .flat_map(|&(i, b, v)| row(i).map(move |(a, &pia)| (a, b, pia * v)))
             .collect(),
     )
 }
@@ -212,14 +210,15 @@ pub(crate) struct Hierarchy {
     /// level's are the V-cycle's own arguments).
     x: Vec<Vec<f64>>,
     b: Vec<Vec<f64>>,
-    /// Each level's residual, the finest included.
+    /// Each coarse level's residual (the finest level's lives in the
+    /// V-cycle's `ac` argument).
     r: Vec<Vec<f64>>,
 }
 
 impl Hierarchy {
     /// The untruncated Galerkin hierarchy of `a` for the prolongations `p`
     /// (coarse to fine): A⁰_{L−1} = Pᵀ A P, A⁰_l = P_lᵀ A⁰_{l+1} P_l.
-    pub(crate) fn new(a: &Csr, diag: Vec<Position>, p: &[CsrMatrix<f64>]) -> Self {
+    pub(crate) fn new(a: &Csr, diag: Vec<Position>, p: &[Csr]) -> Self {
         // Pᵀ only while its product is formed: the V-cycle restricts with P
         // itself (at h = 1/1024 the stored transposes were 150 MB).
         let top = p.len() - 1;
@@ -237,8 +236,6 @@ impl Hierarchy {
                 .map(|l| vec![0.0; l.a.nrows()])
                 .collect::<Vec<_>>()
         };
-        let mut r = zeros();
-        r.push(vec![0.0; a.nrows()]);
         let coarsest = CoarsestSolve::new(&levels[0]);
         Self {
             diag,
@@ -248,7 +245,7 @@ impl Hierarchy {
             coarsest,
             x: zeros(),
             b: zeros(),
-            r,
+            r: zeros(),
             levels,
         }
     }
@@ -256,13 +253,7 @@ impl Hierarchy {
     /// Makes the hierarchy that of T(A + D)T for the truncated set
     /// `truncated` and D = diag(`shift`) (see the module); nothing to do
     /// when they are the current ones.
-    pub(crate) fn truncate(
-        &mut self,
-        a: &Csr,
-        p: &[CsrMatrix<f64>],
-        truncated: &[bool],
-        shift: &[f64],
-    ) {
+    pub(crate) fn truncate(&mut self, a: &Csr, p: &[Csr], truncated: &[bool], shift: &[f64]) {
         // An all-zero D is kept as none (the given-friction laws have no
         // curvature): no vector of the finest size for it.
         let shift = if shift.iter().all(|&d| d == 0.0) {
@@ -314,7 +305,7 @@ impl Hierarchy {
     pub(crate) fn v_cycle(
         &mut self,
         a: &Csr,
-        p: &[CsrMatrix<f64>],
+        p: &[Csr],
         d: &[f64],
         (coarse_sweeps, finest_sweeps): (usize, usize),
         c: &mut [f64],
@@ -361,12 +352,14 @@ impl Hierarchy {
                 (&mut x_here[0], &b_here[0])
             };
             xl.fill(0.0);
-            let rl = &mut r[l];
+            // The finest level's residual lives in `ac`, free until the
+            // last sweep writes it (a vector of the finest size less).
+            let rl: &mut [f64] = if l == top { &mut *ac } else { &mut r[l] };
             // The last sweep leaves the residual behind (one pass over
             // the level's matrix instead of two); none: x = 0, r = b.
             let s = sweeps(l);
             for sweep in 1..=s {
-                let last = (sweep == s).then_some(&mut rl[..]);
+                let last = (sweep == s).then_some(&mut *rl);
                 linear_sweep(matrix, dg, split, dk, bl, xl, fixed, true, last);
             }
             if s == 0 {
@@ -389,22 +382,23 @@ impl Hierarchy {
             } else {
                 (&mut here[0], &b[l])
             };
-            spmv_into(&p[l - 1], &below[l - 1], &mut r[l]);
-            for ((xk, rk), &cut) in xl.iter_mut().zip(&r[l]).zip(fixed) {
+            let rl: &mut [f64] = if l == top { &mut *ac } else { &mut r[l] };
+            spmv_into(&p[l - 1], &below[l - 1], rl);
+            for ((xk, rk), &cut) in xl.iter_mut().zip(&*rl).zip(fixed) {
                 if !cut {
                     *xk += rk;
                 }
             }
             // The last sweep on the finest level leaves its residual in
-            // r[top] (free again once prolongated): A_T c = b − r.
+            // `ac` (free again once prolongated): A_T c = b − r.
             let s = sweeps(l);
             for sweep in 1..=s {
-                let last = (l == top && sweep == s).then_some(&mut r[l][..]);
+                let last = (l == top && sweep == s).then_some(&mut *rl);
                 linear_sweep(matrix, dg, split, dk, bl, xl, fixed, false, last);
             }
             if l == top && s > 0 {
-                for ((q, bk), rk) in ac.iter_mut().zip(bl).zip(&r[l]) {
-                    *q = bk - rk;
+                for (q, bk) in rl.iter_mut().zip(bl) {
+                    *q = bk - *q;
                 }
             }
         }

@@ -24,7 +24,9 @@ use nalgebra_sparse::CsrMatrix;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::numerics::linalg::{Csr, CsrError, max_abs, max_abs_if_finite, spmv, spmv_values_into};
+use crate::numerics::linalg::{
+    Csr, CsrError, IntoCsr, max_abs, max_abs_if_finite, spmv, spmv_values_into,
+};
 
 mod scales;
 mod symmetry;
@@ -95,24 +97,6 @@ pub enum ProblemError {
 
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
 
-/// What [`ContactProblem::new`] takes as A: a [`Csr`] as it is, or a
-/// nalgebra matrix, converted to 32-bit column indices.
-pub trait IntoStiffness {
-    fn into_stiffness(self) -> Result<Csr, CsrError>;
-}
-
-impl IntoStiffness for Csr {
-    fn into_stiffness(self) -> Result<Csr, CsrError> {
-        Ok(self)
-    }
-}
-
-impl IntoStiffness for CsrMatrix<f64> {
-    fn into_stiffness(self) -> Result<Csr, CsrError> {
-        Csr::try_from(self)
-    }
-}
-
 /// Whether M has exactly A's pattern.
 fn on_pattern_of(m: &CsrMatrix<f64>, a: &Csr) -> bool {
     m.nrows() == a.nrows()
@@ -161,7 +145,7 @@ pub struct ContactProblem {
     operator_id: u64,
     /// Prolongations of a nested hierarchy, coarse to fine, the last onto
     /// these unknowns (empty: no hierarchy). Shared between clones.
-    prolongations: std::sync::Arc<[CsrMatrix<f64>]>,
+    prolongations: std::sync::Arc<[Csr]>,
 }
 
 impl ContactProblem {
@@ -173,13 +157,13 @@ impl ContactProblem {
     /// exactly A's pattern is kept as its values. A is kept with 32-bit
     /// column indices ([`Csr`]); a nalgebra matrix is converted.
     pub fn new(
-        a: impl IntoStiffness,
+        a: impl IntoCsr,
         f: Vec<f64>,
         mass: impl Into<Mass>,
         contacts: Vec<ContactNode>,
         rigid_modes: Vec<Vec<f64>>,
     ) -> Result<Self, ProblemError> {
-        let a = a.into_stiffness()?;
+        let a = a.into_csr()?;
         let n = a.nrows();
         let mass = match mass.into() {
             Mass::Matrix(m) if on_pattern_of(&m, &a) => Mass::OnStiffnessPattern(m.disassemble().2),
@@ -260,8 +244,12 @@ impl ContactProblem {
     /// dimensions, finite entries.
     pub fn with_hierarchy(
         mut self,
-        prolongations: Vec<CsrMatrix<f64>>,
+        prolongations: Vec<impl IntoCsr>,
     ) -> Result<Self, ProblemError> {
+        let prolongations = prolongations
+            .into_iter()
+            .map(IntoCsr::into_csr)
+            .collect::<Result<Vec<Csr>, CsrError>>()?;
         let mut expected = self.n();
         for p in prolongations.iter().rev() {
             if p.nrows() != expected {
@@ -283,7 +271,7 @@ impl ContactProblem {
     }
 
     /// The hierarchy's prolongations, coarse to fine (empty without one).
-    pub fn prolongations(&self) -> &[CsrMatrix<f64>] {
+    pub fn prolongations(&self) -> &[Csr] {
         &self.prolongations
     }
 

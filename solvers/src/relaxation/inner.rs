@@ -8,7 +8,7 @@
 //! s; both are C¹ or have a kink only at s = 0, so TNNMG truncates only
 //! sticking slips. H = A + ρM is positive definite, so no kernel is left.
 
-use nalgebra_sparse::CsrMatrix;
+use crate::numerics::linalg::Csr;
 use serde::{Deserialize, Serialize};
 
 use super::pointwise::{RelaxationOperator, Smoothing, SweepData};
@@ -51,7 +51,7 @@ pub(crate) enum InnerSolver<'h> {
 /// iteration's vectors.
 pub(crate) struct MultigridInner<'h> {
     hierarchy: &'h mut Hierarchy,
-    p: &'h [CsrMatrix<f64>],
+    p: &'h [Csr],
     laws: Laws,
     contact: Vec<usize>,
     ws: Workspace,
@@ -61,7 +61,7 @@ pub(crate) struct MultigridInner<'h> {
 impl<'h> MultigridInner<'h> {
     pub(crate) fn new(
         hierarchy: &'h mut Hierarchy,
-        p: &'h [CsrMatrix<f64>],
+        p: &'h [Csr],
         n: usize,
         contacts: &[ContactNode],
     ) -> Self {

@@ -245,6 +245,25 @@ impl Csr {
     }
 }
 
+/// A matrix a problem takes ([`crate::ContactProblem::new`]'s A, its
+/// prolongations): a [`Csr`] as it is, or a nalgebra matrix, converted to
+/// 32-bit column indices.
+pub trait IntoCsr {
+    fn into_csr(self) -> Result<Csr, CsrError>;
+}
+
+impl IntoCsr for Csr {
+    fn into_csr(self) -> Result<Csr, CsrError> {
+        Ok(self)
+    }
+}
+
+impl IntoCsr for CsrMatrix<f64> {
+    fn into_csr(self) -> Result<Csr, CsrError> {
+        Csr::try_from(self)
+    }
+}
+
 impl TryFrom<CsrMatrix<f64>> for Csr {
     type Error = CsrError;
 

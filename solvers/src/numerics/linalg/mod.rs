@@ -6,7 +6,7 @@ mod csr;
 
 pub(crate) use cholesky::lower_part;
 pub use cholesky::{CholeskyAnalysis, SparseCholesky, kernel_dimension};
-pub use csr::{ColumnIndex, Csr, CsrError, SparseRows};
+pub use csr::{ColumnIndex, Csr, CsrError, IntoCsr, SparseRows};
 
 use thiserror::Error;
 
