@@ -307,3 +307,40 @@ fn the_nested_schedule_releases_the_coarse_levels_once_done_with_them() {
     assert!(after[1..].iter().all(|&n| n == Some(finest)), "{after:?}");
     assert!(after.len() > 1, "the finest level is solved after");
 }
+
+/// A nested continuation stepped by hand, without its answers handed back
+/// (`keep`), solves each step on the finest level from zero, since its
+/// coarse levels are gone (it once went back to the dropped coarsest level
+/// and panicked), and reaches the same answer each time.
+#[test]
+fn a_nested_step_not_handed_its_predecessor_starts_on_the_finest() {
+    use contactlab::coulomb::continuation::{Continuation, Schedule};
+    use contactlab::coulomb::fixed_point::{CoulombSettings, GivenFrictionStep};
+
+    let scene = problem(1, 4);
+    let levels: Vec<Discretization> = scene
+        .levels
+        .iter()
+        .map(|&h| Discretization::new(&scene, h).unwrap())
+        .collect();
+    let finest = levels.last().unwrap().problem.n();
+    let mut solver = Recording {
+        inner: Default::default(),
+        log: Vec::new(),
+    };
+    let mut step = Continuation::new(levels, &mut solver, Schedule::Nested);
+    let g = step
+        .initial_bound(&CoulombSettings::default(), &mut Silent)
+        .expect("the coarse levels give a first bound");
+    let first = step.solve_step(&g, None, &mut Silent);
+    let second = step.solve_step(&g, None, &mut Silent);
+    drop(step);
+    assert!(first.status.is_converged(), "{}", first.detail);
+    assert!(second.status.is_converged(), "{}", second.detail);
+    let scale = first.pressure.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+    for (a, b) in first.pressure.iter().zip(&second.pressure) {
+        assert!((a - b).abs() <= 1e-8 * scale, "{a} vs {b}");
+    }
+    let last_two = &solver.log[solver.log.len() - 2..];
+    assert_eq!(last_two, [Some(finest), Some(finest)], "{:?}", solver.log);
+}

@@ -164,6 +164,10 @@ impl GivenFrictionStep for Continuation<'_> {
     ) -> Solution {
         let top = self.levels.len() - 1;
         let first = match (self.schedule, &self.last, &self.nested) {
+            // The nested schedule past its initial bound keeps the finest
+            // level alone: a step not handed its predecessor ([`keep`])
+            // starts there from zero.
+            _ if self.levels[0].is_none() => top,
             (Schedule::FinestOnly | Schedule::Nested, Some(_), _) => top,
             (Schedule::Nested, None, Some(_)) => top,
             _ => 0,
@@ -224,9 +228,8 @@ impl GivenFrictionStep for Continuation<'_> {
                 }
                 s.iterations = total;
                 s.timing = timing;
-                if idx == top {
-                    self.last = Some(s.clone());
-                }
+                // Used: the fixed point hands the new one back ([`keep`]).
+                self.last = None;
                 return s;
             }
             let (coarse, fine) = (at(&self.levels, idx), at(&self.levels, idx + 1));
@@ -234,6 +237,10 @@ impl GivenFrictionStep for Continuation<'_> {
             l = fine.transfer_contact(coarse, &s.pressure);
         }
         unreachable!("the loop returns at the finest level")
+    }
+
+    fn keep(&mut self, solution: Solution) {
+        self.last = Some(solution);
     }
 
     /// The nested schedule: the fixed point on each coarse level in turn,
@@ -315,6 +322,10 @@ impl GivenFrictionStep for NestedLevel<'_> {
         observer: &mut dyn Observer,
     ) -> Solution {
         self.inner.solve_step(g, accuracy, observer)
+    }
+
+    fn keep(&mut self, solution: Solution) {
+        self.inner.keep(solution);
     }
 
     fn initial_bound(&mut self, _: &CoulombSettings, _: &mut dyn Observer) -> Option<Vec<f64>> {

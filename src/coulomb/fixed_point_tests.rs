@@ -153,3 +153,49 @@ fn expanding_map_stops_at_the_cap_with_that_status() {
     assert_eq!(out.ending, Ending::NotContracting);
     assert_eq!(out.history.len(), 4, "{}", out.detail);
 }
+
+/// The affine step that records what the fixed point hands back.
+struct Keeping {
+    exact: Affine,
+    returned: Vec<Vec<f64>>,
+    kept: Vec<Vec<f64>>,
+}
+
+impl GivenFrictionStep for Keeping {
+    fn problem(&self) -> &ContactProblem {
+        &self.exact.problem
+    }
+
+    fn solve_step(&mut self, g: &[f64], a: Option<f64>, o: &mut dyn Observer) -> Solution {
+        let s = self.exact.solve_step(g, a, o);
+        self.returned.push(s.pressure.clone());
+        s
+    }
+
+    fn keep(&mut self, solution: Solution) {
+        self.kept.push(solution.pressure);
+    }
+}
+
+/// Every solution but the last comes back to the step, in order, as the
+/// next step's start (the warm start holds it instead of a copy); the last
+/// one is the answer.
+#[test]
+fn each_solution_but_the_answer_is_handed_back_to_the_step() {
+    let mut step = Keeping {
+        exact: affine(vec![10.0, 20.0], 0.8),
+        returned: Vec::new(),
+        kept: Vec::new(),
+    };
+    let s = CoulombSettings {
+        epsilon: 1e-9,
+        max_iterations: 200,
+        ..CoulombSettings::defaults(Stopping::Paper)
+    };
+    let out = friction_fixed_point(&mut step, &s, &mut Silent);
+    assert_eq!(out.ending, Ending::Converged);
+    let n = step.returned.len();
+    assert!(n > 2, "{n} steps");
+    assert_eq!(step.kept, step.returned[..n - 1]);
+    assert_eq!(out.solution.pressure, step.returned[n - 1]);
+}
