@@ -5,3 +5,4 @@
 pub mod budget;
 pub mod continuation;
 pub mod fixed_point;
+pub mod single_level;

@@ -12,7 +12,11 @@ use crate::mechanics::dofs::DofExpansion;
 use crate::mechanics::material::Material;
 use crate::mechanics::mesh::{Body, Mesh};
 use crate::mechanics::scene::Traction;
+
+mod pattern;
 use crate::solvers::Csr;
+pub use pattern::Pattern;
+use pattern::append;
 
 /// The triangles of the mesh (optionally one body's), as node triples.
 /// Pushed from `for_each`, which drives the mesh's nested iterator from the
@@ -269,24 +273,6 @@ pub fn assemble_all<const K: usize>(
     assemble_rows(mesh, dofs, only, elements, Sum::ByNodesWherePossible)
 }
 
-/// The stored positions of an assembled matrix: row offsets and sorted
-/// 32-bit column indices (the [`Csr`] layout, half the index memory of a
-/// nalgebra pattern).
-#[derive(Debug, PartialEq)]
-pub struct Pattern {
-    offsets: Vec<usize>,
-    columns: Vec<u32>,
-}
-
-impl Pattern {
-    /// The matrix with these positions and `values` (one per position).
-    pub fn with_values(self, values: Vec<f64>) -> Csr {
-        let n = self.offsets.len() - 1;
-        Csr::try_from_csr_data(n, n, self.offsets, self.columns, values)
-            .expect("an assembly's rows are sorted, distinct, in range, one value each")
-    }
-}
-
 /// How [`assemble_rows`] sums the blocks' rows.
 #[derive(Clone, Copy, PartialEq)]
 enum Sum {
@@ -397,22 +383,6 @@ fn assemble_rows<const K: usize>(
     // after the sums by nodes): [`Pattern::with_values`] checks them again
     // in one pass.
     (Pattern { offsets, columns }, values)
-}
-
-/// Appends `get` of each of `from` to `v`: one reservation, then a loop
-/// that only writes. Pushing entry by entry into three arrays at once
-/// stored each length back per entry, `extend` stayed a call per row, and
-/// `resize` wrote every entry twice; this is 0.9 × the first's time at 1/64.
-#[inline(always)]
-fn append<T, S>(v: &mut Vec<T>, from: &[S], get: impl Fn(&S) -> T) {
-    v.reserve(from.len());
-    let len = v.len();
-    for (slot, s) in v.spare_capacity_mut().iter_mut().zip(from) {
-        slot.write(get(s));
-    }
-    // SAFETY: the reservation left at least from.len() spare slots, and the
-    // loop wrote the first from.len() of them.
-    unsafe { v.set_len(len + from.len()) };
 }
 
 /// Assembles one element matrix over every triangle (optionally one body);
