@@ -38,6 +38,8 @@ __all__ = [
     "solve",
     "certify",
     "work_precision",
+    "compare",
+    "Comparison",
     "benchmark",
     "BenchmarkResult",
     "BenchmarkSummary",
@@ -138,6 +140,13 @@ class Problem:
     @property
     def contact(self) -> Contact:
         return Contact(**self._p._contact())
+
+    @property
+    def scales(self) -> Dict[str, float]:
+        """The problem's own scales: ``force``, ``contact_load``, ``length``
+        (of Γ_K), ``stiffness``, ``pressure`` (P) and ``displacement`` (U),
+        in which the certificate and ``compare`` measure."""
+        return dict(self._p.scales)
 
     @property
     def rigid_mode(self) -> np.ndarray:
@@ -309,19 +318,37 @@ class Trial:
         return self.python or self.solver_status == "converged"
 
 
-def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) -> Trial:
+def _python_answer(fn: PythonSolver, problem: Problem, target: float):
+    """A Python function's answer, timed and certified at ``target``:
+    (certificate, seconds, the completed answer as the certificate judged
+    it: displacements, pressure, friction traction)."""
     start = time.perf_counter()
     answer = fn(problem, target)
     seconds = time.perf_counter() - start
     if isinstance(answer, Mapping):
-        c = certify(
-            problem,
-            displacements=answer.get("displacements"),
-            forces=answer.get("forces"),
-            tolerance=target,
-        )
+        v, forces = answer.get("displacements"), answer.get("forces")
     else:
-        c = certify(problem, displacements=answer, tolerance=target)
+        v, forces = answer, None
+    p = q = None
+    if forces is not None:
+        try:
+            p, q = forces
+        except (TypeError, ValueError):
+            raise Error("forces: give a pair (pressure, friction_traction)") from None
+    d = _contactlab.certify(
+        problem._p,
+        _array(v, "displacements"),
+        _array(p, "pressure"),
+        _array(q, "friction_traction"),
+        None,
+        target,
+    )
+    completed = (d["displacements"], d["pressure"], d["friction_traction"])
+    return Certificate._of(d), seconds, completed
+
+
+def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) -> Trial:
+    c, seconds, _ = _python_answer(fn, problem, target)
     return Trial(
         solver=name,
         target=target,
@@ -388,6 +415,92 @@ def work_precision(
             str(chart),
         )
     return trials
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One solver in a comparison: its certified answer against the
+    reference, the certified answer with the smallest largest violation."""
+
+    solver: str
+    certified: bool
+    certificate: Certificate
+    seconds: float
+    status: str
+    #: The solver's own claim ("answered" for a Python function).
+    solver_status: str
+    python: bool
+    #: Whether this answer is the reference.
+    reference: bool
+    #: max|v − v_ref| / U and max|p − p_ref| / P, the problem's
+    #: displacement and pressure scales (NaN when no answer is certified).
+    displacement_difference: float
+    pressure_difference: float
+
+
+def compare(
+    problem: Problem,
+    solvers: Union[Iterable[str], Mapping[str, Union[str, PythonSolver]]],
+    target: float = 1e-8,
+) -> List[Comparison]:
+    """Every solver on the problem's Coulomb law, each answer certified at
+    ``target`` and timed, and compared with the reference: of these
+    answers, the certified one whose largest violation is the smallest
+    (``contactlab compare`` chooses its reference among its candidates by
+    the same rule). ``solvers`` is as for
+    ``work_precision``: a Python function's answer passes through the same
+    certificate and is measured against the same reference; one that the
+    certificate refuses is never the reference.
+    """
+    if not isinstance(solvers, Mapping):
+        solvers = {name: name for name in solvers}
+    target = float(target)
+    runs = []
+    for name, how in solvers.items():
+        if callable(how):
+            c, seconds, (v, p, _) = _python_answer(how, problem, target)
+            status = "converged" if c.passed else "inaccurate"
+            runs.append((name, c, seconds, status, "answered", True, v, p))
+        else:
+            r = solve(problem, solver=how, target=target)
+            runs.append(
+                (
+                    name,
+                    r.certificate,
+                    r.seconds,
+                    r.status,
+                    r.solver_status,
+                    False,
+                    r.displacements,
+                    r.pressure,
+                )
+            )
+    certified = [k for k, run in enumerate(runs) if run[1].passed]
+    best = min(certified, key=lambda k: runs[k][1].residual, default=None)
+    scales = problem.scales
+    out = []
+    for k, (name, c, seconds, status, claim, python, v, p) in enumerate(runs):
+        if best is None:
+            dv = dp = math.nan
+        else:
+            v_ref, p_ref = runs[best][6], runs[best][7]
+            dv = float(np.max(np.abs(v - v_ref), initial=0.0)) / scales["displacement"]
+            dp = float(np.max(np.abs(p - p_ref), initial=0.0)) / scales["pressure"]
+        out.append(
+            Comparison(
+                solver=name,
+                certified=c.passed,
+                certificate=c,
+                seconds=seconds,
+                status=status,
+                solver_status=claim,
+                python=python,
+                reference=k == best,
+                displacement_difference=dv,
+                pressure_difference=dp,
+            )
+        )
+    return out
 
 
 @dataclass(frozen=True)

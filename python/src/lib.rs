@@ -181,6 +181,26 @@ impl Problem {
         Ok(d)
     }
 
+    /// The problem's own scales (force, contact load, length of Γ_K,
+    /// stiffness, pressure P, displacement U): what the certificate and the
+    /// comparisons measure in.
+    #[getter]
+    fn scales<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.finest.problem.scales();
+        let d = PyDict::new(py);
+        for (name, value) in [
+            ("force", s.force),
+            ("contact_load", s.contact_load),
+            ("length", s.length),
+            ("stiffness", s.stiffness),
+            ("pressure", s.pressure),
+            ("displacement", s.displacement),
+        ] {
+            d.set_item(name, value)?;
+        }
+        Ok(d)
+    }
+
     /// The upper body's vertical translation in the unknowns (A's kernel).
     #[getter]
     fn rigid_mode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
@@ -385,6 +405,11 @@ fn certify<'py>(
     let c = certify_answer(cp, friction, &v, &p, &q, tolerance);
     let d = certificate_dict(py, &c)?;
     d.set_item("law", friction.law().as_str())?;
+    // The answer the certificate judged, completed (forces from the
+    // displacements by stationarity, or displacements from the forces).
+    d.set_item("displacements", v.into_pyarray(py))?;
+    d.set_item("pressure", p.into_pyarray(py))?;
+    d.set_item("friction_traction", q.into_pyarray(py))?;
     Ok(d)
 }
 

@@ -233,3 +233,38 @@ def test_a_python_solver_stands_in_the_benchmarks_tables(tmp_path):
     assert "zeros" in (out / "benchmark.md").read_text()
     svg = (out / "charts" / "benchmark_profile_1e-6.svg").read_text()
     assert "newton-coulomb" in svg and "slow" in svg
+
+
+def test_compare_measures_every_answer_against_a_certified_reference():
+    # A comparison that took a refused answer as its reference, skipped the
+    # certificate for a Python solver, or measured in the wrong scales
+    # fails here.
+    p = cl.Problem.paper(1, h="1/16")
+    exact = cl.solve(p, solver="newton-coulomb", target=1e-10)
+
+    def copy(problem, target):
+        return {"forces": (exact.pressure, exact.friction_traction)}
+
+    def zeros(problem, target):
+        return np.zeros(problem.n)
+
+    rows = cl.compare(
+        p, {"newton-coulomb": "newton-coulomb", "copy": copy, "zeros": zeros}, target=1e-8
+    )
+    by = {r.solver: r for r in rows}
+    assert set(by) == {"newton-coulomb", "copy", "zeros"}
+    assert sum(r.reference for r in rows) == 1
+    ref = next(r for r in rows if r.reference)
+    assert ref.certified and ref.solver != "zeros"
+    assert ref.displacement_difference == 0.0 and ref.pressure_difference == 0.0
+    # The copy of a certified answer, given by its forces alone, is certified
+    # and agrees with the reference far below the certificate's tolerance.
+    assert by["copy"].python and by["copy"].certified
+    assert by["copy"].pressure_difference <= 1e-6
+    assert by["copy"].displacement_difference <= 1e-6
+    # v = 0 leaves the load unbalanced: refused, and far from the reference
+    # in the problem's own scales (its pressure is zero where p ~ P).
+    assert not by["zeros"].certified and by["zeros"].solver_status == "answered"
+    assert by["zeros"].pressure_difference > 0.1
+    assert by["zeros"].displacement_difference > 0.1
+    assert p.scales["pressure"] > 0 and p.scales["displacement"] > 0
