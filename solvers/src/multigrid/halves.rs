@@ -165,6 +165,12 @@ impl Halves {
         &self.separator
     }
 
+    /// Whether row k (not in the separator) is in the first half.
+    #[cfg(test)]
+    pub(crate) fn in_first_half(&self, k: usize) -> bool {
+        k < self.split
+    }
+
     /// One Gauss-Seidel sweep over x in this ordering (see the module),
     /// `update(k, x)` setting x[k] from the others; the halves on two
     /// threads. `update` must read only the unknowns of row k's pattern.

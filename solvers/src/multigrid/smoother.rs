@@ -417,6 +417,59 @@ mod tests {
         }
     }
 
+    /// The two threads of a split sweep write disjoint residuals: a half's
+    /// row scatters its move into rows of its own half only, forward and
+    /// backward, and never into the separator's (their residuals are set
+    /// by their own visit, or recomputed after a backward sweep). The
+    /// backward sweep's half rows once scattered into the separator's rows,
+    /// both threads into the same ones: lost updates that no run showed
+    /// twice alike. This checks the writes themselves, not a run's timing.
+    #[test]
+    fn a_half_row_scatters_into_its_own_half_only() {
+        let a = grid(300);
+        let diag = diagonal_positions(&a).expect("a grid has its diagonal");
+        let halves = Halves::new(&a).expect("a grid splits");
+        let sep = halves.in_separator();
+        let mut r = vec![0.0; a.nrows()];
+        let mut written = 0;
+        for k in (0..a.nrows()).filter(|&k| !sep[k]) {
+            for forward in [true, false] {
+                // SAFETY: one thread; the grid's columns are below n.
+                unsafe {
+                    scatter_to_swept(
+                        &a,
+                        k,
+                        diag[k] as usize,
+                        1.0,
+                        (Some(sep), forward),
+                        Shared::of(&mut r),
+                    )
+                };
+                // A row scatters into the rows of its pattern alone.
+                for &j in a.row(k).0 {
+                    let j = j as usize;
+                    if std::mem::take(&mut r[j]) == 0.0 {
+                        continue;
+                    }
+                    written += 1;
+                    assert!(
+                        !sep[j],
+                        "row {k} (forward {forward}) wrote separator row {j}"
+                    );
+                    assert_eq!(
+                        halves.in_first_half(j),
+                        halves.in_first_half(k),
+                        "row {k} (forward {forward}) wrote row {j} of the other half"
+                    );
+                }
+            }
+        }
+        assert!(
+            written > a.nrows(),
+            "the rows do scatter ({written} writes)"
+        );
+    }
+
     /// Each local minimizer is the minimum of its 1-D energy: no sampled
     /// admissible point is lower.
     #[test]
