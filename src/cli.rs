@@ -87,10 +87,11 @@ pub enum Command {
     /// at 1/256, once each without the time limit (about 2 h, 1.5 h of it the
     /// paper's method at 1/256; --quick: seconds); and where the fastest
     /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
-    /// --quick), each in a fresh process; the multigrid goals (about 2 min):
+    /// --quick), each in a fresh process; the multigrid goals (about 5 min):
     /// tnnmg's iterations from zero at every mesh, the whole Coulomb problem
     /// by tnnmg (nested schedule) on the large meshes, the median of 3 runs
-    /// each in a fresh process (1/2048: one), the
+    /// each in a fresh process (1/2048 and 1/4096: one each; 1/4096, about
+    /// 14 GB, only where that much memory is available), the
     /// paper's method with relaxation.inner = multigrid at 1/256, and tnnmg
     /// against newton-coulomb at 1/64 and 1/256. Writes performance.csv,
     /// performance_goals.md and charts into --out.

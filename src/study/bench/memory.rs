@@ -51,6 +51,19 @@ fn status_kb(field: &str) -> Option<u64> {
         .ok()
 }
 
+/// Memory the kernel could give a new process now (`MemAvailable` of
+/// `/proc/meminfo`), in KiB (Linux).
+pub fn available_memory_kb() -> Option<u64> {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()?
+        .lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
 /// Peak resident memory of this process so far, in KiB (Linux).
 fn peak_memory_kb() -> Option<u64> {
     status_kb("VmHWM")

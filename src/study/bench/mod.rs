@@ -79,7 +79,9 @@ impl BenchSpec {
             large: (9..=10)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
-            multigrid_only: vec![MeshSize::from_level(11).expect("in range")],
+            multigrid_only: (11..=12)
+                .map(|k| MeshSize::from_level(k).expect("in range"))
+                .collect(),
             equal_accuracy: (5..=8)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),

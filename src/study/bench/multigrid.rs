@@ -20,7 +20,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{solve_scene, solver_entry};
 use crate::study::bench::goals::Goal;
-use crate::study::bench::memory::{MemoryUse, measure_in_fresh_process};
+use crate::study::bench::memory::{MemoryUse, available_memory_kb, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow};
 
 /// The registered multigrid solver of the given-friction subproblem.
@@ -49,6 +49,8 @@ pub struct MultigridRows {
     pub coulomb: Vec<MemoryUse>,
     /// The same on the meshes only the multigrid solver runs on.
     pub finest: Vec<MemoryUse>,
+    /// Those of them not run, and why (too little memory here).
+    pub skipped: Vec<(MeshSize, String)>,
     /// The paper's method with multigrid inside: (h, seconds, status).
     pub paper: Option<(MeshSize, f64, String)>,
     /// max|p − p_Newton| / P of the Coulomb answers: (h, gap).
@@ -123,6 +125,11 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         .chain(spec.multigrid_only.iter().map(|h| (h, true)))
     {
         let runs = if finest { 1 } else { COULOMB_RUNS };
+        if let Some(why) = finest.then(|| too_large(&out.finest, h)).flatten() {
+            log(&format!("{SOLVER} at h = {h} not run: {why}"));
+            out.skipped.push((h, why));
+            continue;
+        }
         let mut uses = Vec::new();
         for run in 1..=runs {
             log(&format!(
@@ -157,6 +164,24 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         out.agreement.push((h, agreement_at(spec.problem, h)?));
     }
     Ok(out)
+}
+
+/// Why a mesh finer than those measured would not fit here, if it would
+/// not: its estimate, four times the unknowns of the mesh before it at
+/// that mesh's peak per unknown, with a tenth to spare, against the memory
+/// this machine has available now (1/4096 takes about 14 GB).
+fn too_large(done: &[MemoryUse], h: MeshSize) -> Option<String> {
+    let before = done.iter().find(|u| u.h.level() + 1 == h.level())?;
+    let need = 4.0 * before.peak_kb as f64 * 1.1;
+    let available = available_memory_kb()? as f64;
+    (need > available).then(|| {
+        format!(
+            "it would need about {:.0} GiB (four times {}'s peak), and {:.0} GiB are available",
+            need / GIB_KB,
+            before.h,
+            available / GIB_KB
+        )
+    })
 }
 
 /// TNNMG from zero on the given-friction subproblem at `h` (one level):
@@ -281,26 +306,18 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
                 )
             })
             .collect();
-        let gone = |h: &str| !m.finest.iter().any(|u| u.h.to_string() == h);
-        let mut missing = Vec::new();
-        if gone("1/2048") {
-            missing.push("1/2048 not run".to_string());
-        }
-        if gone("1/4096") {
-            // Four times the unknowns of 1/2048 at its peak per unknown.
-            let estimate = m
-                .finest
-                .iter()
-                .find(|u| u.h.to_string() == "1/2048")
-                .map_or(String::new(), |u| {
-                    format!(
-                        ": four times 1/2048's unknowns at its peak per unknown would take about {:.0} GiB",
-                        4.0 * u.peak_kb as f64 / GIB_KB
-                    )
-                });
-            missing.push(format!(
-                "1/4096 refused (meshes finer than 1/2048 are){estimate}"
-            ));
+        let mut missing: Vec<String> = m
+            .skipped
+            .iter()
+            .map(|(h, why)| format!("{h} not run: {why}"))
+            .collect();
+        for h in ["1/2048", "1/4096"] {
+            let seen = |name: String| name == h;
+            if !m.finest.iter().any(|u| seen(u.h.to_string()))
+                && !m.skipped.iter().any(|(s, _)| seen(s.to_string()))
+            {
+                missing.push(format!("{h} not measured"));
+            }
         }
         out.push(Goal {
             goal: "h = 1/2048 and 1/4096 certified, peak at most 12 GiB".into(),

@@ -175,7 +175,7 @@ fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
         "compare" => 120.0,
         "sweep" => 75.0,
         "stability" => 135.0,
-        "bench" => 390.0,
+        "bench" => 530.0,
         "benchmark" => 130.0,
         "discretization_error" => 140.0,
         _ => 60.0,
