@@ -21,8 +21,10 @@ use super::{TnnmgSettings, dot, given_friction_laws};
 use crate::entry::InnerKernel;
 use crate::problem::ContactProblem;
 
-/// The bound of the kernel's subproblem, as a fraction of 𝓕P.
-const BOUND_OF_SCALE: f64 = 0.5;
+/// The given bound of the kernel's subproblem and of `bench`'s iteration
+/// counts, as a fraction of the Coulomb scale 𝓕P at every node: half of
+/// it, so that slip, stick and separation all occur on problem 1.
+pub const BOUND_OF_SCALE: f64 = 0.5;
 
 /// The kernel (None for a problem without a mesh hierarchy).
 pub(crate) fn iteration_kernel(problem: &ContactProblem) -> Option<InnerKernel> {

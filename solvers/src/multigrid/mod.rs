@@ -42,6 +42,7 @@ mod galerkin;
 mod halves;
 pub(crate) mod iteration;
 mod kernel;
+pub use kernel::BOUND_OF_SCALE;
 pub(crate) mod laws;
 mod line_search;
 pub(crate) mod smoother;

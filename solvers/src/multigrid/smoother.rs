@@ -120,6 +120,13 @@ unsafe fn off_diagonal_rhs(a: &Csr, k: usize, diag: usize, b: f64, x: Shared) ->
     b - (sum - vals[diag] * unsafe { x.get(k) })
 }
 
+/// D_kk of the diagonal shift D, which is kept as an empty vector while
+/// every curvature is zero (the given-friction laws).
+#[inline(always)]
+pub(crate) fn shift_at(shift: &[f64], k: usize) -> f64 {
+    shift.get(k).copied().unwrap_or(0.0)
+}
+
 /// The exact minimizer of ½ a x² − c x + φ(x).
 #[inline]
 pub(crate) fn local_minimizer(law: Local, a: f64, c: f64) -> f64 {
@@ -158,7 +165,7 @@ fn separator_residuals(
         // SAFETY: a Csr keeps its column indices below ncols =
         // x.len() (checked by the sweep).
         let ax = unsafe { crate::numerics::linalg::row_dot(row.0, row.1, x) };
-        r[j] = b[j] - ax - shift.get(j).copied().unwrap_or(0.0) * x[j];
+        r[j] = b[j] - ax - shift_at(shift, j) * x[j];
     }
 }
 
@@ -301,7 +308,7 @@ pub(crate) fn linear_sweep(
             // so it leaves the chain of rows (each waits for the unknown
             // the row before set) a multiplication instead of a division.
             let dk = diag[k] as usize;
-            let inverse = 1.0 / (vals[dk] + shift.get(k).copied().unwrap_or(0.0));
+            let inverse = 1.0 / (vals[dk] + shift_at(shift, k));
             let c = off_diagonal_rhs(a, k, dk, b[k], x);
             let new = c * inverse;
             let delta = new - x.get(k);

@@ -8,7 +8,7 @@ fn residual(a: &Csr, shift: &[f64], b: &[f64], x: &[f64], fixed: &[bool]) -> Vec
     spmv_into(a, x, &mut ax);
     (0..x.len())
         .map(|k| {
-            let d = shift.get(k).copied().unwrap_or(0.0);
+            let d = shift_at(shift, k);
             if fixed[k] {
                 0.0
             } else {

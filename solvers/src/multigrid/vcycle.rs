@@ -22,7 +22,7 @@ use crate::numerics::linalg::Csr;
 
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::halves::Halves;
-use crate::multigrid::smoother::{Position, diagonal_position, linear_sweep};
+use crate::multigrid::smoother::{Position, diagonal_position, linear_sweep, shift_at};
 use crate::numerics::linalg::{spmv_into, spmv_transpose_into};
 
 /// Eigenvalues below this fraction of the largest are the coarsest
@@ -408,7 +408,7 @@ impl Hierarchy {
                 *q = if truncated[k] {
                     0.0
                 } else {
-                    *q + shift.get(k).copied().unwrap_or(0.0) * c[k]
+                    *q + shift_at(shift, k) * c[k]
                 };
             }
         }

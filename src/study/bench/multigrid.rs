@@ -8,6 +8,8 @@
 //! single cold solves, as the large meshes' are.
 
 use anyhow::Result;
+// The given bound of the iteration counts is the sweep kernel's own.
+use contactlab_solvers::multigrid::BOUND_OF_SCALE;
 use contactlab_solvers::{Friction, Silent, registry};
 use serde::Serialize;
 use serde_json::json;
@@ -34,10 +36,6 @@ pub const ITERATION_GOAL: usize = 30;
 
 /// The certificate's tolerance of the iteration counts.
 const COUNT_TOLERANCE: f64 = 1e-8;
-
-/// The given bound of the iteration counts: half the Coulomb scale 𝓕P at
-/// every node (slip, stick and separation all occur on problem 1).
-const BOUND_OF_SCALE: f64 = 0.5;
 
 /// What was measured.
 #[derive(Clone, Debug, Default, Serialize)]
