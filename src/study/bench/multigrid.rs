@@ -123,7 +123,11 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         .chain(spec.multigrid_only.iter().map(|h| (h, true)))
     {
         let runs = if finest { 1 } else { COULOMB_RUNS };
-        if let Some(why) = finest.then(|| too_large(&out.finest, h)).flatten() {
+        let available = available_memory_kb();
+        if let Some(why) = finest
+            .then(|| too_large(&out.finest, h, available?))
+            .flatten()
+        {
             log(&format!("{SOLVER} at h = {h} not run: {why}"));
             out.skipped.push((h, why));
             continue;
@@ -167,11 +171,12 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
 /// Why a mesh finer than those measured would not fit here, if it would
 /// not: its estimate, four times the unknowns of the mesh before it at
 /// that mesh's peak per unknown, with a tenth to spare, against the memory
-/// this machine has available now (1/4096 takes about 14 GB).
-fn too_large(done: &[MemoryUse], h: MeshSize) -> Option<String> {
+/// `available_kb` this machine has available now (1/4096 takes about 14
+/// GB).
+fn too_large(done: &[MemoryUse], h: MeshSize, available_kb: u64) -> Option<String> {
     let before = done.iter().find(|u| u.h.level() + 1 == h.level())?;
     let need = 4.0 * before.peak_kb as f64 * 1.1;
-    let available = available_memory_kb()? as f64;
+    let available = available_kb as f64;
     (need > available).then(|| {
         format!(
             "it would need about {:.0} GiB (four times {}'s peak), and {:.0} GiB are available",
@@ -399,5 +404,26 @@ mod tests {
             (4.0, "max_iterations")
         );
         assert!(median_run(Vec::new()).is_none());
+    }
+
+    /// A finer mesh is skipped, with the reason, when four times the peak
+    /// of the mesh before it with a tenth to spare exceeds what is
+    /// available, and run otherwise; one without a measured predecessor is
+    /// run. An estimate from the wrong mesh, or without the factor 4, fails.
+    #[test]
+    fn a_finer_mesh_is_skipped_only_when_it_would_not_fit() {
+        let gib = 1024 * 1024;
+        let mut done = vec![run(10.0, 3 * gib, "converged")];
+        done[0].h = MeshSize::from_level(11).unwrap();
+        let h = MeshSize::from_level(12).unwrap();
+        // Needs 4 × 3 × 1.1 = 13.2 GiB.
+        assert!(too_large(&done, h, 14 * gib).is_none());
+        let why = too_large(&done, h, 12 * gib).expect("13.2 GiB do not fit in 12");
+        assert!(
+            why.contains("13 GiB") && why.contains("1/2048") && why.contains("12 GiB"),
+            "{why}"
+        );
+        // Nothing measured one level below: no estimate, so it runs.
+        assert!(too_large(&done, MeshSize::from_level(11).unwrap(), 1).is_none());
     }
 }
