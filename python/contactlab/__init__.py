@@ -271,13 +271,20 @@ def certify(
     or both. With ``bound`` the given-friction law at that bound is checked,
     else the Coulomb law.
     """
+    return Certificate._of(_certified(problem, displacements, forces, bound, tolerance))
+
+
+def _certified(problem: Problem, displacements, forces, bound, tolerance) -> Mapping:
+    """The certify binding's answer: the certificate's fields, and the
+    answer it judged, completed (displacements, pressure, friction
+    traction)."""
     p = q = None
     if forces is not None:
         try:
             p, q = forces
         except (TypeError, ValueError):
             raise Error("forces: give a pair (pressure, friction_traction)") from None
-    d = _contactlab.certify(
+    return _contactlab.certify(
         problem._p,
         _array(displacements, "displacements"),
         _array(p, "pressure"),
@@ -285,7 +292,6 @@ def certify(
         _array(bound, "bound"),
         tolerance,
     )
-    return Certificate._of(d)
 
 
 #: A solver written in Python: called as ``fn(problem, target)``, it gives
@@ -329,20 +335,7 @@ def _python_answer(fn: PythonSolver, problem: Problem, target: float):
         v, forces = answer.get("displacements"), answer.get("forces")
     else:
         v, forces = answer, None
-    p = q = None
-    if forces is not None:
-        try:
-            p, q = forces
-        except (TypeError, ValueError):
-            raise Error("forces: give a pair (pressure, friction_traction)") from None
-    d = _contactlab.certify(
-        problem._p,
-        _array(v, "displacements"),
-        _array(p, "pressure"),
-        _array(q, "friction_traction"),
-        None,
-        target,
-    )
+    d = _certified(problem, v, forces, None, target)
     completed = (d["displacements"], d["pressure"], d["friction_traction"])
     return Certificate._of(d), seconds, completed
 
