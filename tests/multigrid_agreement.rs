@@ -245,9 +245,20 @@ fn the_nested_schedule_solves_the_coarse_levels_to_their_own_epsilon() {
 
 /// A solver that records what it is asked: the unknowns of each problem and
 /// where the harness released what it keeps.
+#[derive(Default)]
 struct Recording {
     inner: contactlab::solvers::multigrid::Tnnmg,
     log: Vec<Option<usize>>,
+}
+
+/// Every level of the continuation of paper problem `k` at h = 1/2^`level`.
+fn continuation_levels(k: u32, level: u32) -> Vec<Discretization> {
+    let scene = problem(k, level);
+    scene
+        .levels
+        .iter()
+        .map(|&h| Discretization::new(&scene, h).unwrap())
+        .collect()
 }
 
 impl contactlab::solvers::Solver for Recording {
@@ -276,18 +287,10 @@ fn the_nested_schedule_releases_the_coarse_levels_once_done_with_them() {
     use contactlab::coulomb::continuation::{Continuation, Schedule};
     use contactlab::coulomb::fixed_point::{CoulombSettings, friction_fixed_point};
 
-    let scene = problem(1, 5);
-    let levels: Vec<Discretization> = scene
-        .levels
-        .iter()
-        .map(|&h| Discretization::new(&scene, h).unwrap())
-        .collect();
+    let levels = continuation_levels(1, 5);
     let finest = levels.last().unwrap().problem.n();
     let finest_h = levels.last().unwrap().h();
-    let mut solver = Recording {
-        inner: Default::default(),
-        log: Vec::new(),
-    };
+    let mut solver = Recording::default();
     let mut step = Continuation::new(levels, &mut solver, Schedule::Nested);
     let out = friction_fixed_point(&mut step, &CoulombSettings::default(), &mut Silent);
     // The coarse levels themselves are dropped too, not only what the
@@ -317,17 +320,9 @@ fn a_nested_step_not_handed_its_predecessor_starts_on_the_finest() {
     use contactlab::coulomb::continuation::{Continuation, Schedule};
     use contactlab::coulomb::fixed_point::{CoulombSettings, GivenFrictionStep};
 
-    let scene = problem(1, 4);
-    let levels: Vec<Discretization> = scene
-        .levels
-        .iter()
-        .map(|&h| Discretization::new(&scene, h).unwrap())
-        .collect();
+    let levels = continuation_levels(1, 4);
     let finest = levels.last().unwrap().problem.n();
-    let mut solver = Recording {
-        inner: Default::default(),
-        log: Vec::new(),
-    };
+    let mut solver = Recording::default();
     let mut step = Continuation::new(levels, &mut solver, Schedule::Nested);
     let g = step
         .initial_bound(&CoulombSettings::default(), &mut Silent)

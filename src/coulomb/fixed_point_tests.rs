@@ -52,14 +52,19 @@ impl GivenFrictionStep for Affine {
     }
 }
 
-#[test]
-fn contracting_map_converges_with_the_expected_factor() {
-    let mut step = affine(vec![10.0, 20.0], 0.8);
-    let s = CoulombSettings {
+/// The paper's absolute stop at ε = 1e-9, with room for 200 iterations.
+fn tight() -> CoulombSettings {
+    CoulombSettings {
         epsilon: 1e-9,
         max_iterations: 200,
         ..CoulombSettings::defaults(Stopping::Paper)
-    };
+    }
+}
+
+#[test]
+fn contracting_map_converges_with_the_expected_factor() {
+    let mut step = affine(vec![10.0, 20.0], 0.8);
+    let s = tight();
     let out = friction_fixed_point(&mut step, &s, &mut Silent);
     assert_eq!(out.ending, Ending::Converged);
     assert_eq!(out.status, Status::Converged);
@@ -108,10 +113,8 @@ fn a_loose_step_showing_no_change_does_not_end_the_fixed_point() {
         last: None,
     };
     let s = CoulombSettings {
-        epsilon: 1e-9,
-        max_iterations: 200,
         forcing: 0.1,
-        ..CoulombSettings::defaults(Stopping::Paper)
+        ..tight()
     };
     let out = friction_fixed_point(&mut step, &s, &mut Silent);
     assert_eq!(out.ending, Ending::Converged, "{}", out.detail);
@@ -187,11 +190,7 @@ fn each_solution_but_the_answer_is_handed_back_to_the_step() {
         returned: Vec::new(),
         kept: Vec::new(),
     };
-    let s = CoulombSettings {
-        epsilon: 1e-9,
-        max_iterations: 200,
-        ..CoulombSettings::defaults(Stopping::Paper)
-    };
+    let s = tight();
     let out = friction_fixed_point(&mut step, &s, &mut Silent);
     assert_eq!(out.ending, Ending::Converged);
     let n = step.returned.len();
