@@ -163,13 +163,12 @@ impl GivenFrictionStep for Continuation<'_> {
         observer: &mut dyn Observer,
     ) -> Solution {
         let top = self.levels.len() - 1;
-        let first = match (self.schedule, &self.last, &self.nested) {
+        let first = match (self.schedule, &self.last) {
             // The nested schedule past its initial bound keeps the finest
-            // level alone: a step not handed its predecessor ([`keep`])
-            // starts there from zero.
+            // level alone (it starts there from the bound's answer, or,
+            // not handed its predecessor ([`keep`]), from zero).
             _ if self.levels[0].is_none() => top,
-            (Schedule::FinestOnly | Schedule::Nested, Some(_), _) => top,
-            (Schedule::Nested, None, Some(_)) => top,
+            (Schedule::FinestOnly | Schedule::Nested, Some(_)) => top,
             _ => 0,
         };
         let (mut total, mut timing) = (Iterations::default(), Timing::default());

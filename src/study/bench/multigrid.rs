@@ -123,9 +123,8 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         .chain(spec.multigrid_only.iter().map(|h| (h, true)))
     {
         let runs = if finest { 1 } else { COULOMB_RUNS };
-        let available = available_memory_kb();
         if let Some(why) = finest
-            .then(|| too_large(&out.finest, h, available?))
+            .then(|| too_large(&out.finest, h, available_memory_kb()?))
             .flatten()
         {
             log(&format!("{SOLVER} at h = {h} not run: {why}"));
