@@ -293,10 +293,13 @@ pub fn certify(
     // The residual of stationarity, and the contact forces in it.
     let mut r = vec![0.0; problem.n()];
     {
-        let (offsets, cols, vals) = problem.a().csr_data();
+        let a = problem.a();
         for (i, ri) in r.iter_mut().enumerate() {
-            *ri = (offsets[i]..offsets[i + 1])
-                .map(|k| vals[k] * v[cols[k] as usize])
+            let (cols, vals) = a.row(i);
+            *ri = cols
+                .iter()
+                .zip(vals)
+                .map(|(&c, a_ic)| a_ic * v[c as usize])
                 .sum::<f64>()
                 - problem.f()[i];
         }

@@ -19,6 +19,29 @@ fn problem(n: u32, k: u32) -> Discretization {
     Discretization::new(&Scene::paper_problem(n).unwrap(), h(k)).unwrap()
 }
 
+/// The stiffness has one row per kind of node (the interior, edges and
+/// corners of each body, Γ_K), the same at every h, so the problem keeps
+/// its values once: the same few hundred numbers whatever the mesh, and
+/// its prolongations likewise. An assembly that summed one element's
+/// entries in another order than the next one's (other bits for the same
+/// stencil) would make them grow with h, and A's memory with them.
+#[test]
+fn the_stiffness_keeps_each_distinct_row_once_whatever_h() {
+    let stored: Vec<usize> = (4..=7)
+        .map(|k| {
+            let d = problem(1, k);
+            let a = d.problem.a();
+            assert!(a.is_shared(), "A at k = {k}");
+            for (l, p) in d.problem.prolongations().iter().enumerate() {
+                assert!(p.is_shared(), "prolongation {l} at k = {k}");
+            }
+            a.stored_values()
+        })
+        .collect();
+    assert!(stored.iter().all(|&s| s == stored[0]), "{stored:?}");
+    assert!(stored[0] < 1000, "{stored:?}");
+}
+
 fn materials() -> [Material; 2] {
     [PlaneModel::Strain, PlaneModel::Stress].map(|plane| Material {
         plane,
@@ -80,7 +103,8 @@ fn stiffness_is_symmetric() {
         assert!(scale > 0.0);
         let d = problem(2, 4);
         assert!(
-            max_asymmetry(&d.problem.a().to_nalgebra()) <= 1e-12 * max_abs(d.problem.a().values())
+            max_asymmetry(&d.problem.a().to_nalgebra())
+                <= 1e-12 * max_abs(d.problem.a().to_nalgebra().values())
         );
     }
 }

@@ -65,12 +65,14 @@ impl Solver for Toy {
             Ok(g) => g,
             Err(refused) => return *refused,
         };
-        let (offsets, cols, vals) = p.a().csr_data();
+        let a = p.a();
         let grad = |v: &[f64]| -> Vec<f64> {
             (0..n)
                 .map(|i| {
-                    (offsets[i]..offsets[i + 1])
-                        .map(|k| vals[k] * v[cols[k] as usize])
+                    let (cols, vals) = a.row(i);
+                    cols.iter()
+                        .zip(vals)
+                        .map(|(&j, a_ij)| a_ij * v[j as usize])
                         .sum::<f64>()
                         - p.f()[i]
                 })
@@ -78,11 +80,7 @@ impl Solver for Toy {
         };
         // Step 1/L with L a Gershgorin bound on the largest eigenvalue of A.
         let l = (0..n)
-            .map(|i| {
-                (offsets[i]..offsets[i + 1])
-                    .map(|k| vals[k].abs())
-                    .sum::<f64>()
-            })
+            .map(|i| a.row(i).1.iter().map(|v| v.abs()).sum::<f64>())
             .fold(0.0f64, f64::max);
         let alpha = 1.0 / l;
         let prox = |v: &mut [f64]| {

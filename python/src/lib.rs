@@ -81,7 +81,7 @@ fn csr<'py, A: SparseRows>(py: Python<'py>, a: &A) -> Csr<'py> {
     (
         a.row_offsets().to_vec().into_pyarray(py),
         cols.into_pyarray(py),
-        a.values().to_vec().into_pyarray(py),
+        a.values().to_vec(a.row_offsets()).into_pyarray(py),
     )
 }
 

@@ -366,7 +366,7 @@ impl Solver for ConicSolver {
                 .flat_map(|j| {
                     (offsets[j]..offsets[j + 1])
                         .filter(move |&k| cols[k] as usize <= j)
-                        .map(move |k| (cols[k] as usize, j, vals[k]))
+                        .map(move |k| (cols[k] as usize, j, vals.at(offsets, j, k)))
                 })
                 .collect(),
             load: problem.f(),

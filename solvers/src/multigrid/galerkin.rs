@@ -9,7 +9,8 @@
 //! (an entry that cancels to zero is kept), so that a truncation's
 //! correction always lies on it.
 
-use crate::numerics::linalg::Csr;
+use crate::numerics::linalg::{Csr, RowValues};
+use crate::with_values;
 
 /// One block of consecutive coarse rows, offsets from 0, with the dense
 /// accumulator of its product. Allocated by the calling thread, also for
@@ -40,11 +41,26 @@ impl Rows {
     }
 }
 
-/// Rows `rows` of R A P, R = Pᵀ given as CSR, into `out`.
+/// Rows `rows` of R A P, R = Pᵀ given as CSR, into `out`: one loop
+/// compiled for each way A and P store their values (R's rows are read
+/// once per coarse row, through the match).
 fn rows_of_product(r: &Csr, a: &Csr, p: &Csr, rows: std::ops::Range<usize>, out: &mut Rows) {
-    let (ro, rc, rv) = (r.row_offsets(), r.col_indices(), r.values());
-    let (ao, ac, av) = (a.row_offsets(), a.col_indices(), a.values());
-    let (po, pc, pv) = (p.row_offsets(), p.col_indices(), p.values());
+    with_values!(a.values(), av => with_values!(p.values(), pv =>
+        rows_of_product_with(r, (a, av), (p, pv), rows, out)
+    ))
+}
+
+/// [`rows_of_product`] with A's and P's values.
+fn rows_of_product_with<'v>(
+    r: &Csr,
+    (a, av): (&Csr, impl RowValues<'v>),
+    (p, pv): (&Csr, impl RowValues<'v>),
+    rows: std::ops::Range<usize>,
+    out: &mut Rows,
+) {
+    let (ro, rc) = (r.row_offsets(), r.col_indices());
+    let (ao, ac) = (a.row_offsets(), a.col_indices());
+    let (po, pc) = (p.row_offsets(), p.col_indices());
     let Rows {
         offsets,
         cols,
@@ -55,17 +71,20 @@ fn rows_of_product(r: &Csr, a: &Csr, p: &Csr, rows: std::ops::Range<usize>, out:
     } = out;
     offsets.push(0);
     for row in rows {
-        for q in ro[row]..ro[row + 1] {
-            let (i, r_i) = (rc[q] as usize, rv[q]);
-            for s in ao[i]..ao[i + 1] {
-                let (j, ra) = (ac[s] as usize, r_i * av[s]);
-                for t in po[j]..po[j + 1] {
-                    let col = pc[t] as usize;
+        let r_row = r.row(row).1;
+        for (&i, &r_i) in rc[ro[row]..ro[row + 1]].iter().zip(r_row) {
+            let i = i as usize;
+            let (alo, ahi) = (ao[i], ao[i + 1]);
+            for (&j, &a_ij) in ac[alo..ahi].iter().zip(av.row(i, alo, ahi)) {
+                let (j, ra) = (j as usize, r_i * a_ij);
+                let (plo, phi) = (po[j], po[j + 1]);
+                for (&col, &p_jc) in pc[plo..phi].iter().zip(pv.row(j, plo, phi)) {
+                    let col = col as usize;
                     if !seen[col] {
                         seen[col] = true;
                         touched.push(col);
                     }
-                    acc[col] += ra * pv[t];
+                    acc[col] += ra * p_jc;
                 }
             }
         }
@@ -163,5 +182,11 @@ mod tests {
         for (x, y) in got.values().iter().zip(expected.values()) {
             assert!((x - y).abs() <= 1e-14 * y.abs().max(1.0), "{x} vs {y}");
         }
+        // A and P with their distinct rows stored once give the same
+        // product to the bit.
+        let shared = |m: &CsrMatrix<f64>| csr(m).shared();
+        assert!(shared(&a).is_shared() && shared(&p).is_shared());
+        let from_shared = galerkin(&shared(&r), &shared(&a), &shared(&p));
+        assert_eq!(from_shared.to_nalgebra(), got);
     }
 }

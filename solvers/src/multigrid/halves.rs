@@ -294,13 +294,12 @@ pub(crate) mod tests {
         let h = Halves::new(&a).expect("a grid splits");
         let n = a.nrows();
         let b: Vec<f64> = (0..n).map(|k| ((k * 37) % 11) as f64 - 5.0).collect();
-        let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
         let update = |k: usize, x: Shared| {
-            let row = offsets[k]..offsets[k + 1];
+            let (cols, vals) = a.row(k);
             // SAFETY: the grid's columns are below n; the split's halves
             // read only their own rows and the separator.
             unsafe {
-                let sum = x.row_dot(&cols[row.clone()], &vals[row]);
+                let sum = x.row_dot(cols, vals);
                 let xk = x.get(k);
                 x.set(k, xk + (b[k] - sum) / 4.0);
             }

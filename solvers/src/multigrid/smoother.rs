@@ -14,7 +14,8 @@
 //! or the Huber smoothing of w_i g_i |s_i|; their minimizers are the
 //! relaxation's own ([`crate::relaxation::pointwise`]).
 
-use crate::numerics::linalg::Csr;
+use crate::numerics::linalg::{Csr, RowValues};
+use crate::with_values;
 
 use super::halves::{Halves, Shared, sweep};
 use super::laws::Laws;
@@ -81,7 +82,7 @@ pub(crate) fn diagonal_position(a: &Csr, k: usize, floor: f64) -> Option<usize> 
     let offsets = a.row_offsets();
     (offsets[k]..offsets[k + 1])
         .find(|&p| a.col_indices()[p] as usize == k)
-        .filter(|&p| a.values()[p] > floor)
+        .filter(|&p| a.value_at(k, p) > floor)
 }
 
 /// A stored entry's position, in 32 bits: half the memory of a usize per
@@ -105,6 +106,37 @@ pub(crate) fn diagonal_positions(a: &Csr) -> Result<Vec<Position>, String> {
         .collect()
 }
 
+/// Row k of A as a sweep reads it: its columns and values, and the place
+/// of its diagonal among them.
+#[derive(Clone, Copy)]
+pub(crate) struct Row<'a> {
+    k: usize,
+    cols: &'a [u32],
+    vals: &'a [f64],
+    diag: usize,
+}
+
+impl<'a> Row<'a> {
+    /// Row k, whose diagonal is stored at position `diag` of `a`; `vals`
+    /// are a's values (matched once per sweep: [`with_values`]).
+    #[inline(always)]
+    pub(crate) fn of(a: &'a Csr, vals: impl RowValues<'a>, k: usize, diag: usize) -> Self {
+        let (lo, hi) = (a.row_offsets()[k], a.row_offsets()[k + 1]);
+        Row {
+            k,
+            cols: &a.col_indices()[lo..hi],
+            vals: vals.row(k, lo, hi),
+            diag: diag.wrapping_sub(lo),
+        }
+    }
+
+    /// A_kk.
+    #[inline(always)]
+    fn diagonal(self) -> f64 {
+        self.vals[self.diag]
+    }
+}
+
 /// c_k = b_k − Σ_{j≠k} A_kj x_j, the row's sum in the order of the
 /// product's ([`crate::numerics::linalg::row_dot`]).
 ///
@@ -112,12 +144,10 @@ pub(crate) fn diagonal_positions(a: &Csr) -> Result<Vec<Position>, String> {
 /// A's column indices are below x's length, and no other thread writes the
 /// unknowns of row k's pattern meanwhile (see [`Halves`]).
 #[inline]
-unsafe fn off_diagonal_rhs(a: &Csr, k: usize, diag: usize, b: f64, x: Shared) -> f64 {
-    let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
-    let (lo, hi) = (offsets[k], offsets[k + 1]);
+unsafe fn off_diagonal_rhs(row: Row<'_>, b: f64, x: Shared) -> f64 {
     // SAFETY: by the contract.
-    let sum = unsafe { x.row_dot(&cols[lo..hi], &vals[lo..hi]) };
-    b - (sum - vals[diag] * unsafe { x.get(k) })
+    let sum = unsafe { x.row_dot(row.cols, row.vals) };
+    b - (sum - row.diagonal() * unsafe { x.get(row.k) })
 }
 
 /// D_kk of the diagonal shift D, which is kept as an empty vector while
@@ -185,9 +215,7 @@ fn separator_residuals(
 /// at the rows written (the halves' own rows: see [`Halves`]).
 #[inline]
 unsafe fn scatter_to_swept(
-    a: &Csr,
-    k: usize,
-    diag: usize,
+    row: Row<'_>,
     delta: f64,
     (separator, forward): (Option<&[bool]>, bool),
     r: Shared,
@@ -195,8 +223,13 @@ unsafe fn scatter_to_swept(
     if delta == 0.0 {
         return;
     }
-    let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
-    let (below, above) = (offsets[k]..diag, diag + 1..offsets[k + 1]);
+    let Row {
+        k,
+        cols,
+        vals,
+        diag,
+    } = row;
+    let (below, above) = (0..diag, diag + 1..cols.len());
     // SAFETY: by the contract.
     let update = |q: usize| {
         let j = cols[q] as usize;
@@ -246,25 +279,24 @@ pub(crate) fn nonlinear_sweep(
     if let Some(r) = &defect {
         assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
     }
-    let vals = a.values();
     let separator = halves.map(Halves::in_separator);
     let rs = defect.map(Shared::of);
-    sweep(halves, v, true, |k, x| {
+    with_values!(a.values(), vals => sweep(halves, v, true, |k, x| {
         // SAFETY: sizes checked above; the halves' ordering keeps the other
         // thread off row k's pattern and off the defects it writes.
         unsafe {
-            let dk = diag[k] as usize;
-            let c = off_diagonal_rhs(a, k, dk, f[k], x);
-            let akk = vals[dk];
+            let row = Row::of(a, vals, k, diag[k] as usize);
+            let c = off_diagonal_rhs(row, f[k], x);
+            let akk = row.diagonal();
             let new = local_minimizer(laws[k], akk, c);
             let delta = new - x.get(k);
             x.set(k, new);
             if let Some(rs) = rs {
                 rs.set(k, c - akk * new);
-                scatter_to_swept(a, k, dk, delta, (separator, true), rs);
+                scatter_to_swept(row, delta, (separator, true), rs);
             }
         }
-    });
+    }));
 }
 
 /// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,
@@ -292,10 +324,9 @@ pub(crate) fn linear_sweep(
     if let Some(r) = &residual {
         assert_eq!(r.len(), x.len(), "a sweep: one residual per unknown");
     }
-    let vals = a.values();
     let separator = halves.map(Halves::in_separator);
     let rs = residual.as_deref_mut().map(Shared::of);
-    sweep(halves, x, forward, |k, x| {
+    with_values!(a.values(), vals => sweep(halves, x, forward, |k, x| {
         // SAFETY: as in the nonlinear sweep.
         unsafe {
             if fixed[k] {
@@ -307,18 +338,18 @@ pub(crate) fn linear_sweep(
             // The reciprocal first: it depends on nothing the sweep moves,
             // so it leaves the chain of rows (each waits for the unknown
             // the row before set) a multiplication instead of a division.
-            let dk = diag[k] as usize;
-            let inverse = 1.0 / (vals[dk] + shift_at(shift, k));
-            let c = off_diagonal_rhs(a, k, dk, b[k], x);
+            let row = Row::of(a, vals, k, diag[k] as usize);
+            let inverse = 1.0 / (row.diagonal() + shift_at(shift, k));
+            let c = off_diagonal_rhs(row, b[k], x);
             let new = c * inverse;
             let delta = new - x.get(k);
             x.set(k, new);
             if let Some(rs) = rs {
                 rs.set(k, 0.0);
-                scatter_to_swept(a, k, dk, delta, (separator, forward), rs);
+                scatter_to_swept(row, delta, (separator, forward), rs);
             }
         }
-    });
+    }));
     if let (Some(h), Some(r), false) = (halves, residual.as_deref_mut(), forward) {
         separator_residuals(a, h, shift, b, x, r);
     }

@@ -108,9 +108,7 @@ fn a_half_row_scatters_into_its_own_half_only() {
             // SAFETY: one thread; the grid's columns are below n.
             unsafe {
                 scatter_to_swept(
-                    &a,
-                    k,
-                    diag[k] as usize,
+                    Row::of(&a, a.values(), k, diag[k] as usize),
                     1.0,
                     (Some(sep), forward),
                     Shared::of(&mut r),

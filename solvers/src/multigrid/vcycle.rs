@@ -109,7 +109,9 @@ struct Level {
 }
 
 impl Level {
-    fn new(a: Csr) -> Self {
+    /// The level of Galerkin matrix `a`, its values kept row by row: a
+    /// truncation changes them in place.
+    fn new(mut a: Csr) -> Self {
         let found: Vec<Option<usize>> = (0..a.nrows())
             .map(|k| diagonal_position(&a, k, 0.0))
             .collect();
@@ -122,8 +124,9 @@ impl Level {
                 })
             })
             .collect();
+        let values = a.values_mut();
         Self {
-            untruncated_diagonal: diag.iter().map(|&p| a.values()[p as usize]).collect(),
+            untruncated_diagonal: diag.iter().map(|&p| values[p as usize]).collect(),
             halves: Halves::new(&a),
             a,
             diag,
@@ -153,7 +156,7 @@ impl Level {
             self.touched.push((p, *entry));
             *entry -= value;
         }
-        let values = self.a.values();
+        let values = self.a.values_mut();
         for (k, fixed) in self.fixed.iter_mut().enumerate() {
             let full = self.untruncated_diagonal[k];
             *fixed = !(full > 0.0 && values[self.diag[k] as usize] > FIXED_FRACTION * full);
@@ -268,14 +271,14 @@ impl Hierarchy {
         self.shift.clear();
         self.shift.extend_from_slice(shift);
         // E: the entries of A in a truncated row or column (A symmetric).
-        let (offsets, cols, vals) = (a.row_offsets(), a.col_indices(), a.values());
         let mut e = Vec::new();
         for (j, _) in truncated.iter().enumerate().filter(|(_, cut)| **cut) {
-            for q in offsets[j]..offsets[j + 1] {
-                let i = cols[q] as usize;
-                e.push((j, i, vals[q]));
+            let (cols, vals) = a.row(j);
+            for (&i, &v) in cols.iter().zip(vals) {
+                let i = i as usize;
+                e.push((j, i, v));
                 if !truncated[i] {
-                    e.push((i, j, vals[q]));
+                    e.push((i, j, v));
                 }
             }
         }

@@ -155,7 +155,9 @@ impl ContactProblem {
     /// the scales are representable.
     /// M is a matrix or its values on A's pattern ([`Mass`]); a matrix on
     /// exactly A's pattern is kept as its values. A is kept with 32-bit
-    /// column indices ([`Csr`]); a nalgebra matrix is converted.
+    /// column indices ([`Csr`]); a nalgebra matrix is converted; its
+    /// distinct rows are kept once when they are few ([`Csr::shared`]: the
+    /// same numbers to the bit, without 8 bytes per entry).
     pub fn new(
         a: impl IntoCsr,
         f: Vec<f64>,
@@ -226,7 +228,7 @@ impl ContactProblem {
             }
         }
         Ok(Self {
-            a,
+            a: a.shared(),
             f,
             mass,
             contacts,
@@ -241,14 +243,14 @@ impl ContactProblem {
     /// solvers: `prolongations[l]` maps the unknowns of level l to those of
     /// level l + 1, the last onto this problem's unknowns. Plain matrices:
     /// the mechanics builds them, no solver sees a mesh. Checked: chained
-    /// dimensions, finite entries.
+    /// dimensions, finite entries. Their distinct rows kept once where they are few, like A's.
     pub fn with_hierarchy(
         mut self,
         prolongations: Vec<impl IntoCsr>,
     ) -> Result<Self, ProblemError> {
         let prolongations = prolongations
             .into_iter()
-            .map(IntoCsr::into_csr)
+            .map(|p| p.into_csr().map(Csr::shared))
             .collect::<Result<Vec<Csr>, CsrError>>()?;
         let mut expected = self.n();
         for p in prolongations.iter().rev() {
@@ -259,7 +261,7 @@ impl ContactProblem {
                     got: p.nrows(),
                 });
             }
-            if p.values().iter().any(|x| !x.is_finite()) {
+            if p.values().max_abs_if_finite().is_none() {
                 return Err(ProblemError::NonFinite {
                     what: "prolongation",
                 });
@@ -326,7 +328,7 @@ impl ContactProblem {
     /// If the problem was built without M.
     pub(crate) fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
         match &self.mass {
-            Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values, x, y),
+            Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values.as_slice(), x, y),
             Mass::Matrix(m) => crate::numerics::linalg::spmv_into(m, x, y),
             Mass::Omitted => panic!("M x on a problem built without M"),
         }

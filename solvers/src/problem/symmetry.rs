@@ -3,16 +3,18 @@
 //! set-up, a fifth of an assembly at h = 1/64 before it was made cheap).
 
 use super::{Mass, ProblemError};
-use crate::numerics::linalg::{ColumnIndex, Csr, SparseRows, max_abs_if_finite};
+use crate::numerics::linalg::{ColumnIndex, Csr, RowValues, SparseRows, Values};
 
 /// Checks that A and M are n × n, finite and symmetric. When M lives on A's
 /// pattern, one pass over it checks both.
 pub(super) fn check_stiffness_and_mass(a: &Csr, mass: &Mass, n: usize) -> Result<(), ProblemError> {
     match mass {
-        Mass::OnStiffnessPattern(m) => check_square_symmetric(a, [("A", a.values()), ("M", m)], n),
+        Mass::OnStiffnessPattern(m) => {
+            check_square_symmetric(a, [("A", a.values()), ("M", Values::Plain(m))], n)
+        }
         Mass::Matrix(m) => {
             check_square_symmetric(a, [("A", a.values())], n)?;
-            check_square_symmetric(m, [("M", m.values())], n)
+            check_square_symmetric(m, [("M", Values::Plain(m.values()))], n)
         }
         Mass::Omitted => check_square_symmetric(a, [("A", a.values())], n),
     }
@@ -30,7 +32,7 @@ pub(super) fn check_stiffness_and_mass(a: &Csr, mass: &Mass, n: usize) -> Result
 /// entry.
 pub(super) fn check_square_symmetric<const K: usize>(
     pattern: &impl SparseRows,
-    named: [(&'static str, &[f64]); K],
+    named: [(&'static str, Values<'_>); K],
     n: usize,
 ) -> Result<(), ProblemError> {
     let Some(&(first, _)) = named.first() else {
@@ -58,8 +60,9 @@ pub(super) fn check_square_symmetric<const K: usize>(
     let values = named.map(|(_, v)| v);
     let mut scale = [0.0f64; K];
     for m in 0..K {
-        scale[m] =
-            max_abs_if_finite(values[m]).ok_or(ProblemError::NonFinite { what: named[m].0 })?;
+        scale[m] = values[m]
+            .max_abs_if_finite()
+            .ok_or(ProblemError::NonFinite { what: named[m].0 })?;
     }
     let below: usize = (0..n)
         .map(|row| {
@@ -78,8 +81,8 @@ pub(super) fn check_square_symmetric<const K: usize>(
     let mut offending = None;
     walk_mirrors(offsets, indices, Triangle::Both, |row, col, k, mirror| {
         for m in 0..K {
-            let across = mirror.map_or(0.0, |c| values[m][c]);
-            if (across - values[m][k]).abs() > tol[m] {
+            let across = mirror.map_or(0.0, |c| values[m].at(offsets, col, c));
+            if (across - values[m].at(offsets, row, k)).abs() > tol[m] {
                 offending = Some(ProblemError::NotSymmetric {
                     what: named[m].0,
                     row,
@@ -98,15 +101,15 @@ pub(super) fn check_square_symmetric<const K: usize>(
 fn asymmetry<const K: usize, I: ColumnIndex>(
     offsets: &[usize],
     indices: &[I],
-    values: &[&[f64]; K],
+    values: &[Values<'_>; K],
     which: Triangle,
 ) -> ([f64; K], usize) {
     let (mut asymmetry, mut mirrored) = ([0.0f64; K], 0);
-    walk_mirrors(offsets, indices, which, |_, _, k, mirror| {
+    walk_mirrors(offsets, indices, which, |row, col, k, mirror| {
         mirrored += usize::from(mirror.is_some());
         for m in 0..K {
-            let across = mirror.map_or(0.0, |c| values[m][c]);
-            asymmetry[m] = asymmetry[m].max((across - values[m][k]).abs());
+            let across = mirror.map_or(0.0, |c| values[m].at(offsets, col, c));
+            asymmetry[m] = asymmetry[m].max((across - values[m].at(offsets, row, k)).abs());
         }
         true
     });
@@ -186,7 +189,7 @@ mod tests {
 
     /// The check of one matrix on its own pattern.
     fn check(what: &'static str, m: &CsrMatrix<f64>, n: usize) -> Result<(), ProblemError> {
-        check_square_symmetric(m, [(what, m.values())], n)
+        check_square_symmetric(m, [(what, Values::Plain(m.values()))], n)
     }
 
     /// A's pattern with M's values.
@@ -235,6 +238,23 @@ mod tests {
         assert_names(check("M", &m, 3), "M", 0, 2);
     }
 
+    /// Shared rows are read like plain ones: the same entry is named.
+    #[test]
+    fn shared_rows_are_checked_like_plain_ones() {
+        let m = csr(3, &[(0, 0, 1.0), (0, 2, 1e-3), (1, 1, 1.0), (2, 2, 1.0)]);
+        let shared = Csr::try_from(&m).unwrap().shared();
+        assert!(shared.is_shared());
+        assert_names(
+            check_stiffness_and_mass(&shared, &Mass::Omitted, 3),
+            "A",
+            0,
+            2,
+        );
+        let m = csr(3, &[(0, 0, 1.0), (0, 2, 1e-3), (2, 0, 1e-3), (2, 2, 1.0)]);
+        let shared = Csr::try_from(&m).unwrap().shared();
+        assert!(check_stiffness_and_mass(&shared, &Mass::Omitted, 3).is_ok());
+    }
+
     #[test]
     fn a_pair_on_one_pattern_names_the_matrix_that_fails() {
         let entries = [(0, 0, 1.0), (0, 1, 2.0), (1, 0, 2.0), (1, 1, 1.0)];
@@ -242,7 +262,12 @@ mod tests {
         let a = Csr::try_from(&m).unwrap();
         m.values_mut()[2] = 2.5; // (1, 0) of M only
         assert!(
-            check_stiffness_and_mass(&a, &Mass::OnStiffnessPattern(a.values().to_vec()), 2).is_ok()
+            check_stiffness_and_mass(
+                &a,
+                &Mass::OnStiffnessPattern(a.values().to_vec(a.row_offsets())),
+                2
+            )
+            .is_ok()
         );
         assert_names(check_stiffness_and_mass(&a, &on_a(&m), 2), "M", 0, 1);
         // The same M with a pattern of its own.

@@ -77,10 +77,11 @@ impl Condensed {
         let (offsets, cols, vals) = problem.a().csr_data();
         for (i, c) in contacts.iter().enumerate() {
             for (k, r) in [(2 * i, c.t), (2 * i + 1, c.s)] {
-                for p in offsets[r]..offsets[r + 1] {
-                    match position[cols[p] as usize] {
-                        Ok(j) => a_ci[k].push((j, vals[p])),
-                        Err(l) => s[(k, l)] += vals[p],
+                let (lo, hi) = (offsets[r], offsets[r + 1]);
+                for (&col, &v) in cols[lo..hi].iter().zip(vals.row(r, lo, hi)) {
+                    match position[col as usize] {
+                        Ok(j) => a_ci[k].push((j, v)),
+                        Err(l) => s[(k, l)] += v,
                     }
                 }
             }

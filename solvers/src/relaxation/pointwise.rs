@@ -12,7 +12,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::numerics::linalg::Csr;
+use crate::numerics::linalg::{Csr, RowValues};
 
 /// How the non-smooth friction term w g |s| is treated along a slip
 /// coordinate. In settings it is the word `exact` or a Huber width (a number;
@@ -210,7 +210,7 @@ impl RelaxationOperator {
             }
         };
         let diag: Vec<f64> = (0..h.nrows())
-            .map(|i| h.position(i, i).map_or(0.0, |p| h.values()[p]))
+            .map(|i| h.position(i, i).map_or(0.0, |p| h.value_at(i, p)))
             .collect();
         let inv_diag = diag.iter().map(|a| 1.0 / a).collect();
         let mut role = vec![Coordinate::Free; h.nrows()];
@@ -233,12 +233,23 @@ impl RelaxationOperator {
     /// once and allocates nothing.
     pub fn sweep(&self, v: &mut [f64], data: &SweepData<'_>) -> f64 {
         assert_eq!(v.len(), self.h.ncols(), "sweep: v has the wrong length");
-        let (offsets, cols, vals) = self.h.csr_data();
+        crate::with_values!(self.h.values(), vals => self.sweep_with(vals, v, data))
+    }
+
+    /// [`Self::sweep`] for one kind of stored values.
+    fn sweep_with<'v>(
+        &'v self,
+        vals: impl RowValues<'v>,
+        v: &mut [f64],
+        data: &SweepData<'_>,
+    ) -> f64 {
+        let (offsets, cols) = (self.h.row_offsets(), self.h.col_indices());
         let mut max_change = 0.0f64;
         for j in 0..v.len() {
             let (lo, hi) = (offsets[j], offsets[j + 1]);
             // SAFETY: a Csr keeps its column indices below ncols = v.len().
-            let sum = unsafe { crate::numerics::linalg::row_dot(&cols[lo..hi], &vals[lo..hi], v) };
+            let row = vals.row(j, lo, hi);
+            let sum = unsafe { crate::numerics::linalg::row_dot(&cols[lo..hi], row, v) };
             let a = self.diag[j];
             let old = v[j];
             // Gradient of the quadratic part without the diagonal term.
@@ -284,9 +295,10 @@ impl RelaxationOperator {
 
     /// (H v − b)_j: the gradient of the quadratic part at coordinate j.
     pub(crate) fn gradient_at(&self, v: &[f64], b: &[f64], j: usize) -> f64 {
-        let (offsets, cols, vals) = self.h.csr_data();
-        (offsets[j]..offsets[j + 1])
-            .map(|k| vals[k] * v[cols[k] as usize])
+        let (cols, vals) = self.h.row(j);
+        cols.iter()
+            .zip(vals)
+            .map(|(&c, a)| a * v[c as usize])
             .sum::<f64>()
             - b[j]
     }

@@ -346,10 +346,11 @@ pub fn complete_answer(
     Ok(match (v, forces) {
         (Some(v), Some((p, q))) => (v, p, q),
         (Some(v), None) => {
-            let (offsets, cols, vals) = problem.a().csr_data();
             let row = |i: usize| -> f64 {
-                (offsets[i]..offsets[i + 1])
-                    .map(|k| vals[k] * v[cols[k] as usize])
+                let (cols, vals) = problem.a().row(i);
+                cols.iter()
+                    .zip(vals)
+                    .map(|(&c, a_ic)| a_ic * v[c as usize])
                     .sum::<f64>()
                     - problem.f()[i]
             };

@@ -48,11 +48,11 @@ fn lower_of(a: &CsrMatrix<f64>) -> CscMatrix<f64> {
 /// for a symmetric matrix, line j's entries at or beyond j are column j of
 /// the lower triangle, either way. One pass, no intermediate copy: at
 /// h = 1/1024 the triplet route held two more copies of A at once.
-pub(crate) fn lower_part<I: super::ColumnIndex>(
+pub(crate) fn lower_part<'v, I: super::ColumnIndex>(
     k: usize,
     offsets: &[usize],
     indices: &[I],
-    values: &[f64],
+    values: impl super::RowValues<'v>,
     map: &[usize],
 ) -> CscMatrix<f64> {
     let mut col_offsets = Vec::with_capacity(k + 1);
@@ -63,11 +63,12 @@ pub(crate) fn lower_part<I: super::ColumnIndex>(
         if nj == usize::MAX {
             continue;
         }
-        for p in offsets[j]..offsets[j + 1] {
-            let i = indices[p].at();
+        let (lo, hi) = (offsets[j], offsets[j + 1]);
+        for (index, &v) in indices[lo..hi].iter().zip(values.row(j, lo, hi)) {
+            let i = index.at();
             if i >= j && map[i] != usize::MAX {
                 rows.push(map[i]);
-                vals.push(values[p]);
+                vals.push(v);
             }
         }
         col_offsets.push(rows.len());

@@ -13,6 +13,8 @@
 use nalgebra_sparse::CsrMatrix;
 use thiserror::Error;
 
+use super::values::{Stored, Values};
+
 /// A matrix that cannot be held as a [`Csr`].
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum CsrError {
@@ -56,7 +58,7 @@ pub trait SparseRows: Sync {
     /// nrows + 1 offsets into the stored entries, from 0.
     fn row_offsets(&self) -> &[usize];
     fn col_indices(&self) -> &[Self::Index];
-    fn values(&self) -> &[f64];
+    fn values(&self) -> Values<'_>;
     /// Number of stored entries.
     fn nnz(&self) -> usize {
         self.col_indices().len()
@@ -77,19 +79,33 @@ impl SparseRows for CsrMatrix<f64> {
     fn col_indices(&self) -> &[usize] {
         CsrMatrix::col_indices(self)
     }
-    fn values(&self) -> &[f64] {
-        CsrMatrix::values(self)
+    fn values(&self) -> Values<'_> {
+        Values::Plain(CsrMatrix::values(self))
     }
 }
 
 /// A sparse matrix in compressed rows, 32-bit column indices, sorted and
-/// without duplicates within each row (checked on construction).
-#[derive(Clone, Debug, PartialEq)]
+/// without duplicates within each row (checked on construction); its
+/// values stored row by row or, after [`Csr::shared`], each distinct row
+/// once (see [`super::values`]).
+#[derive(Clone, Debug)]
 pub struct Csr {
     ncols: usize,
     offsets: Vec<usize>,
     cols: Vec<u32>,
-    values: Vec<f64>,
+    values: Stored,
+}
+
+/// Equal when they hold the same entries at the same positions, however
+/// their values are stored.
+impl PartialEq for Csr {
+    fn eq(&self, other: &Csr) -> bool {
+        self.same_pattern(other)
+            && self
+                .values()
+                .iter(&self.offsets)
+                .eq(other.values().iter(&other.offsets))
+    }
 }
 
 impl Csr {
@@ -131,14 +147,42 @@ impl Csr {
             ncols,
             offsets,
             cols,
-            values,
+            values: Stored::Plain(values),
         })
+    }
+
+    /// The same matrix with each distinct row of values stored once, if
+    /// they are few (a stiffness on a uniform mesh: 45 rows, whatever h;
+    /// at most 2¹⁶ values in all); as it is otherwise. Every row reads back
+    /// to the bit, so every product and sweep gives the same numbers,
+    /// without the 8 bytes per entry of its values.
+    pub fn shared(mut self) -> Csr {
+        if let Stored::Plain(v) = &self.values
+            && let Some(shared) = Stored::share(&self.offsets, v)
+        {
+            self.values = shared;
+        }
+        self
+    }
+
+    /// How many numbers the values take: one per stored entry, or the
+    /// distinct rows' when they are shared.
+    pub fn stored_values(&self) -> usize {
+        match &self.values {
+            Stored::Plain(v) => v.len(),
+            Stored::Shared { table, .. } => table.len(),
+        }
+    }
+
+    /// Whether the distinct rows are stored once ([`Csr::shared`]).
+    pub fn is_shared(&self) -> bool {
+        matches!(self.values, Stored::Shared { .. })
     }
 
     /// The same matrix as a nalgebra one (a copy with 64-bit indices), for
     /// a solver that factorizes or hands it to another library.
     pub fn to_nalgebra(&self) -> CsrMatrix<f64> {
-        self.nalgebra_with_values(self.values.clone())
+        self.nalgebra_with_values(self.values().to_vec(&self.offsets))
     }
 
     /// The nalgebra matrix with this pattern and other `values` (one per
@@ -174,24 +218,34 @@ impl Csr {
         &self.cols
     }
 
-    pub fn values(&self) -> &[f64] {
-        &self.values
+    /// The stored values: read a row's with [`RowValues::row`].
+    pub fn values(&self) -> Values<'_> {
+        self.values.view()
     }
 
-    /// The stored values, to change in place (the pattern stays).
+    /// The stored values in order, to change in place (the pattern stays);
+    /// shared rows are copied out first, for good.
     pub fn values_mut(&mut self) -> &mut [f64] {
-        &mut self.values
+        self.values.make_plain(&self.offsets)
+    }
+
+    /// The value at stored position `p`, which row `i` holds.
+    ///
+    /// # Panics
+    /// If it does not.
+    pub fn value_at(&self, i: usize, p: usize) -> f64 {
+        self.values().at(&self.offsets, i, p)
     }
 
     /// Offsets, column indices and values.
-    pub fn csr_data(&self) -> (&[usize], &[u32], &[f64]) {
-        (&self.offsets, &self.cols, &self.values)
+    pub fn csr_data(&self) -> (&[usize], &[u32], Values<'_>) {
+        (&self.offsets, &self.cols, self.values())
     }
 
     /// Row i's column indices and values.
     pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
         let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
-        (&self.cols[lo..hi], &self.values[lo..hi])
+        (&self.cols[lo..hi], self.values().row(i, lo, hi))
     }
 
     /// The position of entry (i, j) among the stored entries, if stored.
@@ -209,14 +263,12 @@ impl Csr {
     /// The stored entries as (row, column, value), row by row.
     pub fn triplet_iter(&self) -> impl Iterator<Item = (usize, usize, &f64)> {
         self.offsets.windows(2).enumerate().flat_map(move |(i, w)| {
-            self.cols[w[0]..w[1]]
-                .iter()
-                .zip(&self.values[w[0]..w[1]])
-                .map(move |(&c, v)| (i, c.at(), v))
+            let (cols, vals) = (&self.cols[w[0]..w[1]], self.values().row(i, w[0], w[1]));
+            cols.iter().zip(vals).map(move |(&c, v)| (i, c.at(), v))
         })
     }
 
-    /// The transpose (a new matrix).
+    /// The transpose (a new matrix, its values stored like these).
     pub fn transpose(&self) -> Csr {
         let (m, n) = (self.nrows(), self.ncols);
         let mut offsets = vec![0usize; n + 1];
@@ -229,19 +281,21 @@ impl Csr {
         let mut next = offsets[..n].to_vec();
         let (mut cols, mut values) = (vec![0u32; self.nnz()], vec![0.0; self.nnz()]);
         for i in 0..m {
-            for q in self.offsets[i]..self.offsets[i + 1] {
-                let j = self.cols[q].at();
+            let (row_cols, row_vals) = self.row(i);
+            for (&j, &v) in row_cols.iter().zip(row_vals) {
+                let j = j.at();
                 cols[next[j]] = i as u32;
-                values[next[j]] = self.values[q];
+                values[next[j]] = v;
                 next[j] += 1;
             }
         }
-        Csr {
+        let t = Csr {
             ncols: m,
             offsets,
             cols,
-            values,
-        }
+            values: Stored::Plain(values),
+        };
+        if self.is_shared() { t.shared() } else { t }
     }
 }
 
@@ -280,7 +334,7 @@ impl TryFrom<CsrMatrix<f64>> for Csr {
             ncols,
             offsets,
             cols,
-            values,
+            values: Stored::Plain(values),
         })
     }
 }
@@ -307,8 +361,8 @@ impl SparseRows for Csr {
     fn col_indices(&self) -> &[u32] {
         &self.cols
     }
-    fn values(&self) -> &[f64] {
-        &self.values
+    fn values(&self) -> Values<'_> {
+        Csr::values(self)
     }
 }
 
@@ -337,6 +391,18 @@ mod tests {
         let expected: Vec<_> = m.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
         assert_eq!(triplets, expected);
         assert_eq!(c.row(2), (&[1u32, 2][..], &[3.0, 0.5][..]));
+        let shared = c.clone().shared();
+        assert!(shared.is_shared());
+        assert_eq!(shared, c);
+        assert_eq!(shared.to_nalgebra(), m);
+        assert_eq!(shared.row(2), c.row(2));
+        assert_eq!(shared.transpose(), c.transpose());
+        assert!(shared.transpose().is_shared());
+        let mut copied = shared.clone();
+        copied.values_mut()[0] = 5.0;
+        assert!(!copied.is_shared());
+        assert_eq!(copied.value_at(0, 0), 5.0);
+        assert_eq!(shared.value_at(2, 3), 0.5);
     }
 
     /// Each malformed input is refused, with the reason.

@@ -3,10 +3,12 @@
 
 mod cholesky;
 mod csr;
+pub mod values;
 
 pub(crate) use cholesky::lower_part;
 pub use cholesky::{CholeskyAnalysis, SparseCholesky, kernel_dimension};
 pub use csr::{ColumnIndex, Csr, CsrError, IntoCsr, SparseRows};
+pub use values::{RowValues, SharedRows, Values};
 
 use thiserror::Error;
 
@@ -28,16 +30,16 @@ pub fn spmv(a: &impl SparseRows, x: &[f64]) -> Vec<f64> {
 
 /// y = A x for a CSR matrix, into a caller's buffer (no allocation).
 pub fn spmv_into(a: &impl SparseRows, x: &[f64], y: &mut [f64]) {
-    spmv_values_into(a, a.values(), x, y);
+    crate::with_values!(a.values(), v => spmv_values_into(a, v, x, y));
 }
 
 /// y = B x where B has the pattern of `pattern` and the stored values
 /// `values` (one per stored entry, in its order): the product with a matrix
 /// kept as values on another's pattern, such as the mass matrix on the
 /// stiffness's. No allocation.
-pub(crate) fn spmv_values_into(
+pub(crate) fn spmv_values_into<'v>(
     pattern: &impl SparseRows,
-    values: &[f64],
+    values: impl RowValues<'v>,
     x: &[f64],
     y: &mut [f64],
 ) {
@@ -54,7 +56,7 @@ pub(crate) fn spmv_values_into(
             let (lo, hi) = (offsets[i], offsets[i + 1]);
             // SAFETY: a SparseRows keeps its column indices below ncols =
             // x.len(), and values has one entry per stored index.
-            *yi = unsafe { row_dot(&cols[lo..hi], &values[lo..hi], x) };
+            *yi = unsafe { row_dot(&cols[lo..hi], values.row(i, lo, hi), x) };
         }
     };
     if pattern.nnz() < PARALLEL_NNZ {
@@ -84,13 +86,25 @@ pub(crate) fn spmv_transpose_into(
 ) {
     assert_eq!(x.len(), p.nrows(), "spmv_transpose: x has the wrong length");
     assert_eq!(y.len(), p.ncols(), "spmv_transpose: y has the wrong length");
-    let (offsets, cols, vals) = (p.row_offsets(), p.col_indices(), p.values());
+    crate::with_values!(p.values(), vals => transpose_product(p, vals, x, y, scratch));
+}
+
+/// [`spmv_transpose_into`] for one kind of stored values.
+fn transpose_product<'v>(
+    p: &impl SparseRows,
+    vals: impl RowValues<'v>,
+    x: &[f64],
+    y: &mut [f64],
+    scratch: &mut [f64],
+) {
+    let (offsets, cols) = (p.row_offsets(), p.col_indices());
     let scatter = |rows: std::ops::Range<usize>, y: &mut [f64]| {
         y.fill(0.0);
         for i in rows {
             let xi = x[i];
-            for q in offsets[i]..offsets[i + 1] {
-                y[cols[q].at()] += vals[q] * xi;
+            let (lo, hi) = (offsets[i], offsets[i + 1]);
+            for (c, v) in cols[lo..hi].iter().zip(vals.row(i, lo, hi)) {
+                y[c.at()] += v * xi;
             }
         }
     };
@@ -252,7 +266,7 @@ mod tests {
         let b = CsrMatrix::try_from_pattern_and_values(a.pattern().clone(), m.to_vec()).unwrap();
         let x = [1.0, -2.0, 3.0];
         let mut y = [0.0; 3];
-        spmv_values_into(&a, &m, &x, &mut y);
+        spmv_values_into(&a, &m[..], &x, &mut y);
         assert_eq!(y.to_vec(), spmv(&b, &x));
         assert_eq!(y, [2.5, -4.0, 3.5]);
     }
