@@ -7,16 +7,68 @@ use crate::numerics::linalg::{ColumnIndex, Csr, RowValues, SparseRows, Values};
 
 /// Checks that A and M are n × n, finite and symmetric. When M lives on A's
 /// pattern, one pass over it checks both.
+/// A's values are read as a slice when A keeps them row by row (as
+/// assembled), through [`Values`] when it shares its rows.
 pub(super) fn check_stiffness_and_mass(a: &Csr, mass: &Mass, n: usize) -> Result<(), ProblemError> {
+    if let Values::Plain(av) = a.values() {
+        return check_pair(a, av, mass, n);
+    }
+    check_pair(a, a.values(), mass, n)
+}
+
+/// [`check_stiffness_and_mass`] with A's values `av`, of one kind.
+fn check_pair<'v, V: Entries + From<&'v [f64]>>(
+    a: &Csr,
+    av: V,
+    mass: &'v Mass,
+    n: usize,
+) -> Result<(), ProblemError> {
     match mass {
         Mass::OnStiffnessPattern(m) => {
-            check_square_symmetric(a, [("A", a.values()), ("M", Values::Plain(m))], n)
+            check_square_symmetric(a, [("A", av), ("M", V::from(m.as_slice()))], n)
         }
         Mass::Matrix(m) => {
-            check_square_symmetric(a, [("A", a.values())], n)?;
-            check_square_symmetric(m, [("M", Values::Plain(m.values()))], n)
+            check_square_symmetric(a, [("A", av)], n)?;
+            check_square_symmetric(m, [("M", m.values())], n)
         }
-        Mass::Omitted => check_square_symmetric(a, [("A", a.values())], n),
+        Mass::Omitted => check_square_symmetric(a, [("A", av)], n),
+    }
+}
+
+/// A matrix's stored values as the check reads them: a slice, or
+/// [`Values`] (shared rows), each compiled into its own walk.
+pub(super) trait Entries: Copy {
+    /// Number of stored values.
+    fn count(self) -> usize;
+    /// The largest |value|, None if some value is not finite.
+    fn largest_if_finite(self) -> Option<f64>;
+    /// The value at stored position `p`, in row `row`.
+    fn at(self, offsets: &[usize], row: usize, p: usize) -> f64;
+}
+
+impl Entries for &[f64] {
+    fn count(self) -> usize {
+        self.len()
+    }
+    fn largest_if_finite(self) -> Option<f64> {
+        crate::numerics::linalg::max_abs_if_finite(self)
+    }
+    #[inline(always)]
+    fn at(self, _: &[usize], _: usize, p: usize) -> f64 {
+        self[p]
+    }
+}
+
+impl Entries for Values<'_> {
+    fn count(self) -> usize {
+        RowValues::len(self)
+    }
+    fn largest_if_finite(self) -> Option<f64> {
+        self.max_abs_if_finite()
+    }
+    #[inline(always)]
+    fn at(self, offsets: &[usize], row: usize, p: usize) -> f64 {
+        Values::at(self, offsets, row, p)
     }
 }
 
@@ -30,9 +82,9 @@ pub(super) fn check_stiffness_and_mass(a: &Csr, mass: &Mass, n: usize) -> Result
 /// when an entry below has no stored mirror above, or a matrix fails, is
 /// the whole pattern walked, the second time to name the first offending
 /// entry.
-pub(super) fn check_square_symmetric<const K: usize>(
+pub(super) fn check_square_symmetric<const K: usize, V: Entries>(
     pattern: &impl SparseRows,
-    named: [(&'static str, Values<'_>); K],
+    named: [(&'static str, V); K],
     n: usize,
 ) -> Result<(), ProblemError> {
     let Some(&(first, _)) = named.first() else {
@@ -48,11 +100,11 @@ pub(super) fn check_square_symmetric<const K: usize>(
         }
     }
     for (what, values) in &named {
-        if values.len() != pattern.nnz() {
+        if values.count() != pattern.nnz() {
             return Err(ProblemError::Dimension {
                 what,
                 expected: pattern.nnz(),
-                got: values.len(),
+                got: values.count(),
             });
         }
     }
@@ -61,7 +113,7 @@ pub(super) fn check_square_symmetric<const K: usize>(
     let mut scale = [0.0f64; K];
     for m in 0..K {
         scale[m] = values[m]
-            .max_abs_if_finite()
+            .largest_if_finite()
             .ok_or(ProblemError::NonFinite { what: named[m].0 })?;
     }
     let below: usize = (0..n)
@@ -98,10 +150,10 @@ pub(super) fn check_square_symmetric<const K: usize>(
 
 /// Each matrix's largest |x_ij − x_ji| over the entries of `which` (a
 /// missing mirror counts as 0), and how many of them had a stored mirror.
-fn asymmetry<const K: usize, I: ColumnIndex>(
+fn asymmetry<const K: usize, I: ColumnIndex, V: Entries>(
     offsets: &[usize],
     indices: &[I],
-    values: &[Values<'_>; K],
+    values: &[V; K],
     which: Triangle,
 ) -> ([f64; K], usize) {
     let (mut asymmetry, mut mirrored) = ([0.0f64; K], 0);
@@ -189,7 +241,7 @@ mod tests {
 
     /// The check of one matrix on its own pattern.
     fn check(what: &'static str, m: &CsrMatrix<f64>, n: usize) -> Result<(), ProblemError> {
-        check_square_symmetric(m, [(what, Values::Plain(m.values()))], n)
+        check_square_symmetric(m, [(what, m.values())], n)
     }
 
     /// A's pattern with M's values.

@@ -98,16 +98,18 @@ impl<'a> Values<'a> {
     /// # Panics
     /// If `p` is not among row i's positions.
     /// Plain values are read at `p` directly.
-    #[inline]
+    #[inline(always)]
     pub fn at(self, offsets: &[usize], i: usize, p: usize) -> f64 {
-        let (lo, hi) = (offsets[i], offsets[i + 1]);
-        assert!(
-            (lo..hi).contains(&p),
-            "stored position {p} is not in row {i}"
-        );
         match self {
             Values::Plain(v) => v[p],
-            Values::Shared(s) => s.row(i, lo, hi)[p - lo],
+            Values::Shared(s) => {
+                let (lo, hi) = (offsets[i], offsets[i + 1]);
+                assert!(
+                    (lo..hi).contains(&p),
+                    "stored position {p} is not in row {i}"
+                );
+                s.row(i, lo, hi)[p - lo]
+            }
         }
     }
 
@@ -141,6 +143,12 @@ impl<'a> Values<'a> {
             Values::Plain(v) => super::max_abs_if_finite(v),
             Values::Shared(s) => super::max_abs_if_finite(s.table),
         }
+    }
+}
+
+impl<'a> From<&'a [f64]> for Values<'a> {
+    fn from(v: &'a [f64]) -> Self {
+        Values::Plain(v)
     }
 }
 
@@ -195,17 +203,24 @@ impl Hasher for Prehashed {
 
 /// A hash of a row's bit patterns and length.
 fn row_hash(row: &[f64]) -> u64 {
-    row.iter().fold(row.len() as u64, |h, v| {
-        (h ^ v.to_bits())
-            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            .rotate_left(29)
+    bits(row).iter().fold(row.len() as u64, |h, &v| {
+        (h ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29)
     })
+}
+
+/// The bit patterns of a row.
+fn bits(row: &[f64]) -> &[u64] {
+    // SAFETY: f64 and u64 have the same size and alignment, and every bit
+    // pattern is a valid u64.
+    unsafe { std::slice::from_raw_parts(row.as_ptr().cast::<u64>(), row.len()) }
 }
 
 /// Whether two rows hold the same bit patterns (−0.0 apart from 0.0, a
 /// NaN's payload kept), so that sharing gives back every bit.
+/// (A loop, not `==`: that calls memcmp, whose call costs more than a
+/// stencil's dozen words.)
 fn same_bits(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+    a.len() == b.len() && bits(a).iter().zip(bits(b)).all(|(x, y)| x == y)
 }
 
 impl Stored {
@@ -241,7 +256,10 @@ impl Stored {
                     .get(s..s + row.len())
                     .is_some_and(|t| same_bits(t, row))
             };
-            if let Some(&s) = recent.iter().find(|&&s| at(s)) {
+            // Row i − 2 first: the same kind of node's other component
+            // comes two rows on.
+            let mut order = (0..RECENT).map(|back| recent[(i + RECENT - 2 + back) % RECENT]);
+            if let Some(s) = order.find(|&s| at(s)) {
                 start.push(s);
                 continue;
             }
