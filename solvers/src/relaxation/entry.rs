@@ -14,6 +14,10 @@ use crate::solver::Law;
 pub const CERTIFIED_STOP_KNOB: &str = "target";
 /// The knob of over-relaxation in the sweeps (1: the paper's Gauss–Seidel).
 pub const OVER_RELAXATION_KNOB: &str = "omega";
+/// The knob of the inner minimization at fixed l^k, and its value that
+/// runs it by TNNMG ([`crate::multigrid`]) instead of the paper's sweeps.
+pub const INNER_KNOB: &str = "inner";
+pub const INNER_BY_MULTIGRID: &str = "multigrid";
 /// The over-relaxation factor the studies compare with the paper's ω = 1:
 /// one stated value for every mesh, not tuned per mesh.
 pub const STUDIED_OMEGA: f64 = 1.5;
@@ -81,10 +85,10 @@ pub(crate) const ENTRY: Entry = Entry {
             kind: Kind::Between(0.0, 2.0),
         },
         Knob {
-            name: "inner",
+            name: INNER_KNOB,
             fields: &["inner"],
             help: "the inner minimization at fixed l^k: `sweeps` (the paper's pointwise relaxation) or `multigrid` (TNNMG with those sweeps as smoother: sweep_factor and max_sweeps then apply to its iterations, the certified rule is checked after each, omega is not used)",
-            kind: Kind::Word(&["sweeps", "multigrid"]),
+            kind: Kind::Word(&["sweeps", INNER_BY_MULTIGRID]),
         },
         Knob {
             name: CERTIFIED_STOP_KNOB,

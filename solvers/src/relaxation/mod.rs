@@ -23,7 +23,9 @@ pub mod pointwise;
 pub(crate) mod residual;
 mod settings;
 
-pub use entry::{CERTIFIED_STOP_KNOB, OVER_RELAXATION_KNOB, STUDIED_OMEGA};
+pub use entry::{
+    CERTIFIED_STOP_KNOB, INNER_BY_MULTIGRID, INNER_KNOB, OVER_RELAXATION_KNOB, STUDIED_OMEGA,
+};
 pub(crate) use entry::{ENTRY, SWEEP, UZAWA};
 pub use inner::Inner;
 pub use settings::{RelaxationSettings, Resolved};
