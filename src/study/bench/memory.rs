@@ -71,9 +71,10 @@ fn peak_memory_kb() -> Option<u64> {
 
 /// Measures `solver` on the whole Coulomb problem of `scene` (its finest
 /// mesh) in this process: the assembly's peak and the problem's size first,
-/// then the solve on that assembly (a solver of the given-friction
-/// subproblem, which needs every level of the continuation, assembles them
-/// itself after the first is dropped). Meaningful only in a fresh process.
+/// then the solve on that assembly (a solver that warm-starts along the
+/// continuation gets the coarser levels assembled beside it, as `solve`
+/// does: the finest mesh is assembled once). Meaningful only in a fresh
+/// process.
 pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<MemoryUse> {
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
@@ -96,8 +97,7 @@ pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<M
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)
     } else {
-        drop(d);
-        Assembled::for_solver(scene, entry)?
+        Assembled::with_finest(scene, entry, d)?
     };
     let run = solve(
         problem,
