@@ -4,8 +4,10 @@
 //! removed) available here, measured in the same run: faer's numeric LLᵀ on
 //! both cores with the symbolic analysis done once (both also timed apart,
 //! and the whole factorization on one thread). Nothing that solves this
-//! elasticity problem directly can be much cheaper than that. CHOLMOD is not
-//! installed on this machine, so it is not among the candidates. Solvers are the
+//! elasticity problem directly can be much cheaper than that. CHOLMOD
+//! (Debian's SuiteSparse 5.12, OpenBLAS on two threads) was timed on the
+//! same matrix at h = 1/1024 outside the project and is slower (7.4 s
+//! against faer's 5.3 s: README), so it is not among the candidates. Solvers are the
 //! study engine's trials (certified, with a wall-clock budget: this is a
 //! timing study, its file is a timing file); each solver's inner kernel
 //! (from its registry entry) is timed against one product with its operator.
