@@ -30,6 +30,7 @@ use clarabel::solver::{DefaultSettings, DefaultSettingsBuilder};
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::numerics::linalg::RowValues;
 use crate::observer::{Limits, Observer};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Kept, condense};

@@ -58,7 +58,6 @@ fn rows_of_product_with<'v>(
     rows: std::ops::Range<usize>,
     out: &mut Rows,
 ) {
-    let (ro, rc) = (r.row_offsets(), r.col_indices());
     let (ao, ac) = (a.row_offsets(), a.col_indices());
     let (po, pc) = (p.row_offsets(), p.col_indices());
     let Rows {
@@ -71,8 +70,8 @@ fn rows_of_product_with<'v>(
     } = out;
     offsets.push(0);
     for row in rows {
-        let r_row = r.row(row).1;
-        for (&i, &r_i) in rc[ro[row]..ro[row + 1]].iter().zip(r_row) {
+        let (r_cols, r_vals) = r.row(row);
+        for (&i, &r_i) in r_cols.iter().zip(r_vals) {
             let i = i as usize;
             let (alo, ahi) = (ao[i], ao[i + 1]);
             for (&j, &a_ij) in ac[alo..ahi].iter().zip(av.row(i, alo, ahi)) {

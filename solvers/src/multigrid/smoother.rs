@@ -126,6 +126,9 @@ impl<'a> Row<'a> {
             k,
             cols: &a.col_indices()[lo..hi],
             vals: vals.row(k, lo, hi),
+            // A position outside row k (before it wraps around, after it
+            // lies past its end) makes `diagonal` panic rather than read
+            // another row's value.
             diag: diag.wrapping_sub(lo),
         }
     }

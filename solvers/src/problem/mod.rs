@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::numerics::linalg::{
-    Csr, CsrError, IntoCsr, max_abs, max_abs_if_finite, spmv, spmv_values_into,
+    Csr, CsrError, IntoCsr, RowValues, max_abs, max_abs_if_finite, spmv, spmv_values_into,
 };
 
 mod scales;

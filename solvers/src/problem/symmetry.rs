@@ -17,7 +17,7 @@ pub(super) fn check_stiffness_and_mass(a: &Csr, mass: &Mass, n: usize) -> Result
 }
 
 /// [`check_stiffness_and_mass`] with A's values `av`, of one kind.
-fn check_pair<'v, V: Entries + From<&'v [f64]>>(
+fn check_pair<'v, V: RowValues<'v> + From<&'v [f64]>>(
     a: &Csr,
     av: V,
     mass: &'v Mass,
@@ -35,43 +35,6 @@ fn check_pair<'v, V: Entries + From<&'v [f64]>>(
     }
 }
 
-/// A matrix's stored values as the check reads them: a slice, or
-/// [`Values`] (shared rows), each compiled into its own walk.
-pub(super) trait Entries: Copy {
-    /// Number of stored values.
-    fn count(self) -> usize;
-    /// The largest |value|, None if some value is not finite.
-    fn largest_if_finite(self) -> Option<f64>;
-    /// The value at stored position `p`, in row `row`.
-    fn at(self, offsets: &[usize], row: usize, p: usize) -> f64;
-}
-
-impl Entries for &[f64] {
-    fn count(self) -> usize {
-        self.len()
-    }
-    fn largest_if_finite(self) -> Option<f64> {
-        crate::numerics::linalg::max_abs_if_finite(self)
-    }
-    #[inline(always)]
-    fn at(self, _: &[usize], _: usize, p: usize) -> f64 {
-        self[p]
-    }
-}
-
-impl Entries for Values<'_> {
-    fn count(self) -> usize {
-        RowValues::len(self)
-    }
-    fn largest_if_finite(self) -> Option<f64> {
-        self.max_abs_if_finite()
-    }
-    #[inline(always)]
-    fn at(self, offsets: &[usize], row: usize, p: usize) -> f64 {
-        Values::at(self, offsets, row, p)
-    }
-}
-
 /// Checks that each matrix, given as its values on `pattern` (one per stored
 /// entry), is n × n, finite and symmetric to 1e-12 of its largest entry.
 ///
@@ -82,7 +45,7 @@ impl Entries for Values<'_> {
 /// when an entry below has no stored mirror above, or a matrix fails, is
 /// the whole pattern walked, the second time to name the first offending
 /// entry.
-pub(super) fn check_square_symmetric<const K: usize, V: Entries>(
+pub(super) fn check_square_symmetric<'v, const K: usize, V: RowValues<'v>>(
     pattern: &impl SparseRows,
     named: [(&'static str, V); K],
     n: usize,
@@ -100,11 +63,11 @@ pub(super) fn check_square_symmetric<const K: usize, V: Entries>(
         }
     }
     for (what, values) in &named {
-        if values.count() != pattern.nnz() {
+        if values.len() != pattern.nnz() {
             return Err(ProblemError::Dimension {
                 what,
                 expected: pattern.nnz(),
-                got: values.count(),
+                got: values.len(),
             });
         }
     }
@@ -113,7 +76,7 @@ pub(super) fn check_square_symmetric<const K: usize, V: Entries>(
     let mut scale = [0.0f64; K];
     for m in 0..K {
         scale[m] = values[m]
-            .largest_if_finite()
+            .max_abs_if_finite()
             .ok_or(ProblemError::NonFinite { what: named[m].0 })?;
     }
     let below: usize = (0..n)
@@ -150,7 +113,7 @@ pub(super) fn check_square_symmetric<const K: usize, V: Entries>(
 
 /// Each matrix's largest |x_ij − x_ji| over the entries of `which` (a
 /// missing mirror counts as 0), and how many of them had a stored mirror.
-fn asymmetry<const K: usize, I: ColumnIndex, V: Entries>(
+fn asymmetry<'v, const K: usize, I: ColumnIndex, V: RowValues<'v>>(
     offsets: &[usize],
     indices: &[I],
     values: &[V; K],

@@ -13,7 +13,7 @@
 use nalgebra_sparse::CsrMatrix;
 use thiserror::Error;
 
-use super::values::{Stored, Values};
+use super::values::{RowValues, Stored, Values};
 
 /// A matrix that cannot be held as a [`Csr`].
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -262,8 +262,8 @@ impl Csr {
 
     /// The stored entries as (row, column, value), row by row.
     pub fn triplet_iter(&self) -> impl Iterator<Item = (usize, usize, &f64)> {
-        self.offsets.windows(2).enumerate().flat_map(move |(i, w)| {
-            let (cols, vals) = (&self.cols[w[0]..w[1]], self.values().row(i, w[0], w[1]));
+        (0..self.nrows()).flat_map(move |i| {
+            let (cols, vals) = self.row(i);
             cols.iter().zip(vals).map(move |(&c, v)| (i, c.at(), v))
         })
     }

@@ -30,6 +30,26 @@ pub trait RowValues<'a>: Copy + Send + Sync {
     fn is_empty(self) -> bool {
         self.len() == 0
     }
+
+    /// The value at stored position `p` of row `i` (`offsets`: the
+    /// matrix's row offsets).
+    ///
+    /// # Panics
+    /// If `p` is not among row i's positions (plain values are read at `p`
+    /// directly, without looking at the row).
+    #[inline(always)]
+    fn at(self, offsets: &[usize], i: usize, p: usize) -> f64 {
+        let (lo, hi) = (offsets[i], offsets[i + 1]);
+        assert!(
+            (lo..hi).contains(&p),
+            "stored position {p} is not in row {i}"
+        );
+        self.row(i, lo, hi)[p - lo]
+    }
+
+    /// The largest |value| (0 for none), or None when some value is not
+    /// finite.
+    fn max_abs_if_finite(self) -> Option<f64>;
 }
 
 impl<'a> RowValues<'a> for &'a [f64] {
@@ -39,6 +59,13 @@ impl<'a> RowValues<'a> for &'a [f64] {
     }
     fn len(self) -> usize {
         <[f64]>::len(self)
+    }
+    #[inline(always)]
+    fn at(self, _: &[usize], _: usize, p: usize) -> f64 {
+        self[p]
+    }
+    fn max_abs_if_finite(self) -> Option<f64> {
+        super::max_abs_if_finite(self)
     }
 }
 
@@ -58,6 +85,10 @@ impl<'a> RowValues<'a> for SharedRows<'a> {
     }
     fn len(self) -> usize {
         self.entries
+    }
+    /// From the table: every entry of it is some row's.
+    fn max_abs_if_finite(self) -> Option<f64> {
+        super::max_abs_if_finite(self.table)
     }
 }
 
@@ -83,6 +114,19 @@ impl<'a> RowValues<'a> for Values<'a> {
             Values::Shared(s) => s.entries,
         }
     }
+    #[inline(always)]
+    fn at(self, offsets: &[usize], i: usize, p: usize) -> f64 {
+        match self {
+            Values::Plain(v) => v.at(offsets, i, p),
+            Values::Shared(s) => s.at(offsets, i, p),
+        }
+    }
+    fn max_abs_if_finite(self) -> Option<f64> {
+        match self {
+            Values::Plain(v) => v.max_abs_if_finite(),
+            Values::Shared(s) => s.max_abs_if_finite(),
+        }
+    }
 }
 
 impl<'a> Values<'a> {
@@ -90,27 +134,6 @@ impl<'a> Values<'a> {
     #[inline(always)]
     pub fn row(self, i: usize, lo: usize, hi: usize) -> &'a [f64] {
         RowValues::row(self, i, lo, hi)
-    }
-
-    /// The value at stored position `p` of row `i` (`offsets`: the
-    /// matrix's row offsets).
-    ///
-    /// # Panics
-    /// If `p` is not among row i's positions.
-    /// Plain values are read at `p` directly.
-    #[inline(always)]
-    pub fn at(self, offsets: &[usize], i: usize, p: usize) -> f64 {
-        match self {
-            Values::Plain(v) => v[p],
-            Values::Shared(s) => {
-                let (lo, hi) = (offsets[i], offsets[i + 1]);
-                assert!(
-                    (lo..hi).contains(&p),
-                    "stored position {p} is not in row {i}"
-                );
-                s.row(i, lo, hi)[p - lo]
-            }
-        }
     }
 
     /// The values in stored order (`offsets`: the matrix's row offsets).
@@ -132,16 +155,6 @@ impl<'a> Values<'a> {
                 }
                 out
             }
-        }
-    }
-
-    /// The largest |value| (0 for none), or None when some value is not
-    /// finite; for shared rows, from the table (every entry of it is some
-    /// row's).
-    pub fn max_abs_if_finite(self) -> Option<f64> {
-        match self {
-            Values::Plain(v) => super::max_abs_if_finite(v),
-            Values::Shared(s) => super::max_abs_if_finite(s.table),
         }
     }
 }
@@ -223,6 +236,14 @@ fn same_bits(a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len() && bits(a).iter().zip(bits(b)).all(|(x, y)| x == y)
 }
 
+/// Whether `table` holds `row` from `start` on, bit for bit.
+fn holds(table: &[f64], start: u32, row: &[f64]) -> bool {
+    let s = start as usize;
+    table
+        .get(s..s + row.len())
+        .is_some_and(|t| same_bits(t, row))
+}
+
 impl Stored {
     pub(super) fn view(&self) -> Values<'_> {
         match self {
@@ -250,26 +271,15 @@ impl Stored {
         let mut recent = [u32::MAX; RECENT];
         for (i, w) in offsets.windows(2).enumerate() {
             let row = &values[w[0]..w[1]];
-            let at = |s: u32| {
-                let s = s as usize;
-                table
-                    .get(s..s + row.len())
-                    .is_some_and(|t| same_bits(t, row))
-            };
             // Row i − 2 first: the same kind of node's other component
             // comes two rows on.
             let mut order = (0..RECENT).map(|back| recent[(i + RECENT - 2 + back) % RECENT]);
-            if let Some(s) = order.find(|&s| at(s)) {
+            if let Some(s) = order.find(|&s| holds(&table, s, row)) {
                 start.push(s);
                 continue;
             }
             let candidates = seen.entry(row_hash(row)).or_default();
-            let found = candidates.iter().copied().find(|&s| {
-                let s = s as usize;
-                table
-                    .get(s..s + row.len())
-                    .is_some_and(|t| same_bits(t, row))
-            });
+            let found = candidates.iter().copied().find(|&s| holds(&table, s, row));
             let s = match found {
                 Some(s) => s,
                 None => {
