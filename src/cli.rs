@@ -285,8 +285,16 @@ pub struct ReproduceArgs {
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:
     /// results-quick, so that a smoke run never replaces the committed study].
+    /// The run is written study by study into DIR.partial beside it, which
+    /// an interrupted or failed run leaves for --resume.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Continue the run that was interrupted in DIR.partial: the studies it
+    /// finished are kept, the others run. Refused if that run was started
+    /// by another build, with other settings or another choice of --quick
+    /// and --long. Without it an interrupted run is started anew.
+    #[arg(long)]
+    pub resume: bool,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }

@@ -2,6 +2,8 @@
 //! against a committed reference, certified statuses, valid charts; trials
 //! that do not converge are kept and marked.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -161,20 +163,8 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     // The README's list of files is the run's: every file it names exists,
     // and every file written (besides charts and profiles, listed by
     // pattern) is named.
+    common::readme_lists_every_file(&out);
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
-    let listed: std::collections::BTreeSet<String> = readme
-        .lines()
-        .filter_map(|l| l.strip_prefix("- `"))
-        .filter_map(|l| l.split('`').next())
-        .filter(|f| out.join(f).is_file())
-        .map(String::from)
-        .collect();
-    let written: std::collections::BTreeSet<String> = std::fs::read_dir(&out)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().into_string().unwrap())
-        .filter(|f| !f.starts_with('.') && out.join(f).is_file())
-        .collect();
-    assert_eq!(listed, written);
     // A smoke run says so at the top of its README and in every chart's
     // title, and says what the default run would be.
     assert!(

@@ -1,19 +1,23 @@
 //! `contactlab reproduce`: the main job, into one output folder that is
-//! replaced whole when everything is written.
+//! replaced whole when everything is written. It writes into the folder's
+//! partial copy, study by study, so that an interrupted run can be
+//! continued (`--resume`) instead of started again.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 
 use crate::cli::ReproduceArgs;
 use crate::commands::Bars;
 use crate::io::manifest::Manifest;
 use crate::io::output::{json_bytes, log, print, write_atomic};
-use crate::io::run_folder::RunFolder;
+use crate::io::run_folder::{RunFolder, partial_path};
+use crate::study::lab::Lab;
 use crate::study::lab::Tracker as _;
-use crate::study::lab::{Lab, write_artifacts};
-use crate::study::reproduce::{self, ReproduceSpec, readme};
+use crate::study::reproduce::checkpoint::{Checkpoint, RunKey};
+use crate::study::reproduce::readme::RunFacts;
+use crate::study::reproduce::{self, ReproduceSpec, duration, readme};
 
 /// The committed study's folder, the default of a full run.
 pub const FULL_FOLDER: &str = "results";
@@ -37,7 +41,8 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             FULL_FOLDER
         })
     });
-    let folder = RunFolder::create(&out)?;
+    let interrupted = partial_path(&out)?.exists();
+    let (folder, continued) = RunFolder::create_partial(&out, args.resume)?;
     let started = Instant::now();
     let dir = folder.path().to_path_buf();
     let log_line = |l: &str| {
@@ -46,7 +51,37 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             started.elapsed().as_secs_f64()
         ))
     };
-    let (_, estimate) = reproduce::estimate(&spec, &settings);
+    let key = RunKey::of(&spec, &settings)?;
+    let mut checkpoint = if continued {
+        Checkpoint::resume(&dir, &key)?
+    } else {
+        if args.resume {
+            log_line(&format!(
+                "--resume: no interrupted run in {}; starting anew",
+                dir.display()
+            ));
+        } else if interrupted {
+            log_line(&format!(
+                "the interrupted run in {} is started anew (`--resume` would have continued it)",
+                dir.display()
+            ));
+        }
+        Checkpoint::start(&dir, &key)?
+    };
+    let earlier = checkpoint.done.len();
+    if earlier > 0 {
+        log_line(&format!(
+            "resuming the run in {}: {earlier} studies finished earlier ({})",
+            dir.display(),
+            checkpoint
+                .done
+                .iter()
+                .map(|r| r.study.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    let (_, estimate) = reproduce::estimate(&spec, &settings, earlier);
     log_line(&format!(
         "{estimate}{}",
         if spec.long || spec.quick {
@@ -57,53 +92,63 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     ));
     let bars = Bars::new("reproduce");
     let mut lab = Lab::new(settings.clone(), &log_line, &bars);
-    let (findings, artifacts, study_seconds) = reproduce::run(&spec, &mut lab)?;
+    let done = reproduce::run(&spec, &mut lab, &dir, &mut checkpoint).with_context(|| {
+        format!(
+            "the studies finished before this one are kept in {}: `--resume` continues the run from there",
+            dir.display()
+        )
+    })?;
     bars.finish();
-    let mut artifacts = artifacts;
-    if spec.quick {
-        // A smoke run cannot be mistaken for the study: every chart says so.
-        for a in &mut artifacts {
-            if let crate::study::lab::Content::Chart(c) = &mut a.content {
-                c.title = format!("SMOKE RUN (--quick), not results: {}", c.title);
-            }
-        }
-    }
-    log_line("charts and README");
-    let files = write_artifacts(&dir, &artifacts)?;
-    let charts: Vec<String> = artifacts
+    log_line("manifest and README");
+    let earlier_seconds: f64 = done
+        .seconds
         .iter()
-        .filter_map(|a| a.chart_name().map(str::to_string))
-        .collect();
-    let seconds = started.elapsed().as_secs_f64();
+        .filter(|(n, _)| done.resumed.iter().any(|(r, _)| r == n))
+        .map(|(_, s)| s)
+        .sum();
+    let seconds = started.elapsed().as_secs_f64() + earlier_seconds;
     let manifest = Manifest::collect(
         &settings,
         serde_json::json!({
             "reproduce": spec,
             "solvers": contactlab_solvers::registry::names(),
             "wall_seconds": seconds,
-            "study_seconds": study_seconds
+            "study_seconds": done
+                .seconds
                 .iter()
                 .map(|(n, s)| (n.clone(), serde_json::json!(s)))
+                .collect::<serde_json::Map<_, _>>(),
+            // The studies an earlier, interrupted process of the same
+            // build and settings ran, and when each finished (`--resume`).
+            "resumed": done
+                .resumed
+                .iter()
+                .map(|(n, at)| (n.clone(), serde_json::json!(at)))
                 .collect::<serde_json::Map<_, _>>(),
         }),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let mut files = files;
+    let mut files = done.files.clone();
     files.splice(0..0, ["README.md".to_string(), "manifest.json".to_string()]);
+    let resumed: Vec<String> = done.resumed.iter().map(|(n, _)| n.clone()).collect();
     let text = readme::render(
         &spec,
         &manifest,
-        &findings,
-        &lab.references,
-        &files,
-        &charts,
-        seconds,
+        &done.sections,
+        &RunFacts {
+            files: &files,
+            charts: &done.charts,
+            seconds,
+            resumed: &resumed,
+        },
     )?;
     write_atomic(&dir.join("README.md"), text.as_bytes())?;
+    checkpoint.finish()?;
     let target = folder.commit()?;
     print(&format!(
-        "wrote {} in {seconds:.0} s (see {}/README.md)\n",
+        "wrote {} in {} (see {}/README.md)\n",
         target.display(),
+        duration(seconds),
         target.display()
     ))
 }

@@ -18,6 +18,10 @@
 //! before it exits, once the binary asks for it ([`remove_on_interrupt`]);
 //! a run killed outright leaves it, and the next run into the same place
 //! removes it ([`remove_stale_staging`]).
+//!
+//! A run that can be resumed (`reproduce`) writes instead into
+//! `NAME.partial` beside the target ([`RunFolder::create_partial`]), which
+//! it keeps when it does not finish, under a lock while it runs.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -36,6 +40,9 @@ const MARK: &[u8] = b"written by contactlab\n";
 /// The staging folders of this process' runs not yet committed.
 static STAGING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
+/// What an interrupt says of this process' partial runs, which it keeps.
+static KEPT: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
 /// On Ctrl-C, SIGTERM or SIGHUP: removes every staging folder of this
 /// process, says that the target was left as it was, and exits with 130.
 /// For the binary only: a library caller (the Python package) keeps its
@@ -50,6 +57,9 @@ pub fn remove_on_interrupt() {
         eprintln!(
             "interrupted: the run was not written, and its output folder is as it was before"
         );
+        for line in KEPT.lock().unwrap_or_else(|e| e.into_inner()).iter() {
+            eprintln!("{line}");
+        }
         std::process::exit(130);
     });
 }
@@ -59,6 +69,21 @@ pub struct RunFolder {
     target: PathBuf,
     staging: PathBuf,
     committed: bool,
+    /// A partial run ([`RunFolder::create_partial`]): its staging folder
+    /// is kept if the run does not finish, and locked while it runs; the
+    /// note an interrupt gives of it.
+    partial: Option<(File, String)>,
+}
+
+/// The partial folder of a run into `target`: `NAME.partial` beside it.
+pub fn partial_path(target: &Path) -> Result<PathBuf> {
+    let target = normalized(target)?;
+    let name = target
+        .file_name()
+        .context("give a folder name")?
+        .to_string_lossy()
+        .into_owned();
+    Ok(target.with_file_name(format!("{name}.partial")))
 }
 
 impl RunFolder {
@@ -104,10 +129,88 @@ impl RunFolder {
             target: target.to_path_buf(),
             staging,
             committed: false,
+            partial: None,
         };
         write_new(&folder.staging.join(MARKER), MARK)
             .with_context(|| format!("--out {shown}: the output folder cannot be written"))?;
         Ok(folder)
+    }
+
+    /// Starts a run into `target` whose finished parts outlive it: it is
+    /// written into `NAME.partial` beside the target, which an interrupt,
+    /// an error or a kill leaves in place (and says so), so that a later
+    /// run can continue it. With `resume` an existing partial folder is
+    /// continued (the caller checks what it holds), else it is started
+    /// anew. The folder is locked while the run lasts: a second run into
+    /// the same target at once is refused. Gives the folder and whether an
+    /// existing one was continued.
+    pub fn create_partial(target: &Path, resume: bool) -> Result<(Self, bool)> {
+        let target = &normalized(target)?;
+        let shown = target.display();
+        let partial = partial_path(target)?;
+        let shown_partial = partial.display();
+        if let Some(parent) = target.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).with_context(|| {
+                format!("--out {shown}: cannot create its parent folder; choose a writable place")
+            })?;
+        }
+        check_replaceable(target)?;
+        let exists = std::fs::symlink_metadata(&partial).is_ok();
+        if exists {
+            let ours = std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_dir())
+                && crate::io::guarded::read_small(&partial.join(MARKER), MARK.len() as u64)
+                    .is_ok_and(|bytes| bytes == MARK);
+            if !ours {
+                bail!(
+                    "--out {shown}: {shown_partial} exists and contactlab did not write it (it lacks the {MARKER} mark); move it away or choose another --out"
+                );
+            }
+        }
+        let lock = |dir: &Path| -> Result<File> {
+            let f = File::open(dir).with_context(|| format!("cannot open {}", dir.display()))?;
+            match f.try_lock() {
+                Ok(()) => Ok(f),
+                Err(std::fs::TryLockError::WouldBlock) => bail!(
+                    "--out {shown}: another run is writing {} now; wait for it or choose another --out",
+                    dir.display()
+                ),
+                Err(std::fs::TryLockError::Error(e)) => {
+                    Err(e).with_context(|| format!("cannot lock {}", dir.display()))
+                }
+            }
+        };
+        let continued = exists && resume;
+        let held = if continued {
+            lock(&partial)?
+        } else {
+            if exists {
+                // Ours and not in use (the lock says so): started anew.
+                drop(lock(&partial)?);
+                std::fs::remove_dir_all(&partial)
+                    .with_context(|| format!("cannot remove {shown_partial}"))?;
+            }
+            std::fs::create_dir(&partial).with_context(|| {
+                format!("--out {shown}: {shown_partial} cannot be written; choose a writable place")
+            })?;
+            write_new(&partial.join(MARKER), MARK)
+                .with_context(|| format!("--out {shown}: {shown_partial} cannot be written"))?;
+            lock(&partial)?
+        };
+        let note = format!(
+            "the studies finished so far are kept in {shown_partial}: `--resume` continues the run from there"
+        );
+        KEPT.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(note.clone());
+        Ok((
+            Self {
+                target: target.to_path_buf(),
+                staging: partial,
+                committed: false,
+                partial: Some((held, note)),
+            },
+            continued,
+        ))
     }
 
     /// Where the run's files go until it is committed.
@@ -153,6 +256,11 @@ impl RunFolder {
                 .with_context(|| format!("cannot move the run to {}", self.target.display()))?;
         }
         self.committed = true;
+        if let Some((_, note)) = self.partial.take() {
+            KEPT.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .retain(|l| *l != note);
+        }
         drop(staging);
         drop(lock);
         if let Some(old) = old {
@@ -164,7 +272,8 @@ impl RunFolder {
 
 impl Drop for RunFolder {
     fn drop(&mut self) {
-        if !self.committed {
+        // A partial run keeps what it wrote for `--resume`.
+        if !self.committed && self.partial.is_none() {
             let mut staging = STAGING.lock().unwrap_or_else(|e| e.into_inner());
             staging.retain(|p| *p != self.staging);
             let _ = std::fs::remove_dir_all(&self.staging);

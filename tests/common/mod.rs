@@ -45,3 +45,24 @@ pub fn one_line_error(o: &Output, what: &str, expected: &str) {
         "{what}: '{expected}' not in {stderr}"
     );
 }
+
+/// Checks that the README of the run in `out` lists every file the run
+/// wrote at its top level (charts and profiles are listed by pattern), and
+/// names no file that is not there; gives the files.
+pub fn readme_lists_every_file(out: &std::path::Path) -> std::collections::BTreeSet<String> {
+    let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
+    let listed: std::collections::BTreeSet<String> = readme
+        .lines()
+        .filter_map(|l| l.strip_prefix("- `"))
+        .filter_map(|l| l.split('`').next())
+        .filter(|f| out.join(f).is_file())
+        .map(String::from)
+        .collect();
+    let written: std::collections::BTreeSet<String> = std::fs::read_dir(out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|f| !f.starts_with('.') && out.join(f).is_file())
+        .collect();
+    assert_eq!(listed, written);
+    written
+}

@@ -12,7 +12,7 @@ use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow, bench, multigrid};
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Artifact, FastestDirect, Findings, Lab, Study};
 
 pub use crate::study::bench::charts::{
     MIN_POINTS_FOR_SLOPE, fit_slope, performance_charts, slope_label,
@@ -328,6 +328,7 @@ impl Study for Bench {
             Artifact::text("performance_goals.md", &out.goals_markdown),
         ];
         artifacts.extend(Artifact::charts(out.charts.clone()));
+        findings.handoff.fastest_direct = FastestDirect::of(&out);
         findings.bench = Some(out);
         Ok(artifacts)
     }

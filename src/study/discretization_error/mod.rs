@@ -291,15 +291,11 @@ impl Study for Errors {
             self.spec.reference
         ));
         let mut spec = self.spec.clone();
-        if let (None, Some(bench)) = (spec.solver, &findings.bench) {
-            let finest = bench
-                .meshes
-                .last()
-                .map(|h| h.to_string())
-                .unwrap_or_default();
-            spec.solver =
-                crate::study::bench::certified_direct(&bench.rows, &spec.reference.to_string())
-                    .or_else(|| crate::study::bench::certified_direct(&bench.rows, &finest));
+        if spec.solver.is_none() {
+            spec.solver = findings
+                .handoff
+                .fastest_direct
+                .at_or_finest(&spec.reference.to_string());
         }
         let log = lab.logger();
         let errors = run(&spec, &lab.settings, &|l| {

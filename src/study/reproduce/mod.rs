@@ -7,10 +7,14 @@
 //! and a README that is a view of the findings ([`readme`]). The files it
 //! writes are the studies' artifacts.
 
+pub mod checkpoint;
 pub mod intents;
 pub mod readme;
+pub mod sections;
 mod separation_text;
 mod sweep_text;
+
+use std::path::Path;
 
 use anyhow::Result;
 use serde::Serialize;
@@ -18,6 +22,7 @@ use serde::Serialize;
 use contactlab_solvers::registry;
 
 use crate::coulomb::continuation::Schedule;
+use crate::io::manifest::utc_now;
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
@@ -26,7 +31,9 @@ use crate::study::bench::goals::Bench;
 use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::discretization_error::{ErrorSpec, Errors};
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Content, Findings, Lab, Study, write_artifacts};
+use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord};
+use crate::study::reproduce::sections::Sections;
 use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
@@ -205,9 +212,14 @@ pub fn duration(seconds: f64) -> String {
     }
 }
 
-/// What a run expects to take, stated as it starts.
-pub fn estimate(spec: &ReproduceSpec, settings: &Settings) -> (f64, String) {
-    let names: Vec<&str> = studies(spec, settings).iter().map(|s| s.name()).collect();
+/// What a run expects to take, stated as it starts: its studies from the
+/// `done`-th on (the ones before it were finished by an earlier process).
+pub fn estimate(spec: &ReproduceSpec, settings: &Settings, done: usize) -> (f64, String) {
+    let names: Vec<&str> = studies(spec, settings)
+        .iter()
+        .skip(done)
+        .map(|s| s.name())
+        .collect();
     let total: f64 = names.iter().map(|n| estimated_seconds(n, spec)).sum();
     let each = names
         .iter()
@@ -217,8 +229,9 @@ pub fn estimate(spec: &ReproduceSpec, settings: &Settings) -> (f64, String) {
     (
         total,
         format!(
-            "{} studies, about {} on a 2-core machine like the one of results/ ({each})",
+            "{} studies{}, about {} on a 2-core machine like the one of results/ ({each})",
             names.len(),
+            if done > 0 { " left" } else { "" },
             duration(total)
         ),
     )
@@ -227,25 +240,87 @@ pub fn estimate(spec: &ReproduceSpec, settings: &Settings) -> (f64, String) {
 /// Wall seconds of each study of a run, in order.
 pub type StudySeconds = Vec<(String, f64)>;
 
-/// Runs every study of `spec` in `lab`; gives their findings, their
-/// artifacts (the charts, the manifest and the README are the caller's)
-/// and the seconds each took. After each study it logs how long it took
-/// and, from the estimates scaled by how this run compares so far, the
-/// time left.
-pub fn run(spec: &ReproduceSpec, lab: &mut Lab) -> Result<(Findings, Vec<Artifact>, StudySeconds)> {
+/// What the studies of a run gave: the README's sections, the files
+/// written, the names of the charts, the seconds each study took, and the
+/// studies an earlier process ran, with when each finished.
+#[derive(Default)]
+pub struct Done {
+    pub sections: Sections,
+    pub files: Vec<String>,
+    pub charts: Vec<String>,
+    pub seconds: StudySeconds,
+    pub resumed: Vec<(String, String)>,
+}
+
+/// Runs every study of `spec` in `lab`, writing each one's files into
+/// `dir` as soon as it has run and recording it in `checkpoint`; the
+/// studies `checkpoint` already holds (an earlier process ran them into
+/// `dir`) are taken from it. The manifest and the README are the caller's.
+/// After each study it logs how long it took and, from the estimates
+/// scaled by how this run compares so far, the time left.
+pub fn run(
+    spec: &ReproduceSpec,
+    lab: &mut Lab,
+    dir: &Path,
+    checkpoint: &mut Checkpoint,
+) -> Result<Done> {
     let mut findings = Findings::default();
-    let mut artifacts = Vec::new();
-    let mut seconds = Vec::new();
+    let mut done = Done::default();
     let studies = studies(spec, &lab.settings);
     let estimates: Vec<f64> = studies
         .iter()
         .map(|s| estimated_seconds(s.name(), spec))
         .collect();
+    // A record that does not match its study (none should) ends the resume.
+    let kept = checkpoint
+        .done
+        .iter()
+        .zip(&studies)
+        .take_while(|(r, s)| r.study == s.name())
+        .count();
+    checkpoint.done.truncate(kept);
     let (mut spent, mut expected) = (0.0, 0.0);
     for (k, study) in studies.iter().enumerate() {
+        if let Some(record) = checkpoint.done.get(k) {
+            lab.log(&format!(
+                "{} kept from the interrupted run (finished {}, {})",
+                record.study,
+                record.finished,
+                duration(record.seconds)
+            ));
+            findings.handoff = record.handoff.clone();
+            add(&mut done, record);
+            done.resumed
+                .push((record.study.clone(), record.finished.clone()));
+            continue;
+        }
         let started = std::time::Instant::now();
-        artifacts.extend(lab.run(study.as_ref(), &mut findings)?);
+        let mut artifacts = lab.run(study.as_ref(), &mut findings)?;
+        if spec.quick {
+            // A smoke run cannot be mistaken for the study: every chart says so.
+            for a in &mut artifacts {
+                if let Content::Chart(c) = &mut a.content {
+                    c.title = format!("SMOKE RUN (--quick), not results: {}", c.title);
+                }
+            }
+        }
+        let files = write_artifacts(dir, &artifacts)?;
+        let section = sections::section(study.name(), spec, &findings, &lab.references)?;
         let took = started.elapsed().as_secs_f64();
+        let record = StudyRecord {
+            study: study.name().to_string(),
+            seconds: took,
+            finished: utc_now(),
+            section,
+            files,
+            charts: artifacts
+                .iter()
+                .filter_map(|a| a.chart_name().map(str::to_string))
+                .collect(),
+            handoff: findings.handoff.clone(),
+        };
+        add(&mut done, &record);
+        checkpoint.save(k, record)?;
         spent += took;
         expected += estimates[k];
         // This machine against the estimates' so far, within a factor of 2
@@ -259,7 +334,14 @@ pub fn run(spec: &ReproduceSpec, lab: &mut Lab) -> Result<(Findings, Vec<Artifac
             duration(estimates[k]),
             duration(left)
         ));
-        seconds.push((study.name().to_string(), took));
     }
-    Ok((findings, artifacts, seconds))
+    Ok(done)
+}
+
+/// Adds a finished study's part to what the run gave.
+fn add(done: &mut Done, record: &StudyRecord) {
+    done.sections.add(record.section.clone());
+    done.files.extend(record.files.iter().cloned());
+    done.charts.extend(record.charts.iter().cloned());
+    done.seconds.push((record.study.clone(), record.seconds));
 }
