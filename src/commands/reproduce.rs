@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 
 use crate::cli::ReproduceArgs;
 use crate::commands::Bars;
@@ -92,9 +92,10 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     ));
     let bars = Bars::new("reproduce");
     let mut lab = Lab::new(settings.clone(), &log_line, &bars);
-    let done = reproduce::run(&spec, &mut lab, &dir, &mut checkpoint).with_context(|| {
-        format!(
-            "the studies finished before this one are kept in {}: `--resume` continues the run from there",
+    // The cause first, then where the finished studies are.
+    let done = reproduce::run(&spec, &mut lab, &dir, &mut checkpoint).map_err(|e| {
+        anyhow::anyhow!(
+            "{e:#} (the studies finished before it are kept in {}: `--resume` continues the run from there)",
             dir.display()
         )
     })?;
