@@ -16,19 +16,33 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::study::runner::median;
 
-/// Times `f` once as a warm-up and `runs` more times; returns (first result, times).
+/// A measurement whose timed runs add up to less than this is repeated
+/// (up to [`MAX_SET_UP_RUNS`] runs) until they reach it: one run of a few
+/// milliseconds on a shared machine is one sample of its noise (the
+/// assembly at 1/64 read 0.20, 0.90, 0.34 and 0.46 × the factorization in
+/// four `reproduce` runs of one sample each).
+pub(super) const MIN_TIMED_SECONDS: f64 = 0.2;
+
+/// The most runs of one short measurement.
+pub(super) const MAX_SET_UP_RUNS: usize = 51;
+
+/// Times `f` once as a warm-up and then at least `runs` more times, more
+/// while the timed runs add up to less than [`MIN_TIMED_SECONDS`] (with
+/// `runs` = 0: the warm-up alone, cold); returns (first result, times).
 pub(super) fn timed<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(T, Vec<f64>)> {
     let t = Instant::now();
     let first = f()?;
     let warm = t.elapsed().as_secs_f64();
-    let mut times = Vec::with_capacity(runs);
-    for _ in 0..runs {
+    if runs == 0 {
+        return Ok((first, vec![warm]));
+    }
+    let mut times: Vec<f64> = Vec::with_capacity(runs);
+    while times.len() < runs
+        || (times.iter().sum::<f64>() < MIN_TIMED_SECONDS && times.len() < MAX_SET_UP_RUNS)
+    {
         let t = Instant::now();
         f()?;
         times.push(t.elapsed().as_secs_f64());
-    }
-    if times.is_empty() {
-        times.push(warm);
     }
     Ok((first, times))
 }
@@ -47,8 +61,9 @@ pub fn pinned(d: &Discretization) -> CsrMatrix<f64> {
     CsrMatrix::from(&coo)
 }
 
-/// Seconds of one mesh's set-up measurements, each timed `runs` times after
-/// a warm-up (0: the warm-up alone, cold).
+/// Seconds of one mesh's set-up measurements, each timed at least `runs`
+/// times after a warm-up, more if short ([`timed`]; 0: the warm-up alone,
+/// cold).
 pub(super) struct SetUp {
     /// Assembly: both matrices, the loads and the problem with its checks.
     pub(super) assembly: Vec<f64>,
@@ -176,5 +191,33 @@ impl MeshRows<'_> {
             work: 0,
             note,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A short measurement is repeated until its runs add up (counts, not
+    /// speed); a cold one is the warm-up alone; a long one is not repeated
+    /// beyond the runs asked for.
+    #[test]
+    fn short_measurements_are_repeated_and_long_ones_are_not() {
+        let mut calls = 0;
+        let (_, times) = timed(1, || {
+            calls += 1;
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(times.len(), MAX_SET_UP_RUNS);
+        assert_eq!(calls, MAX_SET_UP_RUNS + 1);
+        let (_, times) = timed(0, || Ok(())).unwrap();
+        assert_eq!(times.len(), 1);
+        let (_, times) = timed(2, || {
+            std::thread::sleep(std::time::Duration::from_secs_f64(MIN_TIMED_SECONDS));
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(times.len(), 2);
     }
 }
