@@ -175,3 +175,73 @@ impl Checkpoint {
 fn record_name(k: usize) -> String {
     format!("study-{k}.json")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn key() -> RunKey {
+        RunKey::of(&ReproduceSpec::quick(), &Settings::default()).unwrap()
+    }
+
+    fn record(study: &str) -> StudyRecord {
+        StudyRecord {
+            study: study.into(),
+            seconds: 1.5,
+            finished: "2026-11-26T00:00:00Z".into(),
+            section: serde_json::from_value(serde_json::json!(
+                {"Table1": {"table1": "| a |", "table1_text": "text"}}
+            ))
+            .unwrap(),
+            files: vec!["table1.csv".into()],
+            charts: vec![],
+            handoff: Handoff::default(),
+        }
+    }
+
+    /// What a run saved is what a resumed run reads, in order; a key that
+    /// differs (here: the certificate's tolerance) is refused, naming what
+    /// differs.
+    #[test]
+    fn records_come_back_in_order_and_another_runs_key_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let key = key();
+        let mut checkpoint = Checkpoint::start(dir.path(), &key).unwrap();
+        checkpoint.save(0, record("table1")).unwrap();
+        checkpoint.save(1, record("compare")).unwrap();
+        assert!(checkpoint.save(3, record("bench")).is_err());
+        let resumed = Checkpoint::resume(dir.path(), &key).unwrap();
+        let studies: Vec<&str> = resumed.done.iter().map(|r| r.study.as_str()).collect();
+        assert_eq!(studies, ["table1", "compare"]);
+        assert_eq!(resumed.done[1].files, ["table1.csv"]);
+        let mut settings = Settings::default();
+        settings.certificate.tolerance *= 10.0;
+        let other = RunKey::of(&ReproduceSpec::quick(), &settings).unwrap();
+        let refused = Checkpoint::resume(dir.path(), &other).err().unwrap();
+        assert!(refused.to_string().contains("other settings"), "{refused}");
+        resumed.finish().unwrap();
+        assert!(!dir.path().join(DIR).exists());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Any bytes as the key or as a record: an error or the records
+        /// before it, never a panic.
+        #[test]
+        fn any_bytes_in_a_checkpoint_are_an_error_not_a_panic(
+            bytes in proptest::collection::vec(any::<u8>(), 0..2000),
+            as_key in any::<bool>(),
+        ) {
+            let dir = tempfile::tempdir().unwrap();
+            let key = key();
+            let checkpoint = Checkpoint::start(dir.path(), &key).unwrap();
+            let target = if as_key { KEY.to_string() } else { record_name(0) };
+            std::fs::write(checkpoint.dir.join(target), &bytes).unwrap();
+            if let Ok(resumed) = Checkpoint::resume(dir.path(), &key) {
+                prop_assert!(resumed.done.len() <= 1);
+            }
+        }
+    }
+}
