@@ -12,7 +12,7 @@ use crate::cli::ReproduceArgs;
 use crate::commands::Bars;
 use crate::io::manifest::Manifest;
 use crate::io::output::{json_bytes, log, print, write_atomic};
-use crate::io::run_folder::{RunFolder, partial_path};
+use crate::io::run_folder::{Earlier, RunFolder};
 use crate::study::lab::Lab;
 use crate::study::lab::Tracker as _;
 use crate::study::reproduce::checkpoint::{Checkpoint, RunKey};
@@ -41,8 +41,7 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
             FULL_FOLDER
         })
     });
-    let interrupted = partial_path(&out)?.exists();
-    let (folder, continued) = RunFolder::create_partial(&out, args.resume)?;
+    let (folder, earlier) = RunFolder::create_partial(&out, args.resume)?;
     let started = Instant::now();
     let dir = folder.path().to_path_buf();
     let log_line = |l: &str| {
@@ -52,26 +51,29 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
         ))
     };
     let key = RunKey::of(&spec, &settings)?;
-    let mut checkpoint = if continued {
-        Checkpoint::resume(&dir, &key)?
-    } else {
-        if args.resume {
-            log_line(&format!(
-                "--resume: no interrupted run in {}; starting anew",
-                dir.display()
-            ));
-        } else if interrupted {
+    let mut checkpoint = match earlier {
+        Earlier::Continued => Checkpoint::resume(&dir, &key)?,
+        Earlier::Replaced => {
             log_line(&format!(
                 "the interrupted run in {} is started anew (`--resume` would have continued it)",
                 dir.display()
             ));
+            Checkpoint::start(&dir, &key)?
         }
-        Checkpoint::start(&dir, &key)?
+        Earlier::None => {
+            if args.resume {
+                log_line(&format!(
+                    "--resume: no interrupted run in {}; starting anew",
+                    dir.display()
+                ));
+            }
+            Checkpoint::start(&dir, &key)?
+        }
     };
-    let earlier = checkpoint.done.len();
-    if earlier > 0 {
+    let finished = checkpoint.done.len();
+    if finished > 0 {
         log_line(&format!(
-            "resuming the run in {}: {earlier} studies finished earlier ({})",
+            "resuming the run in {}: {finished} studies finished earlier ({})",
             dir.display(),
             checkpoint
                 .done
@@ -81,7 +83,7 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
                 .join(", ")
         ));
     }
-    let (_, estimate) = reproduce::estimate(&spec, &settings, earlier);
+    let (_, estimate) = reproduce::estimate(&spec, &settings, finished);
     log_line(&format!(
         "{estimate}{}",
         if spec.long || spec.quick {
@@ -101,10 +103,9 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     })?;
     bars.finish();
     log_line("manifest and README");
-    let earlier_seconds: f64 = done
-        .seconds
+    // The resumed studies are the first ones (see `reproduce::run`).
+    let earlier_seconds: f64 = done.seconds[..done.resumed.len()]
         .iter()
-        .filter(|(n, _)| done.resumed.iter().any(|(r, _)| r == n))
         .map(|(_, s)| s)
         .sum();
     let seconds = started.elapsed().as_secs_f64() + earlier_seconds;

@@ -75,15 +75,42 @@ pub struct RunFolder {
     partial: Option<(File, String)>,
 }
 
-/// The partial folder of a run into `target`: `NAME.partial` beside it.
-pub fn partial_path(target: &Path) -> Result<PathBuf> {
+/// What a partial run ([`RunFolder::create_partial`]) found beside its
+/// target when it started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Earlier {
+    /// No partial run.
+    None,
+    /// A partial run, continued (`resume`).
+    Continued,
+    /// A partial run, started anew (not `resume`).
+    Replaced,
+}
+
+/// A run's target made ready: normalized, its parent folder created, and
+/// checked to be replaceable; gives the target, its name and its parent.
+fn prepare(target: &Path) -> Result<(PathBuf, String, PathBuf)> {
     let target = normalized(target)?;
+    let shown = target.display();
     let name = target
         .file_name()
-        .context("give a folder name")?
+        .with_context(|| format!("--out {shown}: give a folder name, not a root or `..`"))?
         .to_string_lossy()
         .into_owned();
-    Ok(target.with_file_name(format!("{name}.partial")))
+    let parent = parent_of(&target);
+    std::fs::create_dir_all(&parent).with_context(|| {
+        format!("--out {shown}: cannot create its parent folder; choose a writable place")
+    })?;
+    check_replaceable(&target)?;
+    Ok((target, name, parent))
+}
+
+/// The folder `target` lies in (`.` for a bare name).
+fn parent_of(target: &Path) -> PathBuf {
+    match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
 }
 
 impl RunFolder {
@@ -91,22 +118,9 @@ impl RunFolder {
     /// creates the staging folder beside it (so that an unwritable place
     /// fails at once, before any computation).
     pub fn create(target: &Path) -> Result<Self> {
-        let target = &normalized(target)?;
+        let (target, name, parent) = &prepare(target)?;
         let shown = target.display();
-        let name = target
-            .file_name()
-            .with_context(|| format!("--out {shown}: give a folder name, not a root or `..`"))?
-            .to_string_lossy()
-            .into_owned();
-        let parent = match target.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        std::fs::create_dir_all(&parent).with_context(|| {
-            format!("--out {shown}: cannot create its parent folder; choose a writable place")
-        })?;
-        check_replaceable(target)?;
-        remove_stale_staging(&parent, &name);
+        remove_stale_staging(parent, name);
         let staging = (0..100)
             .map(|k| {
                 parent.join(format!(
@@ -142,29 +156,18 @@ impl RunFolder {
     /// run can continue it. With `resume` an existing partial folder is
     /// continued (the caller checks what it holds), else it is started
     /// anew. The folder is locked while the run lasts: a second run into
-    /// the same target at once is refused. Gives the folder and whether an
-    /// existing one was continued.
-    pub fn create_partial(target: &Path, resume: bool) -> Result<(Self, bool)> {
-        let target = &normalized(target)?;
+    /// the same target at once is refused. Gives the folder and what it
+    /// found there.
+    pub fn create_partial(target: &Path, resume: bool) -> Result<(Self, Earlier)> {
+        let (target, name, parent) = prepare(target)?;
         let shown = target.display();
-        let partial = partial_path(target)?;
+        let partial = parent.join(format!("{name}.partial"));
         let shown_partial = partial.display();
-        if let Some(parent) = target.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(parent).with_context(|| {
-                format!("--out {shown}: cannot create its parent folder; choose a writable place")
-            })?;
-        }
-        check_replaceable(target)?;
         let exists = std::fs::symlink_metadata(&partial).is_ok();
-        if exists {
-            let ours = std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_dir())
-                && crate::io::guarded::read_small(&partial.join(MARKER), MARK.len() as u64)
-                    .is_ok_and(|bytes| bytes == MARK);
-            if !ours {
-                bail!(
-                    "--out {shown}: {shown_partial} exists and contactlab did not write it (it lacks the {MARKER} mark); move it away or choose another --out"
-                );
-            }
+        if exists && !carries_mark(&partial) {
+            bail!(
+                "--out {shown}: {shown_partial} exists and contactlab did not write it (it lacks the {MARKER} mark); move it away or choose another --out"
+            );
         }
         let lock = |dir: &Path| -> Result<File> {
             let f = File::open(dir).with_context(|| format!("cannot open {}", dir.display()))?;
@@ -179,11 +182,15 @@ impl RunFolder {
                 }
             }
         };
-        let continued = exists && resume;
-        let held = if continued {
+        let earlier = match (exists, resume) {
+            (false, _) => Earlier::None,
+            (true, true) => Earlier::Continued,
+            (true, false) => Earlier::Replaced,
+        };
+        let held = if earlier == Earlier::Continued {
             lock(&partial)?
         } else {
-            if exists {
+            if earlier == Earlier::Replaced {
                 // Ours and not in use (the lock says so): started anew.
                 drop(lock(&partial)?);
                 std::fs::remove_dir_all(&partial)
@@ -204,12 +211,12 @@ impl RunFolder {
             .push(note.clone());
         Ok((
             Self {
-                target: target.to_path_buf(),
+                target: target.clone(),
                 staging: partial,
                 committed: false,
                 partial: Some((held, note)),
             },
-            continued,
+            earlier,
         ))
     }
 
@@ -225,10 +232,7 @@ impl RunFolder {
 
     /// Puts the finished run in place of whatever the target held.
     pub fn commit(mut self) -> Result<PathBuf> {
-        let parent = match self.target.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
+        let parent = parent_of(&self.target);
         let lock = File::open(&parent)
             .with_context(|| format!("cannot open {} to lock it", parent.display()))?;
         lock.lock()
@@ -312,15 +316,21 @@ fn check_replaceable(target: &Path) -> Result<()> {
     let mut entries = std::fs::read_dir(target)
         .with_context(|| format!("--out {shown}: cannot read the existing folder"))?;
     let empty = entries.next().is_none();
-    let ours = crate::io::guarded::read_small(&target.join(MARKER), MARK.len() as u64)
-        .is_ok_and(|bytes| bytes == MARK);
-    if empty || ours {
+    if empty || carries_mark(target) {
         Ok(())
     } else {
         bail!(
             "--out {shown} is a folder that contactlab did not write (it lacks contactlab's {MARKER} mark, and each run replaces its output folder whole); choose a new or empty folder"
         )
     }
+}
+
+/// Whether `dir` is a folder with contactlab's mark (the marker file with
+/// its exact content).
+fn carries_mark(dir: &Path) -> bool {
+    std::fs::symlink_metadata(dir).is_ok_and(|m| m.is_dir())
+        && crate::io::guarded::read_small(&dir.join(MARKER), MARK.len() as u64)
+            .is_ok_and(|bytes| bytes == MARK)
 }
 
 /// Swaps two directories atomically (Linux `renameat2` with

@@ -242,7 +242,8 @@ pub type StudySeconds = Vec<(String, f64)>;
 
 /// What the studies of a run gave: the README's sections, the files
 /// written, the names of the charts, the seconds each study took, and the
-/// studies an earlier process ran, with when each finished.
+/// studies an earlier process ran, with when each finished (always the
+/// first ones: a checkpoint holds the studies before the first it lacks).
 #[derive(Default)]
 pub struct Done {
     pub sections: Sections,
