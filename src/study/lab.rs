@@ -15,6 +15,7 @@ use crate::io::csv::to_csv;
 use crate::io::output::write_atomic;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::bench::FastestDirect;
 use crate::study::bench::goals::BenchOutput;
 use crate::study::benchmark::BenchmarkRow;
 use crate::study::compare::paper::SeparationRow;
@@ -122,49 +123,6 @@ pub struct Findings {
 pub struct Handoff {
     /// From `bench`: the discretization error's solver unless told.
     pub fastest_direct: FastestDirect,
-}
-
-/// The fastest direct Coulomb solver `bench` certified on each of its
-/// meshes, and its finest regular mesh (the large ones aside).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct FastestDirect {
-    /// (h, solver) for each mesh `bench` measured with a certified direct
-    /// Coulomb solver, in the order of its rows.
-    pub by_mesh: Vec<(String, String)>,
-    /// Its finest regular mesh.
-    pub finest_regular: Option<String>,
-}
-
-impl FastestDirect {
-    /// From a `bench` run's rows ([`crate::study::bench::certified_direct`]).
-    pub fn of(bench: &BenchOutput) -> Self {
-        let mut by_mesh: Vec<(String, String)> = Vec::new();
-        for r in &bench.rows {
-            if by_mesh.iter().any(|(h, _)| *h == r.h) {
-                continue;
-            }
-            if let Some(s) = crate::study::bench::certified_direct(&bench.rows, &r.h) {
-                by_mesh.push((r.h.clone(), s.to_string()));
-            }
-        }
-        Self {
-            by_mesh,
-            finest_regular: bench.meshes.last().map(|h| h.to_string()),
-        }
-    }
-
-    /// The solver certified at `h`, else the one at the finest regular
-    /// mesh; None if `bench` has not run or certified none there.
-    pub fn at_or_finest(&self, h: &str) -> Option<&'static str> {
-        let at = |h: &str| {
-            self.by_mesh
-                .iter()
-                .find(|(m, _)| m == h)
-                .and_then(|(_, s)| contactlab_solvers::registry::by_name(s))
-                .map(|e| e.name)
-        };
-        at(h).or_else(|| self.finest_regular.as_deref().and_then(at))
-    }
 }
 
 /// Where a lab's progress goes: a study starts a stretch of trials (with
@@ -303,33 +261,4 @@ pub trait Study {
     /// Plans and measures its trials in `lab`, records what the report
     /// needs in `findings`, and gives its artifacts.
     fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>>;
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The error study's solver: the one certified on its reference mesh,
-    /// else on bench's finest regular mesh, and only a registered one.
-    #[test]
-    fn the_fastest_direct_solver_falls_back_to_the_finest_regular_mesh() {
-        let fastest = FastestDirect {
-            by_mesh: vec![
-                ("1/64".into(), "newton-coulomb".into()),
-                ("1/2048".into(), "tnnmg".into()),
-                ("1/4096".into(), "no-such-solver".into()),
-            ],
-            finest_regular: Some("1/64".into()),
-        };
-        assert_eq!(fastest.at_or_finest("1/2048"), Some("tnnmg"));
-        assert_eq!(fastest.at_or_finest("1/1024"), Some("newton-coulomb"));
-        // A name the registry does not know counts as none there.
-        assert_eq!(fastest.at_or_finest("1/4096"), Some("newton-coulomb"));
-        let unknown_finest = FastestDirect {
-            finest_regular: Some("1/4096".into()),
-            ..fastest.clone()
-        };
-        assert_eq!(unknown_finest.at_or_finest("1/512"), None);
-        assert_eq!(FastestDirect::default().at_or_finest("1/64"), None);
-    }
 }

@@ -11,8 +11,8 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
-use crate::study::bench::{BenchSpec, PerfRow, bench, multigrid};
-use crate::study::lab::{Artifact, FastestDirect, Findings, Lab, Study};
+use crate::study::bench::{BenchSpec, FastestDirect, PerfRow, bench, multigrid};
+use crate::study::lab::{Artifact, Findings, Lab, Study};
 
 pub use crate::study::bench::charts::{
     MIN_POINTS_FOR_SLOPE, fit_slope, performance_charts, slope_label,

@@ -27,7 +27,7 @@ use std::time::Instant;
 use anyhow::Result;
 use contactlab_solvers::numerics::linalg::spmv_into;
 use contactlab_solvers::{Law, registry};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::io::csv::fixed;
 use crate::mechanics::mesh_size::MeshSize;
@@ -313,6 +313,49 @@ pub fn certified_direct(rows: &[PerfRow], h: &str) -> Option<&'static str> {
     direct_by_speed(rows, h).first().copied()
 }
 
+/// The fastest direct Coulomb solver `bench` certified on each of its
+/// meshes, and its finest regular mesh (the large ones aside).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FastestDirect {
+    /// (h, solver) for each mesh `bench` measured with a certified direct
+    /// Coulomb solver, in the order of its rows.
+    pub by_mesh: Vec<(String, String)>,
+    /// Its finest regular mesh.
+    pub finest_regular: Option<String>,
+}
+
+impl FastestDirect {
+    /// From a `bench` run's rows ([`certified_direct`]).
+    pub fn of(bench: &goals::BenchOutput) -> Self {
+        let mut by_mesh: Vec<(String, String)> = Vec::new();
+        for r in &bench.rows {
+            if by_mesh.iter().any(|(h, _)| *h == r.h) {
+                continue;
+            }
+            if let Some(s) = certified_direct(&bench.rows, &r.h) {
+                by_mesh.push((r.h.clone(), s.to_string()));
+            }
+        }
+        Self {
+            by_mesh,
+            finest_regular: bench.meshes.last().map(|h| h.to_string()),
+        }
+    }
+
+    /// The solver certified at `h`, else the one at the finest regular
+    /// mesh; None if `bench` has not run or certified none there.
+    pub fn at_or_finest(&self, h: &str) -> Option<&'static str> {
+        let at = |h: &str| {
+            self.by_mesh
+                .iter()
+                .find(|(m, _)| m == h)
+                .and_then(|(_, s)| contactlab_solvers::registry::by_name(s))
+                .map(|e| e.name)
+        };
+        at(h).or_else(|| self.finest_regular.as_deref().and_then(at))
+    }
+}
+
 /// Timed runs of the factorization on a large mesh, after a warm-up: the
 /// unit of the large meshes' ratios. Timed once, it moved by a fifth from
 /// one run of `bench` to the next (1/1024: 8.1 s, 6.7 s, 7.1 s).
@@ -397,4 +440,33 @@ fn kernel_against_spmv(
         }
     }
     Ok(((k.name, step), product))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The error study's solver: the one certified on its reference mesh,
+    /// else on bench's finest regular mesh, and only a registered one.
+    #[test]
+    fn the_fastest_direct_solver_falls_back_to_the_finest_regular_mesh() {
+        let fastest = FastestDirect {
+            by_mesh: vec![
+                ("1/64".into(), "newton-coulomb".into()),
+                ("1/2048".into(), "tnnmg".into()),
+                ("1/4096".into(), "no-such-solver".into()),
+            ],
+            finest_regular: Some("1/64".into()),
+        };
+        assert_eq!(fastest.at_or_finest("1/2048"), Some("tnnmg"));
+        assert_eq!(fastest.at_or_finest("1/1024"), Some("newton-coulomb"));
+        // A name the registry does not know counts as none there.
+        assert_eq!(fastest.at_or_finest("1/4096"), Some("newton-coulomb"));
+        let unknown_finest = FastestDirect {
+            finest_regular: Some("1/4096".into()),
+            ..fastest.clone()
+        };
+        assert_eq!(unknown_finest.at_or_finest("1/512"), None);
+        assert_eq!(FastestDirect::default().at_or_finest("1/64"), None);
+    }
 }
