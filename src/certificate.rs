@@ -248,6 +248,19 @@ pub fn certify_solution(
     )
 }
 
+/// Row i of the residual of stationarity, (A v − f)_i, summed over A's
+/// stored row in order by the certificate's own loop (no solver's
+/// product). `complete_answer` reads the contact forces of a displacement
+/// off the same rows.
+pub fn stationarity_residual(problem: &ContactProblem, v: &[f64], i: usize) -> f64 {
+    let (cols, vals) = problem.a().row(i);
+    cols.iter()
+        .zip(vals)
+        .map(|(&c, a_ic)| a_ic * v[c as usize])
+        .sum::<f64>()
+        - problem.f()[i]
+}
+
 /// Checks (v, p, q) against `problem` under `friction` (the given-friction
 /// law at its bound g, or the Coulomb law at g = 𝓕p). Sizes that do not
 /// fit the problem (the answer's or the bound's), and any non-finite value,
@@ -291,19 +304,9 @@ pub fn certify(
     let (u, pr, force) = (s.displacement, s.pressure, s.force);
     let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
     // The residual of stationarity, and the contact forces in it.
-    let mut r = vec![0.0; problem.n()];
-    {
-        let a = problem.a();
-        for (i, ri) in r.iter_mut().enumerate() {
-            let (cols, vals) = a.row(i);
-            *ri = cols
-                .iter()
-                .zip(vals)
-                .map(|(&c, a_ic)| a_ic * v[c as usize])
-                .sum::<f64>()
-                - problem.f()[i];
-        }
-    }
+    let r: Vec<f64> = (0..problem.n())
+        .map(|i| stationarity_residual(problem, v, i))
+        .collect();
     let mut contact_force = vec![0.0; problem.n()];
     for (i, c) in contacts.iter().enumerate() {
         let (t, sl, pi, qi) = (v[c.t], v[c.s], p[i], q[i]);

@@ -346,14 +346,7 @@ pub fn complete_answer(
     Ok(match (v, forces) {
         (Some(v), Some((p, q))) => (v, p, q),
         (Some(v), None) => {
-            let row = |i: usize| -> f64 {
-                let (cols, vals) = problem.a().row(i);
-                cols.iter()
-                    .zip(vals)
-                    .map(|(&c, a_ic)| a_ic * v[c as usize])
-                    .sum::<f64>()
-                    - problem.f()[i]
-            };
+            let row = |i: usize| crate::certificate::stationarity_residual(problem, &v, i);
             let p = problem
                 .contacts()
                 .iter()
