@@ -1,5 +1,6 @@
 //! The binary: outputs of `solve`, and help.
 
+mod common;
 use std::process::Command;
 
 fn contactlab(args: &[&str]) -> std::process::Output {
@@ -116,11 +117,7 @@ fn solve_writes_the_documented_profile_and_summary() {
             "summary.json"
         ]
     );
-    let siblings: Vec<String> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.contains("staging"))
-        .collect();
+    let siblings = common::staging_folders(dir.path());
     assert!(
         siblings.is_empty(),
         "staging folders left behind: {siblings:?}"

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::Duration;
 
-use common::{contactlab, one_line_error};
+use common::{contactlab, one_line_error, staging_folders};
 
 const SOLVE: [&str; 5] = ["solve", "--problem", "1", "--h", "1/8"];
 
@@ -101,11 +101,7 @@ fn an_interrupted_run_leaves_the_previous_run_whole() {
         .output()
         .unwrap();
     assert!(o.status.success());
-    let leftovers: Vec<String> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.contains("staging"))
-        .collect();
+    let leftovers = staging_folders(dir.path());
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
@@ -133,18 +129,7 @@ fn ctrl_c_removes_the_staging_folder_and_exits_130() {
             .spawn()
             .unwrap();
         // Wait until the run has made its staging folder.
-        let staging = || {
-            std::fs::read_dir(dir.path())
-                .unwrap()
-                .filter(|e| {
-                    e.as_ref()
-                        .unwrap()
-                        .file_name()
-                        .to_string_lossy()
-                        .contains("staging")
-                })
-                .count()
-        };
+        let staging = || staging_folders(dir.path()).len();
         let start = std::time::Instant::now();
         while staging() == 0 && start.elapsed() < Duration::from_secs(20) {
             std::thread::sleep(Duration::from_millis(20));

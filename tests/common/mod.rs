@@ -66,3 +66,13 @@ pub fn readme_lists_every_file(out: &std::path::Path) -> std::collections::BTree
     assert_eq!(listed, written);
     written
 }
+
+/// The staging folders of runs left in `dir` (a run's output folder's
+/// parent): the names that contain `staging`.
+pub fn staging_folders(dir: &std::path::Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("staging"))
+        .collect()
+}
