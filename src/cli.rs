@@ -209,6 +209,17 @@ pub struct SweepArgs {
     /// Finest meshes (each with continuation from 1/8).
     #[arg(long = "h", value_name = "1/2^k", value_delimiter = ',', default_values_t = [MeshSize::from_level(5).expect("in range")])]
     pub meshes: Vec<MeshSize>,
+    /// Fine meshes on which solvers that have a fast form there are swept
+    /// in it, measured by their certificates (no reference): the paper's
+    /// method with its inner minimization by multigrid, over r and ε
+    /// (e.g. --fine-h 1/256; about 30 s at 1/256). Not with --vary.
+    #[arg(
+        long = "fine-h",
+        value_name = "1/2^k",
+        value_delimiter = ',',
+        conflicts_with = "vary"
+    )]
+    pub fine_meshes: Vec<MeshSize>,
     /// Solvers to sweep [default: every registered solver].
     #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
     pub solvers: Vec<String>,

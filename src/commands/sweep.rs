@@ -33,6 +33,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let spec = SweepSpec {
         scenes,
         meshes: args.meshes.clone(),
+        fine_meshes: args.fine_meshes.clone(),
         solvers,
         variations: args.vary.is_empty(),
         work_precision: !args.no_work_precision,

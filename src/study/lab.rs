@@ -216,7 +216,7 @@ impl<'a> Lab<'a> {
     /// Measures trials in order, each against the reference of its scene
     /// and mesh (earned on first use, kept for every later study).
     pub fn measure(&mut self, specs: &[TrialSpec], keep: Keep) -> Result<Vec<Measured>> {
-        for s in specs.iter().filter(|s| s.check_solvable) {
+        for s in specs.iter().filter(|s| s.wants_reference()) {
             self.ask(&s.scene)?;
         }
         let tracker = self.tracker;

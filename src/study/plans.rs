@@ -26,11 +26,25 @@ pub struct Variation {
 /// within the solver (name, value).
 pub type Restart = &'static [(&'static str, &'static str)];
 
+/// How a solver is tuned on a fine mesh, where its own defaults are too
+/// slow to sweep: settings within the solver that keep its method and make
+/// it fast there, and the one-factor sweeps run with them.
+#[derive(Clone, Copy, Debug)]
+pub struct Fine {
+    /// Settings within the solver (name, value), as the command line
+    /// writes them.
+    pub settings: &'static [(&'static str, &'static str)],
+    pub sweeps: &'static [Variation],
+}
+
 /// The studies' plan for one solver.
 #[derive(Clone, Copy, Debug)]
 pub struct Plan {
     /// One-factor sweeps of the Coulomb problem (parameter studies).
     pub sweeps: &'static [Variation],
+    /// The same on a fine mesh, with the settings that make it fast there
+    /// (None: not swept on fine meshes).
+    pub fine: Option<Fine>,
     /// Stress conditions of the stability map.
     pub stress: &'static [Variation],
     /// Work (events of its work stage, over a whole Coulomb solve) after
@@ -51,6 +65,7 @@ pub struct Plan {
 /// work cap, its accuracy knob through the default decades.
 pub const DEFAULT: Plan = Plan {
     sweeps: &[],
+    fine: None,
     stress: &[],
     work: DEFAULT_WORK,
     restarts: &[],
@@ -152,6 +167,25 @@ const PLANS: &[(&str, Plan)] = &[
                     quick: &["exact", "1e-3"],
                 },
             ],
+            // Algorithm 1 with its inner minimization by TNNMG (issue 28:
+            // "this is how a researcher tunes r and ε at 1/256"). r below
+            // 1e3 is left out: at 1/256, r = 1 took 115 s (3718 Uzawa
+            // steps) against 2.4 s at r = 1e7, one run each.
+            fine: Some(Fine {
+                settings: &[("inner", "multigrid")],
+                sweeps: &[
+                    Variation {
+                        knob: "r",
+                        values: &["1e3", "1e5", "1e7", "1e9", "1e11"],
+                        quick: &["1e3", "1e7"],
+                    },
+                    Variation {
+                        knob: "epsilon",
+                        values: &["1e-4", "1e-5", "1e-6", "1e-7", "1e-8"],
+                        quick: &["1e-4", "1e-6"],
+                    },
+                ],
+            }),
             stress: &[
                 Variation {
                     knob: "r",
@@ -333,7 +367,17 @@ mod tests {
             for v in p.sweeps.iter().chain(p.stress) {
                 assert!(entry.knob(v.knob).is_some(), "{name}.{}", v.knob);
             }
-            for (knob, _) in p.restarts.iter().flat_map(|r| r.iter()).chain(p.diagnose) {
+            for v in p.fine.iter().flat_map(|f| f.sweeps) {
+                assert!(entry.knob(v.knob).is_some(), "{name}.{} (fine)", v.knob);
+            }
+            let fine_settings = p.fine.iter().flat_map(|f| f.settings);
+            for (knob, _) in p
+                .restarts
+                .iter()
+                .flat_map(|r| r.iter())
+                .chain(p.diagnose)
+                .chain(fine_settings)
+            {
                 assert!(entry.knob(knob).is_some(), "{name}.{knob}");
             }
         }

@@ -237,7 +237,7 @@ pub fn measure_all(
 ) -> Result<Vec<Measured>> {
     let mut out = Vec::with_capacity(specs.len());
     for (i, spec) in specs.iter().enumerate() {
-        let reference = if spec.check_solvable {
+        let reference = if spec.wants_reference() {
             references.get(&spec.scene, &spec.settings)?
         } else {
             None

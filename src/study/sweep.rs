@@ -20,7 +20,7 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::lab::{Artifact, Findings, Lab, Study};
-use crate::study::plans;
+use crate::study::plans::{self, Fine};
 use crate::study::report::sweep_charts;
 use crate::study::runner::Keep;
 use crate::study::trial::TrialSpec;
@@ -42,6 +42,11 @@ pub struct SweepSpec {
     /// Scenes (their levels are replaced by 1/8 ... each mesh).
     pub scenes: Vec<Scene>,
     pub meshes: Vec<MeshSize>,
+    /// Fine meshes on which each solver whose plan says how ([`Fine`]) is
+    /// swept with the settings that make it fast there, its trials measured
+    /// by their certificates alone (no reference: at 1/256 earning one took
+    /// 7 of a sweep's 8 minutes, the oracle's fixed point at its time cap).
+    pub fine_meshes: Vec<MeshSize>,
     /// Solvers whose variations and accuracy knobs are swept.
     pub solvers: Vec<&'static Entry>,
     /// One-factor variations of the Coulomb problem.
@@ -61,6 +66,7 @@ impl Default for SweepSpec {
         Self {
             scenes: vec![Scene::paper_problem(1).expect("built in")],
             meshes: vec![MeshSize::from_level(5).expect("in range")],
+            fine_meshes: Vec::new(),
             solvers: registry::solvers(),
             variations: true,
             work_precision: true,
@@ -135,6 +141,61 @@ pub fn plan(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
             }
         }
     }
+    out.extend(plan_fine(spec, base)?);
+    Ok(out)
+}
+
+/// The group of a variation on a fine mesh: the knob's path and the
+/// settings that make the solver fast there, `relaxation.r (inner =
+/// multigrid)`.
+pub fn fine_group(path: &str, fine: &Fine) -> String {
+    let settings: Vec<String> = fine
+        .settings
+        .iter()
+        .map(|(k, v)| format!("{k} = {v}"))
+        .collect();
+    format!("{path} ({})", settings.join(", "))
+}
+
+/// The fine meshes' trials ([`SweepSpec::fine_meshes`]).
+fn plan_fine(spec: &SweepSpec, base: &Settings) -> Result<Vec<TrialSpec>> {
+    let mut out = Vec::new();
+    for scene in &spec.scenes {
+        for &h in &spec.fine_meshes {
+            let mut scene = scene.clone();
+            scene.set_finest(h);
+            for &entry in &spec.solvers {
+                let Some(fine) = plans::plan(entry).fine else {
+                    continue;
+                };
+                let mut settings = base.clone();
+                for (knob, value) in fine.settings {
+                    settings
+                        .set_text(&format!("{}.{knob}", entry.name), value)
+                        .map_err(anyhow::Error::msg)?;
+                }
+                for v in fine.sweeps {
+                    let path = format!("{}.{}", entry.name, v.knob);
+                    let group = fine_group(&path, &fine);
+                    for value in if spec.quick { v.quick } else { v.values } {
+                        out.push(
+                            TrialSpec::new(
+                                STUDY,
+                                group.clone(),
+                                &scene,
+                                entry,
+                                Law::Coulomb,
+                                &settings,
+                            )
+                            .with_work(work_cap(entry, spec.work_scale))
+                            .varying(&path, value)?
+                            .without_reference(),
+                        );
+                    }
+                }
+            }
+        }
+    }
     Ok(out)
 }
 
@@ -155,14 +216,21 @@ impl Study for Sweep {
     }
 
     fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
-        lab.log(&format!(
-            "sweep at h = {}",
-            self.spec
-                .meshes
+        let list = |meshes: &[MeshSize]| {
+            meshes
                 .iter()
                 .map(|h| h.to_string())
                 .collect::<Vec<_>>()
                 .join(", ")
+        };
+        lab.log(&format!(
+            "sweep at h = {}{}",
+            list(&self.spec.meshes),
+            if self.spec.fine_meshes.is_empty() {
+                String::new()
+            } else {
+                format!("; tuned for speed at h = {}", list(&self.spec.fine_meshes))
+            }
         ));
         let mut specs = plan(&self.spec, &lab.settings)?;
         specs.extend(self.extra.iter().cloned());
@@ -208,4 +276,51 @@ pub fn summary_markdown(measured: &[crate::study::runner::Measured]) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On a fine mesh the paper's method is swept in its fast form (inner
+    /// minimization by multigrid) over r and ε, and its trials ask for no
+    /// reference; nothing else is planned there.
+    #[test]
+    fn fine_meshes_sweep_the_fast_form_without_a_reference() {
+        let fine = MeshSize::from_level(5).unwrap();
+        let spec = SweepSpec {
+            meshes: vec![MeshSize::from_level(3).unwrap()],
+            fine_meshes: vec![fine],
+            variations: false,
+            work_precision: false,
+            quick: true,
+            ..SweepSpec::default()
+        };
+        let trials = plan(&spec, &Settings::default()).unwrap();
+        let groups: Vec<&str> = trials.iter().map(|t| t.group.as_str()).collect();
+        assert_eq!(
+            groups,
+            [
+                "relaxation.r (inner = multigrid)",
+                "relaxation.r (inner = multigrid)",
+                "relaxation.epsilon (inner = multigrid)",
+                "relaxation.epsilon (inner = multigrid)",
+            ]
+        );
+        for t in &trials {
+            assert_eq!(t.scene.finest(), fine);
+            assert_eq!(t.solver.name, "relaxation");
+            assert_eq!(
+                t.settings.get("relaxation.inner"),
+                Some(serde_json::Value::from("multigrid"))
+            );
+            assert!(!t.wants_reference(), "{}", t.group);
+        }
+        // Without fine meshes, none of them.
+        let coarse = SweepSpec {
+            fine_meshes: Vec::new(),
+            ..spec
+        };
+        assert!(plan(&coarse, &Settings::default()).unwrap().is_empty());
+    }
 }

@@ -63,6 +63,10 @@ pub struct TrialSpec {
     /// look at what a solver does with a problem that has no solution; one
     /// given-friction solve with g = 0).
     pub check_solvable: bool,
+    /// Whether it is measured against its scene's reference (false: its
+    /// certificate alone says how accurate it is, where earning a reference
+    /// would cost more than the trials themselves).
+    pub against_reference: bool,
     /// Extra runs for the time (their minimum or median is reported).
     pub repeats: usize,
 }
@@ -88,6 +92,7 @@ impl TrialSpec {
             work: None,
             seconds: None,
             check_solvable: true,
+            against_reference: true,
             repeats: 0,
         }
     }
@@ -110,6 +115,18 @@ impl TrialSpec {
             .map_err(anyhow::Error::msg)?;
         self.setting = Some(Setting::new("epsilon", &format!("{epsilon:e}")));
         Ok(self)
+    }
+
+    /// The same trial measured by its certificate alone, against no
+    /// reference.
+    pub fn without_reference(mut self) -> Self {
+        self.against_reference = false;
+        self
+    }
+
+    /// Whether the trial asks for its scene's reference.
+    pub fn wants_reference(&self) -> bool {
+        self.check_solvable && self.against_reference
     }
 
     /// The same trial stopped after `work` events of the solver's work stage.

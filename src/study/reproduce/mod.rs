@@ -97,6 +97,7 @@ impl ReproduceSpec {
             repeats: 2,
             sweep: SweepSpec {
                 meshes: vec![sweep_h],
+                fine_meshes: vec![MeshSize::from_level(8).expect("in range")],
                 ..SweepSpec::default()
             },
             sweep_h,
@@ -118,6 +119,7 @@ impl ReproduceSpec {
             repeats: 0,
             sweep: SweepSpec {
                 meshes: vec![h],
+                fine_meshes: vec![MeshSize::from_level(5).expect("in range")],
                 quick: true,
                 repeats: 0,
                 work_scale: 0.2,
@@ -180,7 +182,7 @@ fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
     let standard = match study {
         "table1" => 10.0,
         "compare" => 120.0,
-        "sweep" => 75.0,
+        "sweep" => 105.0,
         "stability" => 135.0,
         "bench" => 530.0,
         "benchmark" => 130.0,
@@ -189,7 +191,7 @@ fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
     };
     let long = match study {
         "compare" => 300.0,
-        "sweep" => 175.0,
+        "sweep" => 205.0,
         "bench" => 5700.0,
         "benchmark" => 2400.0,
         _ => standard,

@@ -98,6 +98,7 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
         .filter(|g| *g != WORK_PRECISION && *g != WORK_PRECISION_COULOMB)
         .collect();
     groups.dedup();
+    let main_mesh = sweep.first().map(|m| m.trial.h);
     let mut seen = Vec::new();
     let mut lines = Vec::new();
     for g in groups {
@@ -105,11 +106,8 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
             continue;
         }
         seen.push(g);
-        let runs: Vec<&Trial> = sweep
-            .iter()
-            .map(|m| &m.trial)
-            .filter(|t| t.group == g)
-            .collect();
+        let measured: Vec<&Measured> = sweep.iter().filter(|m| m.trial.group == g).collect();
+        let runs: Vec<&Trial> = measured.iter().map(|m| &m.trial).collect();
         let certified: Vec<&&Trial> = runs.iter().filter(|t| t.certified()).collect();
         let failed: Vec<String> = runs
             .iter()
@@ -117,9 +115,25 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
             .map(|t| format!("{} ({})", t.knob().1, t.status))
             .collect();
         let cheapest = certified.iter().min_by_key(|t| t.work);
+        // A group on another mesh than the section's (the fine meshes)
+        // says its mesh, and, measured against no reference, its times.
+        let h = runs.first().map(|t| t.h);
+        let elsewhere = h.filter(|h| Some(*h) != main_mesh);
+        let unreferenced = runs.iter().all(|t| t.reference.is_none());
+        let seconds: Vec<f64> = measured.iter().map(|m| m.timing.seconds_min).collect();
+        let times = (unreferenced && !seconds.is_empty()).then(|| {
+            let (lo, hi) = seconds
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+            let worst = runs.iter().map(|t| t.residual()).fold(0.0f64, f64::max);
+            format!(
+                "; {lo:.2}–{hi:.2} s a point, largest certificate {worst:.1e} (no reference on this mesh: the certificate measures each answer)"
+            )
+        });
         lines.push(format!(
-            "- `{g}` ({}): certified at {}; {}{}",
+            "- `{g}` ({}{}): certified at {}; {}{}{}",
             runs.first().map(|t| t.solver.name).unwrap_or(""),
+            elsewhere.map(|h| format!(", h = {h}")).unwrap_or_default(),
             if certified.is_empty() {
                 "no value".to_string()
             } else {
@@ -131,12 +145,14 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
             },
             match cheapest {
                 Some(t) => format!(
-                    "the least work at {} ({} work, pressure error {})",
+                    "the least work at {} ({} work{})",
                     t.knob().1,
                     t.work,
-                    t.pressure_error()
-                        .map(|e| format!("{e:.1e}"))
-                        .unwrap_or_else(|| "–".into())
+                    match t.pressure_error() {
+                        Some(e) => format!(", pressure error {e:.1e}"),
+                        None if unreferenced => String::new(),
+                        None => ", pressure error –".into(),
+                    }
                 ),
                 None => String::new(),
             },
@@ -144,7 +160,8 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
                 String::new()
             } else {
                 format!("; not certified at {}", failed.join(", "))
-            }
+            },
+            times.unwrap_or_default()
         ));
     }
     if lines.is_empty() {

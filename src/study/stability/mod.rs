@@ -188,7 +188,7 @@ pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
         uniqueness: Vec::new(),
     };
     let mut one = |map: &mut Map, spec: TrialSpec, cx: Context| -> Result<Measured> {
-        let reference = if spec.check_solvable {
+        let reference = if spec.wants_reference() {
             lab.reference(&spec.scene, &spec.settings)?
         } else {
             None
