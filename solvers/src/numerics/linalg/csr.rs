@@ -165,6 +165,43 @@ impl Csr {
         self
     }
 
+    /// Row i's values, to change in place without giving up the sharing of
+    /// the others: a shared row whose values start before `own_from` (the
+    /// table's length when the caller began to change rows) is first given
+    /// a copy of its own at the table's end. Returns the values and, when a
+    /// copy was made, the start the row had ([`Csr::unshare_undo`] puts it
+    /// back). Plain values: the row's own, and None.
+    pub fn row_values_mut(&mut self, i: usize, own_from: usize) -> (&mut [f64], Option<u32>) {
+        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        match &mut self.values {
+            Stored::Plain(v) => (&mut v[lo..hi], None),
+            Stored::Shared { table, start, .. } => {
+                let s = start[i] as usize;
+                let moved = (s < own_from).then(|| {
+                    let from = table.len();
+                    table.extend_from_within(s..s + (hi - lo));
+                    let before = start[i];
+                    start[i] = u32::try_from(from).expect("a shared table stays below 2³² values");
+                    before
+                });
+                let s = start[i] as usize;
+                (&mut table[s..s + (hi - lo)], moved)
+            }
+        }
+    }
+
+    /// Undoes [`Csr::row_values_mut`]'s copies: each row (row, start before)
+    /// back at its shared start, the table cut back to `len` values.
+    /// Nothing for plain values.
+    pub fn unshare_undo(&mut self, rows: impl IntoIterator<Item = (usize, u32)>, len: usize) {
+        if let Stored::Shared { table, start, .. } = &mut self.values {
+            for (i, s) in rows {
+                start[i] = s;
+            }
+            table.truncate(len);
+        }
+    }
+
     /// How many numbers the values take: one per stored entry, or the
     /// distinct rows' when they are shared.
     pub fn stored_values(&self) -> usize {
