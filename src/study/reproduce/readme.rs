@@ -133,7 +133,19 @@ pub fn render(
             .first()
             .map(|s| s.name.clone())
             .unwrap_or_default(),
-        sweep_h: spec.sweep_h.to_string(),
+        // The fine meshes' groups say their mesh in their own lines; the
+        // heading names them too.
+        sweep_h: if spec.sweep.fine_meshes.is_empty() {
+            spec.sweep_h.to_string()
+        } else {
+            let fine: Vec<String> = spec
+                .sweep
+                .fine_meshes
+                .iter()
+                .map(|h| h.to_string())
+                .collect();
+            format!("{}; fine mesh h = {}", spec.sweep_h, fine.join(", "))
+        },
         work_precision_charts: named(chart_names, "work_precision_"),
         variation_charts: named(chart_names, "sweep_"),
         stability_charts: named(chart_names, "stability_"),
