@@ -9,7 +9,7 @@ mod common;
 
 use std::process::{Command, Stdio};
 
-use common::{contactlab, one_line_error, run_with_deadline};
+use common::{contactlab, one_line_error, run_with_deadline, solve_into};
 
 const SOLVE: [&str; 5] = ["solve", "--problem", "1", "--h", "1/8"];
 
@@ -61,18 +61,7 @@ fn a_closed_or_full_stdout_is_an_error_after_the_files_are_written() {
     // A full device: `solve --out D > /dev/full`.
     if Path::new("/dev/full").exists() {
         let out = dir.path().join("full");
-        let o = contactlab()
-            .args([
-                "solve",
-                "--problem",
-                "1",
-                "--h",
-                "1/8",
-                "--solver",
-                "newton",
-                "--out",
-            ])
-            .arg(&out)
+        let o = solve_into("1/8", "newton", &out)
             .stdout(std::fs::File::create("/dev/full").unwrap())
             .stderr(Stdio::piped())
             .output()

@@ -11,7 +11,7 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::Duration;
 
-use common::{contactlab, one_line_error, staging_folders};
+use common::{contactlab, one_line_error, solve_into, staging_folders};
 
 const SOLVE: [&str; 5] = ["solve", "--problem", "1", "--h", "1/8"];
 
@@ -44,35 +44,11 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
 fn an_interrupted_run_leaves_the_previous_run_whole() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("results");
-    let first = contactlab()
-        .args([
-            "solve",
-            "--problem",
-            "1",
-            "--h",
-            "1/8",
-            "--solver",
-            "newton",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let first = solve_into("1/8", "newton", &out).output().unwrap();
     assert!(first.status.success());
     let before = files(&out);
     // A long run into the same folder, killed while it computes.
-    let mut child = contactlab()
-        .args([
-            "solve",
-            "--problem",
-            "1",
-            "--h",
-            "1/128",
-            "--solver",
-            "relaxation",
-            "--out",
-        ])
-        .arg(&out)
+    let mut child = solve_into("1/128", "relaxation", &out)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -86,20 +62,7 @@ fn an_interrupted_run_leaves_the_previous_run_whole() {
         "the folder must still hold the first run, whole"
     );
     // The next run cleans the killed run's staging folder up.
-    let o = contactlab()
-        .args([
-            "solve",
-            "--problem",
-            "1",
-            "--h",
-            "1/8",
-            "--solver",
-            "newton",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = solve_into("1/8", "newton", &out).output().unwrap();
     assert!(o.status.success());
     let leftovers = staging_folders(dir.path());
     assert!(leftovers.is_empty(), "{leftovers:?}");
@@ -112,18 +75,7 @@ fn ctrl_c_removes_the_staging_folder_and_exits_130() {
     for signal in [libc::SIGINT, libc::SIGTERM] {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("results");
-        let child = contactlab()
-            .args([
-                "solve",
-                "--problem",
-                "1",
-                "--h",
-                "1/128",
-                "--solver",
-                "relaxation",
-                "--out",
-            ])
-            .arg(&out)
+        let child = solve_into("1/128", "relaxation", &out)
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()
@@ -150,18 +102,7 @@ fn two_runs_at_once_leave_one_whole_run() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
     let spawn = |h: &str| {
-        contactlab()
-            .args([
-                "solve",
-                "--problem",
-                "1",
-                "--h",
-                h,
-                "--solver",
-                "newton",
-                "--out",
-            ])
-            .arg(&out)
+        solve_into(h, "newton", &out)
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()

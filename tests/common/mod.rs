@@ -11,6 +11,24 @@ pub fn contactlab() -> Command {
     Command::new(env!("CARGO_BIN_EXE_contactlab"))
 }
 
+/// `solve` of the paper's problem 1 at mesh `h` by `solver`, its files
+/// into `out` (the run the output-folder tests repeat).
+pub fn solve_into(h: &str, solver: &str, out: &std::path::Path) -> Command {
+    let mut cmd = contactlab();
+    cmd.args([
+        "solve",
+        "--problem",
+        "1",
+        "--h",
+        h,
+        "--solver",
+        solver,
+        "--out",
+    ])
+    .arg(out);
+    cmd
+}
+
 /// Runs `cmd`, failing the test if it takes more than `seconds`.
 pub fn run_with_deadline(mut cmd: Command, seconds: u64) -> Output {
     let mut child = cmd
