@@ -22,7 +22,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
 use contactlab::settings::Settings;
-use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solve::{Solved, solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Silent};
 use proptest::prelude::*;
 
@@ -35,10 +35,11 @@ struct Truth {
     q: Vec<f64>,
 }
 
-fn truth(k: u32) -> Truth {
-    let scene = Scene::paper_problem_to(k, MeshSize::from_level(3).unwrap()).unwrap();
+/// The Coulomb problem of `scene` solved by newton-coulomb at its default
+/// settings, converged.
+fn true_answer(scene: &Scene) -> Solved {
     let run = solve_scene(
-        &scene,
+        scene,
         Friction::Coulomb,
         solver_entry("newton-coulomb").unwrap(),
         &Settings::default(),
@@ -46,6 +47,12 @@ fn truth(k: u32) -> Truth {
     )
     .unwrap();
     assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
+    run
+}
+
+fn truth(k: u32) -> Truth {
+    let scene = Scene::paper_problem_to(k, MeshSize::from_level(3).unwrap()).unwrap();
+    let run = true_answer(&scene);
     let s = run.outcome.solution;
     Truth {
         d: run.finest,
@@ -314,15 +321,7 @@ fn a_nearly_balanced_load_holds_the_contact_to_the_net_load() {
     scene.name = "nearly balanced".into();
     let d = Discretization::new(&scene, scene.finest()).unwrap();
     export(&inst, &scene, &d, None, "test").unwrap();
-    let run = solve_scene(
-        &scene,
-        Friction::Coulomb,
-        solver_entry("newton-coulomb").unwrap(),
-        &Settings::default(),
-        &mut Silent,
-    )
-    .unwrap();
-    assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
+    let run = true_answer(&scene);
     let s = &run.outcome.solution;
     let x = d.contact_x();
     let m = x.len();
