@@ -344,13 +344,7 @@ fn a_nearly_balanced_load_holds_the_contact_to_the_net_load() {
     );
     // The whole net force on the node at x = 1, where the bodies are apart.
     let last = m - 1;
-    let net: f64 = d
-        .problem
-        .contacts()
-        .iter()
-        .zip(&s.pressure)
-        .map(|(c, p)| c.weight * p)
-        .sum();
+    let net = d.problem.total_contact_force(&s.pressure);
     assert!(s.v[d.problem.contacts()[last].t] < -10.0 * d.problem.scales().displacement);
     let mut p = vec![0.0; m];
     p[last] = net / d.problem.contacts()[last].weight;

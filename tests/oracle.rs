@@ -59,14 +59,7 @@ fn contact_forces_carry_the_whole_applied_load() {
         for friction in [0.0, 0.5] {
             let run = solve(problem, 4, friction);
             let s = &run.outcome.solution;
-            let total: f64 = run
-                .finest
-                .problem
-                .contacts()
-                .iter()
-                .zip(&s.pressure)
-                .map(|(c, p)| c.weight * p)
-                .sum();
+            let total = run.finest.problem.total_contact_force(&s.pressure);
             assert!(
                 (total - load).abs() <= 1e-8 * load,
                 "problem {problem}: {total} vs {load}"

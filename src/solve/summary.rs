@@ -66,13 +66,7 @@ impl Summary {
         let o: &Outcome = &solved.outcome;
         let s = &o.solution;
         let d = &solved.finest;
-        let total_contact_force = d
-            .problem
-            .contacts()
-            .iter()
-            .zip(&s.pressure)
-            .map(|(c, p)| c.weight * p)
-            .sum();
+        let total_contact_force = d.problem.total_contact_force(&s.pressure);
         let separation = solved.separation();
         Summary {
             scene: scene.clone(),

@@ -357,6 +357,16 @@ impl ContactProblem {
         self.operator_id
     }
 
+    /// The total contact force Σ w_i p_i of the nodal pressures `pressure`
+    /// (one per contact node): the load it balances, in force balance.
+    pub fn total_contact_force(&self, pressure: &[f64]) -> f64 {
+        self.contacts
+            .iter()
+            .zip(pressure)
+            .map(|(c, p)| c.weight * p)
+            .sum()
+    }
+
     /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i| of paper (10) at the
     /// bound g (one per contact node).
     pub fn objective(&self, v: &[f64], g: &[f64]) -> f64 {
