@@ -28,8 +28,13 @@
 //! not the gross load: a load nearly balanced by an upward one leaves
 //! contact forces of the size of the net load, and a wrong contact force
 //! must not hide in the scale of a load the contact does not carry), nodal
-//! force residuals over P·w_max (the force a node carries at that mean
-//! pressure), and the balance over the load along the rigid mode |zᵀf|.
+//! force residuals at a contact node's rows over P·w_i (a pressure error
+//! of that node, whatever its weight: the end nodes of Γ_K have half the
+//! weight of the others), at every other row over P·w_max (the force a node
+//! carries at that mean pressure), and the balance over the load along the
+//! rigid mode |zᵀf|. The contact law and the balance are checked with the
+//! forces given and with those the displacements imply, so that one answer
+//! gets one verdict however it is handed in ([`certify`]).
 //! Complementarity-type conditions are measured in natural-map form
 //! (the smaller of the two quantities that may not both be nonzero).
 //! A value that is not finite, or a residual that overflows (inf − inf),
@@ -81,7 +86,9 @@ pub enum Condition {
     /// Slip opposes the traction at its bound: max over s_i ≠ 0 of
     /// min(|s_i|/U, |q_i + g_i sign(s_i)|/P).
     SlipDirection,
-    /// ‖A v − f + Σλ e_t − Σμ e_s‖∞ / (P·w_max).
+    /// A v − f + Σλ e_t − Σμ e_s row by row: at the rows of contact node
+    /// i over P·w_i (how far the given forces are from those the
+    /// displacements imply, as a pressure), elsewhere over P·w_max.
     Stationarity,
     /// max over rigid modes z of |zᵀ(f − Σλ e_t + Σμ e_s)| / |zᵀf|: the
     /// part of the load along the rigid mode that the contact forces leave
@@ -250,9 +257,8 @@ pub fn certify_solution(
 
 /// Row i of the residual of stationarity, (A v − f)_i, summed over A's
 /// stored row in order by the certificate's own loop (no solver's
-/// product). `complete_answer` reads the contact forces of a displacement
-/// off the same rows.
-pub fn stationarity_residual(problem: &ContactProblem, v: &[f64], i: usize) -> f64 {
+/// product).
+fn stationarity_residual(problem: &ContactProblem, v: &[f64], i: usize) -> f64 {
     let (cols, vals) = problem.a().row(i);
     cols.iter()
         .zip(vals)
@@ -261,10 +267,45 @@ pub fn stationarity_residual(problem: &ContactProblem, v: &[f64], i: usize) -> f
         - problem.f()[i]
 }
 
+/// The contact forces that displacements `v` imply: stationarity at the
+/// contact rows read as forces, p_i = −(A v − f)_{t_i} / w_i and
+/// q_i = (A v − f)_{s_i} / w_i, from the residual `r` = A v − f. An answer
+/// given as displacements alone is completed with them
+/// ([`crate::formats::instance::complete_answer`]), and every answer is
+/// also judged with them ([`certify`]).
+pub fn implied_forces(problem: &ContactProblem, r: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    problem
+        .contacts()
+        .iter()
+        .map(|c| (-r[c.t] / c.weight, r[c.s] / c.weight))
+        .unzip()
+}
+
+/// The residual of stationarity without the contact forces, A v − f, row
+/// by row ([`stationarity_residual`]).
+pub fn elastic_residual(problem: &ContactProblem, v: &[f64]) -> Vec<f64> {
+    (0..problem.n())
+        .map(|i| stationarity_residual(problem, v, i))
+        .collect()
+}
+
 /// Checks (v, p, q) against `problem` under `friction` (the given-friction
 /// law at its bound g, or the Coulomb law at g = 𝓕p). Sizes that do not
 /// fit the problem (the answer's or the bound's), and any non-finite value,
 /// give infinite violations.
+///
+/// One answer, one verdict: the contact law and the balance are checked
+/// twice, with the forces (p, q) as given and with the forces the
+/// displacements imply ([`implied_forces`]), and each condition keeps the
+/// larger violation; stationarity measures how far the given forces are
+/// from the implied ones. So an answer handed in as displacements alone
+/// (completed with its implied forces) and the same answer with its forces
+/// get the same measures, and handing in forces beside the displacements
+/// can only add conditions, never excuse one. Every scale is the
+/// problem's, never the answer's: a force residual at a contact row is
+/// measured per unit length of that node (P·w_i, a pressure error, as the
+/// contact law measures pressures), at any other row per P·w_max; so a
+/// pressure error at an end node of Γ_K (w = h/2) counts in full.
 pub fn certify(
     problem: &ContactProblem,
     friction: Friction<'_>,
@@ -273,21 +314,8 @@ pub fn certify(
     q: &[f64],
     tolerance: f64,
 ) -> Certificate {
-    let contacts = problem.contacts();
-    let m = contacts.len();
-    let inf = f64::INFINITY;
-    let mut out = Certificate {
-        law: friction.law(),
-        nonpenetration: 0.0,
-        pressure_sign: 0.0,
-        complementarity: 0.0,
-        friction_bound: 0.0,
-        stick: 0.0,
-        slip_direction: 0.0,
-        stationarity: 0.0,
-        force_balance: 0.0,
-        tolerance,
-    };
+    let m = problem.contacts().len();
+    let mut out = Certificate::not_run(friction.law(), tolerance);
     let finite = |x: &[f64]| x.iter().all(|y| y.is_finite());
     if v.len() != problem.n()
         || p.len() != m
@@ -295,24 +323,37 @@ pub fn certify(
         || friction.check(problem).is_err()
         || !(finite(v) && finite(p) && finite(q))
     {
-        for c in Condition::ALL {
-            out.set(c, inf);
-        }
         return out;
     }
+    for c in Condition::ALL {
+        out.set(c, 0.0);
+    }
+    let r = elastic_residual(problem, v);
+    let (p_implied, q_implied) = implied_forces(problem, &r);
+    for (pr, qr) in [(p, q), (&p_implied[..], &q_implied[..])] {
+        contact_law(&mut out, problem, friction, v, pr, qr);
+        force_balance(&mut out, problem, pr, qr);
+    }
+    stationarity(&mut out, problem, &r, p, q);
+    out
+}
+
+/// The conditions of the contact law at each node (Signorini, paper
+/// (5)-(6); friction, paper (7)) for the answer's jumps and slips and the
+/// forces (p, q), in natural-map form.
+fn contact_law(
+    out: &mut Certificate,
+    problem: &ContactProblem,
+    friction: Friction<'_>,
+    v: &[f64],
+    p: &[f64],
+    q: &[f64],
+) {
     let s = problem.scales();
-    let (u, pr, force) = (s.displacement, s.pressure, s.force);
-    let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
-    // The residual of stationarity, and the contact forces in it.
-    let r: Vec<f64> = (0..problem.n())
-        .map(|i| stationarity_residual(problem, v, i))
-        .collect();
-    let mut contact_force = vec![0.0; problem.n()];
-    for (i, c) in contacts.iter().enumerate() {
+    let (u, pr) = (s.displacement, s.pressure);
+    for (i, c) in problem.contacts().iter().enumerate() {
         let (t, sl, pi, qi) = (v[c.t], v[c.s], p[i], q[i]);
         let g = friction.bound(i, c.coefficient, pi);
-        contact_force[c.t] += c.weight * pi;
-        contact_force[c.s] -= c.weight * qi;
         raise(&mut out.nonpenetration, t.max(0.0) / u);
         raise(&mut out.pressure_sign, (-pi).max(0.0) / pr);
         raise(
@@ -331,30 +372,59 @@ pub fn certify(
             );
         }
     }
-    let node_force = pr * w_max.max(f64::MIN_POSITIVE);
-    for (ri, ci) in r.iter().zip(&contact_force) {
-        raise(&mut out.stationarity, (ri + ci).abs() / node_force);
+}
+
+/// The nodal contact forces of (p, q) on the unknowns: w_i p_i at t_i,
+/// −w_i q_i at s_i.
+fn contact_forces(problem: &ContactProblem, p: &[f64], q: &[f64]) -> Vec<f64> {
+    let mut force = vec![0.0; problem.n()];
+    for (i, c) in problem.contacts().iter().enumerate() {
+        force[c.t] += c.weight * p[i];
+        force[c.s] -= c.weight * q[i];
     }
+    force
+}
+
+/// ‖A v − f + contact forces‖, row by row: at a contact row over P·w_i
+/// (the pressure error of that node), elsewhere over P·w_max.
+fn stationarity(out: &mut Certificate, problem: &ContactProblem, r: &[f64], p: &[f64], q: &[f64]) {
+    let contacts = problem.contacts();
+    let pr = problem.scales().pressure;
+    let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
+    let mut scale = vec![pr * w_max.max(f64::MIN_POSITIVE); problem.n()];
+    for c in contacts {
+        scale[c.t] = pr * c.weight;
+        scale[c.s] = pr * c.weight;
+    }
+    let force = contact_forces(problem, p, q);
+    for ((ri, ci), si) in r.iter().zip(&force).zip(&scale) {
+        raise(&mut out.stationarity, (ri + ci).abs() / si);
+    }
+}
+
+/// zᵀ(f − contact forces) for every rigid mode z: the load the contact
+/// forces (p, q) leave unbalanced, over the load zᵀf they must carry (F
+/// times max|z| where that is zero).
+fn force_balance(out: &mut Certificate, problem: &ContactProblem, p: &[f64], q: &[f64]) {
+    let force = contact_forces(problem, p, q);
+    let gross = problem.scales().force;
     for z in problem.rigid_modes() {
-        // zᵀ(f − contact forces): the load the contact forces leave
-        // unbalanced, over the load zᵀf they must carry.
         let load: f64 = z.iter().zip(problem.f()).map(|(zk, fk)| zk * fk).sum();
         let unbalanced: f64 = z
             .iter()
             .zip(problem.f())
-            .zip(&contact_force)
+            .zip(&force)
             .map(|((zk, fk), ck)| zk * (fk - ck))
             .sum();
         let scale = if load != 0.0 {
             load.abs()
         } else {
-            force * z.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+            gross * z.iter().fold(0.0f64, |a, x| a.max(x.abs()))
         };
         if scale > 0.0 {
             raise(&mut out.force_balance, unbalanced.abs() / scale);
         }
     }
-    out
 }
 
 /// Raises a violation to `x` if `x` is larger; a NaN (an overflow such as

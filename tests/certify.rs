@@ -37,8 +37,19 @@ const CLOSED: Node = Node {
 /// e_{t_i})ᵀ + Σ_i e_{s_i} e_{s_i}ᵀ, whose kernel is the rigid mode z
 /// (−1 on every t_i, +1 on u). `extra` is added to f afterwards (a residual).
 fn built(nodes: &[Node], extra: &[(usize, f64)]) -> (ContactProblem, Vec<f64>, Vec<f64>, Vec<f64>) {
+    built_with_upper(nodes, extra, 1)
+}
+
+/// As [`built`], with `upper` unknowns u_0 … u_{upper−1} of the upper body
+/// (from index 2m), tied to u_0 by A += Σ_j (e_{u_j} − e_{u_0})(…)ᵀ, all
+/// +1 in the rigid mode: rows away from Γ_K along which residuals add up.
+fn built_with_upper(
+    nodes: &[Node],
+    extra: &[(usize, f64)],
+    upper: usize,
+) -> (ContactProblem, Vec<f64>, Vec<f64>, Vec<f64>) {
     let m = nodes.len();
-    let n = 2 * m + 1;
+    let n = 2 * m + upper;
     let u = 2 * m;
     let mut coo = CooMatrix::new(n, n);
     for i in 0..m {
@@ -52,9 +63,16 @@ fn built(nodes: &[Node], extra: &[(usize, f64)]) -> (ContactProblem, Vec<f64>, V
             coo.push(a, b, 1.0);
         }
     }
+    for j in u + 1..n {
+        for (a, b, x) in [(j, j, 1.0), (u, u, 1.0), (j, u, -1.0), (u, j, -1.0)] {
+            coo.push(a, b, x);
+        }
+    }
     let a = CsrMatrix::from(&coo);
     let mut v = vec![0.0; n];
-    v[u] = 0.7;
+    for x in &mut v[u..] {
+        *x = 0.7;
+    }
     for (i, c) in nodes.iter().enumerate() {
         v[2 * i] = c.t;
         v[2 * i + 1] = c.s;
@@ -88,7 +106,9 @@ fn built(nodes: &[Node], extra: &[(usize, f64)]) -> (ContactProblem, Vec<f64>, V
         })
         .collect();
     let mut z = vec![0.0; n];
-    z[u] = 1.0;
+    for x in &mut z[u..] {
+        *x = 1.0;
+    }
     for i in 0..m {
         z[2 * i] = -1.0;
     }
@@ -219,25 +239,99 @@ fn each_condition_is_checked_by_an_answer_that_violates_it_alone() {
         ),
         [Condition::FrictionBound]
     );
-    // The balance alone: a residual at every jump row, each below the
-    // stationarity tolerance per node (half of it, in P·w_max with P = 1,
-    // w_max = 1), adds up along the rigid mode to far more than the load's
-    // tolerance when many nodes of small weight share it.
-    let mut many = vec![Node {
-        weight: 1.0,
-        ..CLOSED
-    }];
-    many.extend(std::iter::repeat_n(
-        Node {
-            weight: 1e-3,
-            ..CLOSED
-        },
-        49,
-    ));
-    let (problem, ..) = built(&many, &[]);
+    // The balance alone: a residual at each of 20 rows of the upper body
+    // away from Γ_K, each half the stationarity tolerance (in P·w_max with
+    // w_max = 1), adds up along the rigid mode to five times the load's
+    // tolerance (L = 2).
+    let nodes = three(base, law);
+    let (problem, ..) = built_with_upper(&nodes, &[], 20);
     let pw = problem.scales().pressure * 1.0;
-    let extra: Vec<(usize, f64)> = (0..50)
-        .map(|i| (2 * i, 0.5 * DEFAULT_TOLERANCE * pw))
-        .collect();
-    assert_eq!(failing(&many, &extra, law), [Condition::ForceBalance]);
+    let extra: Vec<(usize, f64)> = (6..26).map(|k| (k, 0.5 * DEFAULT_TOLERANCE * pw)).collect();
+    let (problem, v, p, q) = built_with_upper(&nodes, &extra, 20);
+    let g: Vec<f64> = nodes.iter().map(|c| c.g).collect();
+    let c = certify(&problem, Friction::Given(&g), &v, &p, &q, DEFAULT_TOLERANCE);
+    assert_eq!(c.failing(), [Condition::ForceBalance], "{}", c.summary());
+    // Unbalanced: the 20 residuals; the load along z includes them.
+    let z = &problem.rigid_modes()[0];
+    let load: f64 = z.iter().zip(problem.f()).map(|(a, b)| a * b).sum();
+    let unbalanced = 20.0 * 0.5 * DEFAULT_TOLERANCE * pw;
+    assert!(
+        (c.force_balance - unbalanced / load.abs()).abs() < 1e-9 * c.force_balance,
+        "{} {}",
+        c.force_balance,
+        unbalanced / load.abs()
+    );
+    assert!(c.force_balance > 4.0 * DEFAULT_TOLERANCE);
+}
+
+/// A force residual at a contact node is a pressure error of that node,
+/// whatever its weight: the same residual per unit length at the end node
+/// (w = 0.5) and at the middle node (w = 1) gives the same stationarity
+/// violation. Measured per P·w_max instead, the end node's error counted
+/// half, and an answer refused as displacements alone passed with its
+/// forces beside (issue 47).
+#[test]
+fn a_pressure_error_counts_in_full_at_every_node_whatever_its_weight() {
+    let law = Law::GivenFriction;
+    let base = Node {
+        p: 2.0,
+        q: 0.0,
+        ..CLOSED
+    };
+    let nodes = three(base, law);
+    let (problem, ..) = built(&nodes, &[]);
+    let pr = problem.scales().pressure;
+    let error = 3.0 * DEFAULT_TOLERANCE * pr;
+    let g: Vec<f64> = nodes.iter().map(|c| c.g).collect();
+    let mut seen = Vec::new();
+    for (node, weight) in [(0usize, 0.5), (1, 1.0)] {
+        // The given pressure exceeds the one the displacements imply by
+        // `error` at `node`: a residual w·error at its jump row.
+        let (problem, v, mut p, q) = built(&nodes, &[]);
+        p[node] += error;
+        let c = certify(&problem, Friction::Given(&g), &v, &p, &q, DEFAULT_TOLERANCE);
+        assert_eq!(nodes[node].weight, weight);
+        // (The extra pressure also leaves w·error of the load unbalanced.)
+        assert_eq!(c.failing()[0], Condition::Stationarity, "{}", c.summary());
+        seen.push(c.stationarity);
+    }
+    assert!((seen[0] / seen[1] - 1.0).abs() < 1e-12, "{seen:?}");
+    assert!((seen[0] / DEFAULT_TOLERANCE - 3.0).abs() < 1e-9, "{seen:?}");
+}
+
+/// The contact law is held by the forces the displacements imply, not only
+/// by the forces given: displacements that penetrate nowhere but imply a
+/// pull at an open node fail complementarity and the pressure's sign even
+/// when the forces handed in beside them are those of the true answer.
+#[test]
+fn forces_given_beside_the_displacements_cannot_excuse_them() {
+    let law = Law::GivenFriction;
+    let base = Node {
+        p: 2.0,
+        q: 0.0,
+        ..CLOSED
+    };
+    let nodes = three(base, law);
+    let (problem, v, p, q) = built(&nodes, &[]);
+    let g: Vec<f64> = nodes.iter().map(|c| c.g).collect();
+    let friction = Friction::Given(&g);
+    let true_answer = certify(&problem, friction, &v, &p, &q, DEFAULT_TOLERANCE);
+    assert!(true_answer.passed(), "{}", true_answer.summary());
+    // The open node (2) moved 0.1 further apart in t; its row of A ties it
+    // to u, so the displacements now imply a force there.
+    let mut moved = v.clone();
+    moved[4] -= 0.1;
+    let alone = {
+        let r = contactlab::certificate::elastic_residual(&problem, &moved);
+        let (pv, qv) = contactlab::certificate::implied_forces(&problem, &r);
+        certify(&problem, friction, &moved, &pv, &qv, DEFAULT_TOLERANCE)
+    };
+    let both = certify(&problem, friction, &moved, &p, &q, DEFAULT_TOLERANCE);
+    assert!(!alone.passed(), "{}", alone.summary());
+    assert!(!both.passed(), "{}", both.summary());
+    for (c, x) in alone.measures() {
+        if c != Condition::Stationarity {
+            assert!(both.get(c) >= x, "{}: {} < {x}", c.as_str(), both.get(c));
+        }
+    }
 }

@@ -346,17 +346,8 @@ pub fn complete_answer(
     Ok(match (v, forces) {
         (Some(v), Some((p, q))) => (v, p, q),
         (Some(v), None) => {
-            let row = |i: usize| crate::certificate::stationarity_residual(problem, &v, i);
-            let p = problem
-                .contacts()
-                .iter()
-                .map(|c| -row(c.t) / c.weight)
-                .collect();
-            let q = problem
-                .contacts()
-                .iter()
-                .map(|c| row(c.s) / c.weight)
-                .collect();
+            let r = crate::certificate::elastic_residual(problem, &v);
+            let (p, q) = crate::certificate::implied_forces(problem, &r);
             (v, p, q)
         }
         (None, Some((p, q))) => {
