@@ -57,6 +57,7 @@ use crate::entry::{Accuracy, Entry, Knob, Role, StageInfo};
 use crate::numerics::linalg::Csr;
 
 use crate::numerics::linalg::row_dot;
+use crate::numerics::resolution::Resolution;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::settings::{Kind, Validate, from_tree, to_tree};
@@ -389,6 +390,7 @@ impl Solver for Tnnmg {
         let mut detail = format!("iteration cap {} reached", self.settings.max_iter);
         let mut iterations = 0;
         let mut stopped_at_need = None;
+        let mut stall = Resolution::default();
         for k in 1..=self.settings.max_iter {
             iterations = k;
             previous.copy_from_slice(&v);
@@ -401,11 +403,13 @@ impl Solver for Tnnmg {
                     *vk += beta * zk;
                 }
             }
-            let change = v
+            let (moved, size) = v
                 .iter()
                 .zip(&previous)
-                .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()))
-                / u;
+                .fold((0.0f64, 0.0f64), |(a, b), (x, y)| {
+                    (a.max((x - y).abs()), b.max(x.abs()))
+                });
+            let change = moved / u;
             let control = observer.observe(&Progress {
                 stage: ITERATION,
                 iteration: k,
@@ -438,6 +442,14 @@ impl Solver for Tnnmg {
                     );
                     break;
                 }
+            }
+            if stall.stalled(moved, size) {
+                status = Status::InsufficientProgress;
+                detail = format!(
+                    "largest change {change:.3e}·U > {tol:.0e} after {k} iterations: {}",
+                    Resolution::detail("v", moved, size)
+                );
+                break;
             }
             if let Control::Stop(s) = control {
                 status = s;

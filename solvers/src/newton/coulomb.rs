@@ -34,6 +34,7 @@ use serde::{Deserialize, Serialize};
 use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::random::Lcg;
+use crate::numerics::resolution::{Resolution, ULPS, WINDOW};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Kept, condense};
@@ -194,6 +195,7 @@ fn newton(
         steps,
         jacobian,
     };
+    let mut stall = Resolution::default();
     for step in 1..=settings.max_iter {
         let r = norm_inf(&phi) / scale;
         if !r.is_finite() {
@@ -213,6 +215,17 @@ fn newton(
             );
             let j = settings.condition.then(|| sys.jacobian(&x));
             return finish(x, Status::Converged, detail, step - 1, j);
+        }
+        // The residual, relative to the problem's scale, at rounding for
+        // several steps: no Newton step can take it to the tolerance.
+        if stall.stalled(r, 1.0) {
+            let detail = format!(
+                "residual {r:.2e} > {:e} after {} Newton steps: stalled at floating-point resolution (within {ULPS} roundoffs of the problem's scale for {WINDOW} steps)",
+                settings.tolerance,
+                step - 1
+            );
+            let j = settings.condition.then(|| sys.jacobian(&x));
+            return finish(x, Status::InsufficientProgress, detail, step - 1, j);
         }
         let (newton_dir, grad) = sys.direction(&x, &phi);
         let (dir, slope) = direction(newton_dir, &grad, units, settings.line_search);

@@ -12,6 +12,7 @@ use faer::linalg::solvers::Solve;
 use super::tresca::{NEWTON_STEP, NewtonSettings};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::ncp::{billups, fb};
+use crate::numerics::resolution::{Resolution, ULPS, WINDOW};
 use crate::observer::{Control, Observer, Progress};
 use crate::solution::Status;
 
@@ -196,6 +197,7 @@ pub fn semismooth_newton(
     let mut psi = merit(&e.phi);
     let mut merits = Vec::new();
     let residual = |e: &Eval| e.phi.iter().fold(0.0f64, |a, x| a.max(x.abs())) / scale;
+    let mut stall = Resolution::default();
     for step in 1..=settings.max_iter {
         let r = residual(&e);
         if !r.is_finite() {
@@ -216,6 +218,24 @@ pub fn semismooth_newton(
                 step - 1
             );
             return finish(y, lam, mu, Status::Converged, detail, step - 1, merits);
+        }
+        // The residual, relative to the problem's scale, at rounding for
+        // several steps: no Newton step can take it to the tolerance.
+        if stall.stalled(r, 1.0) {
+            let detail = format!(
+                "residual {r:.2e} > {:e} after {} Newton steps: stalled at floating-point resolution (within {ULPS} roundoffs of the problem's scale for {WINDOW} steps)",
+                settings.tolerance,
+                step - 1
+            );
+            return finish(
+                y,
+                lam,
+                mu,
+                Status::InsufficientProgress,
+                detail,
+                step - 1,
+                merits,
+            );
         }
         let grad = kkt.gradient(&e);
         let (dir, slope) = direction(

@@ -34,6 +34,8 @@ use std::time::Instant;
 
 use crate::multigrid::kept_hierarchy;
 use crate::multigrid::vcycle::Hierarchy;
+use crate::numerics::linalg::max_abs;
+use crate::numerics::resolution::{self, Resolution};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::{ContactNode, ContactProblem};
 use crate::settings::Validate;
@@ -119,6 +121,12 @@ pub(crate) fn prox_uzawa(
     };
     let unit = inner.unit();
     let mut last_residual = f64::INFINITY;
+    // Uzawa steps in a row whose inner minimization ended at
+    // floating-point resolution without the step gaining a tenth (the
+    // certified rule), or whose multipliers moved by rounding only (the
+    // paper's rule).
+    let mut stalled_inner = Resolution::default();
+    let mut stall = Resolution::default();
     let (mut sweeps, mut uzawa) = (0usize, 0usize);
     let mut status = Status::MaxIterations;
     let mut detail = format!("Uzawa iteration cap {} reached", settings.max_uzawa);
@@ -142,6 +150,13 @@ pub(crate) fn prox_uzawa(
         inner.begin(contacts, &data);
         let mut converged_inner = false;
         let mut reached = None;
+        // Changes of v below rounding end the inner minimization whatever
+        // its threshold: no sweep can move v further (the certified rule
+        // tightens the threshold without bound). The size of v is read
+        // again every hundred inner iterations (a pass over v; a sweep
+        // passes over A, fourteen times as long).
+        let mut floor = resolution::floor(max_abs(&v));
+        let mut at_floor = false;
         for q_sweep in 1..=settings.max_sweeps {
             let change = inner.step(op, &mut v, &data);
             sweeps += 1;
@@ -177,6 +192,14 @@ pub(crate) fn prox_uzawa(
             }
             if change <= sweep_tol {
                 converged_inner = true;
+                break;
+            }
+            if q_sweep % 100 == 0 {
+                floor = resolution::floor(max_abs(&v));
+            }
+            if change <= floor {
+                converged_inner = true;
+                at_floor = true;
                 break;
             }
         }
@@ -227,16 +250,35 @@ pub(crate) fn prox_uzawa(
                 break;
             }
             // Inexact Uzawa: when a step no longer gains a tenth, the inner
-            // solves are the limit; tighten their threshold tenfold.
-            if residual > 0.9 * last_residual {
+            // solves are the limit; tighten their threshold tenfold. Once
+            // they end at rounding, a step that gains nothing is a stall.
+            let gained = residual <= 0.9 * last_residual;
+            if !gained {
                 sweep_tol /= 10.0;
             }
             last_residual = residual;
+            if stalled_inner.step(at_floor && !gained) {
+                status = Status::InsufficientProgress;
+                detail = format!(
+                    "contact residual {residual:.3e} > {:.0e} after {k} Uzawa iterations, {sweeps} {unit}: stalled at floating-point resolution (in {} Uzawa steps in a row the inner minimization moved v by rounding only and the residual gained less than a tenth)",
+                    settings.target,
+                    resolution::WINDOW
+                );
+                break;
+            }
         } else if dl <= resolved.uzawa_tolerance {
             status = Status::Converged;
             detail = format!(
                 "max|Δl| = {dl:.3e} ≤ {:.3e} after {k} Uzawa iterations, {sweeps} {unit}",
                 resolved.uzawa_tolerance
+            );
+            break;
+        } else if stall.stalled(dl, max_abs(&l)) {
+            status = Status::InsufficientProgress;
+            detail = format!(
+                "max|Δl| = {dl:.3e} > {:.3e} after {k} Uzawa iterations, {sweeps} {unit}: {}",
+                resolved.uzawa_tolerance,
+                Resolution::detail("l", dl, max_abs(&l))
             );
             break;
         }

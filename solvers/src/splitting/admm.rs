@@ -32,6 +32,8 @@ use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::numerics::linalg::max_abs;
+use crate::numerics::resolution::{Resolution, WINDOW, floor};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
@@ -204,6 +206,7 @@ impl Solver for Admm {
         let mut status = Status::MaxIterations;
         let mut detail = format!("step cap {} reached", self.settings.max_iter);
         let mut steps = 0;
+        let mut stall = Resolution::default();
         for k in 1..=self.settings.max_iter {
             steps = k;
             for i in 0..n2 {
@@ -249,6 +252,17 @@ impl Solver for Admm {
                 status = Status::Converged;
                 detail = format!(
                     "residuals {primal:.2e} (primal), {dual:.2e} (dual), {equilibrium:.2e} (equilibrium) ≤ {:e} after {k} steps, ρ = {rho:.3e}",
+                    self.settings.tolerance
+                );
+                break;
+            }
+            // The iterate (z, u) moved by rounding only: a fixed point of
+            // the arithmetic short of the tolerance.
+            let (dz, du) = (dual * f_scale / rho, primal * u_scale);
+            if stall.step(dz <= floor(max_abs(&z)) && du <= floor(max_abs(&u))) {
+                status = Status::InsufficientProgress;
+                detail = format!(
+                    "residual {residual:.2e} > {:e} after {k} steps: stalled at floating-point resolution (z and u moved by rounding only in {WINDOW} steps in a row: {dz:.1e} and {du:.1e})",
                     self.settings.tolerance
                 );
                 break;

@@ -25,6 +25,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::numerics::resolution::Resolution;
 use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
@@ -245,6 +246,7 @@ impl Solver for Apgd {
         let mut status = Status::MaxIterations;
         let mut detail = format!("step cap {} reached", self.settings.max_iter);
         let mut steps = 0;
+        let mut stall = Resolution::default();
         for k in 1..=self.settings.max_iter {
             steps = k;
             op.gradient(&yk, &mut gradient);
@@ -262,11 +264,14 @@ impl Solver for Apgd {
             // It is read as a cosine above a roundoff-level threshold, so that
             // the decision does not hinge on the last bits.
             let (mut uphill, mut gg, mut dd) = (0.0, 0.0, 0.0);
+            let (mut moved, mut size) = (0.0f64, 0.0f64);
             for ((y, a), b) in yk.iter().zip(&next).zip(&r) {
                 let (g, d) = (y - a, a - b);
                 uphill += g * d;
                 gg += g * g;
                 dd += d * d;
+                moved = moved.max(d.abs());
+                size = size.max(a.abs());
             }
             let uphill = uphill > RESTART_COSINE * (gg * dd).sqrt();
             // The natural-map residual of the contact law at the new forces,
@@ -317,6 +322,14 @@ impl Solver for Apgd {
             if residual <= tol {
                 status = Status::Converged;
                 detail = format!("natural-map residual {residual:.3e} ≤ {tol:.0e} after {k} steps");
+                break;
+            }
+            if stall.stalled(moved, size) {
+                status = Status::InsufficientProgress;
+                detail = format!(
+                    "the natural-map residual is above {tol:.0e} after {k} steps: {}",
+                    Resolution::detail("the contact forces r", moved, size)
+                );
                 break;
             }
             if let Control::Stop(s) = control {

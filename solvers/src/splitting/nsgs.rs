@@ -25,6 +25,8 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::numerics::linalg::max_abs;
+use crate::numerics::resolution::{Resolution, floor};
 use crate::numerics::roots::monotone_root;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
@@ -260,6 +262,7 @@ impl Solver for Nsgs {
         let mut status = Status::MaxIterations;
         let mut detail = format!("sweep cap {} reached", self.settings.max_sweeps);
         let mut sweeps = 0;
+        let mut stall = Resolution::default();
         for sweep in 1..=self.settings.max_sweeps {
             sweeps = sweep;
             let mut change = 0.0f64;
@@ -319,6 +322,15 @@ impl Solver for Nsgs {
             if change <= force_tol && moved {
                 status = Status::Converged;
                 detail = format!("max|Δr| = {change:.3e} ≤ {force_tol:.3e} after {sweep} sweeps");
+                break;
+            }
+            let size = max_abs(&r);
+            if stall.step(change <= floor(size) && beta_change.abs() <= floor(beta.abs())) {
+                status = Status::InsufficientProgress;
+                detail = format!(
+                    "max|Δr| = {change:.3e} > {force_tol:.3e} after {sweep} sweeps: {}",
+                    Resolution::detail("the contact forces r", change, size)
+                );
                 break;
             }
             if let Control::Stop(s) = control {
