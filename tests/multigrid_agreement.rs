@@ -339,3 +339,56 @@ fn a_nested_step_not_handed_its_predecessor_starts_on_the_finest() {
     let last_two = &solver.log[solver.log.len() - 2..];
     assert_eq!(last_two, [Some(finest), Some(finest)], "{:?}", solver.log);
 }
+
+/// The coarsest mesh, h = 1/2, has no mesh below it: the multigrid solvers
+/// solve it on one level, with the coarsest level's exact solve as the
+/// coarse correction, and give newton-coulomb's pressures. They used to
+/// return `not_run` and a profile of zeros, blaming "an imported instance"
+/// (issue 47).
+#[test]
+fn the_multigrid_solvers_solve_the_coarsest_mesh_on_one_level() {
+    for k in 1..=3 {
+        let scene = problem(k, 1);
+        let newton = coulomb(&scene, "newton-coulomb", &[]);
+        let tight = [
+            ("coulomb.epsilon", json!(1e-11)),
+            ("tnnmg.tolerance", json!(1e-13)),
+        ];
+        let mg = coulomb(&scene, "tnnmg", &tight);
+        let gap = pressure_gap(&scene, &mg, &newton);
+        assert!(gap <= 1e-8, "{}: tnnmg off by {gap:e}·P", scene.name);
+        let relaxation = coulomb(
+            &scene,
+            "relaxation",
+            &[
+                ("relaxation.inner", json!("multigrid")),
+                ("relaxation.target", json!(1e-7)),
+            ],
+        );
+        let gap = pressure_gap(&scene, &relaxation, &newton);
+        assert!(gap <= 1e-5, "{}: relaxation off by {gap:e}·P", scene.name);
+    }
+}
+
+/// A problem without a mesh hierarchy and too large for one level (an
+/// imported instance) is refused by tnnmg with the reason, before any work.
+#[test]
+fn an_instance_without_a_hierarchy_is_refused_with_the_reason() {
+    let d = Discretization::new(&problem(1, 4), MeshSize::from_level(4).unwrap()).unwrap();
+    let p = d
+        .problem
+        .clone()
+        .with_hierarchy(Vec::<contactlab::solvers::Csr>::new())
+        .unwrap();
+    let mut solver = Settings::default()
+        .build(registry::by_name("tnnmg").unwrap())
+        .unwrap();
+    let g = vec![1.0; p.contacts().len()];
+    let s = solver.solve(&p, Friction::Given(&g), None, &mut Silent);
+    assert_eq!(s.status, contactlab::solvers::Status::NotRun);
+    assert!(
+        s.detail.contains("mesh hierarchy") && s.detail.contains("imported instance"),
+        "{}",
+        s.detail
+    );
+}

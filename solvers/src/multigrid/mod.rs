@@ -262,6 +262,42 @@ impl Tnnmg {
 
 /// The hierarchy of operator `id` in `kept`, built if missing (the oldest
 /// dropped beyond [`KEPT_HIERARCHIES`]).
+/// The largest problem without a mesh hierarchy that the multigrid
+/// solvers take on one level: the coarsest level's exact solve (a dense
+/// eigendecomposition, O(n³)) on the whole problem, with the identity as
+/// its one prolongation. The paper's scenes at h = 1/2 have 12 unknowns.
+pub const ONE_LEVEL_MAX_UNKNOWNS: usize = 256;
+
+/// The prolongations a multigrid solve of `problem` runs on: the
+/// problem's own (its mesh hierarchy), or for a problem without one that
+/// is small enough ([`ONE_LEVEL_MAX_UNKNOWNS`]: a scene at h = 1/2, whose
+/// mesh is the coarsest) the identity, so that the V-cycle's coarse
+/// correction is the exact solve. A larger problem without a hierarchy
+/// (an imported instance) is refused with the reason.
+pub(crate) fn prolongations_of(
+    problem: &ContactProblem,
+) -> Result<std::borrow::Cow<'_, [Csr]>, String> {
+    let p = problem.prolongations();
+    if !p.is_empty() {
+        return Ok(std::borrow::Cow::Borrowed(p));
+    }
+    let n = problem.n();
+    if n > ONE_LEVEL_MAX_UNKNOWNS {
+        return Err(format!(
+            "needs the problem's mesh hierarchy (the prolongations between nested meshes) for {n} unknowns, and this problem carries none: a problem built from a scene does; an imported instance does not (solve it with a solver that factors A, e.g. newton-coulomb)"
+        ));
+    }
+    let identity = Csr::try_from_csr_data(
+        n,
+        n,
+        (0..=n).collect(),
+        (0..n as u32).collect(),
+        vec![1.0; n],
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(std::borrow::Cow::Owned(vec![identity]))
+}
+
 pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
     kept: &'k mut Vec<(K, Hierarchy)>,
     id: K,
@@ -330,15 +366,11 @@ impl Solver for Tnnmg {
             Ok(g) => g,
             Err(refused) => return *refused,
         };
-        let p = problem.prolongations();
-        if p.is_empty() {
-            return Solution::failed(
-                n,
-                m,
-                Status::NotRun,
-                "tnnmg needs the problem's mesh hierarchy (problems built from a scene carry one; an imported instance does not)",
-            );
-        }
+        let levels = match prolongations_of(problem) {
+            Ok(levels) => levels,
+            Err(why) => return Solution::failed(n, m, Status::NotRun, format!("tnnmg {why}")),
+        };
+        let p = &levels[..];
         let t0 = Instant::now();
         let a = problem.a();
         let hierarchy = match kept_hierarchy(&mut self.hierarchies, problem.operator_id(), a, p) {

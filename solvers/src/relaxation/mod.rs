@@ -32,8 +32,8 @@ pub use settings::{RelaxationSettings, Resolved};
 
 use std::time::Instant;
 
-use crate::multigrid::kept_hierarchy;
 use crate::multigrid::vcycle::Hierarchy;
+use crate::multigrid::{kept_hierarchy, prolongations_of};
 use crate::numerics::linalg::max_abs;
 use crate::numerics::resolution::{self, Resolution};
 use crate::observer::{Control, Observer, Progress};
@@ -364,20 +364,24 @@ impl Solver for ProxUzawa {
             );
         }
         let op = operator(&mut self.cache, problem, resolved.proximal);
+        let mut levels_kept = None;
         let mut inner = match settings.inner {
             Inner::Sweeps => InnerSolver::Sweeps,
             Inner::Multigrid => {
-                let p = problem.prolongations();
                 let (n, m) = (problem.n(), problem.contacts().len());
-                if p.is_empty() {
-                    return Solution::failed(
-                        n,
-                        m,
-                        Status::NotRun,
-                        "relaxation.inner = multigrid needs the problem's mesh hierarchy (problems built from a scene carry one; an imported instance does not)",
-                    );
-                }
+                let levels = match prolongations_of(problem) {
+                    Ok(levels) => levels,
+                    Err(why) => {
+                        return Solution::failed(
+                            n,
+                            m,
+                            Status::NotRun,
+                            format!("relaxation.inner = multigrid {why}"),
+                        );
+                    }
+                };
                 let key = (problem.operator_id(), resolved.proximal.to_bits());
+                let p = levels_kept.insert(levels);
                 match kept_hierarchy(&mut self.hierarchies, key, &op.h, p) {
                     Ok(h) => InnerSolver::Multigrid(Box::new(MultigridInner::new(
                         h,
