@@ -188,3 +188,89 @@ fn table1_takes_the_problem_list_its_help_shows() {
         .unwrap();
     assert!(stopping.contains("[default: paper]"), "{stopping}");
 }
+
+/// A setting given twice, once by its own flag and once by `--set`, in
+/// either order: the later one is the one the run used (summary.json says
+/// which), for every flag that has a `--set` path beside it. Before, the
+/// `--set` always won and the flag was dropped without a word (issue 47).
+#[test]
+fn the_later_of_a_flag_and_a_set_of_one_setting_wins() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let cases: [(&str, &str, &str, &str, &str); 6] = [
+        (
+            "--stopping",
+            "relative",
+            "stopping",
+            "paper",
+            "/settings/stopping",
+        ),
+        (
+            "--schedule",
+            "nested",
+            "schedule",
+            "finest-only",
+            "/settings/schedule",
+        ),
+        (
+            "--certify-tol",
+            "1e-4",
+            "certificate.tolerance",
+            "1e-3",
+            "/settings/certificate/tolerance",
+        ),
+        (
+            "--epsilon",
+            "1e-6",
+            "coulomb.epsilon",
+            "1e-5",
+            "/settings/coulomb/epsilon",
+        ),
+        (
+            "--max-friction-iterations",
+            "40",
+            "coulomb.max_iterations",
+            "30",
+            "/settings/coulomb/max_iterations",
+        ),
+        (
+            "--tnnmg-max-iter",
+            "300",
+            "tnnmg.max_iter",
+            "200",
+            "/settings/solvers/tnnmg/max_iter",
+        ),
+    ];
+    for (flag, flag_value, path, set_value, pointer) in cases {
+        for flag_last in [true, false] {
+            let set = format!("{path}={set_value}");
+            let mut args = vec!["solve", "--problem", "1", "--h", "1/8", "--solver", "tnnmg"];
+            let pair = [[flag, flag_value], ["--set", set.as_str()]];
+            let order = if flag_last { [1, 0] } else { [0, 1] };
+            for k in order {
+                args.extend(pair[k]);
+            }
+            args.extend(["--out", out.to_str().unwrap()]);
+            let o = contactlab(&args);
+            assert!(
+                o.status.success(),
+                "{args:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            let summary: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+            let used = summary
+                .pointer(pointer)
+                .unwrap_or_else(|| panic!("{pointer} in {summary}"));
+            let expected = if flag_last { flag_value } else { set_value };
+            let shown = used
+                .as_str()
+                .map_or_else(|| used.to_string(), str::to_string);
+            let same = match (shown.parse::<f64>(), expected.parse::<f64>()) {
+                (Ok(a), Ok(b)) => a == b,
+                _ => shown == expected,
+            };
+            assert!(same, "{args:?}: the run used {shown}, not {expected}");
+        }
+    }
+}

@@ -4,13 +4,11 @@
 
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use contactlab_solvers::Stopping;
 use contactlab_solvers::registry::{self, Knob};
-use serde_json::Value;
 
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point;
-use crate::settings::Settings;
+use crate::settings::{Change, Changes, Settings};
 
 /// Which solvers' knobs a command offers as flags.
 pub trait SolverSet: Clone + std::fmt::Debug + Default + Send + Sync + 'static {
@@ -46,18 +44,13 @@ impl SolverSet for PapersMethod {
     const STOPPING_DEFAULT: &'static str = "paper";
 }
 
-/// Changes to the settings given on the command line; the knobs offered are
-/// those of the solvers in `S`.
+/// Changes to the settings given on the command line, in the order given
+/// ([`Changes`]: the later change of a setting wins, whichever flag gave
+/// it); the knobs offered are those of the solvers in `S`.
 #[derive(Debug, Clone, Default)]
 pub struct SettingsArgs<S: SolverSet = AllSolvers> {
     pub solvers: std::marker::PhantomData<S>,
-    pub stopping: Option<Stopping>,
-    pub epsilon: Option<f64>,
-    pub max_friction_iterations: Option<String>,
-    pub schedule: Option<Schedule>,
-    pub certificate_tolerance: Option<f64>,
-    /// (path, value as written, the flag that gave it), in order.
-    pub assignments: Vec<(String, String, String)>,
+    pub changes: Changes,
 }
 
 const STOPPING: &str = "stopping";
@@ -145,7 +138,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .action(ArgAction::Append)
                     .allow_hyphen_values(true)
                     .help(format!(
-                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable). Each solver's settings are also flags (--relaxation-r 1e8); `contactlab settings [SOLVER]` lists them all",
+                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable). Each solver's settings are also flags (--relaxation-r 1e8); `contactlab settings [SOLVER]` lists them all. All settings flags apply in the order given: when two set the same setting (--set stopping=paper --stopping relative), the later one wins",
                         crate::settings::example_path()
                     )),
             );
@@ -180,40 +173,62 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
     }
 }
 
+/// The settings path each of the harness's own flags sets.
+const FLAG_PATHS: [(&str, &str); 5] = [
+    (STOPPING, "stopping"),
+    (SCHEDULE, "schedule"),
+    (CERTIFY_TOL, "certificate.tolerance"),
+    (EPSILON, "epsilon"),
+    (MAX_FRICTION, "coulomb.max_iterations"),
+];
+
 impl<S: SolverSet> clap::FromArgMatches for SettingsArgs<S> {
     fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
-        let text = |id: &str| m.try_get_one::<String>(id).ok().flatten().cloned();
-        let mut out = SettingsArgs {
-            solvers: std::marker::PhantomData,
-            stopping: text(STOPPING).map(|s| match s.as_str() {
-                "paper" => Stopping::Paper,
-                _ => Stopping::Relative,
-            }),
-            epsilon: m.try_get_one::<f64>(EPSILON).ok().flatten().copied(),
-            max_friction_iterations: text(MAX_FRICTION),
-            schedule: text(SCHEDULE).and_then(|s| Schedule::from_name(&s)),
-            certificate_tolerance: m.try_get_one::<f64>(CERTIFY_TOL).ok().flatten().copied(),
-            assignments: Vec::new(),
+        // Every change with its position on the command line.
+        let mut given: Vec<(usize, Change)> = Vec::new();
+        let mut add = |id: &str, path: &str, flag: String| {
+            let (Ok(Some(values)), Some(at)) = (
+                m.try_get_raw(id),
+                m.indices_of(id).map(|i| i.collect::<Vec<_>>()),
+            ) else {
+                return;
+            };
+            for (value, index) in values.zip(at) {
+                let value = value.to_string_lossy().into_owned();
+                let (path, value) = if id == SET {
+                    let (p, v) = value.split_once('=').unwrap_or((value.as_str(), ""));
+                    (p.trim().to_string(), v.to_string())
+                } else {
+                    (path.to_string(), value)
+                };
+                given.push((
+                    index,
+                    Change {
+                        path,
+                        value,
+                        given_as: flag.clone(),
+                    },
+                ));
+            }
         };
+        for (id, path) in FLAG_PATHS {
+            add(id, path, format!("--{id}"));
+        }
         for e in S::solvers() {
             for k in e.knobs {
-                if let Some(value) = text(&knob_id(e.name, k)) {
-                    out.assignments.push((
-                        format!("{}.{}", e.name, k.name),
-                        value,
-                        format!("--{}", knob_flag(e.name, k)),
-                    ));
-                }
+                add(
+                    &knob_id(e.name, k),
+                    &format!("{}.{}", e.name, k.name),
+                    format!("--{}", knob_flag(e.name, k)),
+                );
             }
         }
-        if let Ok(Some(sets)) = m.try_get_many::<String>(SET) {
-            for s in sets {
-                let (path, value) = s.split_once('=').unwrap_or((s.as_str(), ""));
-                out.assignments
-                    .push((path.trim().to_string(), value.to_string(), "--set".into()));
-            }
-        }
-        Ok(out)
+        add(SET, "", "--set".into());
+        given.sort_by_key(|(index, _)| *index);
+        Ok(SettingsArgs {
+            solvers: std::marker::PhantomData,
+            changes: Changes(given.into_iter().map(|(_, c)| c).collect()),
+        })
     }
 
     fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
@@ -228,106 +243,70 @@ impl<S: SolverSet> SettingsArgs<S> {
         self.resolve_on(Settings::default())
     }
 
-    /// `base` (e.g. a scene file's settings) with these flags applied, validated.
-    pub fn resolve_on(&self, mut settings: Settings) -> Result<Settings> {
-        if let Some(s) = self.stopping {
-            settings.stopping = s;
-        }
-        if let Some(s) = self.schedule {
-            settings.schedule = s;
-        }
-        if let Some(t) = self.certificate_tolerance {
-            settings.certificate.tolerance = t;
-        }
-        if let Some(e) = self.epsilon {
-            settings
-                .set_epsilon(e)
-                .map_err(|m| anyhow::anyhow!("--epsilon: {m}"))?;
-        }
-        if let Some(n) = &self.max_friction_iterations {
-            let value = n.trim().parse::<u64>().map_err(|_| {
-                anyhow::anyhow!(
-                    "--max-friction-iterations = '{n}' is invalid: give a whole number of iterations ≥ 1"
-                )
-            })?;
-            settings
-                .set("coulomb.max_iterations", Value::from(value))
-                .map_err(|m| anyhow::anyhow!(with_flag(m)))?;
-        }
-        let offered: Vec<&str> = S::solvers().iter().map(|e| e.name).collect();
-        for (path, text, flag) in &self.assignments {
-            if flag == "--set" && !text_has_value(path, text) {
+    /// `base` (e.g. a scene file's settings) with these flags applied in
+    /// the order given, validated ([`Changes::apply_to`]).
+    pub fn resolve_on(&self, base: Settings) -> Result<Settings> {
+        for c in &self.changes.0 {
+            if c.given_as == "--set" && (c.path.is_empty() || c.value.trim().is_empty()) {
                 bail!(
-                    "--set '{path}': write it as PATH=VALUE, e.g. --set {}=VALUE",
+                    "--set '{}': write it as PATH=VALUE, e.g. --set {}=VALUE",
+                    c.path,
                     crate::settings::example_path()
                 );
             }
-            if let Some(owner) = other_solver(path, &offered) {
-                let owner = owner.name;
-                bail!(
-                    "--set '{path}': this command runs only {}; settings of {owner} would be ignored",
-                    offered.join(", ")
-                );
-            }
-            settings.set_text(path, text).map_err(|m| {
-                let m = with_flag(m);
-                if m.contains(flag.as_str()) {
-                    anyhow::anyhow!(m)
-                } else {
-                    anyhow::anyhow!("{flag}: {m}")
-                }
-            })?;
         }
-        if let Err(m) = settings.validate() {
-            bail!(with_flag(m));
+        let offered = S::solvers();
+        if offered.len() < registry::solvers().len()
+            && let Err(m) = self.changes.check_used_by(&offered)
+        {
+            bail!(
+                "{m} (this command runs only {})",
+                offered
+                    .iter()
+                    .map(|e| e.name)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
         }
-        Ok(settings)
+        self.changes
+            .apply_to(base)
+            .map_err(|m| anyhow::anyhow!(with_flag(m)))
     }
 
     /// Refuses settings of a registered solver that this run does not use
     /// (`running`): they would be ignored without a word, e.g.
     /// `--clarabel-tol` with `--solver clarabel-faer`, whose flags are
-    /// `--clarabel-faer-*`. The error names the flag for the solver run.
+    /// `--clarabel-faer-*`.
     pub fn check_used_by(&self, running: &[&'static registry::Entry]) -> Result<()> {
-        let names: Vec<&str> = running.iter().map(|r| r.name).collect();
-        for (path, _, flag) in &self.assignments {
-            let Some(owner) = other_solver(path, &names) else {
-                continue;
-            };
-            let owner = owner.name;
-            let knob = path.split_once('.').map_or("", |(_, k)| k);
-            let instead: Vec<String> = running
-                .iter()
-                .filter_map(|r| r.knob(knob).map(|k| format!("--{}", knob_flag(r.name, k))))
-                .collect();
-            let hint = if instead.is_empty() {
-                String::new()
-            } else {
-                format!(": use {} instead", instead.join(" or "))
-            };
-            let given = if flag == "--set" {
-                format!("--set {path}")
-            } else {
-                flag.clone()
-            };
-            bail!(
-                "{given} sets a setting of {owner}, but this run uses {}; it would be ignored{hint}",
-                names.join(", ")
-            );
-        }
-        Ok(())
+        self.changes
+            .check_used_by(running)
+            .map_err(|m| anyhow::anyhow!(flags_for_paths(m, running)))
     }
 }
 
-/// The registered solver that owns setting `path`, if it is not one of
-/// `names` (its settings would be ignored by a run of those).
-fn other_solver(path: &str, names: &[&str]) -> Option<&'static registry::Entry> {
-    let owner = path.split('.').next().unwrap_or("");
-    registry::by_name(owner).filter(|e| !names.contains(&e.name))
-}
-
-fn text_has_value(path: &str, text: &str) -> bool {
-    !path.is_empty() && !text.trim().is_empty()
+/// A message of [`Changes::check_used_by`] with the command line's flag in
+/// place of the path it suggests (`set tnnmg.tolerance instead` becomes
+/// `use --tnnmg-tolerance instead`).
+fn flags_for_paths(message: String, running: &[&'static registry::Entry]) -> String {
+    let Some((head, paths)) = message.split_once(": set ") else {
+        return message;
+    };
+    let Some(paths) = paths.strip_suffix(" instead") else {
+        return message;
+    };
+    let flags: Vec<String> = paths
+        .split(" or ")
+        .map(|path| {
+            running
+                .iter()
+                .find_map(|e| {
+                    let knob = path.strip_prefix(e.name)?.strip_prefix('.')?;
+                    e.knob(knob).map(|k| format!("--{}", knob_flag(e.name, k)))
+                })
+                .unwrap_or_else(|| format!("--set {path}=VALUE"))
+        })
+        .collect();
+    format!("{head}: use {} instead", flags.join(" or "))
 }
 
 /// Adds the command-line flag to a message that starts with a settings path.

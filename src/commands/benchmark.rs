@@ -13,7 +13,7 @@ use crate::study::benchmark::{self, Benchmark, BenchmarkSpec, Shard, views};
 use crate::study::lab::{Artifact, write_artifacts};
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
-    if args.settings.certificate_tolerance.is_some() {
+    if args.settings.changes.sets("certificate.tolerance") {
         bail!(
             "--certify-tol does not apply to the benchmark: each run is certified at its target accuracy; give --targets instead"
         );

@@ -131,8 +131,8 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "forcing",
         fields: &["forcing"],
-        help: "inexact fixed point: ask each given-friction solve for an accuracy of its pressure of forcing·max|Δg|/(𝓕P) of the previous step, relative to P, when looser than its own tolerance (solvers that read it: tnnmg); the fixed point still ends only on a step asked for its own ε or better; 0: never",
-        kind: Kind::NonNegative,
+        help: "inexact fixed point: ask each given-friction solve for an accuracy of its pressure of forcing·max|Δg|/(𝓕P) of the previous step, relative to P, when looser than its own tolerance (solvers that read it: tnnmg); the fixed point still ends only on a step asked for its own ε or better; in [0, 1), as an inexact iteration's forcing terms must be (Dembo, Eisenstat & Steihaug 1982); 0: never",
+        kind: Kind::Fraction,
     },
     Knob {
         name: "coarse_epsilon",

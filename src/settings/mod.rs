@@ -6,6 +6,8 @@
 //! changes are stored and every setting is resolved when it is used. Paths are
 //! checked against the registry: the harness never names a solver.
 
+pub mod changes;
+
 use std::collections::BTreeMap;
 
 use contactlab_solvers::Solver;
@@ -17,6 +19,8 @@ use serde_json::Value;
 use crate::certificate::{DEFAULT_TOLERANCE, check_tolerance};
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point::{self, CoulombSettings};
+
+pub use changes::{Change, Changes};
 
 /// The certificate's settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
