@@ -9,6 +9,7 @@
 //! - [`study`]: the study engine (trials, one runner, earned references) and
 //!   the studies: comparison, sweeps, the stability map, benchmark, Table 1
 //!   and the report;
+//! - [`memory`]: what a run will need and what the process may use;
 //! - [`io`]: scene files, output files, charts, the manifest;
 //! - [`cli`] and [`commands`]: the command line.
 //!
@@ -22,6 +23,7 @@ pub mod coulomb;
 pub mod formats;
 pub mod io;
 pub mod mechanics;
+pub mod memory;
 pub mod settings;
 pub mod solve;
 pub mod study;

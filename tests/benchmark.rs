@@ -281,6 +281,10 @@ static LIAR: Entry = Entry {
     kernel: None,
     max_unknowns: None,
     uses_mass: false,
+    memory: contactlab::solvers::entry::Memory {
+        per_unknown: 400.0,
+        per_unknown_log2: 0.0,
+    },
 };
 
 #[derive(serde::Serialize, serde::Deserialize)]

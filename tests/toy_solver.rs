@@ -190,6 +190,10 @@ static TOY: Entry = Entry {
     kernel: None,
     max_unknowns: None,
     uses_mass: false,
+    memory: contactlab::solvers::entry::Memory {
+        per_unknown: 400.0,
+        per_unknown_log2: 0.0,
+    },
 };
 
 fn register() {
@@ -322,6 +326,10 @@ fn a_solver_is_refused_a_mesh_beyond_its_cap_on_unknowns() {
         name: "toy-capped",
         max_unknowns: Some(200),
         uses_mass: false,
+        memory: contactlab::solvers::entry::Memory {
+            per_unknown: 400.0,
+            per_unknown_log2: 0.0,
+        },
         ..TOY
     };
     let s = scene();

@@ -92,7 +92,46 @@ pub struct Entry {
     /// without M ([`crate::problem::Mass::Omitted`]): a third of the
     /// assembled problem, 235 MB at h = 1/1024.
     pub uses_mass: bool,
+    /// The peak memory of a whole solve (the problem assembled as the
+    /// solver needs it, and solved), per unknown of the finest mesh: the
+    /// harness estimates a run's memory from it before anything is
+    /// allocated, and refuses a run that would not fit.
+    pub memory: Memory,
 }
+
+/// The peak memory of a whole solve per unknown, n·(a + b·log₂ n) bytes
+/// for n unknowns: measured (peak resident memory of `contactlab solve`,
+/// problem 1, from h = 1/128 to the finest mesh the solver runs) and
+/// rounded up, so that the estimate is at or above every measurement. A
+/// solver that factors a sparse matrix grows as n log n (the fill of a
+/// factor of a 2D mesh); one that keeps vectors and matrices of the mesh,
+/// as n.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Memory {
+    /// a: bytes per unknown.
+    pub per_unknown: f64,
+    /// b: bytes per unknown and binary digit of the unknown count.
+    pub per_unknown_log2: f64,
+}
+
+impl Memory {
+    /// The estimate for `n` unknowns, in bytes.
+    pub fn bytes(&self, n: usize) -> f64 {
+        let n = n as f64;
+        n * (self.per_unknown + self.per_unknown_log2 * n.max(2.0).log2())
+    }
+}
+
+/// The condensation onto the contact unknowns (one sparse Cholesky factor
+/// of A without them, [`crate::reduction::condensed`]) with the problem
+/// assembled around it: 96 bytes per unknown and binary digit measured at
+/// h = 1/256 (1640 B per unknown), 90 at 1/512 and 88 at 1/1024 (3.7 GB),
+/// the same for every solver that condenses (newton, newton-coulomb,
+/// clarabel-condensed, nsgs, apgd, admm) and for `export`.
+pub const CONDENSED_MEMORY: Memory = Memory {
+    per_unknown: 0.0,
+    per_unknown_log2: 100.0,
+};
 
 /// The cap of the solvers that factor A: 2²² unknowns, between h = 1/1024
 /// of the paper's scenes (2.1 million, where newton-coulomb peaks at 4.3

@@ -33,5 +33,5 @@ pub use problem::{ContactNode, ContactProblem, Mass, ProblemError, Scales};
 pub use relaxation::pointwise::Smoothing;
 pub use relaxation::{ProxUzawa, RelaxationSettings};
 pub use settings::Stopping;
-pub use solution::{Iterations, Solution, Status, Timing};
+pub use solution::{Iterations, SetupError, Solution, Status, Timing};
 pub use solver::{Friction, Law, STOPPED_AT_NEED, Solver, Start};

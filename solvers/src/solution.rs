@@ -32,6 +32,11 @@ pub enum Status {
     NonFinite,
     /// The solver was not run (e.g. a problem it cannot take).
     NotRun,
+    /// The solve needed more memory than the process may use: an
+    /// allocation of its set-up failed (a factorization), or the harness's
+    /// estimate refused it before it started. A resource, not a property
+    /// of the problem or the method.
+    OutOfMemory,
     /// Never returned by a solver: its claim of convergence failed the
     /// harness's certificate (the failing condition is named beside it).
     Inaccurate,
@@ -55,6 +60,7 @@ impl Status {
             Status::NumericalError => "numerical_error",
             Status::NonFinite => "non_finite",
             Status::NotRun => "not_run",
+            Status::OutOfMemory => "out_of_memory",
             Status::Inaccurate => "inaccurate",
         }
     }
@@ -63,6 +69,37 @@ impl Status {
 impl std::fmt::Display for Status {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.as_str())
+    }
+}
+
+/// Why a solver could not set up a solve (a factorization failed or ran
+/// out of memory): the status to report and the sentence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SetupError {
+    pub status: Status,
+    pub detail: String,
+}
+
+impl From<String> for SetupError {
+    /// A numerical failure, in words.
+    fn from(detail: String) -> Self {
+        Self {
+            status: Status::NumericalError,
+            detail,
+        }
+    }
+}
+
+impl From<crate::numerics::linalg::LinalgError> for SetupError {
+    fn from(e: crate::numerics::linalg::LinalgError) -> Self {
+        let status = match e {
+            crate::numerics::linalg::LinalgError::OutOfMemory { .. } => Status::OutOfMemory,
+            _ => Status::NumericalError,
+        };
+        Self {
+            status,
+            detail: e.to_string(),
+        }
     }
 }
 

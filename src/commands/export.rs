@@ -12,6 +12,18 @@ use crate::mechanics::discretization::Discretization;
 
 pub fn run(args: &ExportArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
+    let h = scene.finest();
+    // The condensed form is one sparse factorization of A: the largest
+    // part of an export, checked before anything is assembled.
+    crate::memory::check(
+        &format!(
+            "exporting {} at h = {h} (with its condensed form)",
+            scene.name
+        ),
+        h,
+        |h| crate::memory::condensation(crate::memory::unknowns(h)),
+        None,
+    )?;
     let folder = RunFolder::create(&args.out)?;
     let d = Discretization::new(&scene, scene.finest())?;
     export(

@@ -26,6 +26,8 @@ pub enum BuildError {
     Overflow { young: f64 },
     #[error("assembled problem is inconsistent: {0}")]
     Problem(ProblemError),
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
 }
 
 /// The paper's scene on one mesh.
@@ -64,6 +66,13 @@ impl Discretization {
     }
 
     fn assemble(scene: &Scene, h: MeshSize, with_mass: bool) -> Result<Self, BuildError> {
+        // Nothing large is allocated before the estimate says it fits.
+        crate::memory::check(
+            &format!("assembling {} at h = {h}", scene.name),
+            h,
+            |h| crate::memory::assembly(h, with_mass),
+            None,
+        )?;
         let mesh = Mesh::new(h);
         let dofs = DofMap::new(&mesh);
         let (a, mass) = if with_mass {

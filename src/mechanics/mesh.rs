@@ -57,6 +57,17 @@ impl Mesh {
         2 * self.n * self.rows
     }
 
+    /// The unknowns of the algebraic problem on this mesh, counted without
+    /// building it ([`crate::mechanics::dofs::DofMap`] numbers them): two
+    /// per node off the clamped side y = 0 and off Γ_K, less one per node
+    /// of the upper body's roller x = 1, plus the jump and the slip of each
+    /// contact node. What a run will need is estimated from it before
+    /// anything is allocated ([`crate::memory`]).
+    pub fn unknowns(&self) -> usize {
+        let (n, above) = (self.n, self.rows - 1);
+        2 * n * above + (2 * n * above - above) + 2 * n
+    }
+
     pub fn num_elements(&self) -> usize {
         2 * 2 * (self.n - 1) * (self.rows - 1)
     }
@@ -132,7 +143,15 @@ mod tests {
             assert_eq!(m.num_nodes(), n * n + n, "N = n² + n at k = {k}");
             assert_eq!(m.triangles().count(), m.num_elements());
             assert_eq!(m.num_elements(), 2 * (n - 1) * (n - 1));
+            let numbered = crate::mechanics::dofs::DofMap::new(&m);
+            let counted = crate::mechanics::dofs::DofExpansion::n(&numbered);
+            assert_eq!(m.unknowns(), counted, "unknowns at k = {k}");
         }
+        // h = 1/512, as `info` prints it.
+        assert_eq!(
+            Mesh::new(MeshSize::from_level(9).unwrap()).unknowns(),
+            526_082
+        );
     }
 
     #[test]

@@ -47,30 +47,26 @@ impl Assembled {
     /// anything else is.
     /// The levels carry the mass matrix M only if the solver reads it
     /// ([`Entry::uses_mass`]).
-    pub fn for_solver(scene: &Scene, entry: &Entry) -> Result<Self> {
+    pub fn for_solver(scene: &Scene, entry: &'static Entry) -> Result<Self> {
+        refuse_too_large(scene, entry, false)?;
         Self::with_finest(scene, entry, level_for(scene, scene.finest(), entry)?)
     }
 
     /// As [`Assembled::for_solver`], with the finest level already
     /// assembled (the Python package's problem holds it: no second
     /// assembly of the finest mesh per solve).
-    pub fn with_finest(scene: &Scene, entry: &Entry, finest: Discretization) -> Result<Self> {
+    pub fn with_finest(
+        scene: &Scene,
+        entry: &'static Entry,
+        finest: Discretization,
+    ) -> Result<Self> {
         anyhow::ensure!(
             finest.h() == scene.finest(),
             "the finest level given is on h = {}, the scene's finest mesh is {}",
             finest.h(),
             scene.finest()
         );
-        let n = finest.problem.n();
-        if let Some(cap) = entry.max_unknowns.filter(|&cap| n > cap) {
-            anyhow::bail!(
-                "h = {} gives {n} unknowns, more than the {cap} that {} is allowed: it factors a matrix \
-                 of that size, whose factor would not fit in memory; use h ≥ 1/1024, or a solver \
-                 without a factorization (tnnmg, or relaxation with --set relaxation.inner=multigrid)",
-                scene.finest(),
-                entry.name
-            );
-        }
+        refuse_too_large(scene, entry, true)?;
         let mut levels = Vec::with_capacity(scene.levels.len());
         if entry.warm_starts && scene.levels.len() > 1 {
             for &h in &scene.levels[..scene.levels.len() - 1] {
@@ -97,6 +93,65 @@ impl Assembled {
     pub fn into_finest(mut self) -> Discretization {
         self.levels.pop().expect("an assembled scene has a level")
     }
+}
+
+/// A solve refused before anything large is allocated.
+#[derive(Debug, thiserror::Error)]
+pub enum TooLarge {
+    /// The mesh is finer than the solver's cap on unknowns
+    /// ([`Entry::max_unknowns`]: a factor that grows faster than the
+    /// problem).
+    #[error(
+        "h = {h} gives {unknowns} unknowns, more than the {cap} that {solver} is allowed: it factors a matrix of that size, whose factor would not fit in memory; use h ≥ 1/1024, or a solver without a factorization (tnnmg, or relaxation with --set relaxation.inner=multigrid)"
+    )]
+    Cap {
+        h: MeshSize,
+        unknowns: usize,
+        cap: usize,
+        solver: &'static str,
+    },
+    /// Its estimated memory does not fit in what the process may use.
+    #[error(transparent)]
+    Memory(#[from] crate::memory::MemoryError),
+}
+
+impl TooLarge {
+    /// The status a refused run reports.
+    pub fn status(&self) -> Status {
+        match self {
+            TooLarge::Cap { .. } => Status::NotRun,
+            TooLarge::Memory(_) => Status::OutOfMemory,
+        }
+    }
+}
+
+/// Refuses a solve of `scene` by `entry` before anything is assembled (or,
+/// with `assembled`, before anything more is): a mesh finer than the
+/// solver's cap on unknowns, or one whose estimated memory does not fit
+/// ([`crate::memory`]). The unknowns are counted from h alone.
+pub fn refuse_too_large(
+    scene: &Scene,
+    entry: &'static Entry,
+    assembled: bool,
+) -> Result<(), TooLarge> {
+    let h = scene.finest();
+    let n = crate::memory::unknowns(h);
+    if let Some(cap) = entry.max_unknowns.filter(|&cap| n > cap) {
+        return Err(TooLarge::Cap {
+            h,
+            unknowns: n,
+            cap,
+            solver: entry.name,
+        });
+    }
+    crate::memory::check_solve(
+        &scene.name,
+        h,
+        entry,
+        &contactlab_solvers::registry::solvers(),
+        assembled,
+    )?;
+    Ok(())
 }
 
 /// One level of `scene` assembled for `entry`: with M only if it reads it.

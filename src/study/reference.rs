@@ -17,7 +17,7 @@ use serde_json::Value;
 use crate::io::csv::fixed;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::solve::{Assembled, Caps, Outcome, Solved, solve};
+use crate::solve::{Assembled, Caps, Outcome, Solved, TooLarge, refuse_too_large, solve};
 
 /// The fixed point's relative tolerance for reference solves.
 pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-11;
@@ -93,6 +93,11 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     let mut candidates = Vec::new();
     let mut best: Option<(&'static Entry, Solved)> = None;
     for &entry in &exact {
+        // A candidate that cannot run on this mesh does not compete.
+        if let Err(e) = refuse_too_large(scene, entry, false) {
+            candidates.push(refused(scene, Law::Coulomb, entry, &e));
+            continue;
+        }
         let settings = reference_settings(entry, base)?;
         let problem = Assembled::for_solver(scene, entry)?;
         let solved = solve(
@@ -119,6 +124,10 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     let g = coulomb.outcome.bound.clone();
     let mut gf_best: Option<GivenFrictionReference> = None;
     for &e in exact.iter().filter(|e| e.solves(Law::GivenFriction)) {
+        if let Err(refusal) = refuse_too_large(scene, e, false) {
+            candidates.push(refused(scene, Law::GivenFriction, e, &refusal));
+            continue;
+        }
         let settings = reference_settings(e, base)?;
         let problem = Assembled::for_solver(scene, e)?;
         let outcome = solve(
@@ -162,6 +171,20 @@ fn candidate(scene: &Scene, law: Law, entry: &Entry, outcome: &Outcome) -> Candi
         solver: entry.name.into(),
         status: outcome.status,
         certificate: outcome.certificate.residual(),
+        chosen: false,
+    }
+}
+
+/// A candidate that could not run on this mesh (too many unknowns for it,
+/// or not enough memory): it does not compete.
+fn refused(scene: &Scene, law: Law, entry: &Entry, why: &TooLarge) -> Candidate {
+    Candidate {
+        scene: scene.name.clone(),
+        h: scene.finest().to_string(),
+        law,
+        solver: entry.name.into(),
+        status: why.status(),
+        certificate: f64::INFINITY,
         chosen: false,
     }
 }

@@ -226,6 +226,30 @@ pub fn median(x: &[f64]) -> f64 {
     }
 }
 
+/// Refuses a plan before any of its trials runs if one of them cannot run
+/// on its mesh (too many unknowns for its solver, or more memory than the
+/// process may use), naming it and the way out: a study never stops for
+/// it halfway, nor aborts for memory.
+fn refuse_what_cannot_run(specs: &[TrialSpec]) -> Result<()> {
+    let mut seen: Vec<(crate::mechanics::mesh_size::MeshSize, &str)> = Vec::new();
+    for spec in specs.iter().filter(|s| s.check_solvable) {
+        let key = (spec.scene.finest(), spec.solver.name);
+        if seen.contains(&key) {
+            continue;
+        }
+        seen.push(key);
+        if let Err(e) = crate::solve::refuse_too_large(&spec.scene, spec.solver, false) {
+            bail!(
+                "{}: {} cannot run at h = {} ({e}); leave it out (--solvers) or use a coarser mesh",
+                spec.study,
+                spec.solver.name,
+                spec.scene.finest()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Measures trials in order, each against the reference of its scene and
 /// mesh (earned on first use); `tick` hears of each one done. The timing
 /// rows are numbered by trial.
@@ -235,6 +259,7 @@ pub fn measure_all(
     keep: Keep,
     tick: &dyn Fn(&TrialSpec),
 ) -> Result<Vec<Measured>> {
+    refuse_what_cannot_run(specs)?;
     let mut out = Vec::with_capacity(specs.len());
     for (i, spec) in specs.iter().enumerate() {
         let reference = if spec.wants_reference() {

@@ -31,7 +31,9 @@ use std::time::Instant;
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::entry::{
+    Accuracy, CONDENSED_MEMORY, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo,
+};
 use crate::numerics::globalization::{Units, armijo, direction, merit};
 use crate::numerics::random::Lcg;
 use crate::numerics::resolution::{Resolution, ULPS, WINDOW};
@@ -117,6 +119,7 @@ pub(crate) const ENTRY: Entry = Entry {
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
     uses_mass: false,
+    memory: CONDENSED_MEMORY,
 };
 
 /// Where the Newton iteration starts.
@@ -334,7 +337,7 @@ impl Solver for NewtonCoulomb {
             .get_or_build(problem.operator_id(), || condense(problem))
         {
             Ok(c) => c,
-            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+            Err(e) => return Solution::failed(n, m, e.status, e.detail),
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();

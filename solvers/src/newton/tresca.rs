@@ -23,12 +23,14 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::entry::{
+    Accuracy, CONDENSED_MEMORY, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo,
+};
 use crate::observer::Observer;
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Kept, condense};
 use crate::settings::{Kind, Validate, from_tree, to_tree};
-use crate::solution::{Iterations, Solution, Status, Timing};
+use crate::solution::{Iterations, Solution, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 pub use super::tresca_system::{NewtonOutcome, semismooth_newton};
@@ -80,6 +82,7 @@ pub(crate) const ENTRY: Entry = Entry {
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
     uses_mass: false,
+    memory: CONDENSED_MEMORY,
 };
 
 /// Settings of the condensed semismooth Newton solver. The same in both
@@ -149,7 +152,7 @@ impl Solver for CondensedNewton {
             .get_or_build(problem.operator_id(), || condense(problem))
         {
             Ok(c) => c,
-            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+            Err(e) => return Solution::failed(n, m, e.status, e.detail),
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();

@@ -18,7 +18,7 @@ use faer::Mat;
 
 use crate::numerics::linalg::{LinalgError, SparseCholesky};
 use crate::problem::ContactProblem;
-use crate::solution::{Iterations, Solution, Status, Timing};
+use crate::solution::{Iterations, SetupError, Solution, Status, Timing};
 
 /// The condensed problem and what is needed to go back to all unknowns.
 pub struct Condensed {
@@ -205,11 +205,11 @@ impl<K: PartialEq, T> Default for Kept<K, T> {
 
 impl<K: PartialEq, T> Kept<K, T> {
     /// The value kept for `key`, built by `build` if the key changed.
-    pub(crate) fn get_or_build(
+    pub(crate) fn get_or_build<E>(
         &mut self,
         key: K,
-        build: impl FnOnce() -> Result<T, String>,
-    ) -> Result<&T, String> {
+        build: impl FnOnce() -> Result<T, E>,
+    ) -> Result<&T, E> {
         if self.entry.as_ref().is_none_or(|(k, _)| *k != key) {
             self.entry = None;
             self.entry = Some((key, build()?));
@@ -263,9 +263,17 @@ impl Condensed {
     }
 }
 
-/// Condenses `problem`, with the error said in terms of the mechanics.
-pub fn condense(problem: &ContactProblem) -> Result<Condensed, String> {
+/// Condenses `problem`, with the error said in terms of the mechanics (an
+/// allocation that failed is [`Status::OutOfMemory`]).
+pub fn condense(problem: &ContactProblem) -> Result<Condensed, SetupError> {
     Condensed::new(problem).map_err(|e| {
-        format!("condensation needs the part of A away from the contact unknowns to be positive definite: {e}")
+        let mut error = SetupError::from(e.clone());
+        error.detail = match e {
+            LinalgError::OutOfMemory { .. } => format!("condensation onto the contact unknowns: {e}"),
+            _ => format!(
+                "condensation needs the part of A away from the contact unknowns to be positive definite: {e}"
+            ),
+        };
+        error
     })
 }

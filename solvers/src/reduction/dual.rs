@@ -170,7 +170,7 @@ pub fn displacements_from_forces(
             q.len()
         ));
     }
-    let condensed = crate::reduction::condensed::condense(problem)?;
+    let condensed = crate::reduction::condensed::condense(problem).map_err(|e| e.detail)?;
     let op = DualOperator::new(problem, &condensed)?;
     let r: Vec<f64> = problem
         .contacts()

@@ -31,14 +31,16 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::entry::{
+    Accuracy, CONDENSED_MEMORY, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo,
+};
 use crate::numerics::linalg::max_abs;
 use crate::numerics::resolution::{Resolution, WINDOW, floor};
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
 use crate::settings::{Kind, Validate, from_tree, to_tree};
-use crate::solution::{Solution, Status, Timing};
+use crate::solution::{SetupError, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 /// The progress stage of one admm step (its unit of work).
@@ -88,6 +90,7 @@ pub(crate) const ENTRY: Entry = Entry {
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
     uses_mass: false,
+    memory: CONDENSED_MEMORY,
 };
 
 /// Settings of ADMM (relative in both stopping modes).
@@ -160,14 +163,14 @@ impl Solver for Admm {
                 for k in 0..n2 {
                     a[(k, k)] += rho;
                 }
-                let llt = a
-                    .llt(Side::Lower)
-                    .map_err(|e| format!("S + ρI is not positive definite: {e:?}"))?;
-                Ok((condensed, llt, rho))
+                let llt = a.llt(Side::Lower).map_err(|e| {
+                    SetupError::from(format!("S + ρI is not positive definite: {e:?}"))
+                })?;
+                Ok::<_, SetupError>((condensed, llt, rho))
             });
         let (condensed, llt, rho) = match kept {
             Ok((c, l, r)) => (c, l, *r),
-            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+            Err(e) => return Solution::failed(n, m, e.status, e.detail),
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();

@@ -24,7 +24,9 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::entry::{Accuracy, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo};
+use crate::entry::{
+    Accuracy, CONDENSED_MEMORY, Entry, FACTORED_MAX_UNKNOWNS, Knob, Role, StageInfo,
+};
 use crate::numerics::linalg::max_abs;
 use crate::numerics::resolution::{Resolution, floor};
 use crate::numerics::roots::monotone_root;
@@ -33,7 +35,7 @@ use crate::problem::ContactProblem;
 use crate::reduction::condensed::{Condensed, Ending, Kept, condense};
 use crate::reduction::dual::DualOperator;
 use crate::settings::{Kind, Validate, from_tree, to_tree};
-use crate::solution::{Solution, Status, Timing};
+use crate::solution::{SetupError, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
 
 /// The progress stage of one nsgs sweep (its unit of work).
@@ -77,6 +79,7 @@ pub(crate) const ENTRY: Entry = Entry {
     kernel: None,
     max_unknowns: Some(FACTORED_MAX_UNKNOWNS),
     uses_mass: false,
+    memory: CONDENSED_MEMORY,
 };
 
 /// Settings of nonsmooth Gauss-Seidel (the same in both stopping modes:
@@ -237,11 +240,11 @@ impl Solver for Nsgs {
         let t0 = Instant::now();
         let (condensed, op) = match self.cache.get_or_build(problem.operator_id(), || {
             let c = condense(problem)?;
-            let d = DualOperator::new(problem, &c)?;
-            Ok((c, d))
+            let d = DualOperator::new(problem, &c).map_err(SetupError::from)?;
+            Ok::<_, SetupError>((c, d))
         }) {
             Ok((c, d)) => (c, d),
-            Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
+            Err(e) => return Solution::failed(n, m, e.status, e.detail),
         };
         let setup = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();

@@ -78,7 +78,7 @@ pub fn export(
         w.serialize(r)?;
     }
     write_atomic(&dir.join("contact.csv"), &w.into_inner()?)?;
-    let c = condense(p).map_err(anyhow::Error::msg)?;
+    let c = condense(p).map_err(|e| anyhow::Error::msg(e.detail))?;
     let m2 = c.b.len();
     write_atomic(
         &dir.join("S.mtx"),

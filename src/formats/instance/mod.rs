@@ -144,6 +144,12 @@ pub fn import(dir: &Path) -> Result<Instance> {
             json_path.display()
         );
     }
+    crate::memory::check_need(
+        &format!("reading the instance {shown}"),
+        crate::memory::instance(n),
+        n,
+        Vec::new(),
+    )?;
     let a = csr(&load(dir, "A.mtx", n, n, "A (the stiffness, n × n)")?);
     let mass = csr(&load(dir, "M.mtx", n, n, "M (the mass matrix, n × n)")?);
     let f = load(dir, "f.mtx", n, 1, "f (the load, n × 1)")?.column(0);
@@ -351,6 +357,13 @@ pub fn complete_answer(
             (v, p, q)
         }
         (None, Some((p, q))) => {
+            let n = problem.n();
+            crate::memory::check_need(
+                "the displacements of an answer given as forces (a condensation onto the contact unknowns)",
+                crate::memory::forces_completion(n),
+                n,
+                vec!["give the displacements too".into()],
+            )?;
             let v = contactlab_solvers::reduction::dual::displacements_from_forces(problem, &p, &q)
                 .map_err(anyhow::Error::msg)?;
             (v, p, q)

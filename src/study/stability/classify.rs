@@ -106,6 +106,8 @@ pub fn classify(t: &Trial, cx: &Context) -> (Class, String) {
         );
     }
     match t.status {
+        // The machine's memory, not the method: refused before or at set-up.
+        Status::OutOfMemory => (Class::Refused, t.detail.clone()),
         Status::NonFinite | Status::NumericalError => (Class::Diverged, t.detail.clone()),
         _ if t.outcome == TrialOutcome::NotContracting => match cx.trend {
             Some(q) if q > 1.0 => (

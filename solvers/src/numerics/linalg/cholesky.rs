@@ -111,7 +111,7 @@ impl CholeskyAnalysis {
             SymmetricOrdering::Amd,
             Default::default(),
         )
-        .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+        .map_err(LinalgError::from)?;
         Ok(Self { symbolic, lower })
     }
 
@@ -134,15 +134,29 @@ impl CholeskyAnalysis {
     }
 }
 
+/// `len` zeros, or [`LinalgError::OutOfMemory`] if they cannot be had: the
+/// values of a factor are its largest allocation, and one that fails must
+/// be an error the caller reports, not an abort.
+fn zeros(len: usize) -> Result<Vec<f64>, LinalgError> {
+    let mut values = Vec::new();
+    values
+        .try_reserve_exact(len)
+        .map_err(|_| LinalgError::OutOfMemory {
+            bytes: len.saturating_mul(8),
+        })?;
+    values.resize(len, 0.0);
+    Ok(values)
+}
+
 /// The values of L for a symbolic analysis and the lower triangle of A.
 fn numeric_values(
     symbolic: &SymbolicCholesky<usize>,
     lower: &CscMatrix<f64>,
     par: Par,
 ) -> Result<Vec<f64>, LinalgError> {
-    let mut values = vec![0.0; symbolic.len_val()];
+    let mut values = zeros(symbolic.len_val())?;
     let mut mem =
-        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
+        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))?;
     symbolic
         .factorize_numeric_llt(
             &mut values,
@@ -207,7 +221,7 @@ impl SparseCholesky {
                 SymmetricOrdering::Amd,
                 Default::default(),
             )
-            .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+            .map_err(LinalgError::from)?;
             match sym.perm() {
                 Some(p) => p.arrays().0.iter().map(|&k| rest[k]).collect(),
                 None => rest.clone(),
@@ -228,7 +242,7 @@ impl SparseCholesky {
             SymmetricOrdering::Custom(PermRef::new_checked(&fwd, &inv, n)),
             params,
         )
-        .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+        .map_err(LinalgError::from)?;
         Self::from_symbolic(symbolic, lower)
     }
 
@@ -335,21 +349,22 @@ pub fn kernel_dimension(a: &CsrMatrix<f64>, rel_tol: f64) -> Result<usize, Linal
         SymmetricOrdering::Amd,
         Default::default(),
     )
-    .map_err(|e| LinalgError::Faer(format!("{e:?}")))?;
+    .map_err(LinalgError::from)?;
     let inv: Option<Vec<usize>> = symbolic.perm().map(|p| p.arrays().1.to_vec());
     let regularization = LltRegularization {
         dynamic_regularization_delta: scale,
         dynamic_regularization_epsilon: rel_tol * scale,
     };
-    let mut values = vec![0.0; symbolic.len_val()];
+    let mut values = zeros(symbolic.len_val())?;
     let par = Par::Seq;
     let info = match symbolic.raw() {
         SymbolicCholeskyRaw::Simplicial(s) => {
             let upper = triangle_csc(a, false, inv.as_deref());
-            let mut mem = MemBuffer::new(simplicial::factorize_simplicial_numeric_llt_scratch::<
-                usize,
-                f64,
-            >(a.nrows()));
+            let mut mem =
+                MemBuffer::try_new(simplicial::factorize_simplicial_numeric_llt_scratch::<
+                    usize,
+                    f64,
+                >(a.nrows()))?;
             simplicial::factorize_simplicial_numeric_llt(
                 &mut values,
                 faer_ref(&upper),
@@ -360,10 +375,11 @@ pub fn kernel_dimension(a: &CsrMatrix<f64>, rel_tol: f64) -> Result<usize, Linal
         }
         SymbolicCholeskyRaw::Supernodal(s) => {
             let lower = triangle_csc(a, true, inv.as_deref());
-            let mut mem = MemBuffer::new(supernodal::factorize_supernodal_numeric_llt_scratch::<
-                usize,
-                f64,
-            >(s, par, Default::default()));
+            let mut mem =
+                MemBuffer::try_new(supernodal::factorize_supernodal_numeric_llt_scratch::<
+                    usize,
+                    f64,
+                >(s, par, Default::default()))?;
             supernodal::factorize_supernodal_numeric_llt(
                 &mut values,
                 faer_ref(&lower),

@@ -17,8 +17,30 @@ use thiserror::Error;
 pub enum LinalgError {
     #[error("sparse Cholesky: the matrix is not numerically positive definite (pivot {index})")]
     NotPositiveDefinite { index: usize },
+    /// An allocation of the factorization failed: the machine's memory,
+    /// not the matrix, is at fault.
+    #[error(
+        "out of memory in a sparse Cholesky factorization (an allocation of {} MB failed): use a coarser mesh, or a solver without a factorization (tnnmg)",
+        bytes / 1_000_000
+    )]
+    OutOfMemory { bytes: usize },
     #[error("sparse Cholesky: {0}")]
     Faer(String),
+}
+
+impl From<faer::sparse::FaerError> for LinalgError {
+    fn from(e: faer::sparse::FaerError) -> Self {
+        match e {
+            faer::sparse::FaerError::OutOfMemory => LinalgError::OutOfMemory { bytes: 0 },
+            other => LinalgError::Faer(format!("{other:?}")),
+        }
+    }
+}
+
+impl From<faer::dyn_stack::mem::AllocError> for LinalgError {
+    fn from(_: faer::dyn_stack::mem::AllocError) -> Self {
+        LinalgError::OutOfMemory { bytes: 0 }
+    }
 }
 
 /// y = A x for a CSR matrix.
