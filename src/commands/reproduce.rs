@@ -52,7 +52,13 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
     };
     let key = RunKey::of(&spec, &settings)?;
     let mut checkpoint = match earlier {
-        Earlier::Continued => Checkpoint::resume(&dir, &key)?,
+        Earlier::Continued => {
+            let resumed = Checkpoint::resume(&dir, &key, &reproduce::plan(&spec, &settings))?;
+            for note in &resumed.notes {
+                log_line(note);
+            }
+            resumed
+        }
         Earlier::Replaced => {
             log_line(&format!(
                 "the interrupted run in {} is started anew (`--resume` would have continued it)",

@@ -32,7 +32,7 @@ use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::discretization_error::{ErrorSpec, Errors};
 use crate::study::lab::{Content, Findings, Lab, Study, write_artifacts};
-use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord};
+use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
 use crate::study::reproduce::sections::Sections;
 use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::sweep::{Sweep, SweepSpec};
@@ -239,6 +239,11 @@ pub fn estimate(spec: &ReproduceSpec, settings: &Settings, done: usize) -> (f64,
     )
 }
 
+/// The names of the studies of a run, in order.
+pub fn plan(spec: &ReproduceSpec, settings: &Settings) -> Vec<&'static str> {
+    studies(spec, settings).iter().map(|s| s.name()).collect()
+}
+
 /// Wall seconds of each study of a run, in order.
 pub type StudySeconds = Vec<(String, f64)>;
 
@@ -274,14 +279,15 @@ pub fn run(
         .iter()
         .map(|s| estimated_seconds(s.name(), spec))
         .collect();
-    // A record that does not match its study (none should) ends the resume.
-    let kept = checkpoint
-        .done
-        .iter()
-        .zip(&studies)
-        .take_while(|(r, s)| r.study == s.name())
-        .count();
-    checkpoint.done.truncate(kept);
+    // The checkpoint kept only the records of these studies, in order,
+    // each whole ([`Checkpoint::resume`]).
+    debug_assert!(
+        checkpoint
+            .done
+            .iter()
+            .zip(&studies)
+            .all(|(r, s)| r.study == s.name())
+    );
     let (mut spent, mut expected) = (0.0, 0.0);
     for (k, study) in studies.iter().enumerate() {
         if let Some(record) = checkpoint.done.get(k) {
@@ -307,10 +313,15 @@ pub fn run(
                 }
             }
         }
-        let files = write_artifacts(dir, &artifacts)?;
+        let files = write_artifacts(dir, &artifacts)?
+            .iter()
+            .map(|path| WrittenFile::of(dir, path))
+            .collect::<Result<Vec<_>>>()?;
         let section = sections::section(study.name(), spec, &findings, &lab.references)?;
         let took = started.elapsed().as_secs_f64();
         let record = StudyRecord {
+            run: checkpoint.run.clone(),
+            index: k,
             study: study.name().to_string(),
             seconds: took,
             finished: utc_now(),
@@ -344,7 +355,8 @@ pub fn run(
 /// Adds a finished study's part to what the run gave.
 fn add(done: &mut Done, record: &StudyRecord) {
     done.sections.add(record.section.clone());
-    done.files.extend(record.files.iter().cloned());
+    done.files
+        .extend(record.files.iter().map(|f| f.path.clone()));
     done.charts.extend(record.charts.iter().cloned());
     done.seconds.push((record.study.clone(), record.seconds));
 }
