@@ -80,12 +80,6 @@ pub fn solve(h: MeshSize, entry: &Entry) -> f64 {
     BASE_BYTES + entry.memory.bytes(unknowns(h))
 }
 
-/// The same solve when its finest level is already assembled (the
-/// Python package's problem holds it): what it adds to that.
-pub fn solve_assembled(h: MeshSize, entry: &Entry) -> f64 {
-    (solve(h, entry) - ASSEMBLY.bytes(unknowns(h))).max(BASE_BYTES)
-}
-
 /// A problem of `n` unknowns assembled with M and condensed onto the
 /// contact unknowns (one sparse factor): `export`.
 pub fn condensation(n: usize) -> f64 {
@@ -345,21 +339,13 @@ pub fn check(
 
 /// Refuses a solve of `scene_name` at `h` by `entry` that would not fit,
 /// naming the solvers among `others` that would (the leanest first).
-/// `assembled`: its finest level is assembled already.
 pub fn check_solve(
     scene_name: &str,
     h: MeshSize,
     entry: &Entry,
     others: &[&'static Entry],
-    assembled: bool,
 ) -> Result<(), MemoryError> {
-    let need = |h: MeshSize, e: &Entry| {
-        if assembled {
-            solve_assembled(h, e)
-        } else {
-            solve(h, e)
-        }
-    };
+    let need = |h: MeshSize, e: &Entry| solve(h, e);
     let Some(room) = room() else {
         return Ok(());
     };

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Union
@@ -71,6 +73,41 @@ class Contact:
         return len(self.t)
 
 
+def _h(h) -> Optional[str]:
+    """A mesh size as the command line writes it: "1/64", or a number."""
+    if h is None:
+        return None
+    if isinstance(h, str):
+        return h
+    if isinstance(h, numbers.Real) and not isinstance(h, bool):
+        return repr(float(h))
+    raise Error(f"h = {h!r}: give a mesh size such as \"1/64\" or 1/64")
+
+
+def _number(x, name: str) -> Optional[float]:
+    if x is None:
+        return None
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        raise Error(f"{name} = {x!r}: give a number")
+    return float(x)
+
+
+def _text(x, name: str) -> Optional[str]:
+    if x is None:
+        return None
+    if not isinstance(x, str):
+        raise Error(f"{name} = {x!r}: give a word")
+    return x
+
+
+def _path(p, name: str) -> str:
+    """A path as str, bytes or os.PathLike."""
+    try:
+        return os.fsdecode(os.fspath(p))
+    except TypeError:
+        raise Error(f"{name} = {p!r}: give a path (str, bytes or os.PathLike)") from None
+
+
 def _csr(parts, n: int) -> scipy.sparse.csr_array:
     indptr, indices, data = parts
     return scipy.sparse.csr_array((data, indices, indptr), shape=(n, n))
@@ -93,25 +130,49 @@ class Problem:
     def paper(
         cls,
         number: int,
-        h: Optional[str] = None,
+        h: Optional[Union[str, float]] = None,
         young: Optional[float] = None,
         poisson: Optional[float] = None,
         friction: Optional[float] = None,
+        plane: Optional[str] = None,
     ) -> "Problem":
-        """The paper's problem 1, 2 or 3 (``h`` such as "1/64": the finest mesh)."""
-        return cls(_contactlab.Problem.paper(number, h, young, poisson, friction))
+        """The paper's problem 1, 2 or 3 (``h`` such as "1/64" or 1/64: the
+        finest mesh; ``plane`` "strain" or "stress")."""
+        if isinstance(number, bool) or not isinstance(number, numbers.Integral):
+            raise Error(f"number = {number!r}: give the paper's problem 1, 2 or 3")
+        return cls(
+            _contactlab.Problem.paper(
+                int(number),
+                _h(h),
+                _number(young, "young"),
+                _number(poisson, "poisson"),
+                _text(plane, "plane"),
+                _number(friction, "friction"),
+            )
+        )
 
     @classmethod
     def from_scene(
         cls,
-        path: str,
-        h: Optional[str] = None,
+        path: Union[str, bytes, "os.PathLike"],
+        h: Optional[Union[str, float]] = None,
         young: Optional[float] = None,
         poisson: Optional[float] = None,
         friction: Optional[float] = None,
+        plane: Optional[str] = None,
     ) -> "Problem":
-        """A scene file, as ``contactlab solve --scene`` reads it."""
-        return cls(_contactlab.Problem.from_scene(str(path), h, young, poisson, friction))
+        """A scene file, as ``contactlab solve --scene`` reads it, with the
+        settings it brings (every solve of the problem starts from them)."""
+        return cls(
+            _contactlab.Problem.from_scene(
+                _path(path, "path"),
+                _h(h),
+                _number(young, "young"),
+                _number(poisson, "poisson"),
+                _text(plane, "plane"),
+                _number(friction, "friction"),
+            )
+        )
 
     @property
     def name(self) -> str:
@@ -204,9 +265,30 @@ class Result:
     profile_csv: str = ""
 
 
-def _settings(settings: Optional[Mapping[str, object]]) -> List[tuple]:
+def _problem(problem) -> None:
+    if not isinstance(problem, Problem):
+        raise Error(f"problem: give a contactlab.Problem (got {type(problem).__name__})")
+
+
+def _settings(settings) -> List[tuple]:
+    """``{path: value}`` (or pairs) as text, in the order given, as
+    ``--set path=value`` writes them: the engine resolves them with the
+    command line's own code (the later change of a setting wins)."""
+    if settings is None:
+        return []
+    if isinstance(settings, Mapping):
+        pairs = list(settings.items())
+    else:
+        try:
+            pairs = [tuple(item) for item in settings]
+        except TypeError:
+            raise Error(
+                f"settings = {settings!r}: give a mapping {{path: value}}, e.g. {{\"tnnmg.tolerance\": 1e-10}}"
+            ) from None
+        if any(len(pair) != 2 for pair in pairs):
+            raise Error("settings: give a mapping {path: value} or (path, value) pairs")
     out = []
-    for path, value in (settings or {}).items():
+    for path, value in pairs:
         if isinstance(value, bool):
             value = "true" if value else "false"
         out.append((str(path), str(value)))
@@ -228,8 +310,17 @@ def solve(
     (``{"newton-coulomb.tolerance": 1e-12}``). ``target`` sets the solver's
     accuracy knob and ε below it and certifies at it, as the benchmark does.
     """
-    g = None if bound is None else [float(x) for x in bound]
-    d = _contactlab.solve(problem._p, solver, _settings(settings), g, target)
+    _problem(problem)
+    if solver is not None and not isinstance(solver, str):
+        raise Error(f"solver = {solver!r}: give a registered solver's name ({', '.join(solvers())})")
+    g = _array(bound, "bound")
+    d = _contactlab.solve(
+        problem._p,
+        solver,
+        _settings(settings),
+        None if g is None else g.tolist(),
+        _number(target, "target"),
+    )
     return Result(
         solver=d["solver"],
         status=d["status"],
@@ -248,12 +339,40 @@ def solve(
 
 
 def _array(x, name: str) -> Optional[np.ndarray]:
+    """A one-dimensional array of real numbers (integers or floats), as
+    float64; complex values, booleans, objects and strings are refused
+    rather than cast (a complex answer's imaginary part was dropped with a
+    warning and the rest certified)."""
     if x is None:
         return None
-    a = np.ascontiguousarray(x, dtype=np.float64)
+    a = np.asarray(x)
+    if a.dtype.kind not in "iuf":
+        raise Error(
+            f"{name}: give real numbers (an array of dtype {a.dtype} was given"
+            + (": its imaginary part would be lost)" if a.dtype.kind == "c" else ")")
+        )
+    a = np.ascontiguousarray(a, dtype=np.float64)
     if a.ndim != 1:
         raise Error(f"{name}: give a one-dimensional array (it has shape {a.shape})")
     return a
+
+
+def _forces(forces):
+    """``(pressure, friction_traction)``, or a mapping with those keys."""
+    if forces is None:
+        return None, None
+    if isinstance(forces, Mapping):
+        keys = set(forces)
+        if keys != {"pressure", "friction_traction"}:
+            raise Error(
+                f"forces: give the keys 'pressure' and 'friction_traction' (got {sorted(map(str, keys))})"
+            )
+        return forces["pressure"], forces["friction_traction"]
+    try:
+        p, q = forces
+    except (TypeError, ValueError):
+        raise Error("forces: give a pair (pressure, friction_traction) or a mapping with those keys") from None
+    return p, q
 
 
 def certify(
@@ -278,12 +397,10 @@ def _certified(problem: Problem, displacements, forces, bound, tolerance) -> Map
     """The certify binding's answer: the certificate's fields, and the
     answer it judged, completed (displacements, pressure, friction
     traction)."""
-    p = q = None
-    if forces is not None:
-        try:
-            p, q = forces
-        except (TypeError, ValueError):
-            raise Error("forces: give a pair (pressure, friction_traction)") from None
+    _problem(problem)
+    p, q = _forces(forces)
+    if tolerance is not None:
+        tolerance = _number(tolerance, "tolerance")
     return _contactlab.certify(
         problem._p,
         _array(displacements, "displacements"),
@@ -320,39 +437,95 @@ class Trial:
     @property
     def claimed(self) -> bool:
         """Whether the solver claimed an answer: a registered solver that
-        says converged, or a Python function that returned one."""
-        return self.python or self.solver_status == "converged"
+        says converged, or a Python function that returned one (not one
+        that raised)."""
+        return self.solver_status in ("converged", "answered")
+
+
+def _failed_certificate(target: float, summary: str) -> "Certificate":
+    """The certificate of a run that gave no answer to judge."""
+    return Certificate(
+        passed=False,
+        tolerance=target,
+        residual=math.inf,
+        summary=summary,
+        violations={},
+    )
 
 
 def _python_answer(fn: PythonSolver, problem: Problem, target: float):
     """A Python function's answer, timed and certified at ``target``:
     (certificate, seconds, the completed answer as the certificate judged
-    it: displacements, pressure, friction traction)."""
+    it: displacements, pressure, friction traction, or None when there is
+    none, and the solver's claim). A function that raises, or whose answer
+    cannot be judged (NaN, a wrong shape, complex values), is one failed
+    run, said in its certificate's summary: it never stops the study."""
     start = time.perf_counter()
-    answer = fn(problem, target)
+    try:
+        answer = fn(problem, target)
+    except Exception as e:  # noqa: BLE001 - the run failed; the study goes on
+        seconds = time.perf_counter() - start
+        return _failed_certificate(target, f"the solver raised {type(e).__name__}: {e}"), seconds, None, "raised"
     seconds = time.perf_counter() - start
-    if isinstance(answer, Mapping):
-        v, forces = answer.get("displacements"), answer.get("forces")
-    else:
-        v, forces = answer, None
-    d = _certified(problem, v, forces, None, target)
+    try:
+        if isinstance(answer, Mapping):
+            v, forces = answer.get("displacements"), answer.get("forces")
+        else:
+            v, forces = answer, None
+        d = _certified(problem, v, forces, None, target)
+    except Error as e:
+        return _failed_certificate(target, f"its answer cannot be judged: {e}"), seconds, None, "answered"
     completed = (d["displacements"], d["pressure"], d["friction_traction"])
-    return Certificate._of(d), seconds, completed
+    return Certificate._of(d), seconds, completed, "answered"
 
 
 def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) -> Trial:
-    c, seconds, _ = _python_answer(fn, problem, target)
+    c, seconds, _, claim = _python_answer(fn, problem, target)
     return Trial(
         solver=name,
         target=target,
         certified=c.passed,
         certificate=c,
         seconds=seconds,
-        status="converged" if c.passed else "inaccurate",
+        status=_python_status(c, claim),
         python=True,
         problem=_instance(problem),
-        solver_status="answered",
+        solver_status=claim,
     )
+
+
+def _python_status(c: "Certificate", claim: str) -> str:
+    """A Python function's certified status: converged if its answer
+    passes, inaccurate if it answered and fails, failed if it raised."""
+    if claim == "raised":
+        return "failed"
+    return "converged" if c.passed else "inaccurate"
+
+
+def _solvers(solvers) -> Mapping:
+    """Registered names, or a mapping of display names to a registered
+    name or a Python function."""
+    if isinstance(solvers, str):
+        solvers = [solvers]
+    if not isinstance(solvers, Mapping):
+        try:
+            solvers = {name: name for name in solvers}
+        except TypeError:
+            raise Error(f"solvers = {solvers!r}: give solver names or a mapping {{name: solver}}") from None
+    for name, how in solvers.items():
+        if not (callable(how) or isinstance(how, str)):
+            raise Error(f"solvers[{name!r}] = {how!r}: give a registered solver's name or a function fn(problem, target)")
+    return solvers
+
+
+def _targets(targets) -> List[float]:
+    try:
+        out = [_number(t, "targets") for t in targets]
+    except TypeError:
+        raise Error(f"targets = {targets!r}: give a list of accuracies such as [1e-4, 1e-8]") from None
+    if not out:
+        raise Error("targets: give at least one accuracy, such as [1e-4]")
+    return out
 
 
 def _instance(problem: Problem) -> str:
@@ -393,19 +566,23 @@ def work_precision(
     certificate's largest violation against seconds, certified points joined
     and failed ones as crosses.
     """
-    if not isinstance(solvers, Mapping):
-        solvers = {name: name for name in solvers}
+    if chart is not None:
+        chart = _path(chart, "chart")
+        if not chart.lower().endswith(".svg"):
+            raise Error(f"chart = {chart!r}: charts are SVG; give a path ending in .svg")
+    _problem(problem)
+    solvers = _solvers(solvers)
     trials: List[Trial] = [
         _trial(name, how, problem, float(target))
         for name, how in solvers.items()
-        for target in targets
+        for target in _targets(targets)
     ]
     if chart is not None:
         _contactlab._work_precision_chart(
             f"Work against precision: {problem.name}, h = {problem.h}",
             "largest violation in the certificate (relative)",
             [(t.solver, t.certificate.residual, t.seconds, t.certified) for t in trials],
-            str(chart),
+            chart,
         )
     return trials
 
@@ -445,15 +622,15 @@ def compare(
     certificate and is measured against the same reference; one that the
     certificate refuses is never the reference.
     """
-    if not isinstance(solvers, Mapping):
-        solvers = {name: name for name in solvers}
-    target = float(target)
+    _problem(problem)
+    solvers = _solvers(solvers)
+    target = _number(target, "target")
     runs = []
     for name, how in solvers.items():
         if callable(how):
-            c, seconds, (v, p, _) = _python_answer(how, problem, target)
-            status = "converged" if c.passed else "inaccurate"
-            runs.append((name, c, seconds, status, "answered", True, v, p))
+            c, seconds, completed, claim = _python_answer(how, problem, target)
+            v, p, _ = completed if completed is not None else (None, None, None)
+            runs.append((name, c, seconds, _python_status(c, claim), claim, True, v, p))
         else:
             r = solve(problem, solver=how, target=target)
             runs.append(
@@ -473,7 +650,7 @@ def compare(
     scales = problem.scales
     out = []
     for k, (name, c, seconds, status, claim, python, v, p) in enumerate(runs):
-        if best is None:
+        if best is None or v is None:
             dv = dp = math.nan
         else:
             v_ref, p_ref = runs[best][6], runs[best][7]
@@ -543,15 +720,21 @@ def benchmark(
     Python function is called as ``fn(problem, target)``. A run succeeds if
     its answer passes the certificate at the target within ``time_limit``
     seconds (a Python function is not interrupted: a slower run counts as
-    failed). A Python function's answer counts as its claim of convergence,
+    failed, at the limit like every failure; one that raises or returns
+    what cannot be judged is one failed run). A Python function's answer counts as its claim of convergence,
     so a refused one is "claimed but failed". With ``out`` (a folder,
     replaced whole, only if empty or a contactlab run) it writes what the
     command line writes: benchmark.csv, benchmark_summary.csv, benchmark.md,
     a LaTeX table per target and the performance profiles.
     """
-    if not isinstance(solvers, Mapping):
-        solvers = {name: name for name in solvers}
-    if not (isinstance(time_limit, (int, float)) and math.isfinite(time_limit) and time_limit > 0):
+    solvers = _solvers(solvers)
+    targets = _targets(targets)
+    problems = list(problems)
+    for problem in problems:
+        _problem(problem)
+    if isinstance(time_limit, bool) or not (
+        isinstance(time_limit, (int, float)) and math.isfinite(time_limit) and time_limit > 0
+    ):
         raise Error(f"time_limit = {time_limit!r}: give a positive number of seconds")
     trials: List[Trial] = []
     rows = []
@@ -571,7 +754,7 @@ def benchmark(
                         "friction_coefficient": friction,
                         "solver": name,
                         "target": t.target,
-                        "status": t.status if in_time else "time limit",
+                        "status": t.status if in_time else "time_limit",
                         "solver_status": t.solver_status,
                         "success": bool(t.certified and in_time),
                         "claimed_but_failed": bool(t.claimed and not t.certified),
@@ -586,7 +769,7 @@ def benchmark(
                     }
                 )
     summaries_json, report = _contactlab._benchmark_report(
-        json.dumps(rows), None if out is None else str(out)
+        json.dumps(rows), None if out is None else _path(out, "out")
     )
     summaries = [
         BenchmarkSummary(

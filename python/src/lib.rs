@@ -9,14 +9,18 @@
 //! here into scipy and numpy objects. Every error is one
 //! `contactlab.Error` with the CLI's one-line message.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
 use contactlab::certificate::certify as certify_answer;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Overrides, Scene};
-use contactlab::settings::Settings;
+use contactlab::settings::{Changes, Settings};
 use contactlab::solve::{Assembled, Caps, solve as solve_assembled, solver_entry};
 use contactlab::solvers::numerics::linalg::{ColumnIndex, SparseRows};
-use contactlab::solvers::{Friction, Silent, registry};
+use contactlab::solvers::{Control, Friction, Observer, Progress, Status, registry};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
@@ -38,35 +42,133 @@ fn anyhow_err(e: anyhow::Error) -> PyErr {
     Error::new_err(format!("{e:#}"))
 }
 
-/// The scene of a problem and its assembly on the finest mesh.
+/// A flag a long computation reads at each progress event: set when the
+/// caller was interrupted (Ctrl-C), so that a computation left running on
+/// its thread stops at its next event.
+#[derive(Clone, Default)]
+struct Cancel(Arc<AtomicBool>);
+
+impl Observer for Cancel {
+    fn observe(&mut self, _: &Progress) -> Control {
+        if self.0.load(Ordering::Relaxed) {
+            Control::Stop(Status::NotRun)
+        } else {
+            Control::Continue
+        }
+    }
+}
+
+/// How often a waiting call looks for Ctrl-C.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Runs `work` on a thread of its own while this thread waits with the GIL
+/// released, looking for signals every [`SIGNAL_POLL`]: Ctrl-C raises
+/// `KeyboardInterrupt` within a fraction of a second and leaves the
+/// session usable, whatever the work is doing (a factorization cannot be
+/// interrupted, so the work is left to end on its thread, told to stop at
+/// its next progress event, its answer dropped). A panic in the work is a
+/// `contactlab.Error`, never a `PanicException`.
+fn interruptible<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+where
+    T: Send + 'static,
+    F: FnOnce(Cancel) -> anyhow::Result<T> + Send + 'static,
+{
+    let cancel = Cancel::default();
+    let theirs = cancel.clone();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("contactlab".into())
+        .spawn(move || {
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(theirs)));
+            let _ = tx.send(result);
+        })
+        .map_err(|e| err(format!("cannot start the computation's thread: {e}")))?;
+    // The receiver behind a lock, so that the wait can leave the GIL.
+    let rx = std::sync::Mutex::new(rx);
+    loop {
+        let received = py.detach(|| {
+            rx.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .recv_timeout(SIGNAL_POLL)
+        });
+        match received {
+            Ok(Ok(result)) => return result.map_err(anyhow_err),
+            Ok(Err(panic)) => {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                return Err(err(format!("internal error (please report it): {what}")));
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    cancel.0.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(err(
+                    "internal error: the computation ended without an answer",
+                ));
+            }
+        }
+    }
+}
+
+/// The scene of a problem, the settings it brings (a scene file's), and
+/// its assembly on the finest mesh (shared with the computations that
+/// read it on their own threads).
 #[pyclass(frozen, module = "contactlab._contactlab")]
 struct Problem {
-    scene: Scene,
-    finest: Discretization,
+    scene: Arc<Scene>,
+    settings: Settings,
+    finest: Arc<Discretization>,
 }
 
 /// The scene with the overrides of `solve --problem/--scene`, applied by
-/// the library's [`Overrides`] (as the command line does), and assembled.
+/// the library's [`Overrides`] (as the command line does), and assembled
+/// (interruptibly, and refused up front if it would not fit in memory).
+#[allow(clippy::too_many_arguments)]
 fn build(
+    py: Python<'_>,
     scene: Scene,
+    settings: Settings,
     h: Option<&str>,
     young: Option<f64>,
     poisson: Option<f64>,
+    plane: Option<&str>,
     friction: Option<f64>,
 ) -> PyResult<Problem> {
     let h = h
         .map(|h| h.parse::<MeshSize>().map_err(|m| err(format!("h: {m}"))))
         .transpose()?;
+    let plane = plane
+        .map(|p| {
+            use contactlab::mechanics::material::PlaneModel;
+            PlaneModel::ALL
+                .into_iter()
+                .find(|m| m.name() == p.trim())
+                .ok_or_else(|| err(format!("plane = '{p}': give 'strain' or 'stress'")))
+        })
+        .transpose()?;
     let overrides = Overrides {
         h,
         young,
         poisson,
-        plane: None,
+        plane,
         friction,
     };
     let scene = overrides.apply(scene).map_err(err)?;
-    let finest = Discretization::new(&scene, scene.finest()).map_err(err)?;
-    Ok(Problem { scene, finest })
+    let (scene, finest) = interruptible(py, move |_| {
+        let finest = Discretization::new(&scene, scene.finest())?;
+        Ok((scene, finest))
+    })?;
+    Ok(Problem {
+        scene: Arc::new(scene),
+        settings,
+        finest: Arc::new(finest),
+    })
 }
 
 /// A sparse matrix as numpy arrays: (indptr, indices, data).
@@ -89,30 +191,51 @@ fn csr<'py, A: SparseRows>(py: Python<'py>, a: &A) -> Csr<'py> {
 impl Problem {
     /// The paper's problem `number` (1, 2 or 3).
     #[staticmethod]
-    #[pyo3(signature = (number, h=None, young=None, poisson=None, friction=None))]
+    #[pyo3(signature = (number, h=None, young=None, poisson=None, plane=None, friction=None))]
     fn paper(
-        number: u32,
+        py: Python<'_>,
+        number: i64,
         h: Option<&str>,
         young: Option<f64>,
         poisson: Option<f64>,
+        plane: Option<&str>,
         friction: Option<f64>,
     ) -> PyResult<Self> {
+        let number = u32::try_from(number).map_err(|_| {
+            err(format!(
+                "number = {number}: give the paper's problem 1, 2 or 3"
+            ))
+        })?;
         let scene = Scene::paper_problem(number).map_err(err)?;
-        build(scene, h, young, poisson, friction)
+        build(
+            py,
+            scene,
+            Settings::default(),
+            h,
+            young,
+            poisson,
+            plane,
+            friction,
+        )
     }
 
-    /// A scene file (TOML, as `solve --scene` reads it).
+    /// A scene file (TOML, as `solve --scene` reads it), with the settings
+    /// it brings: every solve of the problem starts from them, as the
+    /// command line's does.
     #[staticmethod]
-    #[pyo3(signature = (path, h=None, young=None, poisson=None, friction=None))]
+    #[pyo3(signature = (path, h=None, young=None, poisson=None, plane=None, friction=None))]
+    #[allow(clippy::too_many_arguments)]
     fn from_scene(
+        py: Python<'_>,
         path: std::path::PathBuf,
         h: Option<&str>,
         young: Option<f64>,
         poisson: Option<f64>,
+        plane: Option<&str>,
         friction: Option<f64>,
     ) -> PyResult<Self> {
-        let (scene, _) = contactlab::formats::scene_file::load(&path).map_err(err)?;
-        build(scene, h, young, poisson, friction)
+        let (scene, settings) = contactlab::formats::scene_file::load(&path).map_err(err)?;
+        build(py, scene, settings, h, young, poisson, plane, friction)
     }
 
     #[getter]
@@ -224,15 +347,29 @@ fn solvers() -> Vec<&'static str> {
     registry::names()
 }
 
-/// Settings from `{path: value}`, each as the command line's `--set
-/// path=value` (values given as text).
-fn settings_from(items: Vec<(String, String)>) -> PyResult<Settings> {
-    let mut s = Settings::default();
-    for (path, text) in items {
-        s.set_text(&path, &text).map_err(err)?;
+/// The problem's settings (a scene file's, or the defaults) with
+/// `{path: value}` applied in order by the code the command line resolves
+/// its flags with ([`Changes`]: the later change of a setting wins), and
+/// refused if they set a setting of a solver the solve does not use.
+fn settings_from(
+    base: &Settings,
+    items: Vec<(String, String)>,
+    running: &[&'static registry::Entry],
+) -> PyResult<Settings> {
+    let mut changes = Changes::default();
+    for (path, text) in &items {
+        changes.push(path, text, &format!("settings[{path:?}]"));
     }
-    s.validate().map_err(err)?;
-    Ok(s)
+    changes.check_used_by(running).map_err(err)?;
+    changes.apply_to(base.clone()).map_err(err)
+}
+
+/// A friction bound given from Python: one finite value ≥ 0 per contact
+/// node, checked as a solve checks it.
+fn bound_checked(problem: &Problem, g: &[f64]) -> PyResult<()> {
+    Friction::Given(g)
+        .check(&problem.finest.problem)
+        .map_err(|m| err(format!("bound: {m}")))
 }
 
 /// The certificate as a dict: passed, tolerance, summary, violations by
@@ -271,7 +408,7 @@ fn solve<'py>(
         None => registry::with_role(registry::Role::Oracle)
             .ok_or_else(|| err("no oracle is registered"))?,
     };
-    let mut settings = settings_from(settings)?;
+    let mut settings = settings_from(&problem.settings, settings, &[entry])?;
     if let Some(t) = target {
         // The benchmark's rule: the solver's accuracy knob and ε at a safety
         // factor below the target, the certificate at the target.
@@ -280,38 +417,28 @@ fn solve<'py>(
         settings = contactlab::study::benchmark::target_settings(entry, &settings, t)
             .map_err(anyhow_err)?;
     }
-    let m = problem.finest.problem.contacts().len();
     if let Some(g) = &bound {
-        if g.len() != m {
-            return Err(err(format!(
-                "bound has {} values, expected one per contact node ({m})",
-                g.len()
-            )));
-        }
-        if g.iter().any(|x| !x.is_finite() || *x < 0.0) {
-            return Err(err("bound: give finite values ≥ 0"));
-        }
+        bound_checked(problem, g)?;
     }
-    let scene = &problem.scene;
-    let solved = py
-        .detach(|| {
-            let friction = match &bound {
-                Some(g) => Friction::Given(g),
-                None => Friction::Coulomb,
-            };
-            // The problem's finest level, copied (far cheaper than its
-            // assembly); the coarser levels of a continuation are assembled.
-            let assembled = Assembled::with_finest(scene, entry, problem.finest.clone())?;
-            solve_assembled(
-                assembled,
-                friction,
-                entry,
-                &settings,
-                Caps::default(),
-                &mut Silent,
-            )
-        })
-        .map_err(anyhow_err)?;
+    let (scene, finest) = (problem.scene.clone(), problem.finest.clone());
+    let solved = interruptible(py, move |cancel| {
+        let friction = match &bound {
+            Some(g) => Friction::Given(g),
+            None => Friction::Coulomb,
+        };
+        // The problem's finest level, copied (far cheaper than its
+        // assembly); the coarser levels of a continuation are assembled.
+        let assembled = Assembled::with_finest(&scene, entry, (*finest).clone())?;
+        let mut observer = cancel;
+        solve_assembled(
+            assembled,
+            friction,
+            entry,
+            &settings,
+            Caps::default(),
+            &mut observer,
+        )
+    })?;
     let o = &solved.outcome;
     let d = PyDict::new(py);
     d.set_item("solver", entry.name)?;
@@ -384,6 +511,9 @@ fn certify<'py>(
     let p = slice("pressure", &pressure, m)?;
     let q = slice("friction_traction", &friction_traction, m)?;
     let g = slice("bound", &bound, m)?;
+    if let Some(g) = &g {
+        bound_checked(problem, g)?;
+    }
     let forces = match (p, q) {
         (Some(p), Some(q)) => Some((p, q)),
         (None, None) => None,
@@ -391,20 +521,28 @@ fn certify<'py>(
             return Err(err("give both pressure and friction_traction, or neither"));
         }
     };
-    let (v, p, q) =
-        contactlab::formats::instance::complete_answer(cp, v, forces).map_err(anyhow_err)?;
     let tolerance = match tolerance {
         Some(t) => contactlab::certificate::check_tolerance(t)
             .map_err(|m| err(format!("tolerance = {m}")))?,
         None => contactlab::certificate::DEFAULT_TOLERANCE,
     };
-    let friction = match &g {
-        Some(g) => Friction::Given(g),
-        None => Friction::Coulomb,
+    let finest = problem.finest.clone();
+    let (c, v, p, q) = interruptible(py, move |_| {
+        let cp = &finest.problem;
+        let (v, p, q) = contactlab::formats::instance::complete_answer(cp, v, forces)?;
+        let friction = match &g {
+            Some(g) => Friction::Given(g),
+            None => Friction::Coulomb,
+        };
+        Ok((certify_answer(cp, friction, &v, &p, &q, tolerance), v, p, q))
+    })?;
+    let friction_law = if bound.is_some() {
+        contactlab::solvers::Law::GivenFriction
+    } else {
+        contactlab::solvers::Law::Coulomb
     };
-    let c = certify_answer(cp, friction, &v, &p, &q, tolerance);
     let d = certificate_dict(py, &c)?;
-    d.set_item("law", friction.law().as_str())?;
+    d.set_item("law", friction_law.as_str())?;
     // The answer the certificate judged, completed (forces from the
     // displacements by stationarity, or displacements from the forces).
     d.set_item("displacements", v.into_pyarray(py))?;

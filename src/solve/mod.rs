@@ -48,7 +48,7 @@ impl Assembled {
     /// The levels carry the mass matrix M only if the solver reads it
     /// ([`Entry::uses_mass`]).
     pub fn for_solver(scene: &Scene, entry: &'static Entry) -> Result<Self> {
-        refuse_too_large(scene, entry, false)?;
+        refuse_too_large(scene, entry)?;
         Self::with_finest(scene, entry, level_for(scene, scene.finest(), entry)?)
     }
 
@@ -66,7 +66,7 @@ impl Assembled {
             finest.h(),
             scene.finest()
         );
-        refuse_too_large(scene, entry, true)?;
+        refuse_too_large(scene, entry)?;
         let mut levels = Vec::with_capacity(scene.levels.len());
         if entry.warm_starts && scene.levels.len() > 1 {
             for &h in &scene.levels[..scene.levels.len() - 1] {
@@ -125,15 +125,12 @@ impl TooLarge {
     }
 }
 
-/// Refuses a solve of `scene` by `entry` before anything is assembled (or,
-/// with `assembled`, before anything more is): a mesh finer than the
-/// solver's cap on unknowns, or one whose estimated memory does not fit
-/// ([`crate::memory`]). The unknowns are counted from h alone.
-pub fn refuse_too_large(
-    scene: &Scene,
-    entry: &'static Entry,
-    assembled: bool,
-) -> Result<(), TooLarge> {
+/// Refuses a solve of `scene` by `entry` before anything is assembled: a
+/// mesh finer than the solver's cap on unknowns, or one whose estimated
+/// memory does not fit ([`crate::memory`]; a finest level already
+/// assembled is copied by the solve, so it counts whole). The unknowns are
+/// counted from h alone.
+pub fn refuse_too_large(scene: &Scene, entry: &'static Entry) -> Result<(), TooLarge> {
     let h = scene.finest();
     let n = crate::memory::unknowns(h);
     if let Some(cap) = entry.max_unknowns.filter(|&cap| n > cap) {
@@ -149,7 +146,6 @@ pub fn refuse_too_large(
         h,
         entry,
         &contactlab_solvers::registry::solvers(),
-        assembled,
     )?;
     Ok(())
 }

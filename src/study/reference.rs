@@ -94,7 +94,7 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     let mut best: Option<(&'static Entry, Solved)> = None;
     for &entry in &exact {
         // A candidate that cannot run on this mesh does not compete.
-        if let Err(e) = refuse_too_large(scene, entry, false) {
+        if let Err(e) = refuse_too_large(scene, entry) {
             candidates.push(refused(scene, Law::Coulomb, entry, &e));
             continue;
         }
@@ -124,7 +124,7 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     let g = coulomb.outcome.bound.clone();
     let mut gf_best: Option<GivenFrictionReference> = None;
     for &e in exact.iter().filter(|e| e.solves(Law::GivenFriction)) {
-        if let Err(refusal) = refuse_too_large(scene, e, false) {
+        if let Err(refusal) = refuse_too_large(scene, e) {
             candidates.push(refused(scene, Law::GivenFriction, e, &refusal));
             continue;
         }

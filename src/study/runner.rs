@@ -238,7 +238,7 @@ fn refuse_what_cannot_run(specs: &[TrialSpec]) -> Result<()> {
             continue;
         }
         seen.push(key);
-        if let Err(e) = crate::solve::refuse_too_large(&spec.scene, spec.solver, false) {
+        if let Err(e) = crate::solve::refuse_too_large(&spec.scene, spec.solver) {
             bail!(
                 "{}: {} cannot run at h = {} ({e}); leave it out (--solvers) or use a coarser mesh",
                 spec.study,

@@ -58,12 +58,10 @@ fn solvers(rows: &[BenchmarkRow]) -> Vec<String> {
 
 /// A run's time as the profile and the mean count it: its time if it
 /// succeeded, else the time limit (the mean) or infinity (the profile).
+/// A failure counts at the limit exactly, also one that ran past it (a
+/// Python function, which cannot be interrupted): the report says so.
 fn charged(r: &BenchmarkRow) -> f64 {
-    if r.success {
-        r.seconds
-    } else {
-        r.time_limit.max(r.seconds)
-    }
+    if r.success { r.seconds } else { r.time_limit }
 }
 
 /// The per-solver summaries at every target.
@@ -277,4 +275,58 @@ pub fn report(rows: &[BenchmarkRow]) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(solver: &str, success: bool, seconds: f64) -> BenchmarkRow {
+        BenchmarkRow {
+            instance: "p".into(),
+            family: "paper".into(),
+            h: "1/8".into(),
+            unknowns: 158,
+            friction_coefficient: 0.5,
+            solver: solver.into(),
+            target: 1e-4,
+            status: if success { "converged" } else { "time_limit" }.into(),
+            solver_status: "converged".into(),
+            success,
+            claimed_but_failed: false,
+            certificate: 1e-6,
+            failing: String::new(),
+            seconds,
+            time_limit: 10.0,
+            work: 0,
+            detail: String::new(),
+        }
+    }
+
+    /// A failure counts at the time limit exactly, as the report says,
+    /// also one that ran past it (a Python function is not interrupted):
+    /// before, a run of 100 s against a limit of 10 counted as 100 s.
+    #[test]
+    fn a_failure_counts_at_the_time_limit_even_past_it() {
+        let rows = [
+            row("a", true, 1.0),
+            row("a", false, 100.0),
+            row("b", false, 10.0),
+            row("b", true, 1.0),
+        ];
+        let s = summaries(&rows);
+        let mean = |name: &str| {
+            s.iter()
+                .find(|x| x.solver == name)
+                .unwrap()
+                .shifted_geometric_mean
+        };
+        assert_eq!(mean("a"), mean("b"));
+        let expected = (((1.0 + SHIFT) * (10.0 + SHIFT)) as f64).sqrt() - SHIFT;
+        assert!(
+            (mean("a") - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            mean("a")
+        );
+    }
 }
