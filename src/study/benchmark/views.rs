@@ -322,7 +322,7 @@ mod tests {
                 .shifted_geometric_mean
         };
         assert_eq!(mean("a"), mean("b"));
-        let expected = (((1.0 + SHIFT) * (10.0 + SHIFT)) as f64).sqrt() - SHIFT;
+        let expected = ((1.0 + SHIFT) * (10.0 + SHIFT)).sqrt() - SHIFT;
         assert!(
             (mean("a") - expected).abs() < 1e-12,
             "{} vs {expected}",
