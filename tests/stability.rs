@@ -40,11 +40,15 @@ fn each_documented_failure_is_detected_and_reported() {
         assert_eq!(class(d), Class::Converged, "{d:?}");
         assert!(d.certified());
     }
-    // A far too small penalty, and an unreachable ε: stopped by the work cap.
-    for (knob, value) in [("relaxation.r", "1e-8"), ("relaxation.epsilon", "1e-15")] {
+    // A far too small penalty: stopped by the work cap. An ε below what
+    // the arithmetic resolves: stopped at resolution, long before the cap.
+    for (knob, value, status) in [
+        ("relaxation.r", "1e-8", Status::MaxIterations),
+        ("relaxation.epsilon", "1e-15", Status::InsufficientProgress),
+    ] {
         let r = find(t, "stress", "relaxation", knob, value);
         assert_eq!(class(r), Class::Stalled, "{r:?}");
-        assert_eq!(r.status, Status::MaxIterations, "{r:?}");
+        assert_eq!(r.status, status, "{}: {}", r.status, r.detail);
     }
     // A coarse smoothing converges by its own test but fails the certificate.
     let r = find(t, "stress", "relaxation", "relaxation.smoothing", "1e-2");

@@ -7,8 +7,10 @@
 //! - diverged: a NaN or infinity, a numerical breakdown, a fixed point whose
 //!   max|Δg| grows (contraction factor > 1), or a solver that reports a
 //!   problem unbounded or infeasible although condition (13) holds;
-//! - stalled: stopped by a work cap, at reduced accuracy, or by a fixed
-//!   point that stopped contracting without growing;
+//! - stalled: stopped by a work cap, at reduced accuracy, at
+//!   floating-point resolution short of its tolerance
+//!   (`insufficient_progress`), or by a fixed point that stopped
+//!   contracting without growing;
 //! - wrong: converged by its own test, but the certificate fails
 //!   (status `inaccurate`) or the pressure differs from the reference's by
 //!   more than [`WRONG_PRESSURE`] of its largest value;

@@ -195,7 +195,7 @@ pub fn readme_section(trials: &[Trial]) -> String {
         "Classes (`src/study/stability/classify.rs`): **refused**, the problem has no solution and this is said (our \
          check of condition (13), or a solver reporting it unbounded or infeasible); **diverged**, a NaN, a numerical \
          breakdown, a fixed point whose max|Δg| grows, or a solver that reports a solvable problem unbounded; \
-         **stalled**, stopped by a work cap, at reduced accuracy, or a fixed point that stopped contracting; **wrong**, \
+         **stalled**, stopped by a work cap, at reduced accuracy, at floating-point resolution short of its tolerance, or a fixed point that stopped contracting; **wrong**, \
          converged by its own test but failing the certificate (tolerance {tol:e}) or with a pressure off the reference's \
          by more than {WRONG_PRESSURE:e}; **slow**, right but more than {SLOW_FACTOR}× the work of the same solver at its \
          defaults; **converged**. Every trial stops at a work cap (a count), so the map is the same on every machine.\n"
