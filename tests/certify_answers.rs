@@ -12,6 +12,8 @@
 //!   balanced by an upward one, the whole net force on a node where the
 //!   bodies are apart, or no friction where the bodies slide.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 use std::sync::OnceLock;
@@ -21,9 +23,8 @@ use contactlab::formats::instance::export;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Scene, Traction};
-use contactlab::settings::Settings;
-use contactlab::solve::{Solved, solve_scene, solver_entry};
-use contactlab::solvers::{Friction, Silent};
+
+use contactlab::solvers::Friction;
 use proptest::prelude::*;
 
 /// A true answer of problem `k` at h = 1/8 (newton-coulomb, tight), its
@@ -35,24 +36,9 @@ struct Truth {
     q: Vec<f64>,
 }
 
-/// The Coulomb problem of `scene` solved by newton-coulomb at its default
-/// settings, converged.
-fn true_answer(scene: &Scene) -> Solved {
-    let run = solve_scene(
-        scene,
-        Friction::Coulomb,
-        solver_entry("newton-coulomb").unwrap(),
-        &Settings::default(),
-        &mut Silent,
-    )
-    .unwrap();
-    assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
-    run
-}
-
 fn truth(k: u32) -> Truth {
     let scene = Scene::paper_problem_to(k, MeshSize::from_level(3).unwrap()).unwrap();
-    let run = true_answer(&scene);
+    let run = common::true_answer(&scene);
     let s = run.outcome.solution;
     Truth {
         d: run.finest,
@@ -321,7 +307,7 @@ fn a_nearly_balanced_load_holds_the_contact_to_the_net_load() {
     scene.name = "nearly balanced".into();
     let d = Discretization::new(&scene, scene.finest()).unwrap();
     export(&inst, &scene, &d, None, "test").unwrap();
-    let run = true_answer(&scene);
+    let run = common::true_answer(&scene);
     let s = &run.outcome.solution;
     let x = d.contact_x();
     let m = x.len();

@@ -10,6 +10,8 @@
 //! solution of problem 1 are completed as `certify` and the Python package
 //! complete them ([`complete_answer`]) and certified each way.
 
+mod common;
+
 use std::sync::OnceLock;
 
 use contactlab::certificate::{Certificate, Condition, DEFAULT_TOLERANCE, certify};
@@ -17,9 +19,7 @@ use contactlab::formats::instance::complete_answer;
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
-use contactlab::settings::Settings;
-use contactlab::solve::{solve_scene, solver_entry};
-use contactlab::solvers::{Friction, Silent};
+use contactlab::solvers::Friction;
 use proptest::prelude::*;
 
 /// Problem 1 at h = 1/16 and its answer by newton-coulomb.
@@ -34,15 +34,7 @@ fn truth() -> &'static Truth {
     static T: OnceLock<Truth> = OnceLock::new();
     T.get_or_init(|| {
         let scene = Scene::paper_problem_to(1, MeshSize::from_level(4).unwrap()).unwrap();
-        let run = solve_scene(
-            &scene,
-            Friction::Coulomb,
-            solver_entry("newton-coulomb").unwrap(),
-            &Settings::default(),
-            &mut Silent,
-        )
-        .unwrap();
-        assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
+        let run = common::true_answer(&scene);
         let s = run.outcome.solution;
         Truth {
             d: run.finest,

@@ -94,3 +94,18 @@ pub fn staging_folders(dir: &std::path::Path) -> Vec<String> {
         .filter(|n| n.contains("staging"))
         .collect()
 }
+
+/// The Coulomb problem of `scene` solved by newton-coulomb at its default
+/// settings, which the tests hold to be converged: a true answer.
+pub fn true_answer(scene: &contactlab::mechanics::scene::Scene) -> contactlab::solve::Solved {
+    let run = contactlab::solve::solve_scene(
+        scene,
+        contactlab::solvers::Friction::Coulomb,
+        contactlab::solve::solver_entry("newton-coulomb").unwrap(),
+        &contactlab::settings::Settings::default(),
+        &mut contactlab::solvers::Silent,
+    )
+    .unwrap();
+    assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
+    run
+}

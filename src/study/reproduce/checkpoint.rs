@@ -62,22 +62,10 @@ impl RunKey {
     }
 }
 
-/// A hash of this process' own executable, read in pieces.
+/// A hash of this process' own executable ([`file_hash`]).
 fn binary_hash() -> Result<String> {
     let exe = std::env::current_exe().context("cannot find contactlab's own executable")?;
-    let (mut file, _) = guarded::open(&exe)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| format!("cannot read {}", exe.display()))?;
-    let mut hasher = std::hash::DefaultHasher::new();
-    let mut buffer = vec![0u8; 1 << 20];
-    loop {
-        let n = file.read(&mut buffer)?;
-        if n == 0 {
-            break;
-        }
-        hasher.write(&buffer[..n]);
-    }
-    Ok(format!("{:016x}", hasher.finish()))
+    file_hash(&exe)
 }
 
 /// One file a study wrote: its path in the run's folder and a hash of
@@ -337,7 +325,7 @@ pub fn file_hash(path: &Path) -> Result<String> {
         .map_err(anyhow::Error::msg)
         .with_context(|| format!("cannot read {}", path.display()))?;
     let mut hasher = std::hash::DefaultHasher::new();
-    let mut buffer = vec![0u8; 1 << 16];
+    let mut buffer = vec![0u8; 1 << 20];
     loop {
         let n = file.read(&mut buffer)?;
         if n == 0 {
