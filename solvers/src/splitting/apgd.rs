@@ -277,9 +277,12 @@ impl Solver for Apgd {
                 size = size.max(a.abs());
             }
             let uphill = uphill > RESTART_COSINE * (gg * dd).sqrt();
+            // Forces that move by rounding only: a fixed point of the
+            // arithmetic, converged or stalled, which the residual decides.
+            let at_rest = stall.stalled(moved, size);
             // The natural-map residual of the contact law at the new forces,
-            // every tenth step (it costs a product with M).
-            let residual = if k % 10 == 0 || k == self.settings.max_iter {
+            // every tenth step (it costs a product with M), and at rest.
+            let residual = if k % 10 == 0 || k == self.settings.max_iter || at_rest {
                 op.gradient(&next, &mut gradient);
                 for (p, gi) in probe.iter_mut().zip(&gradient) {
                     *p = -gi;
@@ -327,7 +330,7 @@ impl Solver for Apgd {
                 detail = format!("natural-map residual {residual:.3e} ≤ {tol:.0e} after {k} steps");
                 break;
             }
-            if stall.stalled(moved, size) {
+            if at_rest {
                 status = Status::InsufficientProgress;
                 detail = format!(
                     "the natural-map residual is above {tol:.0e} after {k} steps: {}",
