@@ -33,19 +33,26 @@ def test_ctrl_c_stops_a_long_solve_within_a_fraction_of_a_second(p16):
     # surfaced as a PanicException) fails here.
     p = cl.Problem.paper(1, h="1/32")
     sent = []
+    # Ctrl-C raises KeyboardInterrupt, as in any interactive session (a
+    # process started in the background with SIGINT ignored, as a
+    # non-interactive shell starts its `&` jobs, would otherwise ignore it).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def interrupt():
         time.sleep(1.0)
         sent.append(time.perf_counter())
         os.kill(os.getpid(), signal.SIGINT)
 
-    threading.Thread(target=interrupt, daemon=True).start()
-    with pytest.raises(KeyboardInterrupt):
-        cl.solve(
-            p,
-            solver="relaxation",
-            settings={"relaxation.omega": 0.4, "relaxation.epsilon": 1e-8},
-        )
+    try:
+        threading.Thread(target=interrupt, daemon=True).start()
+        with pytest.raises(KeyboardInterrupt):
+            cl.solve(
+                p,
+                solver="relaxation",
+                settings={"relaxation.omega": 0.4, "relaxation.epsilon": 1e-8},
+            )
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert sent, "the solve ended before the interrupt: make it longer"
     assert time.perf_counter() - sent[0] < 0.5
     # The session is usable: the next solve runs and is certified.
