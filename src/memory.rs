@@ -61,13 +61,6 @@ pub fn unknowns(h: MeshSize) -> usize {
     Mesh::new(h).unknowns()
 }
 
-/// What a run needs: bytes, and what for (for messages).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Need {
-    pub bytes: f64,
-    pub what: String,
-}
-
 /// Assembling one level at `h` (with the mass matrix M or without).
 pub fn assembly(h: MeshSize, mass: bool) -> f64 {
     let n = unknowns(h);
@@ -294,47 +287,53 @@ pub fn check_need(
     unknowns: usize,
     ways: Vec<String>,
 ) -> Result<(), MemoryError> {
-    let Some(room) = room() else {
-        return Ok(());
-    };
-    if need <= room.bytes {
-        return Ok(());
+    match room() {
+        Some(room) if need > room.bytes => Err(refusal(what, need, unknowns, room, ways)),
+        _ => Ok(()),
     }
-    let mut ways = ways;
+}
+
+/// The refusal of `what`, with the bound's own remedy after `ways`.
+fn refusal(
+    what: &str,
+    need: f64,
+    unknowns: usize,
+    room: Room,
+    mut ways: Vec<String>,
+) -> MemoryError {
     ways.push(room.bound.remedy().to_string());
-    Err(MemoryError {
+    MemoryError {
         what: what.to_string(),
         need,
         unknowns,
         room,
         way_out: ways.join(", or "),
-    })
+    }
 }
 
 /// Refuses `what` at mesh `h` if `need(h)` bytes do not fit in what this
 /// process may use; `need` at coarser meshes gives the way out (the finest
-/// h that fits), and `leaner`, if any, a sentence on another way.
+/// h that fits), and `leaner`, asked only then, another way if any.
 pub fn check(
     what: &str,
     h: MeshSize,
     need: impl Fn(MeshSize) -> f64,
-    leaner: Option<String>,
+    leaner: impl FnOnce(Room) -> Option<String>,
 ) -> Result<(), MemoryError> {
     let bytes = need(h);
-    if room().is_none_or(|r| bytes <= r.bytes) {
+    let Some(room) = room().filter(|r| bytes > r.bytes) else {
         return Ok(());
-    }
-    let room = room().map_or(f64::INFINITY, |r| r.bytes);
+    };
     let coarser = (MIN_LEVEL..h.level())
         .rev()
         .map(|k| MeshSize::from_level(k).expect("between the bounds"))
-        .find(|&c| need(c) <= room);
+        .find(|&c| need(c) <= room.bytes);
     let mut ways = Vec::new();
     if let Some(c) = coarser {
         ways.push(format!("use h = {c} or coarser ({})", Bytes(need(c))));
     }
-    ways.extend(leaner);
-    check_need(what, bytes, unknowns(h), ways)
+    ways.extend(leaner(room));
+    Err(refusal(what, bytes, unknowns(h), room, ways))
 }
 
 /// Refuses a solve of `scene_name` at `h` by `entry` that would not fit,
@@ -345,30 +344,28 @@ pub fn check_solve(
     entry: &Entry,
     others: &[&'static Entry],
 ) -> Result<(), MemoryError> {
-    let need = |h: MeshSize, e: &Entry| solve(h, e);
-    let Some(room) = room() else {
-        return Ok(());
-    };
-    let mut fitting: Vec<(&str, f64)> = others
-        .iter()
-        .filter(|e| e.name != entry.name)
-        .filter(|e| e.max_unknowns.is_none_or(|cap| unknowns(h) <= cap))
-        .map(|e| (e.name, need(h, e)))
-        .filter(|(_, bytes)| *bytes <= room.bytes)
-        .collect();
-    fitting.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let leaner = (!fitting.is_empty()).then(|| {
-        let names: Vec<String> = fitting
+    let leaner = |room: Room| {
+        let mut fitting: Vec<(&str, f64)> = others
             .iter()
-            .take(2)
-            .map(|(name, bytes)| format!("{name} ({})", Bytes(*bytes)))
+            .filter(|e| e.name != entry.name)
+            .filter(|e| e.max_unknowns.is_none_or(|cap| unknowns(h) <= cap))
+            .map(|e| (e.name, solve(h, e)))
+            .filter(|(_, bytes)| *bytes <= room.bytes)
             .collect();
-        format!("a leaner solver: {}", names.join(" or "))
-    });
+        fitting.sort_by(|a, b| a.1.total_cmp(&b.1));
+        (!fitting.is_empty()).then(|| {
+            let names: Vec<String> = fitting
+                .iter()
+                .take(2)
+                .map(|(name, bytes)| format!("{name} ({})", Bytes(*bytes)))
+                .collect();
+            format!("a leaner solver: {}", names.join(" or "))
+        })
+    };
     check(
         &format!("solving {scene_name} at h = {h} with {}", entry.name),
         h,
-        |c| need(c, entry),
+        |c| solve(c, entry),
         leaner,
     )
 }

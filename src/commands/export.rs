@@ -22,7 +22,7 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         ),
         h,
         |h| crate::memory::condensation(crate::memory::unknowns(h)),
-        None,
+        |_| None,
     )?;
     let folder = RunFolder::create(&args.out)?;
     let d = Discretization::new(&scene, scene.finest())?;

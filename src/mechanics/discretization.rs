@@ -71,7 +71,7 @@ impl Discretization {
             &format!("assembling {} at h = {h}", scene.name),
             h,
             |h| crate::memory::assembly(h, with_mass),
-            None,
+            |_| None,
         )?;
         let mesh = Mesh::new(h);
         let dofs = DofMap::new(&mesh);

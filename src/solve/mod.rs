@@ -49,7 +49,7 @@ impl Assembled {
     /// ([`Entry::uses_mass`]).
     pub fn for_solver(scene: &Scene, entry: &'static Entry) -> Result<Self> {
         refuse_too_large(scene, entry)?;
-        Self::with_finest(scene, entry, level_for(scene, scene.finest(), entry)?)
+        Self::around(scene, entry, level_for(scene, scene.finest(), entry)?)
     }
 
     /// As [`Assembled::for_solver`], with the finest level already
@@ -60,13 +60,20 @@ impl Assembled {
         entry: &'static Entry,
         finest: Discretization,
     ) -> Result<Self> {
+        refuse_too_large(scene, entry)?;
+        Self::around(scene, entry, finest)
+    }
+
+    /// The coarser levels `entry` needs assembled around `finest`, checked
+    /// already: a second check after the finest is assembled would count
+    /// it twice, in what the process holds and in the need.
+    fn around(scene: &Scene, entry: &'static Entry, finest: Discretization) -> Result<Self> {
         anyhow::ensure!(
             finest.h() == scene.finest(),
             "the finest level given is on h = {}, the scene's finest mesh is {}",
             finest.h(),
             scene.finest()
         );
-        refuse_too_large(scene, entry)?;
         let mut levels = Vec::with_capacity(scene.levels.len());
         if entry.warm_starts && scene.levels.len() > 1 {
             for &h in &scene.levels[..scene.levels.len() - 1] {
