@@ -360,7 +360,9 @@ fn settings_from(
     for (path, text) in &items {
         changes.push(path, text, &format!("settings[{path:?}]"));
     }
-    changes.check_used_by(running).map_err(err)?;
+    changes
+        .check_used_by(running, &contactlab::settings::changes::AS_PATHS)
+        .map_err(err)?;
     changes.apply_to(base.clone()).map_err(err)
 }
 

@@ -8,6 +8,7 @@ use contactlab_solvers::registry::{self, Knob};
 
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point;
+use crate::settings::changes::Spelling;
 use crate::settings::{Change, Changes, Settings};
 
 /// Which solvers' knobs a command offers as flags.
@@ -257,7 +258,7 @@ impl<S: SolverSet> SettingsArgs<S> {
         }
         let offered = S::solvers();
         if offered.len() < registry::solvers().len()
-            && let Err(m) = self.changes.check_used_by(&offered)
+            && let Err(m) = self.changes.check_used_by(&offered, &AS_FLAGS)
         {
             bail!(
                 "{m} (this command runs only {})",
@@ -279,35 +280,16 @@ impl<S: SolverSet> SettingsArgs<S> {
     /// `--clarabel-faer-*`.
     pub fn check_used_by(&self, running: &[&'static registry::Entry]) -> Result<()> {
         self.changes
-            .check_used_by(running)
-            .map_err(|m| anyhow::anyhow!(flags_for_paths(m, running)))
+            .check_used_by(running, &AS_FLAGS)
+            .map_err(anyhow::Error::msg)
     }
 }
 
-/// A message of [`Changes::check_used_by`] with the command line's flag in
-/// place of the path it suggests (`set tnnmg.tolerance instead` becomes
-/// `use --tnnmg-tolerance instead`).
-fn flags_for_paths(message: String, running: &[&'static registry::Entry]) -> String {
-    let Some((head, paths)) = message.split_once(": set ") else {
-        return message;
-    };
-    let Some(paths) = paths.strip_suffix(" instead") else {
-        return message;
-    };
-    let flags: Vec<String> = paths
-        .split(" or ")
-        .map(|path| {
-            running
-                .iter()
-                .find_map(|e| {
-                    let knob = path.strip_prefix(e.name)?.strip_prefix('.')?;
-                    e.knob(knob).map(|k| format!("--{}", knob_flag(e.name, k)))
-                })
-                .unwrap_or_else(|| format!("--set {path}=VALUE"))
-        })
-        .collect();
-    format!("{head}: use {} instead", flags.join(" or "))
-}
+/// Settings named by their flags (`use --tnnmg-tolerance instead`).
+const AS_FLAGS: Spelling = Spelling {
+    verb: "use",
+    name: |e, k| format!("--{}", knob_flag(e.name, k)),
+};
 
 /// Adds the command-line flag to a message that starts with a settings path.
 pub fn with_flag(message: String) -> String {

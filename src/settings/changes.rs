@@ -14,7 +14,7 @@
 //! - a value is one line of at most [`MAX_VALUE_CHARS`] characters, so that
 //!   every message that quotes it stays one short line.
 
-use contactlab_solvers::registry::{self, Entry};
+use contactlab_solvers::registry::{self, Entry, Knob};
 
 use super::Settings;
 
@@ -77,8 +77,14 @@ impl Changes {
 
     /// Refuses a change of a registered solver's setting when the run uses
     /// only `running`: it would be ignored. The message names the setting
-    /// of a solver that is run that has the same name, if any.
-    pub fn check_used_by(&self, running: &[&'static Entry]) -> Result<(), String> {
+    /// of a solver that is run that has the same name, if any, as
+    /// `spelling` writes it (a path here and in Python, a flag on the
+    /// command line).
+    pub fn check_used_by(
+        &self,
+        running: &[&'static Entry],
+        spelling: &Spelling,
+    ) -> Result<(), String> {
         let names: Vec<&str> = running.iter().map(|r| r.name).collect();
         for c in &self.0 {
             let Some(owner) = other_solver(&c.path, &names) else {
@@ -87,13 +93,12 @@ impl Changes {
             let knob = c.path.split_once('.').map_or("", |(_, k)| k);
             let instead: Vec<String> = running
                 .iter()
-                .filter(|r| r.knob(knob).is_some())
-                .map(|r| format!("{}.{knob}", r.name))
+                .filter_map(|r| r.knob(knob).map(|k| (spelling.name)(r, k)))
                 .collect();
             let hint = if instead.is_empty() {
                 String::new()
             } else {
-                format!(": set {} instead", instead.join(" or "))
+                format!(": {} {} instead", spelling.verb, instead.join(" or "))
             };
             return Err(format!(
                 "{} sets a setting of {}, but this run uses {}; it would be ignored{hint}",
@@ -105,6 +110,19 @@ impl Changes {
         Ok(())
     }
 }
+
+/// How a front names a setting it suggests: the verb and the name
+/// (`set tnnmg.tolerance`, `use --tnnmg-tolerance`).
+pub struct Spelling {
+    pub verb: &'static str,
+    pub name: fn(&'static Entry, &'static Knob) -> String,
+}
+
+/// Settings named by their paths (`set tnnmg.tolerance instead`).
+pub const AS_PATHS: Spelling = Spelling {
+    verb: "set",
+    name: |e, k| format!("{}.{}", e.name, k.name),
+};
 
 impl Change {
     /// How the change was given, for messages: `--set PATH`, or the flag.
@@ -264,16 +282,16 @@ mod tests {
     fn a_setting_of_a_solver_not_run_is_refused_naming_the_one_to_set() {
         let c = changes(&[("newton-coulomb.tolerance", "1e-2", "--set")]);
         let tnnmg = registry::by_name("tnnmg").unwrap();
-        let e = c.check_used_by(&[tnnmg]).unwrap_err();
+        let e = c.check_used_by(&[tnnmg], &AS_PATHS).unwrap_err();
         assert!(
             e.contains("tnnmg.tolerance") && e.contains("ignored"),
             "{e}"
         );
         let newton = registry::by_name("newton-coulomb").unwrap();
-        c.check_used_by(&[newton]).unwrap();
+        c.check_used_by(&[newton], &AS_PATHS).unwrap();
         // The fixed point's settings belong to no solver.
         changes(&[("coulomb.epsilon", "1e-6", "--set")])
-            .check_used_by(&[tnnmg])
+            .check_used_by(&[tnnmg], &AS_PATHS)
             .unwrap();
     }
 
