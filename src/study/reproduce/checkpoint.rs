@@ -211,19 +211,16 @@ impl Checkpoint {
                     Ok(r) => checkpoint.check(folder, k, study, r),
                     Err(e) => Err(format!("its record is unreadable ({e})")),
                 };
-                match (verdict, record) {
-                    (Ok(()), Ok(r)) => {
-                        checkpoint.done.push(r);
+                match verdict {
+                    Ok(()) => {
+                        checkpoint.done.extend(record.ok());
                         continue;
                     }
-                    (verdict, record) => {
+                    Err(why) => {
                         checkpoint.notes.push(format!(
-                            "--resume: {study} runs again, and every study after it: {}",
-                            verdict.err().unwrap_or_default()
+                            "--resume: {study} runs again, and every study after it: {why}"
                         ));
                         discarding = true;
-                        stale.extend(record.map(|r| r.files).unwrap_or_default());
-                        continue;
                     }
                 }
             }
@@ -234,12 +231,12 @@ impl Checkpoint {
                 let _ = std::fs::remove_file(path);
             }
         }
-        let kept = checkpoint.done.len();
-        for k in kept.. {
+        for k in checkpoint.done.len().. {
             let path = checkpoint.dir.join(record_name(k));
-            if std::fs::remove_file(&path).is_err() && !path.exists() {
+            if !path.exists() {
                 break;
             }
+            let _ = std::fs::remove_file(&path);
         }
         Ok(checkpoint)
     }
