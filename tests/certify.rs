@@ -30,6 +30,14 @@ const CLOSED: Node = Node {
     weight: 0.5,
 };
 
+/// A closed, sticking node carrying pressure 2 and no traction: the node
+/// under test in the cases below, before its change.
+const BASE: Node = Node {
+    p: 2.0,
+    q: 0.0,
+    ..CLOSED
+};
+
 /// A problem whose answer is `nodes` (and u = 0.7 for the upper body's one
 /// unknown), with the load f = A v + contact forces, so that stationarity
 /// holds to rounding and every other condition is as the nodes make it.
@@ -164,11 +172,7 @@ fn three(middle: Node, law: Law) -> Vec<Node> {
 #[test]
 fn each_condition_is_checked_by_an_answer_that_violates_it_alone() {
     let law = Law::GivenFriction;
-    let base = Node {
-        p: 2.0,
-        q: 0.0,
-        ..CLOSED
-    };
+    let base = BASE;
     assert_eq!(failing(&three(base, law), &[], law), [], "the true answer");
     let cases = [
         (
@@ -273,11 +277,7 @@ fn each_condition_is_checked_by_an_answer_that_violates_it_alone() {
 #[test]
 fn a_pressure_error_counts_in_full_at_every_node_whatever_its_weight() {
     let law = Law::GivenFriction;
-    let base = Node {
-        p: 2.0,
-        q: 0.0,
-        ..CLOSED
-    };
+    let base = BASE;
     let nodes = three(base, law);
     let (problem, ..) = built(&nodes, &[]);
     let pr = problem.scales().pressure;
@@ -306,11 +306,7 @@ fn a_pressure_error_counts_in_full_at_every_node_whatever_its_weight() {
 #[test]
 fn forces_given_beside_the_displacements_cannot_excuse_them() {
     let law = Law::GivenFriction;
-    let base = Node {
-        p: 2.0,
-        q: 0.0,
-        ..CLOSED
-    };
+    let base = BASE;
     let nodes = three(base, law);
     let (problem, v, p, q) = built(&nodes, &[]);
     let g: Vec<f64> = nodes.iter().map(|c| c.g).collect();
