@@ -30,12 +30,9 @@ fn an_interrupted_reproduce_resumes_where_it_stopped() {
     loop {
         line.clear();
         let n = reader.read_until(b'\n', &mut line).unwrap();
-        assert!(
-            n > 0,
-            "the run ended before its comparison was done:\n{log}"
-        );
+        assert!(n > 0, "the run ended before its Table 1 was done:\n{log}");
         log += &String::from_utf8_lossy(&line);
-        if log.contains("compare done in") {
+        if log.contains("table1 done in") {
             break;
         }
     }
@@ -105,7 +102,7 @@ fn an_interrupted_reproduce_resumes_where_it_stopped() {
     // processes' (besides charts and profiles, listed by pattern).
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
     assert!(
-        readme.contains("`--resume`: `table1`, `compare` ran in an earlier process"),
+        readme.contains("`--resume`: `compare`, `table1` ran in an earlier process"),
         "{}",
         &readme[..800.min(readme.len())]
     );

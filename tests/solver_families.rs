@@ -12,7 +12,7 @@ use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Law, Silent, registry};
 use contactlab::study::agreement::agreement;
 use contactlab::study::compare::Compare;
-use contactlab::study::lab::{Findings, Lab, Quiet};
+use contactlab::study::lab::{Lab, Quiet};
 use contactlab::study::reference::References;
 use contactlab::study::runner::Measured;
 
@@ -56,9 +56,7 @@ fn check_all_agree(scene: &Scene) -> (Vec<Measured>, References) {
         solvers: registry::solvers(),
         repeats: 0,
     };
-    let mut findings = Findings::default();
-    lab.run(&study, &mut findings).unwrap();
-    let measured = findings.compare.remove(0).1;
+    let measured = lab.run(&study).unwrap().findings;
     let references = std::mem::take(&mut lab.references);
     let reference = references.all().next().expect("a reference is earned");
     assert!(reference.coulomb.outcome.certificate.passed());

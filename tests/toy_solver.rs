@@ -18,11 +18,11 @@ use contactlab::solvers::{
     ContactProblem, Control, Friction, Iterations, Law, Observer, Progress, Solution, Solver,
     Start, Status, Timing,
 };
-use contactlab::study::lab::{Findings, Lab, Quiet};
+use contactlab::study::lab::{Lab, Quiet};
 use contactlab::study::plans::{self, Plan, Variation};
-use contactlab::study::report::sweep_charts;
 use contactlab::study::stability::classify::Class;
 use contactlab::study::stability::{StabilitySpec, run as stability};
+use contactlab::study::sweep::charts::sweep_charts;
 use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::{compare::Compare, trial::Trial};
 use serde::{Deserialize, Serialize};
@@ -239,14 +239,12 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
     // against the earned reference.
     let settings = Settings::default();
     let mut lab = Lab::new(settings.clone(), &|_| {}, &Quiet);
-    let mut findings = Findings::default();
     let study = Compare {
         scene: scene(),
         solvers: registry::solvers(),
         repeats: 0,
     };
-    lab.run(&study, &mut findings).unwrap();
-    let measured = &findings.compare[0].1;
+    let measured = &lab.run(&study).unwrap().findings;
     let toy: Vec<&Trial> = measured
         .iter()
         .map(|m| &m.trial)
@@ -273,8 +271,7 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         references_file: "references.csv",
     };
     let mut lab = Lab::new(settings.clone(), &|_| {}, &Quiet);
-    lab.run(&study, &mut findings).unwrap();
-    let swept = &findings.sweep;
+    let swept = &lab.run(&study).unwrap().findings;
     assert!(swept.iter().any(|m| m.trial.knob().0 == "toy.tolerance"));
     let pairs: Vec<_> = swept.iter().map(|m| (&m.trial, &m.timing)).collect();
     let charts = sweep_charts(&pairs);

@@ -36,7 +36,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let (findings, artifacts) = run_study(&Bench { spec }, settings)?;
     write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
-    let goals = findings.bench.map(|b| b.goals).unwrap_or_default();
+    let goals = findings.goals;
     print(&format!(
         "{}\nwrote {}/performance.csv, performance_goals.md and charts\n",
         goals_markdown(&goals),

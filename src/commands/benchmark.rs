@@ -47,7 +47,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         }),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let report = views::report(&findings.benchmark);
+    let report = views::report(&findings);
     let target = folder.commit()?;
     print(&format!(
         "{report}\nwrote {}/benchmark.csv, its tables and charts\n",

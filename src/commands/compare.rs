@@ -22,7 +22,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         repeats: args.repeats as usize,
     };
     let (findings, artifacts) = run_study(&study, settings)?;
-    let measured = findings.compare.first().map_or(&[][..], |(_, m)| m);
+    let measured = &findings;
     let mut report = compare::markdown_of(measured);
     if let Some(folder) = folder {
         let files = write_artifacts(folder.path(), &artifacts)?;

@@ -21,7 +21,7 @@ use contactlab_solvers::{Control, Observer, Progress};
 use crate::coulomb::fixed_point;
 use crate::io::output::log;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Findings, Lab, Study, Tracker};
+use crate::study::lab::{Artifact, Lab, Study, Tracker};
 use crate::study::trial::TrialSpec;
 
 /// Logs the friction loop to stderr.
@@ -237,15 +237,14 @@ impl Tracker for Bars {
 
 /// Runs one study in a lab of its own at `settings`, with progress on
 /// stderr: its findings and its artifacts.
-pub fn run_study(study: &dyn Study, settings: Settings) -> Result<(Findings, Vec<Artifact>)> {
+pub fn run_study<S: Study>(study: &S, settings: Settings) -> Result<(S::Findings, Vec<Artifact>)> {
     let bars = Bars::new(study.name());
     let name = study.name();
     let log_line = move |l: &str| log(format!("{name}: {l}"));
     let mut lab = Lab::new(settings, &log_line, &bars);
-    let mut findings = Findings::default();
-    let artifacts = lab.run(study, &mut findings)?;
+    let ran = lab.run(study)?;
     bars.finish();
-    Ok((findings, artifacts))
+    Ok((ran.findings, ran.artifacts))
 }
 
 /// The solvers named (all registered ones if none).

@@ -145,9 +145,9 @@ pub fn run(args: &ReproduceArgs) -> Result<()> {
         &done.sections,
         &RunFacts {
             files: &files,
-            charts: &done.charts,
             seconds,
             resumed: &resumed,
+            tolerance: settings.certificate.tolerance,
         },
     )?;
     write_atomic(&dir.join("README.md"), text.as_bytes())?;

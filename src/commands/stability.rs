@@ -25,7 +25,7 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
     let (findings, artifacts) = run_study(&study, settings)?;
     write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
-    let trials = findings.stability.map(|m| m.trials).unwrap_or_default();
+    let trials = findings.trials;
     print(&format!(
         "{}\nwrote {}/stability.csv ({} trials; every trial that did not simply converge, with its reason, in stability_summary.md), stability_friction.csv and charts\n",
         counts_markdown(&trials),

@@ -59,15 +59,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     let (findings, artifacts) = run_study(&study, settings)?;
     write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
-    let failed = findings
-        .sweep
-        .iter()
-        .filter(|m| !m.trial.certified())
-        .count();
-    log(format!(
-        "{} trials, {failed} not certified",
-        findings.sweep.len()
-    ));
+    let failed = findings.iter().filter(|m| !m.trial.certified()).count();
+    log(format!("{} trials, {failed} not certified", findings.len()));
     print(&format!(
         "wrote {}/sweep_summary.md (a table of every trial), sweep.csv, sweep_timing.csv, references.csv and charts\n",
         target.display()

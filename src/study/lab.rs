@@ -1,9 +1,10 @@
 //! The one shape of every study: a study plans trials, has them measured
 //! in a [`Lab`] (the one runner, with the one reference cache), and turns
-//! them into [`Artifact`]s (tables, charts, report sections), recording
-//! what a report needs in [`Findings`]. A command runs one study;
-//! `reproduce` runs a list of them in one lab, and the files it writes are
-//! the artifacts' paths.
+//! them into typed findings, [`Artifact`]s (tables, charts) and its
+//! [`Section`] of a run's README. A command runs one study; `reproduce`
+//! runs a list of them in one lab, and the files it writes are the
+//! artifacts' paths. This module knows no study: studies depend on it,
+//! never the other way.
 
 use std::path::Path;
 
@@ -15,15 +16,8 @@ use crate::io::csv::to_csv;
 use crate::io::output::write_atomic;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::bench::FastestDirect;
-use crate::study::bench::goals::BenchOutput;
-use crate::study::benchmark::BenchmarkRow;
-use crate::study::compare::paper::SeparationRow;
-use crate::study::discretization_error::ErrorRow;
 use crate::study::reference::{Candidate, Reference, References};
 use crate::study::runner::{Keep, Measured, measure_all};
-use crate::study::stability::Map;
-use crate::study::table1::Table1Row;
 use crate::study::trial::TrialSpec;
 
 /// A file a study gives: its path in the output folder and its content.
@@ -71,6 +65,16 @@ impl Artifact {
             .collect()
     }
 
+    /// A study's trials and their times: `STEM.csv` and `STEM_timing.csv`.
+    pub fn trials(stem: &str, measured: &[Measured]) -> Result<Vec<Self>> {
+        let rows: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
+        let timing: Vec<_> = measured.iter().map(|m| &m.timing).collect();
+        Ok(vec![
+            Self::csv(&format!("{stem}.csv"), &rows, &[])?,
+            Self::csv(&format!("{stem}_timing.csv"), &timing, &[])?,
+        ])
+    }
+
     /// Whether it is a chart (its name without folder and extension then).
     pub fn chart_name(&self) -> Option<&str> {
         match self.content {
@@ -95,34 +99,31 @@ pub fn write_artifacts(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<String>
     Ok(artifacts.iter().map(|a| a.path.clone()).collect())
 }
 
-/// What the report of a run needs from its studies, typed.
-#[derive(Default)]
-pub struct Findings {
-    pub table1: Vec<Table1Row>,
-    /// Per problem: its comparison trials, then the paper's method at the
-    /// paper's settings.
-    pub compare: Vec<(u32, Vec<Measured>)>,
-    pub separation: Vec<SeparationRow>,
-    /// The keys of the comparison's references (see [`Lab::asked`]).
-    pub compare_references: Vec<String>,
-    /// Separated fraction of problem 1 in plane stress (the reference's).
-    pub plane_stress_fraction: Option<f64>,
-    pub sweep: Vec<Measured>,
-    pub stability: Option<Map>,
-    pub bench: Option<BenchOutput>,
-    pub benchmark: Vec<BenchmarkRow>,
-    pub errors: Vec<ErrorRow>,
-    /// What later studies read from earlier ones.
-    pub handoff: Handoff,
-}
-
-/// What a study reads from the studies before it, kept apart from their
-/// trials so that a resumed run (`reproduce --resume`) hands it on from
-/// the checkpoint of a study an earlier process ran.
+/// What a study hands on to the studies after it, typed: a value is
+/// found by its type, never by a name, and kept as JSON so that a resumed
+/// run (`reproduce --resume`) hands it on from the checkpoint of a study an
+/// earlier process ran.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Handoff {
-    /// From `bench`: the discretization error's solver unless told.
-    pub fastest_direct: FastestDirect,
+pub struct Handoff(std::collections::BTreeMap<String, serde_json::Value>);
+
+impl Handoff {
+    fn key<T>() -> String {
+        std::any::type_name::<T>().to_string()
+    }
+
+    /// Hands `value` on (replacing one of the same type).
+    pub fn put<T: Serialize>(&mut self, value: &T) -> Result<()> {
+        self.0
+            .insert(Self::key::<T>(), serde_json::to_value(value)?);
+        Ok(())
+    }
+
+    /// The value of type `T` an earlier study handed on, if any.
+    pub fn get<T: serde::de::DeserializeOwned>(&self) -> Option<T> {
+        self.0
+            .get(&Self::key::<T>())
+            .and_then(|v| serde_json::from_value(v.clone()).ok())
+    }
 }
 
 /// Where a lab's progress goes: a study starts a stretch of trials (with
@@ -148,6 +149,8 @@ impl Tracker for Quiet {
 pub struct Lab<'a> {
     pub settings: Settings,
     pub references: References,
+    /// What the studies run so far handed on ([`Handoff`]).
+    pub handoff: Handoff,
     /// The keys of the references the current study asked for, in order.
     asked: Vec<String>,
     /// The current study's name (for progress).
@@ -161,6 +164,7 @@ impl<'a> Lab<'a> {
         Self {
             settings,
             references: References::default(),
+            handoff: Handoff::default(),
             asked: Vec::new(),
             study: "",
             log,
@@ -200,9 +204,9 @@ impl<'a> Lab<'a> {
     }
 
     /// Runs `study` in this lab (see [`Study::run`]).
-    pub fn run(&mut self, study: &dyn Study, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    pub fn run<S: Study + ?Sized>(&mut self, study: &S) -> Result<Ran<S::Findings>> {
         self.begin(study.name());
-        study.run(self, findings)
+        study.run(self)
     }
 
     fn ask(&mut self, scene: &Scene) -> Result<()> {
@@ -253,12 +257,90 @@ impl<'a> Lab<'a> {
     }
 }
 
-/// A study: what it is called, and how it runs in a lab.
+/// What a study's run gives: its typed findings (what its command prints
+/// and its README section is made of) and its files.
+pub struct Ran<F> {
+    pub findings: F,
+    pub artifacts: Vec<Artifact>,
+}
+
+/// How long a run of studies is meant to be: a smoke run (`--quick`), the
+/// default run, or the long one (`--long`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RunLength {
+    Quick,
+    Standard,
+    Long,
+}
+
+/// A study's part of a run's README: Markdown under its own heading,
+/// computed from its findings as soon as it has run and saved with the
+/// run's checkpoint, so that a resumed run renders the README without the
+/// trials of the studies an earlier process ran.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Section {
+    pub markdown: String,
+}
+
+/// A chart of a README section: its file stem and what it is for, in one
+/// sentence (its intent), written under it.
+pub fn chart_markdown(name: &str, intent: &str) -> String {
+    format!("![{name}](charts/{name}.svg)\n\n*{intent}*\n\n")
+}
+
+/// A study: the unit of extension. It owns everything a study has: its
+/// name, its time estimate, its run (a plan of trials measured in a
+/// [`Lab`]), its typed findings, its files and charts, and its section of
+/// a run's README. Adding one to `contactlab reproduce` is one line in
+/// `reproduce::studies`; `tests/toy_study.rs` adds one in
+/// a test.
 pub trait Study {
-    /// Its name in logs and in the manifest.
+    /// What it found, typed.
+    type Findings;
+
+    /// Its name in logs, in the manifest and in the checkpoint.
     fn name(&self) -> &'static str;
 
-    /// Plans and measures its trials in `lab`, records what the report
-    /// needs in `findings`, and gives its artifacts.
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>>;
+    /// Seconds it takes on the 2-core machine of `results/` in a run of
+    /// `length` (the manifest's `study_seconds` records the measured ones
+    /// to refresh these): what a run states as it starts.
+    fn estimated_seconds(&self, length: RunLength) -> f64;
+
+    /// Plans and measures its trials in `lab`; gives its findings and files.
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Self::Findings>>;
+
+    /// Its section of a run's README, from its findings, the references it
+    /// asked `lab` for, and the names of the charts it wrote (as the files
+    /// `charts/NAME.svg`).
+    fn section(&self, findings: &Self::Findings, lab: &Lab, charts: &[String]) -> Result<Section>;
+}
+
+/// A study with its findings' type erased, as a run of several holds it:
+/// it runs and gives its files and its README section.
+pub trait Planned {
+    fn name(&self) -> &'static str;
+    fn estimated_seconds(&self, length: RunLength) -> f64;
+    /// Runs in `lab`; gives its files and its README section.
+    fn run_for_report(&self, lab: &mut Lab) -> Result<(Vec<Artifact>, Section)>;
+}
+
+impl<S: Study> Planned for S {
+    fn name(&self) -> &'static str {
+        Study::name(self)
+    }
+
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        Study::estimated_seconds(self, length)
+    }
+
+    fn run_for_report(&self, lab: &mut Lab) -> Result<(Vec<Artifact>, Section)> {
+        let ran = lab.run(self)?;
+        let charts: Vec<String> = ran
+            .artifacts
+            .iter()
+            .filter_map(|a| a.chart_name().map(str::to_string))
+            .collect();
+        let section = self.section(&ran.findings, lab, &charts)?;
+        Ok((ran.artifacts, section))
+    }
 }

@@ -6,12 +6,12 @@
 pub mod agreement;
 pub mod bench;
 pub mod benchmark;
+pub mod class;
 pub mod compare;
 pub mod discretization_error;
 pub mod lab;
 pub mod plans;
 pub mod reference;
-pub mod report;
 pub mod reproduce;
 pub mod runner;
 pub mod stability;

@@ -18,7 +18,8 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::agreement::Agreement;
-use crate::study::stability::classify::Class;
+use crate::study::class::Class;
+pub use crate::study::class::WRONG_PRESSURE;
 
 /// A setting a trial varies: its path (`relaxation.r`, `epsilon`, or a
 /// study's own name for what it varies, such as `friction`) and its value

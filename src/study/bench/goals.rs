@@ -12,7 +12,7 @@ use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, FastestDirect, PerfRow, bench, multigrid};
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 
 pub use crate::study::bench::charts::{
     MIN_POINTS_FOR_SLOPE, fit_slope, performance_charts, slope_label,
@@ -315,11 +315,28 @@ pub struct Bench {
 }
 
 impl Study for Bench {
+    /// Its rows, goals and memory measurements.
+    type Findings = BenchOutput;
+
     fn name(&self) -> &'static str {
         "bench"
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 5.3,
+            RunLength::Standard => 530.0,
+            RunLength::Long => 5700.0,
+        }
+    }
+
+    fn section(&self, out: &BenchOutput, _: &Lab, charts: &[String]) -> Result<Section> {
+        Ok(Section {
+            markdown: crate::study::bench::section::section(out, charts),
+        })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<BenchOutput>> {
         lab.log("speed");
         let log = lab.logger();
         let out = measure_bench(&self.spec, &lab.settings, &|l| log(&format!("bench: {l}")))?;
@@ -328,9 +345,11 @@ impl Study for Bench {
             Artifact::text("performance_goals.md", &out.goals_markdown),
         ];
         artifacts.extend(Artifact::charts(out.charts.clone()));
-        findings.handoff.fastest_direct = FastestDirect::of(&out);
-        findings.bench = Some(out);
-        Ok(artifacts)
+        lab.handoff.put(&FastestDirect::of(&out))?;
+        Ok(Ran {
+            findings: out,
+            artifacts,
+        })
     }
 }
 

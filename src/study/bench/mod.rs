@@ -17,6 +17,7 @@ pub mod equal_accuracy;
 pub mod goals;
 pub mod memory;
 pub mod multigrid;
+pub mod section;
 mod set_up;
 
 pub use set_up::{FACTORIZATION_THREADS, pinned};

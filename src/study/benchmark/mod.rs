@@ -28,7 +28,7 @@ use crate::mechanics::dofs::{DofExpansion, DofMap};
 use crate::mechanics::mesh::Mesh;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::trial::{Setting, TrialSpec};
 
@@ -140,11 +140,52 @@ pub struct Benchmark {
 }
 
 impl Study for Benchmark {
+    /// One row per run.
+    type Findings = Vec<BenchmarkRow>;
+
     fn name(&self) -> &'static str {
         STUDY
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 1.3,
+            RunLength::Standard => 130.0,
+            RunLength::Long => 2400.0,
+        }
+    }
+
+    fn section(&self, rows: &Vec<BenchmarkRow>, _: &Lab, charts: &[String]) -> Result<Section> {
+        let mut ids: Vec<&str> = rows.iter().map(|r| r.instance.as_str()).collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let mut s = format!(
+            "## Benchmark over a problem collection\n\n`benchmark.csv` has one row per run (instance, solver, target \
+             accuracy) over {} instances{}: the collection is the paper's three problems over 𝓕 ∈ {{0, 0.25, 0.5, 1, 2}} \
+             and h ∈ {{1/16, 1/32, 1/64}}, sideways loads (a tangential traction on the loaded part of the top side), \
+             loads that barely satisfy condition (13), and the paper's problems at h = 1/128 and 1/256 (`contactlab \
+             benchmark --help`). At a target accuracy τ every solver's own tolerances and ε are set to 0.1·τ and a run \
+             succeeds only if its answer passes the certificate at τ within the time limit. LaTeX (booktabs) versions \
+             of the tables: `benchmark_<τ>.tex`; `compare.tex` and `table1.tex` are the tables above.\n\n{}\n\n",
+            ids.len(),
+            if self.spec.core {
+                " (its core collection: the instances finer than 1/32 are left to `--long`)"
+            } else {
+                ""
+            },
+            views::report(rows)
+        );
+        for c in charts {
+            s += &chart_markdown(
+                c,
+                "Performance profile over the collection: the fraction of instances each solver solves (certified) \
+                 within τ times the fastest solver's time.",
+            );
+        }
+        Ok(Section { markdown: s })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<BenchmarkRow>>> {
         let plan = plan(&self.spec, &lab.settings)?;
         lab.log(&format!(
             "benchmark over the problem collection: {} runs",
@@ -160,13 +201,12 @@ impl Study for Benchmark {
         lab.finish();
         let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
         let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[])?];
-        artifacts.extend(crate::study::compare::trials_artifacts(
-            "benchmark_trials",
-            &measured,
-        )?);
+        artifacts.extend(Artifact::trials("benchmark_trials", &measured)?);
         artifacts.extend(views::artifacts(&rows)?);
-        findings.benchmark = rows;
-        Ok(artifacts)
+        Ok(Ran {
+            findings: rows,
+            artifacts,
+        })
     }
 }
 

@@ -9,14 +9,16 @@ use contactlab_solvers::registry::Entry;
 use crate::io::latex::booktabs;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::{Trial, TrialSpec, intervals_text};
 
 /// The study's name in trial records.
 pub const STUDY: &str = "compare";
 
+pub mod charts;
 pub mod paper;
+pub mod section;
 
 /// The comparison of `solvers` on one scene, as a study: compare.csv,
 /// compare_timing.csv, compare.tex and references.csv.
@@ -27,14 +29,37 @@ pub struct Compare {
 }
 
 impl Study for Compare {
+    /// Its trials, measured.
+    type Findings = Vec<Measured>;
+
     fn name(&self) -> &'static str {
         STUDY
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        let per_solver = 5.0 * (1 + self.repeats) as f64;
+        let s = per_solver * self.solvers.len() as f64;
+        if length == RunLength::Quick {
+            s / 100.0
+        } else {
+            s
+        }
+    }
+
+    fn section(&self, measured: &Vec<Measured>, _: &Lab, _: &[String]) -> Result<Section> {
+        Ok(Section {
+            markdown: format!(
+                "## Every solver against the reference ({})\n\n{}",
+                self.scene.name,
+                markdown_of(measured)
+            ),
+        })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<Measured>>> {
         let specs = plan(&self.scene, &lab.settings, &self.solvers, self.repeats);
         let measured = lab.measure(&specs, Keep::default())?;
-        let mut artifacts = trials_artifacts(STUDY, &measured)?;
+        let mut artifacts = Artifact::trials(STUDY, &measured)?;
         artifacts.push(Artifact::text(
             "compare.tex",
             &booktabs(
@@ -43,19 +68,11 @@ impl Study for Compare {
             ),
         ));
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
-        findings.compare.push((0, measured));
-        Ok(artifacts)
+        Ok(Ran {
+            findings: measured,
+            artifacts,
+        })
     }
-}
-
-/// A study's trials and their times: `STEM.csv` and `STEM_timing.csv`.
-pub fn trials_artifacts(stem: &str, measured: &[Measured]) -> Result<Vec<Artifact>> {
-    let rows: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
-    let timing: Vec<_> = measured.iter().map(|m| &m.timing).collect();
-    Ok(vec![
-        Artifact::csv(&format!("{stem}.csv"), &rows, &[])?,
-        Artifact::csv(&format!("{stem}_timing.csv"), &timing, &[])?,
-    ])
 }
 
 /// The Markdown table of measured comparison trials.

@@ -16,9 +16,9 @@ use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::compare::{STUDY, markdown_of, plan, trials_artifacts};
-use crate::study::lab::{Artifact, Findings, Lab, Study};
-use crate::study::report::{ProfilePair, convergence_charts, profile_charts};
+use crate::study::compare::charts::{ProfilePair, convergence_charts, profile_charts};
+use crate::study::compare::{STUDY, markdown_of, plan};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::{TrialSpec, intervals_text};
 
@@ -41,6 +41,19 @@ pub struct SeparationRow {
     pub zone_start: f64,
 }
 
+/// What the comparison found.
+#[derive(Default)]
+pub struct PaperFindings {
+    /// Per problem: its comparison trials, then the paper's method at the
+    /// paper's settings.
+    pub measured: Vec<(u32, Vec<Measured>)>,
+    pub separation: Vec<SeparationRow>,
+    /// The keys of its references (see [`Lab::asked`]).
+    pub references: Vec<String>,
+    /// Separated fraction of problem 1 in plane stress (the reference's).
+    pub plane_stress_fraction: Option<f64>,
+}
+
 /// The comparison of every registered solver on the paper's `problems` at
 /// mesh `h`, each trial timed `1 + repeats` times.
 pub struct PaperCompare {
@@ -50,11 +63,36 @@ pub struct PaperCompare {
 }
 
 impl Study for PaperCompare {
+    type Findings = PaperFindings;
+
     fn name(&self) -> &'static str {
-        "compare"
+        STUDY
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 1.2,
+            RunLength::Standard => 120.0,
+            RunLength::Long => 300.0,
+        }
+    }
+
+    fn section(&self, out: &PaperFindings, lab: &Lab, charts: &[String]) -> Result<Section> {
+        Ok(Section {
+            markdown: crate::study::compare::section::section(
+                self.h,
+                &self.problems,
+                out,
+                &lab.references,
+                lab.settings.certificate.tolerance,
+                charts,
+            ),
+        })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<PaperFindings>> {
+        let mut findings = PaperFindings::default();
+        let findings = &mut findings;
         let solvers = registry::solvers();
         let paper_method =
             registry::with_role(Role::PapersMethod).context("no paper's method registered")?;
@@ -93,14 +131,14 @@ impl Study for PaperCompare {
                     .map(Measured::without_finest)
                     .collect::<Vec<_>>(),
             )));
-            findings.compare.push((problem, measured));
+            findings.measured.push((problem, measured));
         }
         let all: Vec<Measured> = findings
-            .compare
+            .measured
             .iter()
             .flat_map(|(_, m)| m.iter().map(Measured::without_finest))
             .collect();
-        artifacts.extend(trials_artifacts(STUDY, &all)?);
+        artifacts.extend(Artifact::trials(STUDY, &all)?);
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
         artifacts.push(Artifact::text(
             "compare.tex",
@@ -117,8 +155,11 @@ impl Study for PaperCompare {
         findings.plane_stress_fraction = lab
             .reference(&stress, &settings)?
             .map(|r| r.coulomb.separation().fraction);
-        findings.compare_references = lab.asked().to_vec();
-        Ok(artifacts)
+        findings.references = lab.asked().to_vec();
+        Ok(Ran {
+            findings: std::mem::take(findings),
+            artifacts,
+        })
     }
 }
 
@@ -132,7 +173,7 @@ impl PaperCompare {
         problem: u32,
         sc: &Scene,
         measured: &[Measured],
-        findings: &mut Findings,
+        findings: &mut PaperFindings,
     ) -> Result<Vec<Artifact>> {
         let solvers = registry::solvers();
         let mut frictionless = sc.clone();

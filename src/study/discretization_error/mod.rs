@@ -34,7 +34,8 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{Solved, solve_scene, solver_entry};
 use crate::solvers::{Friction, Law, Silent, registry};
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::bench::FastestDirect;
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 
 mod views;
 pub use views::{PAPERS_ZONE_START, charts, findings, markdown};
@@ -281,21 +282,53 @@ pub struct Errors {
 }
 
 impl Study for Errors {
+    /// One row per mesh.
+    type Findings = Vec<ErrorRow>;
+
     fn name(&self) -> &'static str {
         "discretization_error"
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 1.4,
+            _ => 140.0,
+        }
+    }
+
+    fn section(&self, errors: &Vec<ErrorRow>, _: &Lab, charts: &[String]) -> Result<Section> {
+        let solver = errors.first().map_or("", |r| r.solver.as_str());
+        let mut s = format!(
+            "## Discretization error\n\nHow the discrete solution converges as h → 0, against h = {} as the \
+             reference (`discretization_error.csv`), with `{solver}`{}: errors of the displacement in L2 and in the \
+             energy norm (both exact on these nested meshes, relative to the reference's norms), of the pressure at \
+             the contact nodes (relative to its maximum) and of the start of the separated zone, with the observed \
+             orders log₂(e(2h)/e(h)).\n\n{}{}\n",
+            self.spec.reference,
+            solver_note(solver),
+            markdown(errors),
+            findings(errors)
+        );
+        for c in charts {
+            s += &chart_markdown(
+                c,
+                "How fast each error falls as h → 0 against the finest mesh: on log–log axes the slope is the observed order.",
+            );
+        }
+        Ok(Section { markdown: s })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<ErrorRow>>> {
         lab.log(&format!(
             "discretization error against h = {}",
             self.spec.reference
         ));
         let mut spec = self.spec.clone();
         if spec.solver.is_none() {
-            spec.solver = findings
+            spec.solver = lab
                 .handoff
-                .fastest_direct
-                .at_or_finest(&spec.reference.to_string());
+                .get::<FastestDirect>()
+                .and_then(|f| f.at_or_finest(&spec.reference.to_string()));
         }
         let log = lab.logger();
         let errors = run(&spec, &lab.settings, &|l| {
@@ -303,7 +336,9 @@ impl Study for Errors {
         })?;
         let mut artifacts = vec![Artifact::csv("discretization_error.csv", &errors, &[])?];
         artifacts.extend(Artifact::charts(charts(&errors)));
-        findings.errors = errors;
-        Ok(artifacts)
+        Ok(Ran {
+            findings: errors,
+            artifacts,
+        })
     }
 }

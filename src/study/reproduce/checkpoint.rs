@@ -17,9 +17,8 @@ use serde::{Deserialize, Serialize};
 use crate::io::guarded;
 use crate::io::output::{json_bytes, write_atomic};
 use crate::settings::Settings;
-use crate::study::lab::Handoff;
+use crate::study::lab::{Handoff, Section};
 use crate::study::reproduce::ReproduceSpec;
-use crate::study::reproduce::sections::Section;
 
 /// The checkpoint's folder inside the partial folder.
 pub const DIR: &str = ".resume";
@@ -382,10 +381,9 @@ mod tests {
             study: PLAN[k].into(),
             seconds: 1.5,
             finished: "2026-11-26T00:00:00Z".into(),
-            section: serde_json::from_value(serde_json::json!(
-                {"Table1": {"table1": "| a |", "table1_text": "text"}}
-            ))
-            .unwrap(),
+            section: Section {
+                markdown: format!("## {}\n", PLAN[k]),
+            },
             files: vec![WrittenFile::of(dir, &file).unwrap()],
             charts: vec![],
             handoff: Handoff::default(),

@@ -8,11 +8,7 @@
 //! writes are the studies' artifacts.
 
 pub mod checkpoint;
-pub mod intents;
 pub mod readme;
-pub mod sections;
-mod separation_text;
-mod sweep_text;
 
 use std::path::Path;
 
@@ -31,9 +27,8 @@ use crate::study::bench::goals::Bench;
 use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::discretization_error::{ErrorSpec, Errors};
-use crate::study::lab::{Content, Findings, Lab, Study, write_artifacts};
+use crate::study::lab::{Content, Lab, Planned, RunLength, Section, write_artifacts};
 use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
-use crate::study::reproduce::sections::Sections;
 use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
@@ -134,23 +129,35 @@ impl ReproduceSpec {
     }
 }
 
+impl ReproduceSpec {
+    /// The length of this run.
+    pub fn length(&self) -> RunLength {
+        match (self.quick, self.long) {
+            (true, _) => RunLength::Quick,
+            (false, true) => RunLength::Long,
+            (false, false) => RunLength::Standard,
+        }
+    }
+}
+
 /// The studies of a run, in order: each runs in the one lab (one runner,
-/// one reference cache) and gives its artifacts.
-pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Study>> {
+/// one reference cache) and gives its artifacts and its README section.
+/// A new study is one line here.
+pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned>> {
     let mut paper = Settings::paper();
     paper.certificate = settings.certificate;
     vec![
+        Box::new(PaperCompare {
+            h: spec.h,
+            problems: spec.problems.clone(),
+            repeats: spec.repeats,
+        }),
         Box::new(Table1 {
             problems: vec![1, 2, 3],
             schedules: vec![Schedule::Revisit, Schedule::FinestOnly],
             h: spec.h,
             plane: PlaneModel::Strain,
             settings: paper,
-        }),
-        Box::new(PaperCompare {
-            h: spec.h,
-            problems: spec.problems.clone(),
-            repeats: spec.repeats,
         }),
         Box::new(Sweep {
             spec: spec.sweep.clone(),
@@ -173,36 +180,6 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Study>>
     ]
 }
 
-/// Seconds each study of a default run takes on the 2-core machine of
-/// `results/` (read off a trial run of this commit's default with a build
-/// beside it, and the committed long run's trials; `manifest.json` records
-/// each study's seconds, `study_seconds`, to refresh these), and of the
-/// long run where it differs: the estimate a run states as it starts.
-fn estimated_seconds(study: &str, spec: &ReproduceSpec) -> f64 {
-    let standard = match study {
-        "table1" => 10.0,
-        "compare" => 120.0,
-        "sweep" => 105.0,
-        "stability" => 135.0,
-        "bench" => 530.0,
-        "benchmark" => 130.0,
-        "discretization_error" => 140.0,
-        _ => 60.0,
-    };
-    let long = match study {
-        "compare" => 300.0,
-        "sweep" => 205.0,
-        "bench" => 5700.0,
-        "benchmark" => 2400.0,
-        _ => standard,
-    };
-    match (spec.quick, spec.long) {
-        (true, _) => standard / 100.0,
-        (false, true) => long,
-        (false, false) => standard,
-    }
-}
-
 /// A duration for people: seconds, minutes or hours.
 pub fn duration(seconds: f64) -> String {
     if seconds < 90.0 {
@@ -217,22 +194,32 @@ pub fn duration(seconds: f64) -> String {
 /// What a run expects to take, stated as it starts: its studies from the
 /// `done`-th on (the ones before it were finished by an earlier process).
 pub fn estimate(spec: &ReproduceSpec, settings: &Settings, done: usize) -> (f64, String) {
-    let names: Vec<&str> = studies(spec, settings)
+    estimate_of(&studies(spec, settings), spec.length(), done)
+}
+
+/// What the studies `studies` of a run of `length` expect to take, from
+/// the `done`-th on.
+pub fn estimate_of(
+    studies: &[Box<dyn Planned + '_>],
+    length: RunLength,
+    done: usize,
+) -> (f64, String) {
+    let left: Vec<(&str, f64)> = studies
         .iter()
         .skip(done)
-        .map(|s| s.name())
+        .map(|s| (s.name(), s.estimated_seconds(length)))
         .collect();
-    let total: f64 = names.iter().map(|n| estimated_seconds(n, spec)).sum();
-    let each = names
+    let total: f64 = left.iter().map(|(_, t)| t).sum();
+    let each = left
         .iter()
-        .map(|n| format!("{n} {}", duration(estimated_seconds(n, spec))))
+        .map(|(n, t)| format!("{n} {}", duration(*t)))
         .collect::<Vec<_>>()
         .join(", ");
     (
         total,
         format!(
             "{} studies{}, about {} on a 2-core machine like the one of results/ ({each})",
-            names.len(),
+            left.len(),
             if done > 0 { " left" } else { "" },
             duration(total)
         ),
@@ -253,31 +240,42 @@ pub type StudySeconds = Vec<(String, f64)>;
 /// first ones: a checkpoint holds the studies before the first it lacks).
 #[derive(Default)]
 pub struct Done {
-    pub sections: Sections,
+    pub sections: Vec<Section>,
     pub files: Vec<String>,
     pub charts: Vec<String>,
     pub seconds: StudySeconds,
     pub resumed: Vec<(String, String)>,
 }
 
-/// Runs every study of `spec` in `lab`, writing each one's files into
-/// `dir` as soon as it has run and recording it in `checkpoint`; the
-/// studies `checkpoint` already holds (an earlier process ran them into
-/// `dir`) are taken from it. The manifest and the README are the caller's.
-/// After each study it logs how long it took and, from the estimates
-/// scaled by how this run compares so far, the time left.
+/// Runs every study of `spec` in `lab` ([`run_studies`]).
 pub fn run(
     spec: &ReproduceSpec,
     lab: &mut Lab,
     dir: &Path,
     checkpoint: &mut Checkpoint,
 ) -> Result<Done> {
-    let mut findings = Findings::default();
-    let mut done = Done::default();
     let studies = studies(spec, &lab.settings);
+    run_studies(&studies, spec.length(), lab, dir, checkpoint)
+}
+
+/// Runs `studies` in `lab`, writing each one's files into `dir` as soon
+/// as it has run and recording it in `checkpoint`; the studies
+/// `checkpoint` already holds (an earlier process ran them into `dir`) are
+/// taken from it. A smoke run's charts say so in their titles. The
+/// manifest and the README are the caller's. After each study it logs how
+/// long it took and, from the estimates scaled by how this run compares
+/// so far, the time left.
+pub fn run_studies(
+    studies: &[Box<dyn Planned + '_>],
+    length: RunLength,
+    lab: &mut Lab,
+    dir: &Path,
+    checkpoint: &mut Checkpoint,
+) -> Result<Done> {
+    let mut done = Done::default();
     let estimates: Vec<f64> = studies
         .iter()
-        .map(|s| estimated_seconds(s.name(), spec))
+        .map(|s| s.estimated_seconds(length))
         .collect();
     // The checkpoint kept only the records of these studies, in order,
     // each whole ([`Checkpoint::resume`]).
@@ -285,7 +283,7 @@ pub fn run(
         checkpoint
             .done
             .iter()
-            .zip(&studies)
+            .zip(studies)
             .all(|(r, s)| r.study == s.name())
     );
     let (mut spent, mut expected) = (0.0, 0.0);
@@ -297,15 +295,15 @@ pub fn run(
                 record.finished,
                 duration(record.seconds)
             ));
-            findings.handoff = record.handoff.clone();
+            lab.handoff = record.handoff.clone();
             add(&mut done, record);
             done.resumed
                 .push((record.study.clone(), record.finished.clone()));
             continue;
         }
         let started = std::time::Instant::now();
-        let mut artifacts = lab.run(study.as_ref(), &mut findings)?;
-        if spec.quick {
+        let (mut artifacts, section) = study.run_for_report(lab)?;
+        if length == RunLength::Quick {
             // A smoke run cannot be mistaken for the study: every chart says so.
             for a in &mut artifacts {
                 if let Content::Chart(c) = &mut a.content {
@@ -317,7 +315,6 @@ pub fn run(
             .iter()
             .map(|path| WrittenFile::of(dir, path))
             .collect::<Result<Vec<_>>>()?;
-        let section = sections::section(study.name(), spec, &findings, &lab.references)?;
         let took = started.elapsed().as_secs_f64();
         let record = StudyRecord {
             run: checkpoint.run.clone(),
@@ -331,7 +328,7 @@ pub fn run(
                 .iter()
                 .filter_map(|a| a.chart_name().map(str::to_string))
                 .collect(),
-            handoff: findings.handoff.clone(),
+            handoff: lab.handoff.clone(),
         };
         add(&mut done, &record);
         checkpoint.save(k, record)?;
@@ -354,7 +351,7 @@ pub fn run(
 
 /// Adds a finished study's part to what the run gave.
 fn add(done: &mut Done, record: &StudyRecord) {
-    done.sections.add(record.section.clone());
+    done.sections.push(record.section.clone());
     done.files
         .extend(record.files.iter().map(|f| f.path.clone()));
     done.charts.extend(record.charts.iter().cloned());

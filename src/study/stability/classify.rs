@@ -20,53 +20,10 @@
 //! - converged: everything else.
 
 use contactlab_solvers::Status;
-use serde::{Deserialize, Serialize};
 
 use crate::study::trial::{Trial, TrialOutcome};
 
-/// Pressure difference from the reference above which a certified answer is
-/// still wrong: about what moves the separation zone by a node at h = 1/64.
-pub const WRONG_PRESSURE: f64 = 1e-3;
-/// Work beyond this many times the default run's is slow.
-pub const SLOW_FACTOR: f64 = 10.0;
-
-/// The classes of the map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Class {
-    Converged,
-    Slow,
-    Stalled,
-    Diverged,
-    Wrong,
-    Refused,
-}
-
-impl Class {
-    pub const ALL: [Class; 6] = [
-        Class::Converged,
-        Class::Slow,
-        Class::Stalled,
-        Class::Diverged,
-        Class::Wrong,
-        Class::Refused,
-    ];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Class::Converged => "converged",
-            Class::Slow => "slow",
-            Class::Stalled => "stalled",
-            Class::Diverged => "diverged",
-            Class::Wrong => "wrong",
-            Class::Refused => "refused",
-        }
-    }
-
-    pub fn parse(text: &str) -> Option<Class> {
-        Class::ALL.into_iter().find(|c| c.as_str() == text)
-    }
-}
+pub use crate::study::class::{Class, SLOW_FACTOR, WRONG_PRESSURE};
 
 /// What classification needs beside the trial.
 #[derive(Clone, Copy, Debug, Default)]

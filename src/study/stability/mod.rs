@@ -27,7 +27,7 @@ use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
 use crate::study::trial::{Setting, Trial, TrialSpec};
@@ -150,11 +150,42 @@ pub struct Stability {
 }
 
 impl Study for Stability {
+    /// The map.
+    type Findings = Map;
+
     fn name(&self) -> &'static str {
         STUDY
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 1.35,
+            _ => 135.0,
+        }
+    }
+
+    fn section(&self, map: &Map, _: &Lab, charts: &[String]) -> Result<Section> {
+        let mut s = String::from("## Where each method fails: the stability map\n\n");
+        s += &views::readme_section(&map.trials);
+        let lines = uniqueness::readme_lines(&map.uniqueness);
+        if !lines.is_empty() {
+            s += "\n**Past the fixed point's limit** (problem 1; a solver of the Coulomb problem itself from its \
+                  default start and from each starting point its registry entry lists; `stability_uniqueness.csv`):\n\n";
+            s += &lines.join("\n");
+            s += "\n";
+        }
+        s += "\n";
+        for c in charts {
+            s += &chart_markdown(c, charts::intent(c));
+        }
+        s += &format!(
+            "<details><summary>Every trial that did not simply converge</summary>\n\n{}\n</details>\n",
+            views::summary_markdown(&map.trials)
+        );
+        Ok(Section { markdown: s })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Map>> {
         lab.log("stability map");
         let map = run(&self.spec, lab)?;
         let rows: Vec<_> = map.trials.iter().map(|t| t.row()).collect();
@@ -171,8 +202,10 @@ impl Study for Stability {
             artifacts.push(Artifact::csv(file, &lab.candidates(), &[])?);
         }
         artifacts.extend(Artifact::charts(charts::charts(&map.trials, &map.steps)));
-        findings.stability = Some(map);
-        Ok(artifacts)
+        Ok(Ran {
+            findings: map,
+            artifacts,
+        })
     }
 }
 

@@ -38,9 +38,12 @@ pub(super) fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> St
                 m.trial.group == group && m.trial.solver.name == solver && m.trial.certified()
             })
             .filter_map(|m| {
-                m.trial
-                    .pressure_error()
-                    .map(|e| (e.max(crate::study::report::WP_FLOOR), m.timing.seconds_min))
+                m.trial.pressure_error().map(|e| {
+                    (
+                        e.max(crate::study::sweep::charts::WP_FLOOR),
+                        m.timing.seconds_min,
+                    )
+                })
             })
             .filter(|(_, t)| *t > 0.0)
             .collect();

@@ -12,6 +12,9 @@
 //!
 //! Every planned trial gives a row, certified or not: the status says which.
 
+pub mod charts;
+pub mod section;
+
 use anyhow::Result;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::{self, Entry};
@@ -19,10 +22,10 @@ use contactlab_solvers::registry::{self, Entry};
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Findings, Lab, Study};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::plans::{self, Fine};
-use crate::study::report::sweep_charts;
 use crate::study::runner::Keep;
+use crate::study::sweep::charts::sweep_charts;
 use crate::study::trial::TrialSpec;
 
 /// The study's name in trial records.
@@ -211,11 +214,76 @@ pub struct Sweep {
 }
 
 impl Study for Sweep {
+    /// Its trials, measured.
+    type Findings = Vec<crate::study::runner::Measured>;
+
     fn name(&self) -> &'static str {
         STUDY
     }
 
-    fn run(&self, lab: &mut Lab, findings: &mut Findings) -> Result<Vec<Artifact>> {
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 1.05,
+            RunLength::Standard => 105.0,
+            RunLength::Long => 205.0,
+        }
+    }
+
+    fn section(
+        &self,
+        measured: &Vec<crate::study::runner::Measured>,
+        _: &Lab,
+        charts: &[String],
+    ) -> Result<Section> {
+        let list = |meshes: &[MeshSize]| {
+            meshes
+                .iter()
+                .map(|h| h.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let mut s = format!(
+            "## Speed against accuracy, and the paper's method's settings ({}, h = {}{})\n\n",
+            self.spec
+                .scenes
+                .first()
+                .map(|s| s.name.clone())
+                .unwrap_or_default(),
+            list(&self.spec.meshes),
+            if self.spec.fine_meshes.is_empty() {
+                String::new()
+            } else {
+                format!("; fine mesh h = {}", list(&self.spec.fine_meshes))
+            }
+        );
+        for c in charts.iter().filter(|c| c.starts_with("work_precision")) {
+            s += &chart_markdown(
+                c,
+                if c.starts_with("work_precision_coulomb") {
+                    "Time against accuracy on the whole Coulomb problem, certified points joined and failed claims as crosses: the cheapest solver at each accuracy."
+                } else {
+                    "Time against accuracy on one given-friction subproblem, where no outer loop blurs the comparison."
+                },
+            );
+        }
+        s += &section::work_precision_text(measured);
+        s += "\n";
+        s += &section::variations_text(measured);
+        s += "\n";
+        for c in charts.iter().filter(|c| c.starts_with("sweep_")) {
+            s += &chart_markdown(
+                c,
+                if c.contains("_error_") {
+                    "How one setting of a solver moves its error against the reference and its certificate."
+                } else {
+                    "How one setting of a solver moves its work (iterations) on the Coulomb problem."
+                },
+            );
+        }
+        Ok(Section { markdown: s })
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<crate::study::runner::Measured>>> {
         let list = |meshes: &[MeshSize]| {
             meshes
                 .iter()
@@ -235,7 +303,7 @@ impl Study for Sweep {
         let mut specs = plan(&self.spec, &lab.settings)?;
         specs.extend(self.extra.iter().cloned());
         let measured = lab.measure(&specs, Keep::default())?;
-        let mut artifacts = crate::study::compare::trials_artifacts(STUDY, &measured)?;
+        let mut artifacts = Artifact::trials(STUDY, &measured)?;
         artifacts.push(Artifact::csv(self.references_file, &lab.candidates(), &[])?);
         artifacts.push(Artifact::text(
             "sweep_summary.md",
@@ -243,8 +311,10 @@ impl Study for Sweep {
         ));
         let pairs: Vec<_> = measured.iter().map(|m| (&m.trial, &m.timing)).collect();
         artifacts.extend(Artifact::charts(sweep_charts(&pairs)));
-        findings.sweep = measured;
-        Ok(artifacts)
+        Ok(Ran {
+            findings: measured,
+            artifacts,
+        })
     }
 }
 

@@ -1,0 +1,104 @@
+//! The speed measurements' section of a run's README: the goals, the
+//! memory, the paper's method at equal accuracy, the speed table and the
+//! performance charts.
+
+use contactlab_solvers::registry;
+
+use crate::study::bench::goals::{BenchOutput, equal_accuracy_markdown, goals_markdown};
+use crate::study::bench::memory;
+use crate::study::lab::chart_markdown;
+
+/// The whole section.
+pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
+    let mut s = String::from(
+        "## Speed (problem 1, one thread, medians after a warm-up)\n\n\
+         Every time is also a ratio to one sparse Cholesky factorization and solve of the stiffness matrix with the \
+         semicoercive mode removed, measured in the same run (`performance.csv`, a timing file; `contactlab bench` \
+         reruns it alone). A solver stops at a stated budget per run. The program keeps freed memory for reuse \
+         (`src/allocator.rs`), so a repeated run does not fault its pages in again: medians are warm, and the rows \
+         marked *once* are cold.\n\n",
+    );
+    s += &goals_markdown(&bench.goals);
+    s += "\n";
+    s += &memory::markdown(&bench.memory);
+    s += "\n";
+    s += &equal_accuracy_markdown(&bench.rows, bench.problem);
+    s += "\n\nIn that comparison the paper's method stops by its certified rule (`relaxation.target`: the \
+          certificate's largest violation, checked every `check_every` sweeps and after every Uzawa step) instead of \
+          its rules on max|Δl| and max|Δv|, so that it delivers the same accuracy on every mesh; `relaxation.omega` = 1 \
+          is the paper's Gauss–Seidel, 1.5 the over-relaxed sweep. The oracle runs at its own settings. Each run is \
+          once and cold, without the budget; its certificate (the same code for every solver) says what accuracy it \
+          reached.\n";
+    s += &speed_table(bench);
+    s += "\n";
+    for c in charts.iter().filter(|c| c.starts_with("performance_")) {
+        s += &chart_markdown(
+            c,
+            "How each solver's time grows with the number of unknowns (slope in the legend, fitted through three or \
+             more certified runs; runs stopped or refused are crosses), beside the best sparse factorization (faer on \
+             both cores, symbolic analysis once).",
+        );
+    }
+    s
+}
+
+fn speed_table(bench: &BenchOutput) -> String {
+    let rows = &bench.rows;
+    // Each mesh once, in the order of its first row (later studies revisit
+    // meshes).
+    let mut meshes: Vec<&str> = Vec::new();
+    for r in rows {
+        if !meshes.contains(&r.h.as_str()) {
+            meshes.push(&r.h);
+        }
+    }
+    let mut s = String::from(
+        "\nWhole Coulomb problem, median seconds (× the best factorization: 2 threads, symbolic once), certified status:\n\n| solver |",
+    );
+    for h in &meshes {
+        s += &format!(" {h} |");
+    }
+    s += "\n|---|";
+    s += &"---|".repeat(meshes.len());
+    s += "\n";
+    let mut names = vec!["faer LLᵀ"];
+    names.extend(registry::names());
+    for name in names {
+        s += &format!(
+            "| {} |",
+            if name == "faer LLᵀ" {
+                "best factorization + solve (2 threads)"
+            } else {
+                name
+            }
+        );
+        for h in &meshes {
+            let cell = rows
+                .iter()
+                .find(|r| {
+                    r.solver == name
+                        && r.h == *h
+                        && (r.what == "coulomb" || r.what == "factorization")
+                })
+                .map(|r| {
+                    if r.median_seconds.is_finite() {
+                        let st = if r.what == "factorization" {
+                            String::new()
+                        } else {
+                            format!(", {}", r.status)
+                        };
+                        format!(
+                            "{:.4} ({:.1}×{st})",
+                            r.median_seconds, r.ratio_to_factorization
+                        )
+                    } else {
+                        r.status.clone()
+                    }
+                })
+                .unwrap_or_default();
+            s += &format!(" {cell} |");
+        }
+        s += "\n";
+    }
+    s
+}
