@@ -268,10 +268,10 @@ static LIAR: Entry = Entry {
         kind: Kind::Positive,
     }],
     defaults: |_| to_tree(&LiarSettings { tolerance: 1e-10 }),
-    build: |tree| {
+    build: contactlab::solvers::registry::Build::Fn(|tree| {
         let _: LiarSettings = from_tree(tree)?;
         Ok(Box::new(Liar))
-    },
+    }),
     accuracy: Accuracy {
         knob: "tolerance",
         reference: 1e-10,

@@ -121,7 +121,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
         let mut tree = (entry.defaults)(Default::default());
         tree["max_iter"] = json!(iterations);
         tree["tolerance"] = json!(1e-12);
-        let mut solver = (entry.build)(&tree).unwrap();
+        let mut solver = entry.build.call(&tree).unwrap();
         let start = Start {
             v: &lift,
             pressure: &pressure,
@@ -140,7 +140,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
             w[1]
         );
     }
-    let mut solver = (entry.build)(&(entry.defaults)(Default::default())).unwrap();
+    let mut solver = entry.build.call(&(entry.defaults)(Default::default())).unwrap();
     let start = Start {
         v: &lift,
         pressure: &pressure,
@@ -152,7 +152,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
     let c = certify_solution(p, Friction::Given(&g), &s, 1e-8);
     assert!(c.passed(), "{} ({})", c.summary(), s.detail);
     let newton = registry::by_name("newton").unwrap();
-    let mut exact = (newton.build)(&(newton.defaults)(Default::default())).unwrap();
+    let mut exact = newton.build.call(&(newton.defaults)(Default::default())).unwrap();
     let e = exact.solve(p, Friction::Given(&g), None, &mut Silent);
     let gap = pressure_gap(&scene, &s.pressure, &e.pressure);
     assert!(gap <= 1e-7, "pressures differ from Newton's by {gap:e}·P");

@@ -180,7 +180,7 @@ static TOY: Entry = Entry {
         },
     ],
     defaults: |_| to_tree(&ToySettings::default()),
-    build: |tree| Ok(Box::new(Toy(from_tree(tree)?))),
+    build: contactlab::solvers::registry::Build::Fn(|tree| Ok(Box::new(Toy(from_tree(tree)?)))),
     accuracy: Accuracy {
         knob: "tolerance",
         reference: 1e-12,

@@ -11,6 +11,37 @@ pub use crate::settings::Knob;
 use crate::settings::{Stopping, check_tree};
 use crate::solver::{Law, Solver};
 
+/// What builds a solver from its settings tree.
+pub type BuildFn = dyn Fn(&Value) -> Result<Box<dyn Solver>, String> + Send + Sync;
+
+/// How an entry builds its solver: a function (every solver of this
+/// crate), or a closure made at run time, for a solver registered by a
+/// program (a Python function through the binding: the closure holds it).
+#[derive(Clone, Copy)]
+pub enum Build {
+    Fn(fn(&Value) -> Result<Box<dyn Solver>, String>),
+    Closure(&'static BuildFn),
+}
+
+impl Build {
+    /// The solver for `tree`.
+    pub fn call(&self, tree: &Value) -> Result<Box<dyn Solver>, String> {
+        match self {
+            Build::Fn(f) => f(tree),
+            Build::Closure(f) => f(tree),
+        }
+    }
+}
+
+impl std::fmt::Debug for Build {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Build::Fn(_) => "Build::Fn",
+            Build::Closure(_) => "Build::Closure",
+        })
+    }
+}
+
 /// What a solver is to this testbed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Role {
@@ -76,7 +107,7 @@ pub struct Entry {
     pub defaults: fn(Stopping) -> Value,
     /// Builds the solver from a settings tree (unknown fields and values
     /// that its knobs' kinds refuse are errors that name the field).
-    pub build: fn(&Value) -> Result<Box<dyn Solver>, String>,
+    pub build: Build,
     pub accuracy: Accuracy,
     pub role: Role,
     /// Its inner iteration for the speed benchmark (None: it has none; the

@@ -212,15 +212,16 @@ impl Settings {
         from_tree(&self.tree(COULOMB).expect("coulomb has defaults")).map_err(|e| named(COULOMB, e))
     }
 
-    /// A registered solver's settings tree.
+    /// A solver's settings tree: its entry's defaults with the changes
+    /// applied (an entry registered after these settings were made, too).
     pub fn solver_tree(&self, entry: &Entry) -> Value {
         self.tree(entry.name)
-            .expect("registered solvers have defaults")
+            .unwrap_or_else(|| (entry.defaults)(self.stopping))
     }
 
     /// Builds a registered solver with these settings.
     pub fn build(&self, entry: &Entry) -> Result<Box<dyn Solver>, String> {
-        (entry.build)(&self.solver_tree(entry)).map_err(|e| named(entry.name, e))
+        entry.build.call(&self.solver_tree(entry)).map_err(|e| named(entry.name, e))
     }
 
     /// Checks every setting: the fixed point's, each solver's (against its

@@ -110,7 +110,7 @@ pub(crate) const ENTRY: Entry = Entry {
         },
     ],
     defaults: |_| to_tree(&ConicSettings::default()),
-    build: |tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?))),
+    build: crate::entry::Build::Fn(|tree| Ok(Box::new(ConicSolver::new(from_tree(tree)?)))),
     accuracy: Accuracy {
         knob: "tol",
         reference: 1e-10,

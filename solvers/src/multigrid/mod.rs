@@ -124,7 +124,7 @@ pub(crate) const ENTRY: Entry = Entry {
         },
     ],
     defaults: |_| to_tree(&TnnmgSettings::default()),
-    build: |tree| Ok(Box::new(Tnnmg::new(from_tree(tree)?))),
+    build: crate::entry::Build::Fn(|tree| Ok(Box::new(Tnnmg::new(from_tree(tree)?)))),
     accuracy: Accuracy {
         knob: "tolerance",
         reference: 1e-13,

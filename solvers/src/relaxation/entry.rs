@@ -116,7 +116,7 @@ pub(crate) const ENTRY: Entry = Entry {
         },
     ],
     defaults: |stopping| to_tree(&RelaxationSettings::defaults(stopping)),
-    build: |tree| Ok(Box::new(ProxUzawa::new(from_tree(tree)?))),
+    build: crate::entry::Build::Fn(|tree| Ok(Box::new(ProxUzawa::new(from_tree(tree)?)))),
     accuracy: Accuracy {
         knob: "epsilon",
         reference: 1e-10,

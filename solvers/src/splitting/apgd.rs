@@ -74,7 +74,7 @@ pub(crate) const ENTRY: Entry = Entry {
         },
     ],
     defaults: |_| to_tree(&ApgdSettings::default()),
-    build: |tree| Ok(Box::new(Apgd::new(from_tree(tree)?))),
+    build: crate::entry::Build::Fn(|tree| Ok(Box::new(Apgd::new(from_tree(tree)?)))),
     accuracy: Accuracy {
         knob: "tolerance",
         reference: 1e-13,
