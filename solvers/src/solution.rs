@@ -43,6 +43,22 @@ pub enum Status {
 }
 
 impl Status {
+    /// Every status, in the order of the declaration.
+    pub const ALL: [Status; 12] = [
+        Status::Converged,
+        Status::ReducedAccuracy,
+        Status::MaxIterations,
+        Status::TimeLimit,
+        Status::InsufficientProgress,
+        Status::Infeasible,
+        Status::Unbounded,
+        Status::NumericalError,
+        Status::NonFinite,
+        Status::NotRun,
+        Status::OutOfMemory,
+        Status::Inaccurate,
+    ];
+
     pub fn is_converged(self) -> bool {
         self == Status::Converged
     }

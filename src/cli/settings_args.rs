@@ -8,6 +8,7 @@ use contactlab_solvers::registry::{self, Knob};
 
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point;
+use crate::settings::changes::Refusal;
 use crate::settings::changes::Spelling;
 use crate::settings::{Change, Changes, Settings};
 
@@ -245,8 +246,48 @@ impl<S: SolverSet> SettingsArgs<S> {
     }
 
     /// `base` (e.g. a scene file's settings) with these flags applied in
-    /// the order given, validated ([`Changes::apply_to`]).
+    /// the order given, validated, for a run of the solvers `running`: the
+    /// library's one resolution ([`Changes::resolve`]), its messages
+    /// naming flags.
+    pub fn resolve_for(
+        &self,
+        base: Settings,
+        running: &[&'static registry::Entry],
+    ) -> Result<Settings> {
+        self.resolved(base, running, "")
+    }
+
+    /// `base` (e.g. a scene file's settings) with these flags applied in
+    /// the order given, validated, for a command that runs the solvers it
+    /// offers flags for (all, or only the paper's method).
     pub fn resolve_on(&self, base: Settings) -> Result<Settings> {
+        let offered = S::solvers();
+        let note = if offered.len() < registry::solvers().len() {
+            let names: Vec<&str> = offered.iter().map(|e| e.name).collect();
+            format!(" (this command runs only {})", names.join(", "))
+        } else {
+            String::new()
+        };
+        self.resolved(base, &offered, &note)
+    }
+
+    fn resolved(
+        &self,
+        base: Settings,
+        running: &[&'static registry::Entry],
+        note: &str,
+    ) -> Result<Settings> {
+        self.check_spelling()?;
+        self.changes
+            .resolve(base, running, &AS_FLAGS)
+            .map_err(|r| match r {
+                Refusal::Value(m) => anyhow::anyhow!(with_flag(m)),
+                Refusal::Unused(m) => anyhow::anyhow!("{m}{note}"),
+            })
+    }
+
+    /// `--set` written as PATH=VALUE.
+    fn check_spelling(&self) -> Result<()> {
         for c in &self.changes.0 {
             if c.given_as == "--set" && (c.path.is_empty() || c.value.trim().is_empty()) {
                 bail!(
@@ -256,32 +297,7 @@ impl<S: SolverSet> SettingsArgs<S> {
                 );
             }
         }
-        let offered = S::solvers();
-        if offered.len() < registry::solvers().len()
-            && let Err(m) = self.changes.check_used_by(&offered, &AS_FLAGS)
-        {
-            bail!(
-                "{m} (this command runs only {})",
-                offered
-                    .iter()
-                    .map(|e| e.name)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-        self.changes
-            .apply_to(base)
-            .map_err(|m| anyhow::anyhow!(with_flag(m)))
-    }
-
-    /// Refuses settings of a registered solver that this run does not use
-    /// (`running`): they would be ignored without a word, e.g.
-    /// `--clarabel-tol` with `--solver clarabel-faer`, whose flags are
-    /// `--clarabel-faer-*`.
-    pub fn check_used_by(&self, running: &[&'static registry::Entry]) -> Result<()> {
-        self.changes
-            .check_used_by(running, &AS_FLAGS)
-            .map_err(anyhow::Error::msg)
+        Ok(())
     }
 }
 

@@ -9,6 +9,7 @@ use crate::commands::{run_study, solver_list};
 use crate::io::manifest::Manifest;
 use crate::io::output::{json_bytes, print, write_atomic};
 use crate::io::run_folder::RunFolder;
+use crate::settings::Settings;
 use crate::study::benchmark::{self, Benchmark, BenchmarkSpec, Shard, views};
 use crate::study::lab::{Artifact, write_artifacts};
 
@@ -18,9 +19,8 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
             "--certify-tol does not apply to the benchmark: each run is certified at its target accuracy; give --targets instead"
         );
     }
-    let settings = args.settings.resolve()?;
     let solvers = solver_list(&args.solvers)?;
-    args.settings.check_used_by(&solvers)?;
+    let settings = args.settings.resolve_for(Settings::default(), &solvers)?;
     let mut spec = BenchmarkSpec::new(args.quick, solvers);
     spec.shard = args.shard.unwrap_or(Shard::WHOLE);
     if let Some(t) = args.time_limit {

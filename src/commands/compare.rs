@@ -12,9 +12,8 @@ use crate::study::lab::write_artifacts;
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     let (scene, base) = args.scene.load()?;
-    let settings = args.settings.resolve_on(base)?;
     let solvers = solver_list(&args.solvers)?;
-    args.settings.check_used_by(&solvers)?;
+    let settings = args.settings.resolve_for(base, &solvers)?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
     let study = Compare {
         scene,

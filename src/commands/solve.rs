@@ -18,12 +18,11 @@ use crate::solve::{solve_scene, solver_entry};
 
 pub fn run(args: &SolveArgs) -> Result<()> {
     let (scene, base) = args.scene.load()?;
-    let settings = args.settings.resolve_on(base)?;
     let solver = match &args.solver {
         Some(name) => solver_entry(name)?,
         None => registry::with_role(Role::Oracle).context("no oracle is registered")?,
     };
-    args.settings.check_used_by(&[solver])?;
+    let settings = args.settings.resolve_for(base, &[solver])?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
     log(format!(
         "solving {} at h = {} with {}",

@@ -27,9 +27,8 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             Settings::default(),
         ),
     };
-    let settings = args.settings.resolve_on(base)?;
     let solvers = solver_list(&args.solvers)?;
-    args.settings.check_used_by(&solvers)?;
+    let settings = args.settings.resolve_for(base, &solvers)?;
     let spec = SweepSpec {
         scenes,
         meshes: args.meshes.clone(),

@@ -75,6 +75,24 @@ impl Changes {
         Ok(settings)
     }
 
+    /// The settings of a run, resolved once for every front (the command
+    /// line and the Python package call this, so that both refuse the same
+    /// things): `base` (the defaults, or a scene file's settings), then
+    /// every change in order, validated ([`Changes::apply_to`]), then the
+    /// check that each change is read by a solver that runs
+    /// ([`Changes::check_used_by`]).
+    pub fn resolve(
+        &self,
+        base: Settings,
+        running: &[&'static Entry],
+        spelling: &Spelling,
+    ) -> Result<Settings, Refusal> {
+        let settings = self.apply_to(base).map_err(Refusal::Value)?;
+        self.check_used_by(running, spelling)
+            .map_err(Refusal::Unused)?;
+        Ok(settings)
+    }
+
     /// Refuses a change of a registered solver's setting when the run uses
     /// only `running`: it would be ignored. The message names the setting
     /// of a solver that is run that has the same name, if any, as
@@ -194,6 +212,23 @@ impl Change {
 pub fn other_solver(path: &str, names: &[&str]) -> Option<&'static Entry> {
     let owner = path.split('.').next().unwrap_or("");
     registry::by_name(owner).filter(|e| !names.contains(&e.name))
+}
+
+/// Why settings were refused, in one line.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Refusal {
+    /// A value the setting cannot take (the line starts with its path).
+    Value(String),
+    /// A setting of a solver the run does not use.
+    Unused(String),
+}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Refusal::Value(m) | Refusal::Unused(m) => f.write_str(m),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -221,7 +221,10 @@ impl Settings {
 
     /// Builds a registered solver with these settings.
     pub fn build(&self, entry: &Entry) -> Result<Box<dyn Solver>, String> {
-        entry.build.call(&self.solver_tree(entry)).map_err(|e| named(entry.name, e))
+        entry
+            .build
+            .call(&self.solver_tree(entry))
+            .map_err(|e| named(entry.name, e))
     }
 
     /// Checks every setting: the fixed point's, each solver's (against its
