@@ -18,7 +18,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use contactlab_solvers::entry::Entry;
-use contactlab_solvers::{Friction, Law, Observer, Solution, Status};
+use contactlab_solvers::{ContactProblem, Friction, Law, Observer, Solution, Status};
 
 use crate::certificate::certify_solution;
 use crate::coulomb::budget::Budget;
@@ -218,8 +218,33 @@ pub fn solve(
         done.levels = vec![done.one_level_count(&finest)];
         (done, finest)
     };
-    let certificate = certify_solution(
+    let outcome = judge(
+        entry,
+        friction,
         &finest.problem,
+        finest.total_load,
+        done,
+        settings,
+        budget.work(),
+    );
+    Ok(Solved { finest, outcome })
+}
+
+/// Certifies what a solve gave on `problem` (the finest level) and puts
+/// the outcome together: the certified status beside the solver's claim.
+/// `total_load` is the scene's Σ p2·(to − from), negative when condition
+/// (13) holds (NaN for a problem given by its matrices: not known).
+fn judge(
+    entry: &'static Entry,
+    friction: Friction<'_>,
+    problem: &ContactProblem,
+    total_load: f64,
+    done: Done,
+    settings: &Settings,
+    work_events: usize,
+) -> Outcome {
+    let certificate = certify_solution(
+        problem,
         friction,
         &done.solution,
         settings.certificate.tolerance,
@@ -229,21 +254,21 @@ pub fn solve(
         Some(fp) => fp.detail.clone(),
         None => done.solution.detail.clone(),
     };
-    if matches!(status, Status::Unbounded | Status::Infeasible) && finest.total_load < 0.0 {
+    if matches!(status, Status::Unbounded | Status::Infeasible) && total_load < 0.0 {
         // The load satisfies condition (13): a solution exists. (A scene
         // assembled without the check may violate it: then the solver's
         // word stands.)
         detail = format!(
             "{detail} — but condition (13) holds (total vertical load {:e} < 0), so a solution exists: \
              this is a failure of the solver, not a property of the problem",
-            finest.total_load
+            total_load
         );
     }
     let (work, timing) = match &done.fixed_point {
         Some(fp) => (fp.work(), fp.timing(done.seconds)),
         None => (Work::of(&done.solution), done.solution.timing),
     };
-    let outcome = Outcome {
+    Outcome {
         solver: entry,
         law: friction.law(),
         bound: done.bound,
@@ -252,15 +277,62 @@ pub fn solve(
         claim: done.claim,
         detail,
         work: Work {
-            events: budget.work(),
+            events: work_events,
             ..work
         },
         timing,
         fixed_point: done.fixed_point,
         levels: done.levels,
         solution: done.solution,
+    }
+}
+
+/// Solves a problem given by its matrices alone (an exported instance,
+/// one's own matrices) under `friction` with the solver of `entry`: the
+/// Coulomb law directly if the solver solves it, else by the fixed point of
+/// paper (9) over single-level given-friction steps (there is no mesh to
+/// continue on). A solver that needs a multigrid hierarchy the problem
+/// does not carry says so in its status. Certified like every solve.
+pub fn solve_algebraic(
+    problem: &ContactProblem,
+    friction: Friction<'_>,
+    entry: &'static Entry,
+    settings: &Settings,
+    caps: Caps,
+    observer: &mut dyn Observer,
+) -> Result<Outcome> {
+    let mut solver = settings.build(entry).map_err(anyhow::Error::msg)?;
+    let mut budget = Budget::new(entry, caps.work, caps.seconds, observer);
+    let start = Instant::now();
+    let done = if friction == Friction::Coulomb && entry.solves(Law::Coulomb) {
+        let s = solver.solve(problem, Friction::Coulomb, None, &mut budget);
+        let bound = problem
+            .contacts()
+            .iter()
+            .zip(&s.pressure)
+            .map(|(c, p)| c.coefficient * p.max(0.0))
+            .collect();
+        Done {
+            claim: s.status,
+            solution: s,
+            bound,
+            fixed_point: None,
+            levels: Vec::new(),
+            seconds: start.elapsed().as_secs_f64(),
+        }
+    } else {
+        let mut step = SingleLevel::new(problem, solver.as_mut());
+        steps(&mut step, friction, settings, &mut budget, start)?
     };
-    Ok(Solved { finest, outcome })
+    Ok(judge(
+        entry,
+        friction,
+        problem,
+        f64::NAN,
+        done,
+        settings,
+        budget.work(),
+    ))
 }
 
 /// What the solver, or the fixed point around it, gave before the

@@ -18,3 +18,4 @@ pub mod stability;
 pub mod sweep;
 pub mod table1;
 pub mod trial;
+pub mod work_precision;

@@ -141,7 +141,7 @@ pub fn export(
             ),
             (
                 "S.mtx",
-                "condensed operator on the contact unknowns, 2m x 2m (dense, every entry)",
+                "condensed operator on the contact unknowns, 2m x 2m, dense and symmetric (its lower triangle written, header 'symmetric', as A.mtx and M.mtx)",
             ),
             ("b_condensed.mtx", "condensed load, 2m x 1"),
             (
@@ -162,6 +162,71 @@ pub fn export(
         git_commit: git_commit.to_string(),
     };
     write_atomic(&dir.join("problem.json"), &json_bytes(&description)?)?;
+    write_atomic(&dir.join("README.md"), readme(&description).as_bytes())?;
     crate::formats::mesh_map::write(dir, d)?;
     Ok(())
+}
+
+/// The folder's README: what each file holds (its shape, units and signs),
+/// what the condensed form and the rigid mode mean for a solver of one's
+/// own, and how to hand an answer back to `certify`, with a worked example
+/// in Python. Written from the same description as `problem.json`.
+fn readme(d: &Description) -> String {
+    let mut s = format!(
+        "# {} at h = {}: the algebraic contact problem\n\n\
+         Written by `contactlab export` (commit {}). `problem.json` says the same in JSON; \
+         `contactlab certify` reads this folder back.\n\n\
+         n = {} unknowns, m = {} contact nodes, {} rigid mode(s).\n\n## The problem\n\n",
+        d.scene.name, d.h, d.git_commit, d.n, d.contact_nodes, d.rigid_modes
+    );
+    for line in &d.statement {
+        s += &format!("- {line}\n");
+    }
+    s += &format!(
+        "\n**Unknowns.** {}\n\n## Conventions and units\n\n",
+        d.unknowns
+    );
+    for line in d.conventions.iter().chain(&d.units) {
+        s += &format!("- {line}\n");
+    }
+    let sc = &d.scales;
+    s += &format!(
+        "\n**The problem's scales** (the certificate measures in them): force F = {:e}, length of Γ_K L = {:e}, \
+         stiffness K = {:e}, pressure P = F/L = {:e}, displacement U = F/K = {:e}.\n\n## Files\n\n\
+         | file | what |\n|---|---|\n",
+        sc.force, sc.length, sc.stiffness, sc.pressure, sc.displacement
+    );
+    for (file, what) in &d.files {
+        s += &format!("| `{file}` | {what} |\n");
+    }
+    s += "| `problem.json` | this description, for programs |\n| `README.md` | this file |\n";
+    s += "\n## For a solver of your own\n\n\
+          - **A is singular.** The rigid mode z (`rigid_modes.mtx`) is the upper body's vertical translation: \
+          A z = 0. A solver must not invert A: the contact forces fix the translation, and a solution exists only \
+          if they can balance the load along z (paper condition (13)).\n\
+          - **The condensed form** eliminates every unknown but the contact ones (y = t_0, s_0, t_1, s_1, …): \
+          S y = b_condensed − r with r the nodal contact forces, S z_condensed = 0, and z_condensed'(b_condensed − r) \
+          = 0. A local (node-by-node) solver works on S and b_condensed alone.\n\
+          - **A multigrid solver** needs the mesh: `nodes.csv` and `triangles.csv` map the unknowns to the P1 mesh.\n\
+          \n## Handing an answer to `certify`\n\n\
+          Write the displacements v (n values), or the contact forces (pressure p and friction traction q, m values \
+          each), or both; the missing half follows (forces from stationarity at the contact rows, displacements from \
+          the elastic response). Files are Matrix Market columns (n × 1 or m × 1) or one number per line:\n\n\
+          ```\ncontactlab certify --instance THIS_FOLDER --displacements v.mtx\n\
+          contactlab certify --instance THIS_FOLDER --forces forces.csv   # header pressure,friction_traction, one row per contact node\n```\n\n\
+          In Python (scipy reads every file here):\n\n```python\n\
+          import numpy as np, scipy.io, scipy.sparse.linalg as sla\n\
+          A = scipy.io.mmread(\"A.mtx\").tocsr()            # symmetric: scipy fills the upper triangle\n\
+          f = scipy.io.mmread(\"f.mtx\").toarray().ravel()\n\
+          # ... your solver gives v ...\n\
+          scipy.io.mmwrite(\"v.mtx\", v.reshape(-1, 1))\n\
+          # then: contactlab certify --instance . --displacements v.mtx\n\
+          # or, with the Python package: cl.certify(cl.Problem.from_instance(\".\"), displacements=v)\n```\n\n\
+          The certificate checks nonpenetration, pressure ≥ 0, complementarity, the friction bound (g = 𝓕p for the \
+          Coulomb law), no slip below it, the slip opposite to the traction, stationarity and the force balance, each \
+          relative to the scales above.\n";
+    for line in &d.certificate {
+        s += &format!("- {line}\n");
+    }
+    s
 }

@@ -19,8 +19,8 @@ pub mod merge;
 pub mod views;
 
 use anyhow::Result;
-use contactlab_solvers::Law;
 use contactlab_solvers::registry::Entry;
+use contactlab_solvers::{Law, Status};
 use serde::{Deserialize, Serialize};
 
 use crate::io::csv::{fixed, fixed_or_nan};
@@ -85,6 +85,9 @@ pub struct BenchmarkSpec {
     pub time_limit: f64,
     pub shard: Shard,
     pub solvers: Vec<&'static Entry>,
+    /// The instances to run instead of the collection (the problems a
+    /// Python benchmark is given); `core` and `quick` then choose nothing.
+    pub instances: Option<Vec<Instance>>,
 }
 
 impl BenchmarkSpec {
@@ -97,6 +100,7 @@ impl BenchmarkSpec {
             time_limit: if quick { 5.0 } else { 20.0 },
             shard: Shard::WHOLE,
             solvers,
+            instances: None,
         }
     }
 }
@@ -236,10 +240,13 @@ pub type Planned = (Instance, TrialSpec, f64);
 
 pub fn plan(spec: &BenchmarkSpec, base: &Settings) -> Result<Vec<Planned>> {
     let mut out = Vec::new();
-    let instances: Vec<_> = collection(spec.quick)?
-        .into_iter()
-        .filter(|i| !spec.core || collection::in_core(i))
-        .collect();
+    let instances: Vec<_> = match &spec.instances {
+        Some(given) => given.clone(),
+        None => collection(spec.quick)?
+            .into_iter()
+            .filter(|i| !spec.core || collection::in_core(i))
+            .collect(),
+    };
     if spec.shard.of > instances.len() {
         anyhow::bail!(
             "--shard {}/{}: the {}collection has {} instances, so shards beyond the {}th would be empty; use at most {} shards",
@@ -308,6 +315,10 @@ pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(Benchma
         let m = measure(&t, None, Keep::default())?;
         let tr = &m.trial;
         let claimed = tr.solver_status.is_converged();
+        // A solver that reports no progress cannot be stopped at the limit
+        // (a Python function): a run that overran it failed all the same.
+        let limit = t.seconds.unwrap_or(f64::INFINITY);
+        let overran = m.timing.seconds_min > limit;
         let row = BenchmarkRow {
             instance: inst.id.clone(),
             family: inst.family.into(),
@@ -316,14 +327,18 @@ pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(Benchma
             friction_coefficient: inst.scene.friction,
             solver: tr.solver.name.to_string(),
             target,
-            status: tr.status.to_string(),
+            status: if overran {
+                Status::TimeLimit.to_string()
+            } else {
+                tr.status.to_string()
+            },
             solver_status: tr.solver_status.to_string(),
-            success: tr.certified(),
+            success: tr.certified() && !overran,
             claimed_but_failed: claimed && !tr.certified(),
             certificate: tr.residual(),
             failing: tr.row().failing,
             seconds: m.timing.seconds_min,
-            time_limit: t.seconds.unwrap_or(f64::INFINITY),
+            time_limit: limit,
             work: tr.work,
             detail: tr.detail.clone(),
         };

@@ -1,0 +1,145 @@
+//! Work against precision on one scene: each solver at each target
+//! accuracy by the benchmark's rule ([`target_settings`]: its accuracy knob
+//! and every ε at a safety factor below the target, the certificate at the
+//! target), timed, certified, and measured against the earned reference.
+//! The study behind Python's `cl.work_precision`; its chart is the
+//! certificate's largest violation against seconds, certified points
+//! joined and failed ones as crosses.
+
+use anyhow::Result;
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::Entry;
+
+use crate::io::charts::{Chart, Series};
+use crate::mechanics::scene::Scene;
+use crate::study::benchmark::target_settings;
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::runner::{Keep, Measured};
+use crate::study::trial::TrialSpec;
+
+/// The study's name in trial records.
+pub const STUDY: &str = "work_precision";
+
+/// `solvers` on `scene` at each of `targets`.
+pub struct WorkPrecision {
+    pub scene: Scene,
+    pub solvers: Vec<&'static Entry>,
+    pub targets: Vec<f64>,
+    /// Timed runs per trial after the first.
+    pub repeats: usize,
+}
+
+impl WorkPrecision {
+    /// The trials: per solver, per target, the whole Coulomb problem.
+    pub fn plan(&self, lab: &Lab) -> Result<Vec<TrialSpec>> {
+        let mut out = Vec::new();
+        for &e in &self.solvers {
+            for &target in &self.targets {
+                let mut settings = target_settings(e, &lab.settings, target)?;
+                settings.certificate.tolerance = target;
+                let mut t = TrialSpec::new(STUDY, e.name, &self.scene, e, Law::Coulomb, &settings)
+                    .with_repeats(self.repeats);
+                t.setting = Some(crate::study::trial::Setting::new(
+                    "target",
+                    &format!("{target:e}"),
+                ));
+                out.push(t);
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The chart: per solver, the certificate's largest violation against the
+/// fastest of its timed runs.
+pub fn chart(title: &str, measured: &[Measured]) -> Chart {
+    let mut names: Vec<&str> = Vec::new();
+    for m in measured {
+        if !names.contains(&m.trial.solver.name) {
+            names.push(m.trial.solver.name);
+        }
+    }
+    let mut series = Vec::new();
+    for name in names {
+        let points = |ok: bool| {
+            let mut p: Vec<(f64, f64)> = measured
+                .iter()
+                .filter(|m| m.trial.solver.name == name && m.trial.certified() == ok)
+                .map(|m| (m.trial.residual(), m.timing.seconds_min))
+                .filter(|(x, y)| *x > 0.0 && x.is_finite() && *y > 0.0)
+                .collect();
+            p.sort_by(|a, b| a.0.total_cmp(&b.0));
+            p
+        };
+        series.extend(Series::certified_and_failed(
+            name,
+            points(true),
+            points(false),
+        ));
+    }
+    Chart::new(
+        title,
+        "largest violation in the certificate (relative)",
+        "seconds",
+        true,
+        true,
+        series,
+    )
+}
+
+impl Study for WorkPrecision {
+    /// Its trials, measured.
+    type Findings = Vec<Measured>;
+
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        let s = 2.0 * (self.solvers.len() * self.targets.len() * (1 + self.repeats)) as f64;
+        if length == RunLength::Quick {
+            s / 100.0
+        } else {
+            s
+        }
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<Measured>>> {
+        let specs = self.plan(lab)?;
+        let measured = lab.measure(&specs, Keep::default())?;
+        let mut artifacts = Artifact::trials(STUDY, &measured)?;
+        artifacts.push(Artifact::chart(
+            STUDY,
+            chart(
+                &format!(
+                    "Work against precision: {}, h = {}",
+                    self.scene.name,
+                    self.scene.finest()
+                ),
+                &measured,
+            ),
+        ));
+        artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
+        Ok(Ran {
+            findings: measured,
+            artifacts,
+        })
+    }
+
+    fn section(&self, measured: &Vec<Measured>, _: &Lab, charts: &[String]) -> Result<Section> {
+        let certified = measured.iter().filter(|m| m.trial.certified()).count();
+        let mut markdown = format!(
+            "## Work against precision ({}, h = {})\n\n{certified} of {} runs certified at their target.\n\n",
+            self.scene.name,
+            self.scene.finest(),
+            measured.len()
+        );
+        for c in charts {
+            markdown += &chart_markdown(
+                c,
+                "Time against the certificate's largest violation for each solver at each target accuracy.",
+            );
+        }
+        Ok(Section { markdown })
+    }
+}
