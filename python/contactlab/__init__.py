@@ -2,55 +2,120 @@
 and its studies (Zhiltsov & Namm 2019, two plane elastic bodies in unilateral
 contact with Coulomb friction).
 
-Everything numerical is contactlab's own Rust code, the code the command
-line runs: a ``Problem`` is the assembled scene, ``solve`` is ``contactlab
-solve``, ``certify`` is ``contactlab certify``. This module only turns its
-arrays into numpy and scipy objects.
+Everything numerical, and every study, is contactlab's own Rust code, the
+code the command line runs: a ``Problem`` is the assembled scene (or an
+algebraic problem checked like an imported instance), ``solve`` is
+``contactlab solve``, ``certify`` is ``contactlab certify``, ``compare``,
+``benchmark`` and ``work_precision`` run the command line's studies and
+write the same files. A Python function can stand wherever a registered
+solver stands (``register``). This module holds only conversions to numpy
+and scipy, types and documentation.
 
     import contactlab as cl
-    p = cl.Problem.paper(1, h="1/64")
+    p = cl.Problem.paper(1, h=1/64)
     r = cl.solve(p, solver="newton-coulomb")
     r.status, r.certificate.passed, r.pressure.max()
 """
 
 from __future__ import annotations
 
-import json
-import math
+import csv
+import enum
+import functools
+import io
 import numbers
 import os
-import time
-from dataclasses import dataclass, field
+import re
+from dataclasses import dataclass
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 import scipy.sparse
 
 from . import _contactlab
-from ._contactlab import Error
+from ._contactlab import Error, FileError, InputError, OutOfMemory
 
 __all__ = [
     "Error",
+    "InputError",
+    "FileError",
+    "OutOfMemory",
+    "Status",
     "Problem",
     "Contact",
     "Certificate",
     "Result",
-    "Trial",
+    "StudyResult",
+    "BenchmarkResult",
     "solvers",
+    "register",
     "solve",
     "certify",
-    "work_precision",
     "compare",
-    "Comparison",
     "benchmark",
-    "BenchmarkResult",
-    "BenchmarkSummary",
+    "work_precision",
 ]
+
+#: A path as Python programs give one.
+PathLike = Union[str, bytes, "os.PathLike[str]"]
+
+
+class Status(str, enum.Enum):
+    """How a solve ended, certified: ``converged`` only if the solver claimed
+    convergence and the certificate passed. A member compares equal to its
+    name as written in output files (``Status.CONVERGED == "converged"``)."""
+
+    CONVERGED = "converged"
+    REDUCED_ACCURACY = "reduced_accuracy"
+    MAX_ITERATIONS = "max_iterations"
+    TIME_LIMIT = "time_limit"
+    INSUFFICIENT_PROGRESS = "insufficient_progress"
+    INFEASIBLE = "infeasible"
+    UNBOUNDED = "unbounded"
+    NUMERICAL_ERROR = "numerical_error"
+    NON_FINITE = "non_finite"
+    NOT_RUN = "not_run"
+    OUT_OF_MEMORY = "out_of_memory"
+    INACCURATE = "inaccurate"
+
+    def __str__(self) -> str:
+        return self.value
 
 
 def solvers() -> List[str]:
-    """The registered solvers' names, as ``contactlab solve --solver`` takes them."""
+    """The registered solvers' names, as ``contactlab solve --solver`` takes
+    them (Python solvers registered in this session among them)."""
     return list(_contactlab.solvers())
+
+
+#: A solver written in Python: called as ``fn(problem, target)`` with a
+#: ``Problem`` and the accuracy it is asked for, it returns the
+#: displacements (an array of ``problem.n``), or a mapping with
+#: ``displacements`` and/or ``forces`` = (pressure, friction_traction).
+PythonSolver = Callable[["Problem", float], object]
+
+
+def register(name: str, fn: PythonSolver) -> None:
+    """Registers a Python function as the solver ``name``.
+
+    From then on it stands wherever a registered solver stands: ``solve``,
+    ``compare``, ``benchmark``, ``work_precision``. Its answers pass through
+    the same certificate as every other's; a function that raises, or whose
+    answer cannot be judged, is one failed run. It solves the whole Coulomb
+    law. Registering a name again gives it the new function.
+
+    Parameters
+    ----------
+    name : str
+        Letters, digits, ``-`` and ``_``; not a built-in solver's name.
+    fn : callable
+        ``fn(problem, target)``; see ``PythonSolver``.
+    """
+    if not isinstance(name, str):
+        raise InputError(f"name = {name!r}: give the solver's name as a word")
+    if not callable(fn):
+        raise InputError(f"fn = {fn!r}: give a function fn(problem, target)")
+    _contactlab.register(name, fn)
 
 
 @dataclass(frozen=True)
@@ -60,35 +125,40 @@ class Contact:
     ``t`` and ``s`` index the jump t = v'_2 − v''_2 and the slip
     s = v'_1 − v''_1 in the unknowns; ``weight`` is the trapezoid weight
     w_i, ``coefficient`` the friction coefficient 𝓕_i and ``x`` the node's
-    abscissa.
+    abscissa (None for a problem given by its matrices).
     """
 
     t: np.ndarray
     s: np.ndarray
     weight: np.ndarray
     coefficient: np.ndarray
-    x: np.ndarray
+    x: Optional[np.ndarray]
 
     def __len__(self) -> int:
         return len(self.t)
 
 
 def _h(h) -> Optional[str]:
-    """A mesh size as the command line writes it: "1/64", or a number."""
-    if h is None:
-        return None
-    if isinstance(h, str):
+    """A mesh size as the command line writes it, from "1/64", 1/64 or 64."""
+    if h is None or isinstance(h, str):
         return h
-    if isinstance(h, numbers.Real) and not isinstance(h, bool):
-        return repr(float(h))
-    raise Error(f"h = {h!r}: give a mesh size such as \"1/64\" or 1/64")
+    if isinstance(h, bool) or not isinstance(h, numbers.Real):
+        raise InputError(f'h = {h!r}: give a mesh size such as "1/64", 1/64 or 64')
+    if isinstance(h, numbers.Integral):
+        return f"1/{int(h)}"
+    h = float(h)
+    if h > 0 and np.isfinite(h):
+        n = round(1.0 / h)
+        if n >= 1 and abs(n * h - 1.0) <= 1e-9:
+            return f"1/{n}"
+    raise InputError(f'h = {h!r}: give a mesh size 1/N such as "1/64", 1/64 or 64')
 
 
 def _number(x, name: str) -> Optional[float]:
     if x is None:
         return None
     if isinstance(x, bool) or not isinstance(x, numbers.Real):
-        raise Error(f"{name} = {x!r}: give a number")
+        raise InputError(f"{name} = {x!r}: give a number")
     return float(x)
 
 
@@ -96,7 +166,7 @@ def _text(x, name: str) -> Optional[str]:
     if x is None:
         return None
     if not isinstance(x, str):
-        raise Error(f"{name} = {x!r}: give a word")
+        raise InputError(f"{name} = {x!r}: give a word")
     return x
 
 
@@ -105,22 +175,53 @@ def _path(p, name: str) -> str:
     try:
         return os.fsdecode(os.fspath(p))
     except TypeError:
-        raise Error(f"{name} = {p!r}: give a path (str, bytes or os.PathLike)") from None
+        raise InputError(f"{name} = {p!r}: give a path (str, bytes or os.PathLike)") from None
 
 
-def _csr(parts, n: int) -> scipy.sparse.csr_array:
+def _csr(parts, shape) -> scipy.sparse.csr_array:
     indptr, indices, data = parts
-    return scipy.sparse.csr_array((data, indices, indptr), shape=(n, n))
+    return scipy.sparse.csr_array((data, indices, indptr), shape=shape)
+
+
+def _csr_in(a, name: str, shape=None):
+    """Any scipy sparse matrix or array (or a dense 2-D array) as canonical
+    CSR parts (sorted indices, duplicates summed), float64."""
+    if isinstance(a, np.ndarray) or not scipy.sparse.issparse(a):
+        a = np.asarray(a)
+        if a.ndim != 2 or a.dtype.kind not in "iuf":
+            raise InputError(f"{name}: give a real matrix (scipy sparse, or a 2-D array)")
+    m = scipy.sparse.csr_array(a, dtype=np.float64)
+    if shape is not None and m.shape != shape:
+        raise InputError(f"{name} has shape {m.shape}, expected {shape}")
+    m.sum_duplicates()
+    m.sort_indices()
+    return (
+        m.shape,
+        (m.indptr.astype(np.int64).tolist(), m.indices.astype(np.int64).tolist(), m.data.tolist()),
+    )
 
 
 class Problem:
-    """One scene assembled on its finest mesh, in the problem's own unknowns
-    (boundary conditions and the (t, s) change of variables on Γ_K applied).
+    """The algebraic contact problem: A v = f under the contact conditions.
 
-    ``A`` (stiffness) and ``M`` (the mass matrix of the proximal term) are
-    ``scipy.sparse.csr_array``; ``f`` is the load vector; ``contact`` the
-    contact nodes; ``rigid_mode`` the kernel of A (the upper body's vertical
-    translation).
+    Built from a scene (``paper``, ``from_scene``: assembled on its finest
+    mesh, in the problem's own unknowns, boundary conditions and the (t, s)
+    change of variables on Γ_K applied) or given as it is
+    (``from_instance``, ``from_matrices``).
+
+    Attributes
+    ----------
+    A, M : scipy.sparse.csr_array
+        Stiffness and the mass matrix of the proximal term; built once per
+        problem and cached (do not modify them in place).
+    f : numpy.ndarray
+        The load vector.
+    contact : Contact
+        The contact nodes.
+    rigid_mode : numpy.ndarray
+        The kernel of A (the upper body's vertical translation).
+    scales : dict
+        The problem's own scales, in which the certificate measures.
     """
 
     def __init__(self, inner: "_contactlab.Problem"):
@@ -130,16 +231,28 @@ class Problem:
     def paper(
         cls,
         number: int,
-        h: Optional[Union[str, float]] = None,
+        h: Optional[Union[str, float, int]] = None,
         young: Optional[float] = None,
         poisson: Optional[float] = None,
         friction: Optional[float] = None,
         plane: Optional[str] = None,
     ) -> "Problem":
-        """The paper's problem 1, 2 or 3 (``h`` such as "1/64" or 1/64: the
-        finest mesh; ``plane`` "strain" or "stress")."""
+        """The paper's problem 1, 2 or 3.
+
+        Parameters
+        ----------
+        number : int
+            1, 2 or 3.
+        h : str, float or int, optional
+            The finest mesh: ``"1/64"``, ``1/64`` or ``64``.
+        young, poisson, friction : float, optional
+            Overrides of E, ν and 𝓕, as ``--young``, ``--poisson``,
+            ``--friction``.
+        plane : {"strain", "stress"}, optional
+            The plane model, as ``--plane``.
+        """
         if isinstance(number, bool) or not isinstance(number, numbers.Integral):
-            raise Error(f"number = {number!r}: give the paper's problem 1, 2 or 3")
+            raise InputError(f"number = {number!r}: give the paper's problem 1, 2 or 3")
         return cls(
             _contactlab.Problem.paper(
                 int(number),
@@ -154,15 +267,16 @@ class Problem:
     @classmethod
     def from_scene(
         cls,
-        path: Union[str, bytes, "os.PathLike"],
-        h: Optional[Union[str, float]] = None,
+        path: PathLike,
+        h: Optional[Union[str, float, int]] = None,
         young: Optional[float] = None,
         poisson: Optional[float] = None,
         friction: Optional[float] = None,
         plane: Optional[str] = None,
     ) -> "Problem":
         """A scene file, as ``contactlab solve --scene`` reads it, with the
-        settings it brings (every solve of the problem starts from them)."""
+        settings it brings (every solve and study of the problem starts from
+        them). The overrides are as for ``paper``."""
         return cls(
             _contactlab.Problem.from_scene(
                 _path(path, "path"),
@@ -174,31 +288,113 @@ class Problem:
             )
         )
 
+    @classmethod
+    def from_instance(cls, folder: PathLike) -> "Problem":
+        """A folder written by ``contactlab export`` (or ``Problem.export``),
+        read back with every file held to what its ``problem.json`` declares.
+        It has no mesh: it can be solved and certified, not studied."""
+        return cls(_contactlab.Problem.from_instance(_path(folder, "folder")))
+
+    @classmethod
+    def from_matrices(
+        cls,
+        A,
+        f,
+        contact: Mapping[str, Sequence],
+        rigid_mode,
+        M=None,
+        prolongations: Optional[Sequence] = None,
+        name: str = "matrices",
+    ) -> "Problem":
+        """A problem posed from one's own matrices, checked as an imported
+        instance is (symmetry, dimensions, index sets, A z = 0, the net load
+        along z).
+
+        Parameters
+        ----------
+        A : sparse matrix (any scipy format) or 2-D array, n × n
+            Symmetric positive semidefinite, with kernel ``rigid_mode``.
+        f : array of n
+        contact : mapping
+            ``t`` and ``s`` (indices of the jump and slip unknowns of each
+            contact node), ``weight`` and ``coefficient`` (𝓕), one per node.
+        rigid_mode : array of n, or a list of them
+        M : sparse matrix, optional
+            The mass matrix of the proximal term (for the paper's method).
+        prolongations : list of sparse matrices, optional
+            A nested hierarchy, coarse to fine, the last onto the n
+            unknowns: multigrid solvers need one above 256 unknowns, and say
+            so without it.
+        """
+        shape, a = _csr_in(A, "A")
+        if shape[0] != shape[1]:
+            raise InputError(f"A has shape {shape}: give a square matrix")
+        n = shape[0]
+        fv = _array(f, "f")
+        for key in ("t", "s", "weight", "coefficient"):
+            if not isinstance(contact, Mapping) or key not in contact:
+                raise InputError("contact: give a mapping with t, s, weight and coefficient per node")
+        t = np.asarray(contact["t"])
+        s = np.asarray(contact["s"])
+        if t.dtype.kind not in "iu" or s.dtype.kind not in "iu":
+            raise InputError("contact: t and s are indices of unknowns: give integers")
+        modes = np.asarray(rigid_mode, dtype=np.float64)
+        modes = [modes] if modes.ndim == 1 else list(modes)
+        m = None if M is None else _csr_in(M, "M", (n, n))[1]
+        ps = []
+        for k, p in enumerate(prolongations or []):
+            ps.append(_csr_in(p, f"prolongations[{k}]"))
+        return cls(
+            _contactlab.Problem.from_matrices(
+                str(name),
+                n,
+                a,
+                fv.tolist(),
+                t.astype(np.int64).tolist(),
+                s.astype(np.int64).tolist(),
+                _array(contact["weight"], "contact weight").tolist(),
+                _array(contact["coefficient"], "contact coefficient").tolist(),
+                [_array(z, "rigid_mode").tolist() for z in modes],
+                m,
+                ps,
+            )
+        )
+
+    def export(self, folder: PathLike, bound: Optional[float] = None) -> None:
+        """Writes the problem as ``contactlab export`` does, with the README
+        that says what each file holds and how to hand an answer back to
+        ``certify``. The folder is replaced whole, only if it is empty or a
+        contactlab run."""
+        _contactlab.export(self._p, _path(folder, "folder"), _number(bound, "bound"))
+
     @property
     def name(self) -> str:
         return self._p.name
 
     @property
-    def h(self) -> str:
+    def h(self) -> Optional[str]:
+        """The finest mesh as the command line writes it ("1/64"); None for
+        a problem given by its matrices."""
         return self._p.h
 
     @property
     def n(self) -> int:
+        """The number of unknowns."""
         return self._p.n
 
-    @property
+    @functools.cached_property
     def A(self) -> scipy.sparse.csr_array:
-        return _csr(self._p._a(), self.n)
+        return _csr(self._p._a(), (self.n, self.n))
 
-    @property
+    @functools.cached_property
     def M(self) -> scipy.sparse.csr_array:
-        return _csr(self._p._m(), self.n)
+        return _csr(self._p._m(), (self.n, self.n))
 
-    @property
+    @functools.cached_property
     def f(self) -> np.ndarray:
         return self._p.f
 
-    @property
+    @functools.cached_property
     def contact(self) -> Contact:
         return Contact(**self._p._contact())
 
@@ -209,7 +405,7 @@ class Problem:
         in which the certificate and ``compare`` measure."""
         return dict(self._p.scales)
 
-    @property
+    @functools.cached_property
     def rigid_mode(self) -> np.ndarray:
         return self._p.rigid_mode
 
@@ -243,14 +439,25 @@ class Certificate:
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class Result:
-    """One certified solve. ``status`` is the certified verdict,
-    ``solver_status`` the solver's own claim."""
+    """One certified solve.
+
+    Attributes
+    ----------
+    status : Status
+        The certified verdict; ``solver_status`` is the solver's own claim.
+    success : bool
+        ``status == Status.CONVERGED`` (as scipy's ``OptimizeResult``).
+    message : str
+        Why the solver stopped (``detail``).
+    stopped_by_callback : bool
+        The progress callback asked to stop.
+    """
 
     solver: str
-    status: str
-    solver_status: str
+    status: Status
+    solver_status: Status
     detail: str
     certificate: Certificate
     displacements: np.ndarray
@@ -261,19 +468,36 @@ class Result:
     seconds: float
     seconds_setup: float
     #: The contact zone, node by node: the bytes ``solve --out`` writes to
-    #: ``profile.csv``.
-    profile_csv: str = ""
+    #: ``profile.csv`` (None for a problem without a mesh).
+    profile_csv: Optional[str] = None
+    stopped_by_callback: bool = False
+
+    @property
+    def success(self) -> bool:
+        return self.status == Status.CONVERGED
+
+    @property
+    def message(self) -> str:
+        return self.detail
+
+    def __repr__(self) -> str:
+        return (
+            f"Result(solver={self.solver!r}, status={self.status.value!r}, "
+            f"solver_status={self.solver_status.value!r}, residual={self.certificate.residual:.2e}, "
+            f"iterations={self.iterations}, seconds={self.seconds:.3g})"
+        )
 
 
 def _problem(problem) -> None:
     if not isinstance(problem, Problem):
-        raise Error(f"problem: give a contactlab.Problem (got {type(problem).__name__})")
+        raise InputError(f"problem: give a contactlab.Problem (got {type(problem).__name__})")
 
 
 def _settings(settings) -> List[tuple]:
     """``{path: value}`` (or pairs) as text, in the order given, as
     ``--set path=value`` writes them: the engine resolves them with the
-    command line's own code (the later change of a setting wins)."""
+    library's one resolution (the later change of a setting wins; a setting
+    of a solver that does not run is refused)."""
     if settings is None:
         return []
     if isinstance(settings, Mapping):
@@ -282,11 +506,11 @@ def _settings(settings) -> List[tuple]:
         try:
             pairs = [tuple(item) for item in settings]
         except TypeError:
-            raise Error(
+            raise InputError(
                 f"settings = {settings!r}: give a mapping {{path: value}}, e.g. {{\"tnnmg.tolerance\": 1e-10}}"
             ) from None
         if any(len(pair) != 2 for pair in pairs):
-            raise Error("settings: give a mapping {path: value} or (path, value) pairs")
+            raise InputError("settings: give a mapping {path: value} or (path, value) pairs")
     out = []
     for path, value in pairs:
         if isinstance(value, bool):
@@ -295,24 +519,48 @@ def _settings(settings) -> List[tuple]:
     return out
 
 
+#: A progress callback: called with ``{"stage", "iteration", "residual",
+#: "seconds"}`` for each step of the friction fixed point and of a solver's
+#: outer loop; returning ``False`` (or raising) stops the solve.
+Callback = Callable[[Dict[str, object]], Optional[bool]]
+
+
 def solve(
     problem: Problem,
     solver: Optional[str] = None,
     settings: Optional[Mapping[str, object]] = None,
     bound: Optional[Sequence[float]] = None,
     target: Optional[float] = None,
+    callback: Optional[Callback] = None,
 ) -> Result:
-    """Solves the problem's Coulomb law (or, given ``bound``, the
-    given-friction subproblem at that bound) with a registered solver (the
-    oracle if none) and certifies the answer: ``contactlab solve``.
+    """Solves the problem and certifies the answer: ``contactlab solve``.
 
-    ``settings`` maps ``OWNER.NAME`` paths to values, as ``--set`` does
-    (``{"newton-coulomb.tolerance": 1e-12}``). ``target`` sets the solver's
-    accuracy knob and ε below it and certifies at it, as the benchmark does.
+    Parameters
+    ----------
+    problem : Problem
+    solver : str, optional
+        A registered solver (the oracle if none).
+    settings : mapping, optional
+        ``OWNER.NAME`` paths to values, as ``--set`` does
+        (``{"newton-coulomb.tolerance": 1e-12}``).
+    bound : array, optional
+        Solve the given-friction subproblem at this bound instead of the
+        Coulomb law.
+    target : float, optional
+        Sets the solver's accuracy knob and ε below it and certifies at it,
+        as the benchmark does.
+    callback : callable, optional
+        See ``Callback``; a raised exception is raised again here.
+
+    Returns
+    -------
+    Result
     """
     _problem(problem)
     if solver is not None and not isinstance(solver, str):
-        raise Error(f"solver = {solver!r}: give a registered solver's name ({', '.join(solvers())})")
+        raise InputError(f"solver = {solver!r}: give a registered solver's name ({', '.join(solvers())})")
+    if callback is not None and not callable(callback):
+        raise InputError(f"callback = {callback!r}: give a function of the progress dict")
     g = _array(bound, "bound")
     d = _contactlab.solve(
         problem._p,
@@ -320,11 +568,12 @@ def solve(
         _settings(settings),
         None if g is None else g.tolist(),
         _number(target, "target"),
+        callback,
     )
     return Result(
         solver=d["solver"],
-        status=d["status"],
-        solver_status=d["solver_status"],
+        status=Status(d["status"]),
+        solver_status=Status(d["solver_status"]),
         detail=d["detail"],
         certificate=Certificate._of(d["certificate"]),
         displacements=d["displacements"],
@@ -335,25 +584,25 @@ def solve(
         seconds=float(d["seconds"]),
         seconds_setup=float(d["seconds_setup"]),
         profile_csv=d["profile_csv"],
+        stopped_by_callback=bool(d["stopped_by_callback"]),
     )
 
 
 def _array(x, name: str) -> Optional[np.ndarray]:
     """A one-dimensional array of real numbers (integers or floats), as
     float64; complex values, booleans, objects and strings are refused
-    rather than cast (a complex answer's imaginary part was dropped with a
-    warning and the rest certified)."""
+    rather than cast (a complex answer's imaginary part would be lost)."""
     if x is None:
         return None
     a = np.asarray(x)
     if a.dtype.kind not in "iuf":
-        raise Error(
+        raise InputError(
             f"{name}: give real numbers (an array of dtype {a.dtype} was given"
             + (": its imaginary part would be lost)" if a.dtype.kind == "c" else ")")
         )
     a = np.ascontiguousarray(a, dtype=np.float64)
     if a.ndim != 1:
-        raise Error(f"{name}: give a one-dimensional array (it has shape {a.shape})")
+        raise InputError(f"{name}: give a one-dimensional array (it has shape {a.shape})")
     return a
 
 
@@ -364,14 +613,14 @@ def _forces(forces):
     if isinstance(forces, Mapping):
         keys = set(forces)
         if keys != {"pressure", "friction_traction"}:
-            raise Error(
+            raise InputError(
                 f"forces: give the keys 'pressure' and 'friction_traction' (got {sorted(map(str, keys))})"
             )
         return forces["pressure"], forces["friction_traction"]
     try:
         p, q = forces
     except (TypeError, ValueError):
-        raise Error("forces: give a pair (pressure, friction_traction) or a mapping with those keys") from None
+        raise InputError("forces: give a pair (pressure, friction_traction) or a mapping with those keys") from None
     return p, q
 
 
@@ -384,24 +633,23 @@ def certify(
 ) -> Certificate:
     """The certificate of an answer computed anywhere: ``contactlab certify``.
 
-    Give ``displacements`` (the contact forces then follow from stationarity
-    at the contact rows), ``forces=(pressure, friction_traction)`` per
-    contact node (the displacements then follow from the elastic response),
-    or both. With ``bound`` the given-friction law at that bound is checked,
-    else the Coulomb law.
+    Parameters
+    ----------
+    displacements : array of n, optional
+        The contact forces then follow from stationarity at the contact rows.
+    forces : (pressure, friction_traction), optional
+        Per contact node; the displacements then follow from the elastic
+        response. Give either or both.
+    bound : array, optional
+        Check the given-friction law at this bound, else the Coulomb law.
+    tolerance : float, optional
+        The certificate's tolerance (default 1e-5).
     """
-    return Certificate._of(_certified(problem, displacements, forces, bound, tolerance))
-
-
-def _certified(problem: Problem, displacements, forces, bound, tolerance) -> Mapping:
-    """The certify binding's answer: the certificate's fields, and the
-    answer it judged, completed (displacements, pressure, friction
-    traction)."""
     _problem(problem)
     p, q = _forces(forces)
     if tolerance is not None:
         tolerance = _number(tolerance, "tolerance")
-    return _contactlab.certify(
+    d = _contactlab.certify(
         problem._p,
         _array(displacements, "displacements"),
         _array(p, "pressure"),
@@ -409,379 +657,243 @@ def _certified(problem: Problem, displacements, forces, bound, tolerance) -> Map
         _array(bound, "bound"),
         tolerance,
     )
+    return Certificate._of(d)
 
 
-#: A solver written in Python: called as ``fn(problem, target)``, it gives
-#: the displacements (an array of ``problem.n``), or a dict with
-#: ``displacements`` and/or ``forces`` = (pressure, friction_traction).
-PythonSolver = Callable[[Problem, float], object]
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|NaN|-?inf")
 
 
-@dataclass(frozen=True)
-class Trial:
-    """One run of a study: a solver at a target accuracy, certified."""
-
-    solver: str
-    target: float
-    certified: bool
-    certificate: Certificate
-    seconds: float
-    status: str
-    python: bool = False
-    #: The problem's name and mesh (``benchmark`` runs several).
-    problem: str = ""
-    #: The solver's own claim (a registered solver's status before the
-    #: certificate; "answered" for a Python function).
-    solver_status: str = ""
-
-    @property
-    def claimed(self) -> bool:
-        """Whether the solver claimed an answer: a registered solver that
-        says converged, or a Python function that returned one (not one
-        that raised)."""
-        return self.solver_status in ("converged", "answered")
-
-
-def _failed_certificate(target: float, summary: str) -> "Certificate":
-    """The certificate of a run that gave no answer to judge."""
-    return Certificate(
-        passed=False,
-        tolerance=target,
-        residual=math.inf,
-        summary=summary,
-        violations={},
-    )
-
-
-def _python_answer(fn: PythonSolver, problem: Problem, target: float):
-    """A Python function's answer, timed and certified at ``target``:
-    (certificate, seconds, the completed answer as the certificate judged
-    it: displacements, pressure, friction traction, or None when there is
-    none, and the solver's claim). A function that raises, or whose answer
-    cannot be judged (NaN, a wrong shape, complex values), is one failed
-    run, said in its certificate's summary: it never stops the study."""
-    start = time.perf_counter()
-    try:
-        answer = fn(problem, target)
-    except Exception as e:  # noqa: BLE001 - the run failed; the study goes on
-        seconds = time.perf_counter() - start
-        return _failed_certificate(target, f"the solver raised {type(e).__name__}: {e}"), seconds, None, "raised"
-    seconds = time.perf_counter() - start
-    try:
-        if isinstance(answer, Mapping):
-            v, forces = answer.get("displacements"), answer.get("forces")
-        else:
-            v, forces = answer, None
-        d = _certified(problem, v, forces, None, target)
-    except Error as e:
-        return _failed_certificate(target, f"its answer cannot be judged: {e}"), seconds, None, "answered"
-    completed = (d["displacements"], d["pressure"], d["friction_traction"])
-    return Certificate._of(d), seconds, completed, "answered"
-
-
-def _python_trial(name: str, fn: PythonSolver, problem: Problem, target: float) -> Trial:
-    c, seconds, _, claim = _python_answer(fn, problem, target)
-    return Trial(
-        solver=name,
-        target=target,
-        certified=c.passed,
-        certificate=c,
-        seconds=seconds,
-        status=_python_status(c, claim),
-        python=True,
-        problem=_instance(problem),
-        solver_status=claim,
-    )
-
-
-def _python_status(c: "Certificate", claim: str) -> str:
-    """A Python function's certified status: converged if its answer
-    passes, inaccurate if it answered and fails, failed if it raised."""
-    if claim == "raised":
-        return "failed"
-    return "converged" if c.passed else "inaccurate"
-
-
-def _solvers(solvers) -> Mapping:
-    """Registered names, or a mapping of display names to a registered
-    name or a Python function."""
-    if isinstance(solvers, str):
-        solvers = [solvers]
-    if not isinstance(solvers, Mapping):
+def _value(text: str):
+    """A CSV cell as Python reads it: int, float (as the files write them:
+    digits, ``NaN``, ``inf``), bool, or text (None if empty); a word such
+    as a solver's name stays text."""
+    if text == "":
+        return None
+    if text in ("true", "false"):
+        return text == "true"
+    if _NUMBER.fullmatch(text):
         try:
-            solvers = {name: name for name in solvers}
-        except TypeError:
-            raise Error(f"solvers = {solvers!r}: give solver names or a mapping {{name: solver}}") from None
-    for name, how in solvers.items():
-        if not (callable(how) or isinstance(how, str)):
-            raise Error(f"solvers[{name!r}] = {how!r}: give a registered solver's name or a function fn(problem, target)")
-    return solvers
+            return int(text)
+        except ValueError:
+            return float(text)
+    return text
+
+
+def _rows(data: bytes) -> List[Dict[str, object]]:
+    """The rows of a CSV file the study wrote, typed."""
+    return [
+        {k: _value(v) for k, v in row.items()}
+        for row in csv.DictReader(io.StringIO(data.decode("utf-8")))
+    ]
+
+
+@dataclass(frozen=True, repr=False)
+class StudyResult:
+    """What a study gave: the rows of its main table, every file it wrote
+    (the bytes the command line writes for the same inputs), its charts
+    (SVG) and its report (its README section, Markdown).
+
+    ``rows`` is the main CSV (``compare.csv``, ``benchmark.csv``,
+    ``work_precision.csv``) as dicts, typed; ``table(path)`` reads any
+    other CSV it wrote.
+    """
+
+    rows: List[Dict[str, object]]
+    files: Dict[str, bytes]
+    charts: Dict[str, bytes]
+    report: str
+
+    def table(self, path: str) -> List[Dict[str, object]]:
+        """The rows of the CSV file ``path`` the study wrote."""
+        if path not in self.files:
+            raise InputError(f"{path}: the study wrote {', '.join(sorted(self.files))}")
+        return _rows(self.files[path])
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({len(self.rows)} rows, files: {', '.join(sorted(self.files))})"
+
+
+@dataclass(frozen=True, repr=False)
+class BenchmarkResult(StudyResult):
+    """A benchmark's runs and its views: ``summaries`` is
+    ``benchmark_summary.csv`` (per target and solver: success rate, runs
+    claimed but refused, shifted geometric mean of the time)."""
+
+    summaries: List[Dict[str, object]] = ()
+
+
+def _solver_names(solvers) -> List[str]:
+    """Registered names, Python functions registered under their keys."""
+    if isinstance(solvers, str):
+        return [solvers]
+    if isinstance(solvers, Mapping):
+        names = []
+        for name, how in solvers.items():
+            if callable(how):
+                register(name, how)
+            elif how != name:
+                raise InputError(
+                    f"solvers[{name!r}] = {how!r}: give a function fn(problem, target), "
+                    "or the registered solver's own name"
+                )
+            names.append(str(name))
+        return names
+    try:
+        names = list(solvers)
+    except TypeError:
+        raise InputError(f"solvers = {solvers!r}: give solver names or a mapping {{name: function}}") from None
+    if not all(isinstance(n, str) for n in names):
+        raise InputError(f"solvers = {solvers!r}: give solver names or a mapping {{name: function}}")
+    return names
 
 
 def _targets(targets) -> List[float]:
     try:
         out = [_number(t, "targets") for t in targets]
     except TypeError:
-        raise Error(f"targets = {targets!r}: give a list of accuracies such as [1e-4, 1e-8]") from None
-    if not out:
-        raise Error("targets: give at least one accuracy, such as [1e-4]")
+        raise InputError(f"targets = {targets!r}: give a list of accuracies such as [1e-4, 1e-8]") from None
     return out
 
 
-def _instance(problem: Problem) -> str:
-    return f"{problem.name}, h = {problem.h}"
+def _out(out) -> Optional[str]:
+    return None if out is None else _path(out, "out")
 
 
-def _trial(name: str, how: Union[str, PythonSolver], problem: Problem, target: float) -> Trial:
-    """One solver (registered, or a Python function) at one target, certified."""
-    if callable(how):
-        return _python_trial(name, how, problem, target)
-    r = solve(problem, solver=how, target=target)
-    return Trial(
-        solver=name,
-        target=target,
-        certified=r.certificate.passed,
-        certificate=r.certificate,
-        seconds=r.seconds,
-        status=r.status,
-        problem=_instance(problem),
-        solver_status=r.solver_status,
+Solvers = Union[str, Iterable[str], Mapping[str, Union[str, PythonSolver]]]
+
+
+def compare(
+    problem: Problem,
+    solvers: Solvers,
+    settings: Optional[Mapping[str, object]] = None,
+    repeats: int = 0,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """Every solver against the earned reference: ``contactlab compare``.
+
+    Each solver runs on the problem's given-friction subproblem at the
+    reference's bound (if it solves it) and on the whole Coulomb problem;
+    each answer is certified and measured against the reference (every
+    exact solver at its tightest settings, the certified answer with the
+    smallest certificate).
+
+    Parameters
+    ----------
+    problem : Problem
+        Built from a scene.
+    solvers : names, or a mapping {name: function or name}
+        A function is registered under its name (see ``register``).
+    settings : mapping, optional
+        As for ``solve``; applied on the scene file's settings.
+    repeats : int
+        Timed runs after the first (``--runs`` less one).
+    out : path, optional
+        Writes the run folder as ``contactlab compare --out`` does.
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: ``compare.csv``.
+    """
+    _problem(problem)
+    if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
+        raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
+    d = _contactlab._compare(
+        problem._p, _solver_names(solvers), _settings(settings), int(repeats), _out(out)
+    )
+    files = dict(d["files"])
+    return StudyResult(rows=_rows(files["compare.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+
+
+def benchmark(
+    problems: Iterable[Problem],
+    solvers: Solvers,
+    targets: Sequence[float] = (1e-4, 1e-8),
+    time_limit: float = 60.0,
+    settings: Optional[Mapping[str, object]] = None,
+    out: Optional[PathLike] = None,
+) -> BenchmarkResult:
+    """A benchmark over ``problems``: ``contactlab benchmark``'s study.
+
+    Every solver at every target accuracy τ on every problem: its accuracy
+    knob and ε at 0.1·τ, the certificate at τ; a run succeeds if its answer
+    passes within ``time_limit`` seconds (a Python function cannot be
+    interrupted: a slower run counts as failed at the limit).
+
+    Returns
+    -------
+    BenchmarkResult
+        ``rows``: ``benchmark.csv``; ``summaries``: ``benchmark_summary.csv``;
+        ``report``: ``benchmark.md``'s tables. With ``out`` the folder the
+        command line writes (LaTeX tables and performance profiles too).
+    """
+    problems = list(problems)
+    for p in problems:
+        _problem(p)
+    limit = _number(time_limit, "time_limit")
+    d = _contactlab._benchmark(
+        [p._p for p in problems],
+        _solver_names(solvers),
+        _targets(targets),
+        limit,
+        _settings(settings),
+        _out(out),
+    )
+    files = dict(d["files"])
+    return BenchmarkResult(
+        rows=_rows(files["benchmark.csv"]),
+        files=files,
+        charts=dict(d["charts"]),
+        report=d["report"],
+        summaries=_rows(files["benchmark_summary.csv"]),
     )
 
 
 def work_precision(
     problem: Problem,
-    solvers: Union[Iterable[str], Mapping[str, Union[str, PythonSolver]]],
+    solvers: Solvers,
     targets: Sequence[float] = (1e-4, 1e-6, 1e-8),
-    chart: Optional[str] = None,
-) -> List[Trial]:
-    """A work-precision study: each solver at each target accuracy, every
-    answer certified by contactlab's certificate at that target, timed.
+    settings: Optional[Mapping[str, object]] = None,
+    repeats: int = 0,
+    chart: Optional[PathLike] = None,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """Work against precision: each solver at each target accuracy (the
+    benchmark's rule), certified at the target, timed, and measured against
+    the earned reference.
 
-    ``solvers`` lists registered solvers' names, or maps display names to a
-    registered name or to a Python function (see ``PythonSolver``): a
-    Python solver's answers pass through the same certificate and are drawn
-    in the same chart. With ``chart`` (a path ending in .svg) the trials are
-    drawn as the command line draws its work-precision charts: the
-    certificate's largest violation against seconds, certified points joined
-    and failed ones as crosses.
+    Parameters
+    ----------
+    chart : path ending in .svg, optional
+        Writes the chart: the certificate's largest violation against
+        seconds, certified points joined, failed ones as crosses.
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: ``work_precision.csv``.
     """
+    _problem(problem)
     if chart is not None:
         chart = _path(chart, "chart")
         if not chart.lower().endswith(".svg"):
-            raise Error(f"chart = {chart!r}: charts are SVG; give a path ending in .svg")
-    _problem(problem)
-    solvers = _solvers(solvers)
-    trials: List[Trial] = [
-        _trial(name, how, problem, float(target))
-        for name, how in solvers.items()
-        for target in _targets(targets)
-    ]
-    if chart is not None:
-        _contactlab._work_precision_chart(
-            f"Work against precision: {problem.name}, h = {problem.h}",
-            "largest violation in the certificate (relative)",
-            [(t.solver, t.certificate.residual, t.seconds, t.certified) for t in trials],
-            chart,
-        )
-    return trials
-
-
-@dataclass(frozen=True)
-class Comparison:
-    """One solver in a comparison: its certified answer against the
-    reference, the certified answer with the smallest largest violation."""
-
-    solver: str
-    certified: bool
-    certificate: Certificate
-    seconds: float
-    status: str
-    #: The solver's own claim ("answered" for a Python function).
-    solver_status: str
-    python: bool
-    #: Whether this answer is the reference.
-    reference: bool
-    #: max|v − v_ref| / U and max|p − p_ref| / P, the problem's
-    #: displacement and pressure scales (NaN when no answer is certified).
-    displacement_difference: float
-    pressure_difference: float
-
-
-def compare(
-    problem: Problem,
-    solvers: Union[Iterable[str], Mapping[str, Union[str, PythonSolver]]],
-    target: float = 1e-8,
-) -> List[Comparison]:
-    """Every solver on the problem's Coulomb law, each answer certified at
-    ``target`` and timed, and compared with the reference: of these
-    answers, the certified one whose largest violation is the smallest
-    (``contactlab compare`` chooses its reference among its candidates by
-    the same rule). ``solvers`` is as for
-    ``work_precision``: a Python function's answer passes through the same
-    certificate and is measured against the same reference; one that the
-    certificate refuses is never the reference.
-    """
-    _problem(problem)
-    solvers = _solvers(solvers)
-    target = _number(target, "target")
-    runs = []
-    for name, how in solvers.items():
-        if callable(how):
-            c, seconds, completed, claim = _python_answer(how, problem, target)
-            v, p, _ = completed if completed is not None else (None, None, None)
-            runs.append((name, c, seconds, _python_status(c, claim), claim, True, v, p))
-        else:
-            r = solve(problem, solver=how, target=target)
-            runs.append(
-                (
-                    name,
-                    r.certificate,
-                    r.seconds,
-                    r.status,
-                    r.solver_status,
-                    False,
-                    r.displacements,
-                    r.pressure,
-                )
-            )
-    certified = [k for k, run in enumerate(runs) if run[1].passed]
-    best = min(certified, key=lambda k: runs[k][1].residual, default=None)
-    scales = problem.scales
-    out = []
-    for k, (name, c, seconds, status, claim, python, v, p) in enumerate(runs):
-        if best is None or v is None:
-            dv = dp = math.nan
-        else:
-            v_ref, p_ref = runs[best][6], runs[best][7]
-            dv = float(np.max(np.abs(v - v_ref), initial=0.0)) / scales["displacement"]
-            dp = float(np.max(np.abs(p - p_ref), initial=0.0)) / scales["pressure"]
-        out.append(
-            Comparison(
-                solver=name,
-                certified=c.passed,
-                certificate=c,
-                seconds=seconds,
-                status=status,
-                solver_status=claim,
-                python=python,
-                reference=k == best,
-                displacement_difference=dv,
-                pressure_difference=dp,
-            )
-        )
-    return out
-
-
-@dataclass(frozen=True)
-class BenchmarkSummary:
-    """One solver at one target accuracy over every problem of a benchmark,
-    as ``benchmark_summary.csv`` has it: success rate, runs its solver
-    claimed but the certificate refused, and the shifted geometric mean of
-    its time (shift 0.1 s, a failure counted at the time limit), also
-    relative to the best solver's."""
-
-    target: float
-    solver: str
-    runs: int
-    successes: int
-    success_rate: float
-    claimed_but_failed: int
-    shifted_geometric_mean: float
-    relative_to_best: float
-
-
-@dataclass(frozen=True)
-class BenchmarkResult:
-    """A benchmark's runs and the command line's views of them."""
-
-    trials: List[Trial]
-    summaries: List[BenchmarkSummary]
-    #: The report ``benchmark.md`` holds: per target the table, the runs
-    #: claimed but refused, which solver wins by how much.
-    report: str
-
-
-def benchmark(
-    problems: Iterable[Problem],
-    solvers: Union[Iterable[str], Mapping[str, Union[str, PythonSolver]]],
-    targets: Sequence[float] = (1e-4, 1e-8),
-    time_limit: float = 60.0,
-    out: Optional[str] = None,
-) -> BenchmarkResult:
-    """A benchmark over ``problems``: every solver at every target accuracy
-    on every problem, each answer certified at the target, timed; the
-    summaries, report and performance profiles are computed by the code of
-    ``contactlab benchmark``, so a Python solver stands in the same tables
-    and charts as the registered ones.
-
-    ``solvers`` is as for ``work_precision``. A registered solver runs with
-    the benchmark's rule (its accuracy knob and ε below the target); a
-    Python function is called as ``fn(problem, target)``. A run succeeds if
-    its answer passes the certificate at the target within ``time_limit``
-    seconds (a Python function is not interrupted: a slower run counts as
-    failed, at the limit like every failure; one that raises or returns
-    what cannot be judged is one failed run). A Python function's answer counts as its claim of convergence,
-    so a refused one is "claimed but failed". With ``out`` (a folder,
-    replaced whole, only if empty or a contactlab run) it writes what the
-    command line writes: benchmark.csv, benchmark_summary.csv, benchmark.md,
-    a LaTeX table per target and the performance profiles.
-    """
-    solvers = _solvers(solvers)
-    targets = _targets(targets)
-    problems = list(problems)
-    for problem in problems:
-        _problem(problem)
-    if isinstance(time_limit, bool) or not (
-        isinstance(time_limit, (int, float)) and math.isfinite(time_limit) and time_limit > 0
-    ):
-        raise Error(f"time_limit = {time_limit!r}: give a positive number of seconds")
-    trials: List[Trial] = []
-    rows = []
-    for problem in problems:
-        friction = float(np.max(problem.contact.coefficient, initial=0.0))
-        for name, how in solvers.items():
-            for target in targets:
-                t = _trial(name, how, problem, float(target))
-                trials.append(t)
-                in_time = t.seconds <= time_limit
-                rows.append(
-                    {
-                        "instance": t.problem,
-                        "family": "python",
-                        "h": problem.h,
-                        "unknowns": problem.n,
-                        "friction_coefficient": friction,
-                        "solver": name,
-                        "target": t.target,
-                        "status": t.status if in_time else "time_limit",
-                        "solver_status": t.solver_status,
-                        "success": bool(t.certified and in_time),
-                        "claimed_but_failed": bool(t.claimed and not t.certified),
-                        "certificate": repr(float(t.certificate.residual)),
-                        "failing": ";".join(
-                            k for k, v in t.certificate.violations.items() if v > t.target
-                        ),
-                        "seconds": t.seconds,
-                        "time_limit": float(time_limit),
-                        "work": 0,
-                        "detail": t.certificate.summary,
-                    }
-                )
-    summaries_json, report = _contactlab._benchmark_report(
-        json.dumps(rows), None if out is None else _path(out, "out")
+            raise InputError(f"chart = {chart!r}: charts are SVG; give a path ending in .svg")
+    if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
+        raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
+    d = _contactlab._work_precision(
+        problem._p,
+        _solver_names(solvers),
+        _targets(targets),
+        _settings(settings),
+        int(repeats),
+        _out(out),
     )
-    summaries = [
-        BenchmarkSummary(
-            target=float(d["target"]),
-            solver=str(d["solver"]),
-            runs=int(d["runs"]),
-            successes=int(d["successes"]),
-            success_rate=float(d["success_rate"]),
-            claimed_but_failed=int(d["claimed_but_failed"]),
-            shifted_geometric_mean=float(d["shifted_geometric_mean"]),
-            relative_to_best=float(d["relative_to_best"]),
-        )
-        for d in json.loads(summaries_json)
-    ]
-    return BenchmarkResult(trials=trials, summaries=summaries, report=report)
+    files = dict(d["files"])
+    charts = dict(d["charts"])
+    if chart is not None:
+        try:
+            with open(chart, "wb") as fh:
+                fh.write(charts["work_precision"])
+        except OSError as e:
+            raise FileError(f"cannot write {chart}: {e.strerror}") from None
+    return StudyResult(rows=_rows(files["work_precision.csv"]), files=files, charts=charts, report=d["report"])

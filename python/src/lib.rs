@@ -1,45 +1,84 @@
 //! `contactlab._contactlab`: the compiled half of the Python package.
 //!
 //! It exposes the library's own functions, not copies of them: a problem is
-//! the scene assembled by [`Discretization`] (the one the CLI solves), a
-//! solve is the library's [`solve_assembled`] on the problem's own finest level (not
-//! assembled again) with settings resolved by [`Settings::set_text`]
-//! (the CLI's `--set`), a certificate is [`certify`] (the CLI's `certify`).
-//! The Python layer (`contactlab/__init__.py`) turns the plain arrays given
-//! here into scipy and numpy objects. Every error is one
-//! `contactlab.Error` with the CLI's one-line message.
+//! the scene assembled by `Discretization` (the one the CLI solves) or an
+//! algebraic problem checked like an imported instance ([`problem`]); a
+//! solve is the library's [`solve_assembled`] (or [`solve_algebraic`]);
+//! settings are resolved by the library's one resolution
+//! ([`Changes::resolve`]); a certificate is [`certify`] (the CLI's
+//! `certify`); the studies are the library's ([`studies`]); a Python
+//! function is a registered solver ([`python_solver`]). The Python layer
+//! (`contactlab/__init__.py`) holds types, conversions and documentation.
+//! Every error is a `contactlab.Error` with the CLI's one-line message: an
+//! `InputError` (also a `ValueError`), a `FileError` (also an `OSError`) or
+//! an `OutOfMemory` (also a `MemoryError`).
 
-use std::sync::Arc;
+mod problem;
+mod python_solver;
+mod studies;
+
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use contactlab::certificate::certify as certify_answer;
-use contactlab::mechanics::discretization::Discretization;
-use contactlab::mechanics::mesh_size::MeshSize;
-use contactlab::mechanics::scene::{Overrides, Scene};
-use contactlab::settings::{Changes, Settings};
-use contactlab::solve::{Assembled, Caps, solve as solve_assembled, solver_entry};
-use contactlab::solvers::numerics::linalg::{ColumnIndex, SparseRows};
+use contactlab::settings::Changes;
+use contactlab::settings::changes::AS_PATHS;
+use contactlab::solve::{Assembled, Caps, solve as solve_assembled, solve_algebraic, solver_entry};
 use contactlab::solvers::{Control, Friction, Observer, Progress, Status, registry};
-use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyReadonlyArray1};
 use pyo3::create_exception;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+
+use problem::{Problem, Source, vector};
 
 create_exception!(
     _contactlab,
     Error,
-    PyValueError,
+    PyException,
     "A contactlab error: the same one-line message as the command line's."
 );
 
-fn err(e: impl std::fmt::Display) -> PyErr {
-    Error::new_err(e.to_string())
+/// The exception class `name` of this module (made at its start as a
+/// subclass of both `Error` and a built-in one), else `Error`.
+fn raise(kind: &str, message: String) -> PyErr {
+    Python::attach(|py| {
+        py.import("contactlab._contactlab")
+            .and_then(|m| m.getattr(kind))
+            .and_then(|t| Ok(PyErr::from_type(t.cast_into()?, message.clone())))
+            .unwrap_or_else(|_| Error::new_err(message))
+    })
 }
 
-fn anyhow_err(e: anyhow::Error) -> PyErr {
-    Error::new_err(format!("{e:#}"))
+/// Bad input: an `InputError`.
+pub fn input_error(e: impl std::fmt::Display) -> PyErr {
+    raise("InputError", e.to_string())
+}
+
+/// A library error as the exception it is: a file that cannot be read or
+/// written (`FileError`), memory that would not suffice (`OutOfMemory`),
+/// else bad input (`InputError`).
+pub fn error_of(e: anyhow::Error) -> PyErr {
+    let message = format!("{e:#}");
+    let kind = if e.chain().any(|c| c.is::<std::io::Error>())
+        || message.starts_with("cannot read ")
+        || message.starts_with("cannot write ")
+    {
+        "FileError"
+    } else if e.chain().any(|c| c.is::<contactlab::memory::MemoryError>())
+        || message.starts_with("not enough memory")
+    {
+        "OutOfMemory"
+    } else {
+        "InputError"
+    };
+    raise(kind, message)
+}
+
+fn err(e: impl std::fmt::Display) -> PyErr {
+    Error::new_err(e.to_string())
 }
 
 /// A flag a long computation reads at each progress event: set when the
@@ -68,7 +107,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 /// interrupted, so the work is left to end on its thread, told to stop at
 /// its next progress event, its answer dropped). A panic in the work is a
 /// `contactlab.Error`, never a `PanicException`.
-fn interruptible<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+pub(crate) fn interruptible<T, F>(py: Python<'_>, work: F) -> PyResult<T>
 where
     T: Send + 'static,
     F: FnOnce(Cancel) -> anyhow::Result<T> + Send + 'static,
@@ -92,7 +131,7 @@ where
                 .recv_timeout(SIGNAL_POLL)
         });
         match received {
-            Ok(Ok(result)) => return result.map_err(anyhow_err),
+            Ok(Ok(result)) => return result.map_err(error_of),
             Ok(Err(panic)) => {
                 let what = panic
                     .downcast_ref::<String>()
@@ -116,262 +155,26 @@ where
     }
 }
 
-/// The scene of a problem, the settings it brings (a scene file's), and
-/// its assembly on the finest mesh (shared with the computations that
-/// read it on their own threads).
-#[pyclass(frozen, module = "contactlab._contactlab")]
-struct Problem {
-    scene: Arc<Scene>,
-    settings: Settings,
-    finest: Arc<Discretization>,
-}
-
-/// The scene with the overrides of `solve --problem/--scene`, applied by
-/// the library's [`Overrides`] (as the command line does), and assembled
-/// (interruptibly, and refused up front if it would not fit in memory).
-#[allow(clippy::too_many_arguments)]
-fn build(
-    py: Python<'_>,
-    scene: Scene,
-    settings: Settings,
-    h: Option<&str>,
-    young: Option<f64>,
-    poisson: Option<f64>,
-    plane: Option<&str>,
-    friction: Option<f64>,
-) -> PyResult<Problem> {
-    let h = h
-        .map(|h| h.parse::<MeshSize>().map_err(|m| err(format!("h: {m}"))))
-        .transpose()?;
-    let plane = plane
-        .map(|p| {
-            use contactlab::mechanics::material::PlaneModel;
-            PlaneModel::ALL
-                .into_iter()
-                .find(|m| m.name() == p.trim())
-                .ok_or_else(|| err(format!("plane = '{p}': give 'strain' or 'stress'")))
-        })
-        .transpose()?;
-    let overrides = Overrides {
-        h,
-        young,
-        poisson,
-        plane,
-        friction,
-    };
-    let scene = overrides.apply(scene).map_err(err)?;
-    let (scene, finest) = interruptible(py, move |_| {
-        let finest = Discretization::new(&scene, scene.finest())?;
-        Ok((scene, finest))
-    })?;
-    Ok(Problem {
-        scene: Arc::new(scene),
-        settings,
-        finest: Arc::new(finest),
-    })
-}
-
-/// A sparse matrix as numpy arrays: (indptr, indices, data).
-type Csr<'py> = (
-    Bound<'py, PyArray1<usize>>,
-    Bound<'py, PyArray1<usize>>,
-    Bound<'py, PyArray1<f64>>,
-);
-
-fn csr<'py, A: SparseRows>(py: Python<'py>, a: &A) -> Csr<'py> {
-    let cols: Vec<usize> = a.col_indices().iter().map(|&c| c.at()).collect();
-    (
-        a.row_offsets().to_vec().into_pyarray(py),
-        cols.into_pyarray(py),
-        a.values().to_vec(a.row_offsets()).into_pyarray(py),
-    )
-}
-
-#[pymethods]
-impl Problem {
-    /// The paper's problem `number` (1, 2 or 3).
-    #[staticmethod]
-    #[pyo3(signature = (number, h=None, young=None, poisson=None, plane=None, friction=None))]
-    fn paper(
-        py: Python<'_>,
-        number: i64,
-        h: Option<&str>,
-        young: Option<f64>,
-        poisson: Option<f64>,
-        plane: Option<&str>,
-        friction: Option<f64>,
-    ) -> PyResult<Self> {
-        let number = u32::try_from(number).map_err(|_| {
-            err(format!(
-                "number = {number}: give the paper's problem 1, 2 or 3"
-            ))
-        })?;
-        let scene = Scene::paper_problem(number).map_err(err)?;
-        build(
-            py,
-            scene,
-            Settings::default(),
-            h,
-            young,
-            poisson,
-            plane,
-            friction,
-        )
-    }
-
-    /// A scene file (TOML, as `solve --scene` reads it), with the settings
-    /// it brings: every solve of the problem starts from them, as the
-    /// command line's does.
-    #[staticmethod]
-    #[pyo3(signature = (path, h=None, young=None, poisson=None, plane=None, friction=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn from_scene(
-        py: Python<'_>,
-        path: std::path::PathBuf,
-        h: Option<&str>,
-        young: Option<f64>,
-        poisson: Option<f64>,
-        plane: Option<&str>,
-        friction: Option<f64>,
-    ) -> PyResult<Self> {
-        let (scene, settings) = contactlab::formats::scene_file::load(&path).map_err(err)?;
-        build(py, scene, settings, h, young, poisson, plane, friction)
-    }
-
-    #[getter]
-    fn name(&self) -> String {
-        self.scene.name.clone()
-    }
-
-    #[getter]
-    fn h(&self) -> String {
-        self.finest.h().to_string()
-    }
-
-    #[getter]
-    fn n(&self) -> usize {
-        self.finest.problem.n()
-    }
-
-    /// A in CSR: (indptr, indices, data).
-    fn _a<'py>(&self, py: Python<'py>) -> Csr<'py> {
-        csr(py, self.finest.problem.a())
-    }
-
-    /// M, the mass matrix of the proximal term, in CSR.
-    fn _m<'py>(&self, py: Python<'py>) -> PyResult<Csr<'py>> {
-        let m = self
-            .finest
-            .problem
-            .mass()
-            .ok_or_else(|| err("this problem was assembled without its mass matrix M"))?;
-        Ok(csr(py, &*m))
-    }
-
-    #[getter]
-    fn f<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.finest.problem.f().to_vec().into_pyarray(py)
-    }
-
-    /// The contact nodes: t, s (indices of the jump and slip unknowns),
-    /// weight, coefficient (𝓕) and x, each an array.
-    fn _contact<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = self.finest.problem.contacts();
-        let d = PyDict::new(py);
-        d.set_item(
-            "t",
-            c.iter().map(|c| c.t).collect::<Vec<_>>().into_pyarray(py),
-        )?;
-        d.set_item(
-            "s",
-            c.iter().map(|c| c.s).collect::<Vec<_>>().into_pyarray(py),
-        )?;
-        d.set_item(
-            "weight",
-            c.iter()
-                .map(|c| c.weight)
-                .collect::<Vec<_>>()
-                .into_pyarray(py),
-        )?;
-        d.set_item(
-            "coefficient",
-            c.iter()
-                .map(|c| c.coefficient)
-                .collect::<Vec<_>>()
-                .into_pyarray(py),
-        )?;
-        d.set_item("x", self.finest.contact_x().into_pyarray(py))?;
-        Ok(d)
-    }
-
-    /// The problem's own scales (force, contact load, length of Γ_K,
-    /// stiffness, pressure P, displacement U): what the certificate and the
-    /// comparisons measure in.
-    #[getter]
-    fn scales<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = self.finest.problem.scales();
-        let d = PyDict::new(py);
-        for (name, value) in [
-            ("force", s.force),
-            ("contact_load", s.contact_load),
-            ("length", s.length),
-            ("stiffness", s.stiffness),
-            ("pressure", s.pressure),
-            ("displacement", s.displacement),
-        ] {
-            d.set_item(name, value)?;
-        }
-        Ok(d)
-    }
-
-    /// The upper body's vertical translation in the unknowns (A's kernel).
-    #[getter]
-    fn rigid_mode<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.finest.kernel_vector().into_pyarray(py)
-    }
-
-    fn __repr__(&self) -> String {
-        format!(
-            "Problem({}, h = {}, {} unknowns, {} contact nodes)",
-            self.scene.name,
-            self.finest.h(),
-            self.finest.problem.n(),
-            self.finest.problem.contacts().len()
-        )
-    }
-}
-
-/// The registered solvers' names.
+/// The registered solvers' names (Python solvers among them).
 #[pyfunction]
 fn solvers() -> Vec<&'static str> {
     registry::names()
 }
 
-/// The problem's settings (a scene file's, or the defaults) with
-/// `{path: value}` applied in order by the code the command line resolves
-/// its flags with ([`Changes`]: the later change of a setting wins), and
-/// refused if they set a setting of a solver the solve does not use.
-fn settings_from(
-    base: &Settings,
-    items: Vec<(String, String)>,
-    running: &[&'static registry::Entry],
-) -> PyResult<Settings> {
+/// Every status a solve can end with, as written in output files.
+#[pyfunction]
+fn statuses() -> Vec<&'static str> {
+    Status::ALL.iter().map(|s| s.as_str()).collect()
+}
+
+/// `{path: value}` items as the library's ordered changes (the later
+/// change of a setting wins), each named as Python gave it.
+pub(crate) fn changes_of(items: &[(String, String)]) -> Changes {
     let mut changes = Changes::default();
-    for (path, text) in &items {
+    for (path, text) in items {
         changes.push(path, text, &format!("settings[{path:?}]"));
     }
     changes
-        .check_used_by(running, &contactlab::settings::changes::AS_PATHS)
-        .map_err(err)?;
-    changes.apply_to(base.clone()).map_err(err)
-}
-
-/// A friction bound given from Python: one finite value ≥ 0 per contact
-/// node, checked as a solve checks it.
-fn bound_checked(problem: &Problem, g: &[f64]) -> PyResult<()> {
-    Friction::Given(g)
-        .check(&problem.finest.problem)
-        .map_err(|m| err(format!("bound: {m}")))
 }
 
 /// The certificate as a dict: passed, tolerance, summary, violations by
@@ -393,10 +196,61 @@ fn certificate_dict<'py>(
     Ok(d)
 }
 
+/// Progress for a Python callback: each event of a stage that keeps a
+/// history (the friction fixed point, a solver's outer loop: not the many
+/// inner sweeps) is given to `callback` as a dict; `False` (or an
+/// exception, kept to be raised after the solve) stops the solve. Ctrl-C
+/// stops it too ([`Cancel`]).
+struct Callback {
+    callback: Option<Py<PyAny>>,
+    cancel: Cancel,
+    stages: Vec<&'static str>,
+    raised: Arc<Mutex<Option<PyErr>>>,
+    stopped: Arc<AtomicBool>,
+}
+
+impl Observer for Callback {
+    fn observe(&mut self, p: &Progress) -> Control {
+        if self.cancel.observe(p) != Control::Continue || self.stopped.load(Ordering::Relaxed) {
+            return Control::Stop(Status::NotRun);
+        }
+        let Some(f) = &self.callback else {
+            return Control::Continue;
+        };
+        if !self.stages.contains(&p.stage) {
+            return Control::Continue;
+        }
+        Python::attach(|py| {
+            let d = PyDict::new(py);
+            let call = || -> PyResult<bool> {
+                d.set_item("stage", p.stage)?;
+                d.set_item("iteration", p.iteration)?;
+                d.set_item("residual", p.residual)?;
+                d.set_item("seconds", p.seconds)?;
+                let r = f.call1(py, (d.clone(),))?;
+                let r = r.bind(py);
+                Ok(r.is_none() || r.is_truthy()?)
+            };
+            match call() {
+                Ok(true) => Control::Continue,
+                Ok(false) => {
+                    self.stopped.store(true, Ordering::Relaxed);
+                    Control::Stop(Status::NotRun)
+                }
+                Err(e) => {
+                    *self.raised.lock().unwrap_or_else(|e| e.into_inner()) = Some(e);
+                    self.stopped.store(true, Ordering::Relaxed);
+                    Control::Stop(Status::NotRun)
+                }
+            }
+        })
+    }
+}
+
 /// One solve of the problem's Coulomb law (or the given-friction subproblem
 /// at `bound`), certified: the CLI's `solve`.
 #[pyfunction]
-#[pyo3(signature = (problem, solver=None, settings=Vec::new(), bound=None, target=None))]
+#[pyo3(signature = (problem, solver=None, settings=Vec::new(), bound=None, target=None, callback=None))]
 fn solve<'py>(
     py: Python<'py>,
     problem: &Problem,
@@ -404,49 +258,102 @@ fn solve<'py>(
     settings: Vec<(String, String)>,
     bound: Option<Vec<f64>>,
     target: Option<f64>,
+    callback: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let entry = match solver {
-        Some(name) => solver_entry(name).map_err(anyhow_err)?,
+        Some(name) => solver_entry(name).map_err(error_of)?,
         None => registry::with_role(registry::Role::Oracle)
             .ok_or_else(|| err("no oracle is registered"))?,
     };
-    let mut settings = settings_from(&problem.settings, settings, &[entry])?;
+    let mut settings = changes_of(&settings)
+        .resolve(problem.settings.clone(), &[entry], &AS_PATHS)
+        .map_err(input_error)?;
     if let Some(t) = target {
         // The benchmark's rule: the solver's accuracy knob and ε at a safety
         // factor below the target, the certificate at the target.
         let t = contactlab::certificate::check_tolerance(t)
-            .map_err(|m| err(format!("target = {m}")))?;
-        settings = contactlab::study::benchmark::target_settings(entry, &settings, t)
-            .map_err(anyhow_err)?;
+            .map_err(|m| input_error(format!("target = {m}")))?;
+        settings =
+            contactlab::study::benchmark::target_settings(entry, &settings, t).map_err(error_of)?;
     }
     if let Some(g) = &bound {
-        bound_checked(problem, g)?;
+        problem.bound_checked(g)?;
     }
-    let (scene, finest) = (problem.scene.clone(), problem.finest.clone());
-    let solved = interruptible(py, move |cancel| {
+    let raised = Arc::new(Mutex::new(None));
+    let stopped = Arc::new(AtomicBool::new(false));
+    let mut stages: Vec<&'static str> = entry
+        .stages
+        .iter()
+        .filter(|s| s.history)
+        .map(|s| s.name)
+        .collect();
+    stages.push(contactlab::coulomb::fixed_point::STAGE);
+    let source = match &problem.source {
+        Source::Scene { scene, finest } => Source::Scene {
+            scene: scene.clone(),
+            finest: finest.clone(),
+        },
+        Source::Algebraic(p) => Source::Algebraic(p.clone()),
+    };
+    let (theirs, stop) = (raised.clone(), stopped.clone());
+    let (outcome, profile) = interruptible(py, move |cancel| {
         let friction = match &bound {
             Some(g) => Friction::Given(g),
             None => Friction::Coulomb,
         };
-        // The problem's finest level, copied (far cheaper than its
-        // assembly); the coarser levels of a continuation are assembled.
-        let assembled = Assembled::with_finest(&scene, entry, (*finest).clone())?;
-        let mut observer = cancel;
-        solve_assembled(
-            assembled,
-            friction,
-            entry,
-            &settings,
-            Caps::default(),
-            &mut observer,
-        )
+        let mut observer = Callback {
+            callback,
+            cancel,
+            stages,
+            raised: theirs,
+            stopped: stop,
+        };
+        match source {
+            Source::Scene { scene, finest } => {
+                // The problem's finest level, copied (far cheaper than its
+                // assembly); the coarser levels of a continuation are assembled.
+                let assembled = Assembled::with_finest(&scene, entry, (*finest).clone())?;
+                let solved = solve_assembled(
+                    assembled,
+                    friction,
+                    entry,
+                    &settings,
+                    Caps::default(),
+                    &mut observer,
+                )?;
+                // The bytes `solve --out` writes to profile.csv, by the same code.
+                let profile = contactlab::io::csv::to_csv(
+                    &solved.profile(),
+                    &contactlab::mechanics::contact_zone::PROFILE_COLUMNS,
+                )?;
+                Ok((
+                    solved.outcome,
+                    Some(String::from_utf8_lossy(&profile).into_owned()),
+                ))
+            }
+            Source::Algebraic(p) => Ok((
+                solve_algebraic(
+                    &p,
+                    friction,
+                    entry,
+                    &settings,
+                    Caps::default(),
+                    &mut observer,
+                )?,
+                None,
+            )),
+        }
     })?;
-    let o = &solved.outcome;
+    if let Some(e) = raised.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        return Err(e);
+    }
+    let o = &outcome;
     let d = PyDict::new(py);
     d.set_item("solver", entry.name)?;
     d.set_item("status", o.status.to_string())?;
     d.set_item("solver_status", o.claim.to_string())?;
     d.set_item("detail", o.detail.clone())?;
+    d.set_item("stopped_by_callback", stopped.load(Ordering::Relaxed))?;
     d.set_item("certificate", certificate_dict(py, &o.certificate)?)?;
     let s = &o.solution;
     d.set_item("displacements", s.v.clone().into_pyarray(py))?;
@@ -463,16 +370,7 @@ fn solve<'py>(
     d.set_item("iterations", it)?;
     d.set_item("seconds", o.timing.total())?;
     d.set_item("seconds_setup", o.timing.setup)?;
-    // The bytes `solve --out` writes to profile.csv, by the same code.
-    let profile = contactlab::io::csv::to_csv(
-        &solved.profile(),
-        &contactlab::mechanics::contact_zone::PROFILE_COLUMNS,
-    )
-    .map_err(anyhow_err)?;
-    d.set_item(
-        "profile_csv",
-        String::from_utf8_lossy(&profile).into_owned(),
-    )?;
+    d.set_item("profile_csv", profile)?;
     Ok(d)
 }
 
@@ -490,20 +388,23 @@ fn certify<'py>(
     bound: Option<PyReadonlyArray1<'py, f64>>,
     tolerance: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let cp = &problem.finest.problem;
+    let cp = problem.algebraic();
     let (n, m) = (cp.n(), cp.contacts().len());
     let slice = |name: &str, a: &Option<PyReadonlyArray1<'py, f64>>, len: usize| {
         a.as_ref()
             .map(|a| -> PyResult<Vec<f64>> {
-                let v = a.as_slice().map_err(err)?.to_vec();
+                let v = vector(a)?;
                 if v.len() != len {
-                    return Err(err(format!(
+                    return Err(input_error(format!(
                         "{name} has {} values, expected {len}",
                         v.len()
                     )));
                 }
                 if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                    return Err(err(format!("{name}[{i}] is {}: give finite values", v[i])));
+                    return Err(input_error(format!(
+                        "{name}[{i}] is {}: give finite values",
+                        v[i]
+                    )));
                 }
                 Ok(v)
             })
@@ -514,29 +415,35 @@ fn certify<'py>(
     let q = slice("friction_traction", &friction_traction, m)?;
     let g = slice("bound", &bound, m)?;
     if let Some(g) = &g {
-        bound_checked(problem, g)?;
+        problem.bound_checked(g)?;
     }
     let forces = match (p, q) {
         (Some(p), Some(q)) => Some((p, q)),
         (None, None) => None,
         _ => {
-            return Err(err("give both pressure and friction_traction, or neither"));
+            return Err(input_error(
+                "give both pressure and friction_traction, or neither",
+            ));
         }
     };
     let tolerance = match tolerance {
         Some(t) => contactlab::certificate::check_tolerance(t)
-            .map_err(|m| err(format!("tolerance = {m}")))?,
+            .map_err(|m| input_error(format!("tolerance = {m}")))?,
         None => contactlab::certificate::DEFAULT_TOLERANCE,
     };
-    let finest = problem.finest.clone();
+    let cp = Arc::new(cp.clone());
     let (c, v, p, q) = interruptible(py, move |_| {
-        let cp = &finest.problem;
-        let (v, p, q) = contactlab::formats::instance::complete_answer(cp, v, forces)?;
+        let (v, p, q) = contactlab::formats::instance::complete_answer(&cp, v, forces)?;
         let friction = match &g {
             Some(g) => Friction::Given(g),
             None => Friction::Coulomb,
         };
-        Ok((certify_answer(cp, friction, &v, &p, &q, tolerance), v, p, q))
+        Ok((
+            certify_answer(&cp, friction, &v, &p, &q, tolerance),
+            v,
+            p,
+            q,
+        ))
     })?;
     let friction_law = if bound.is_some() {
         contactlab::solvers::Law::GivenFriction
@@ -553,86 +460,80 @@ fn certify<'py>(
     Ok(d)
 }
 
-/// A work-precision chart of a study's trials, drawn by the charts of the
-/// command line: per solver, certified points joined, failed ones as
-/// crosses. `trials`: (solver, accuracy, seconds, certified).
+/// Writes the problem as `contactlab export` does (A, M, f, the contact
+/// nodes, the rigid mode, the condensed form, a README), for another code
+/// to read; `bound`: a friction bound g = bound for every node, for the
+/// given-friction subproblem.
 #[pyfunction]
-fn _work_precision_chart(
-    title: String,
-    x_label: String,
-    trials: Vec<(String, f64, f64, bool)>,
-    path: std::path::PathBuf,
+#[pyo3(signature = (problem, out, bound=None))]
+fn export(
+    py: Python<'_>,
+    problem: &Problem,
+    out: std::path::PathBuf,
+    bound: Option<f64>,
 ) -> PyResult<()> {
-    use contactlab::io::charts::{Chart, Series};
-    let mut names: Vec<&str> = Vec::new();
-    for (s, ..) in &trials {
-        if !names.contains(&s.as_str()) {
-            names.push(s);
-        }
-    }
-    let mut series = Vec::new();
-    for name in names {
-        let points = |ok: bool| {
-            let mut p: Vec<(f64, f64)> = trials
-                .iter()
-                .filter(|t| t.0 == name && t.3 == ok && t.1 > 0.0 && t.2 > 0.0)
-                .map(|t| (t.1, t.2))
-                .collect();
-            p.sort_by(|a, b| a.0.total_cmp(&b.0));
-            p
-        };
-        series.extend(Series::certified_and_failed(
-            name,
-            points(true),
-            points(false),
-        ));
-    }
-    let chart = Chart::new(&title, &x_label, "seconds", true, true, series);
-    chart.write(&path).map_err(anyhow_err)
+    let (scene, finest) = problem.scene("export")?;
+    let (scene, finest) = (scene.clone(), finest.clone());
+    interruptible(py, move |_| {
+        let folder = contactlab::io::run_folder::RunFolder::create(&out)?;
+        contactlab::formats::instance::export(
+            folder.path(),
+            &scene,
+            &finest,
+            bound,
+            &contactlab::io::manifest::git_commit(),
+        )?;
+        folder.commit()?;
+        Ok(())
+    })
 }
 
-/// The benchmark's views of runs made in Python (registered solvers and
-/// Python functions alike), by the code of `contactlab benchmark`: the
-/// per-solver summaries (JSON) and the report (markdown). With `out`, the
-/// run folder the command line writes (benchmark.csv, benchmark_summary.csv,
-/// benchmark.md, a LaTeX table per target, the performance profiles),
-/// replaced whole and only if it is empty or a contactlab run. `rows_json`:
-/// the rows as `benchmark.csv` has them (`BenchmarkRow`), the certificate
-/// as a string.
-#[pyfunction]
-#[pyo3(signature = (rows_json, out=None))]
-fn _benchmark_report(
-    rows_json: &str,
-    out: Option<std::path::PathBuf>,
-) -> PyResult<(String, String)> {
-    use contactlab::study::benchmark::{BenchmarkRow, views};
-    use contactlab::study::lab::{Artifact, write_artifacts};
-    let rows: Vec<BenchmarkRow> =
-        serde_json::from_str(rows_json).map_err(|e| err(format!("benchmark rows: {e}")))?;
-    if rows.is_empty() {
-        return Err(err(
-            "benchmark: no runs; give at least one problem, solver and target",
-        ));
-    }
-    if let Some(dir) = out {
-        let folder = contactlab::io::run_folder::RunFolder::create(&dir).map_err(anyhow_err)?;
-        let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[]).map_err(anyhow_err)?];
-        artifacts.extend(views::artifacts(&rows).map_err(anyhow_err)?);
-        write_artifacts(folder.path(), &artifacts).map_err(anyhow_err)?;
-        folder.commit().map_err(anyhow_err)?;
-    }
-    let summaries = serde_json::to_string(&views::summaries(&rows)).map_err(err)?;
-    Ok((summaries, views::report(&rows)))
+/// The exception classes: `Error`, and its subclasses that are also the
+/// built-in exception a Python user catches.
+fn add_errors(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    let error = py.get_type::<Error>();
+    m.add("Error", &error)?;
+    let make = |name: &str, builtin: Bound<'_, pyo3::types::PyType>, doc: &str| -> PyResult<()> {
+        let namespace = PyDict::new(py);
+        namespace.set_item("__doc__", doc)?;
+        namespace.set_item("__module__", "contactlab")?;
+        let t = py.import("builtins")?.getattr("type")?.call1((
+            name,
+            (error.clone(), builtin),
+            namespace,
+        ))?;
+        m.add(name, t)
+    };
+    make(
+        "InputError",
+        py.get_type::<pyo3::exceptions::PyValueError>(),
+        "Bad input: a value, a setting, a shape or a combination that contactlab refuses.",
+    )?;
+    make(
+        "FileError",
+        py.get_type::<pyo3::exceptions::PyOSError>(),
+        "A file or folder that cannot be read or written.",
+    )?;
+    make(
+        "OutOfMemory",
+        py.get_type::<pyo3::exceptions::PyMemoryError>(),
+        "A run refused up front: its memory estimate exceeds what the process may use.",
+    )?;
+    Ok(())
 }
 
 #[pymodule]
 fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Problem>()?;
     m.add_function(wrap_pyfunction!(solvers, m)?)?;
+    m.add_function(wrap_pyfunction!(statuses, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(certify, m)?)?;
-    m.add_function(wrap_pyfunction!(_work_precision_chart, m)?)?;
-    m.add_function(wrap_pyfunction!(_benchmark_report, m)?)?;
-    m.add("Error", m.py().get_type::<Error>())?;
-    Ok(())
+    m.add_function(wrap_pyfunction!(export, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::register, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_compare, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_benchmark, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_work_precision, m)?)?;
+    add_errors(m)
 }

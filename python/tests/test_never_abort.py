@@ -121,32 +121,27 @@ def test_a_failing_python_solver_is_one_failed_run_in_every_study(tmp_path, p16)
     # One failing function aborted work_precision, compare and benchmark,
     # and lost every other run.
     solvers = {"tnnmg": "tnnmg", **FAILING}
-    trials = cl.work_precision(p16, solvers, targets=[1e-4, 1e-6])
-    assert len(trials) == 8
-    by = {(t.solver, t.target): t for t in trials}
-    assert by[("tnnmg", 1e-6)].certified
-    for name in FAILING:
-        t = by[(name, 1e-4)]
-        assert not t.certified and t.python
-        assert t.certificate.residual == float("inf")
-    assert by[("raises", 1e-4)].status == "failed"
-    assert "RuntimeError: this solver fails" in by[("raises", 1e-4)].certificate.summary
-    assert not by[("raises", 1e-4)].claimed
-    assert by[("nan", 1e-4)].claimed and by[("nan", 1e-4)].status == "inaccurate"
+    r = cl.work_precision(p16, solvers, targets=[1e-4, 1e-6])
+    assert len(r.rows) == 8
+    by = {(t["solver"], t["value"]): t for t in r.rows}
+    assert by[("tnnmg", 1e-6)]["status"] == "converged"
+    assert by[("raises", 1e-4)]["status"] == "numerical_error"
+    assert "RuntimeError: this solver fails" in by[("raises", 1e-4)]["detail"]
+    assert by[("nan", 1e-4)]["status"] == "non_finite"
+    assert by[("shape", 1e-4)]["status"] == "non_finite"
+    assert "expected" in by[("shape", 1e-4)]["detail"]
 
-    rows = cl.compare(p16, solvers, target=1e-6)
-    ref = [r for r in rows if r.reference]
-    assert [r.solver for r in ref] == ["tnnmg"]
-    for r in rows:
-        if r.solver in FAILING:
-            assert not r.certified and np.isnan(r.pressure_difference)
+    r = cl.compare(p16, solvers)
+    for row in r.rows:
+        if row["solver"] in FAILING:
+            assert row["status"] != "converged"
 
     r = cl.benchmark([p16], solvers, targets=[1e-4], time_limit=30, out=tmp_path / "b")
-    by = {s.solver: s for s in r.summaries}
-    assert by["tnnmg"].successes == 1
+    by = {s["solver"]: s for s in r.summaries}
+    assert by["tnnmg"]["successes"] == 1
     for name in FAILING:
-        assert by[name].successes == 0 and by[name].runs == 1
-    assert by["nan"].claimed_but_failed == 1 and by["raises"].claimed_but_failed == 0
+        assert by[name]["successes"] == 0 and by[name]["runs"] == 1
+        assert by[name]["claimed_but_failed"] == 0
     assert (tmp_path / "b" / "benchmark.csv").is_file()
 
 
@@ -159,8 +154,8 @@ def test_a_run_past_the_time_limit_counts_at_the_limit(p16):
 
     r = cl.benchmark([p16], {"slow": slow}, targets=[1e-4], time_limit=0.1)
     (s,) = r.summaries
-    assert s.successes == 0
-    assert abs(s.shifted_geometric_mean - 0.1) < 1e-12, s.shifted_geometric_mean
+    assert s["successes"] == 0
+    assert abs(s["shifted_geometric_mean"] - 0.1) < 1e-9, s["shifted_geometric_mean"]
 
 
 @pytest.mark.parametrize(
@@ -220,6 +215,8 @@ def test_wrong_arguments_are_errors_that_name_them(tmp_path, p16):
         (lambda: cl.work_precision(p16, ["tnnmg"], targets=[1e-4], chart=tmp_path / "x.png"), "chart"),
         (lambda: cl.solve("not a problem"), "problem"),
         (lambda: cl.work_precision(p16, {"x": 3}), "solvers"),
+        (lambda: cl.register("tnnmg", lambda p, t: None), "registered solver"),
+        (lambda: cl.compare(p16, ["tnnmg"], settings={"newton-coulomb.tolerance": 1e-9}), "ignored"),
     ]
     for make, name in cases:
         with pytest.raises(cl.Error, match=name):
@@ -231,6 +228,7 @@ def test_arguments_in_the_forms_people_write_them(p16):
     # h = 1/64 was a TypeError.
     p = cl.Problem.from_scene(os.fsencode(SCENE), h=1 / 8)
     assert p.h == "1/8"
+    assert cl.Problem.paper(1, h=8).h == "1/8" and cl.Problem.paper(1, h="1/8").h == "1/8"
     exact = cl.solve(p16, solver="newton-coulomb")
     c = cl.certify(p16, forces={"pressure": exact.pressure, "friction_traction": exact.friction_traction})
     assert c.passed

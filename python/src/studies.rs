@@ -1,0 +1,217 @@
+//! The studies from Python: the library's own studies (`Compare`,
+//! `Benchmark`, `WorkPrecision`), run in a lab like the command line's,
+//! with settings resolved by the library's one resolution
+//! ([`Changes::resolve`]). They give the files the command line writes
+//! (the same bytes for the same inputs) and the study's README section;
+//! with `out`, the run folder is written as the command line writes it.
+
+use std::path::PathBuf;
+
+use contactlab::io::run_folder::RunFolder;
+use contactlab::settings::Settings;
+use contactlab::settings::changes::AS_PATHS;
+use contactlab::solve::solver_entry;
+use contactlab::solvers::registry::Entry;
+use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
+use contactlab::study::compare::Compare;
+use contactlab::study::lab::{Content, Lab, Quiet, Study, write_artifacts};
+use contactlab::study::work_precision::WorkPrecision;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use crate::problem::Problem;
+use crate::{changes_of, input_error, interruptible};
+
+/// The solvers named (registered ones, Python solvers among them).
+fn entries(names: &[String]) -> PyResult<Vec<&'static Entry>> {
+    if names.is_empty() {
+        return Err(input_error("solvers: give at least one solver"));
+    }
+    names
+        .iter()
+        .map(|n| solver_entry(n).map_err(crate::error_of))
+        .collect()
+}
+
+/// `base` with `settings` applied for a run of `running`.
+fn resolved(
+    base: &Settings,
+    settings: Vec<(String, String)>,
+    running: &[&'static Entry],
+) -> PyResult<Settings> {
+    changes_of(&settings)
+        .resolve(base.clone(), running, &AS_PATHS)
+        .map_err(|r| input_error(r.to_string()))
+}
+
+/// Runs `study` at `settings` on a thread of its own (Ctrl-C returns at
+/// once), writes its files into `out` as the command line does, and gives
+/// `{files: {path: bytes}, report: markdown, charts: {name: svg bytes}}`.
+fn run<S>(
+    py: Python<'_>,
+    study: S,
+    settings: Settings,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'_, PyDict>>
+where
+    S: Study + Send + 'static,
+{
+    let folder = out
+        .map(|o| RunFolder::create(&o).map_err(crate::error_of))
+        .transpose()?;
+    let (files, charts, report) = interruptible(py, move |_| {
+        let log = |_: &str| {};
+        let mut lab = Lab::new(settings, &log, &Quiet);
+        let ran = lab.run(&study)?;
+        let names: Vec<String> = ran
+            .artifacts
+            .iter()
+            .filter_map(|a| a.chart_name().map(str::to_string))
+            .collect();
+        let section = study.section(&ran.findings, &lab, &names)?;
+        if let Some(folder) = folder {
+            write_artifacts(folder.path(), &ran.artifacts)?;
+            folder.commit()?;
+        }
+        let mut files = Vec::new();
+        let mut charts = Vec::new();
+        for a in &ran.artifacts {
+            match &a.content {
+                Content::Bytes(b) => files.push((a.path.clone(), b.clone())),
+                Content::Chart(c) => charts.push((
+                    a.chart_name().unwrap_or_default().to_string(),
+                    c.to_svg()?.into_bytes(),
+                )),
+            }
+        }
+        Ok((files, charts, section.markdown))
+    })?;
+    let d = PyDict::new(py);
+    let f = PyDict::new(py);
+    for (path, bytes) in files {
+        f.set_item(path, PyBytes::new(py, &bytes))?;
+    }
+    let c = PyDict::new(py);
+    for (name, bytes) in charts {
+        c.set_item(name, PyBytes::new(py, &bytes))?;
+    }
+    d.set_item("files", f)?;
+    d.set_item("charts", c)?;
+    d.set_item("report", report)?;
+    Ok(d)
+}
+
+/// `contactlab compare`: every solver on the problem's scene against the
+/// earned reference.
+#[pyfunction]
+#[pyo3(signature = (problem, solvers, settings=Vec::new(), repeats=0, out=None))]
+pub fn _compare<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    solvers: Vec<String>,
+    settings: Vec<(String, String)>,
+    repeats: usize,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (scene, _) = problem.scene("compare")?;
+    let solvers = entries(&solvers)?;
+    let settings = resolved(&problem.settings, settings, &solvers)?;
+    let study = Compare {
+        scene: (**scene).clone(),
+        solvers,
+        repeats,
+    };
+    run(py, study, settings, out)
+}
+
+/// `contactlab benchmark` over the given problems: every solver at every
+/// target on every problem, certified at the target, within the time limit.
+#[pyfunction]
+#[pyo3(signature = (problems, solvers, targets, time_limit, settings=Vec::new(), out=None))]
+pub fn _benchmark<'py>(
+    py: Python<'py>,
+    problems: Vec<PyRef<'py, Problem>>,
+    solvers: Vec<String>,
+    targets: Vec<f64>,
+    time_limit: f64,
+    settings: Vec<(String, String)>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    if problems.is_empty() {
+        return Err(input_error("problems: give at least one problem"));
+    }
+    if targets.is_empty() {
+        return Err(input_error(
+            "targets: give at least one accuracy, such as [1e-4]",
+        ));
+    }
+    for t in &targets {
+        contactlab::certificate::check_tolerance(*t)
+            .map_err(|m| input_error(format!("targets: {m}")))?;
+    }
+    if !(time_limit.is_finite() && time_limit > 0.0) {
+        return Err(input_error(format!(
+            "time_limit = {time_limit}: give a positive number of seconds"
+        )));
+    }
+    let solvers = entries(&solvers)?;
+    let mut instances = Vec::new();
+    for p in &problems {
+        let (scene, finest) = p.scene("benchmark")?;
+        let mut scene = (**scene).clone();
+        let id = format!("{}, h = {}", p.name, finest.h());
+        scene.name = id.clone();
+        instances.push(Instance {
+            id,
+            family: "given",
+            scene,
+        });
+    }
+    let settings = resolved(&problems[0].settings, settings, &solvers)?;
+    let mut spec = BenchmarkSpec::new(false, solvers);
+    spec.targets = targets;
+    spec.time_limit = time_limit;
+    spec.instances = Some(instances);
+    run(py, Benchmark { spec }, settings, out)
+}
+
+/// Work against precision: each solver at each target on the problem.
+#[pyfunction]
+#[pyo3(signature = (problem, solvers, targets, settings=Vec::new(), repeats=0, out=None))]
+pub fn _work_precision<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    solvers: Vec<String>,
+    targets: Vec<f64>,
+    settings: Vec<(String, String)>,
+    repeats: usize,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (scene, _) = problem.scene("work_precision")?;
+    if targets.is_empty() {
+        return Err(input_error(
+            "targets: give at least one accuracy, such as [1e-4, 1e-8]",
+        ));
+    }
+    for t in &targets {
+        contactlab::certificate::check_tolerance(*t)
+            .map_err(|m| input_error(format!("targets: {m}")))?;
+    }
+    let solvers = entries(&solvers)?;
+    let settings = resolved(&problem.settings, settings, &solvers)?;
+    let study = WorkPrecision {
+        scene: (**scene).clone(),
+        solvers,
+        targets,
+        repeats,
+    };
+    run(py, study, settings, out)
+}
+
+/// Registers the Python function `f` as the solver `name` (see
+/// [`crate::python_solver`]).
+#[pyfunction]
+pub fn register(name: &str, f: Py<PyAny>) -> PyResult<()> {
+    crate::python_solver::register(name, f).map_err(input_error)?;
+    Ok(())
+}
