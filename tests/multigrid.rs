@@ -133,7 +133,10 @@ fn tnnmg_iterations_do_not_grow_with_the_mesh() {
         let c = certify_solution(&d.problem, Friction::Given(&g), &s, 1e-8);
         assert!(c.passed(), "h = 1/2^{k}: {} ({})", c.summary(), s.detail);
         counts.push(count.0);
-        let mut exact = newton.build.call(&(newton.defaults)(Default::default())).unwrap();
+        let mut exact = newton
+            .build
+            .call(&(newton.defaults)(Default::default()))
+            .unwrap();
         let e = exact.solve(&d.problem, Friction::Given(&g), None, &mut Count::default());
         let u = d.problem.scales().displacement;
         let du =
@@ -164,7 +167,10 @@ fn a_loose_accuracy_is_one_of_the_pressure() {
     let entry = registry::by_name("tnnmg").unwrap();
     let zero = (vec![0.0; p.n()], vec![0.0; m]);
     let solve = |accuracy: Option<f64>| {
-        let mut solver = entry.build.call(&(entry.defaults)(Default::default())).unwrap();
+        let mut solver = entry
+            .build
+            .call(&(entry.defaults)(Default::default()))
+            .unwrap();
         let start = contactlab::solvers::Start {
             v: &zero.0,
             pressure: &zero.1,

@@ -140,7 +140,10 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
             w[1]
         );
     }
-    let mut solver = entry.build.call(&(entry.defaults)(Default::default())).unwrap();
+    let mut solver = entry
+        .build
+        .call(&(entry.defaults)(Default::default()))
+        .unwrap();
     let start = Start {
         v: &lift,
         pressure: &pressure,
@@ -152,7 +155,10 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
     let c = certify_solution(p, Friction::Given(&g), &s, 1e-8);
     assert!(c.passed(), "{} ({})", c.summary(), s.detail);
     let newton = registry::by_name("newton").unwrap();
-    let mut exact = newton.build.call(&(newton.defaults)(Default::default())).unwrap();
+    let mut exact = newton
+        .build
+        .call(&(newton.defaults)(Default::default()))
+        .unwrap();
     let e = exact.solve(p, Friction::Given(&g), None, &mut Silent);
     let gap = pressure_gap(&scene, &s.pressure, &e.pressure);
     assert!(gap <= 1e-7, "pressures differ from Newton's by {gap:e}·P");

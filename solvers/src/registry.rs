@@ -91,7 +91,9 @@ mod tests {
             assert!(e.stage(e.work_stage).is_some(), "{}: work stage", e.name);
             for stopping in [Stopping::Relative, Stopping::Paper] {
                 let tree = (e.defaults)(stopping);
-                e.build.call(&tree).unwrap_or_else(|m| panic!("{}: defaults: {m}", e.name));
+                e.build
+                    .call(&tree)
+                    .unwrap_or_else(|m| panic!("{}: defaults: {m}", e.name));
                 for k in e.knobs {
                     for f in k.fields {
                         assert!(tree.get(f).is_some(), "{}.{}: no field {f}", e.name, k.name);
