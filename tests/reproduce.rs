@@ -382,7 +382,7 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             )
         } else if name.starts_with("discretization_error") {
             ("Discretization error", "h", "relative error", false)
-        } else if name == "stability_friction" {
+        } else if name.starts_with("stability_friction") {
             (
                 "Coulomb fixed point",
                 "friction coefficient",

@@ -41,7 +41,14 @@ pub struct Series {
     pub style: Style,
     /// Index into the palette; None: by the series' position.
     pub color: Option<usize>,
+    /// Whether the legend lists it (a chart with more than
+    /// [`MAX_LEGEND`] entries lists its failed points once for all).
+    pub legend: bool,
 }
+
+/// The most entries a legend lists: beyond, a reader cannot match colours
+/// to names.
+pub const MAX_LEGEND: usize = 12;
 
 impl Series {
     pub fn line(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
@@ -50,6 +57,7 @@ impl Series {
             points,
             style: Style::Line,
             color: None,
+            legend: true,
         }
     }
 
@@ -145,8 +153,8 @@ pub fn suits_log_axis(values: impl IntoIterator<Item = f64>) -> bool {
     lo > 0.0 && hi.is_finite() && hi >= 10.0 * lo
 }
 
-/// Ten distinguishable colours (Tableau 10).
-const PALETTE: [RGBColor; 10] = [
+/// Twenty colours: Tableau 10, then the light shade of each (Tableau 20).
+const PALETTE: [RGBColor; 20] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -157,17 +165,50 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(127, 127, 127),
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
+    RGBColor(174, 199, 232),
+    RGBColor(255, 152, 150),
+    RGBColor(152, 223, 138),
+    RGBColor(255, 187, 120),
+    RGBColor(197, 176, 213),
+    RGBColor(196, 156, 148),
+    RGBColor(247, 182, 210),
+    RGBColor(199, 199, 199),
+    RGBColor(219, 219, 141),
+    RGBColor(158, 218, 229),
 ];
+
+/// The shape of a series' markers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Marker {
+    Circle,
+    Triangle,
+    Square,
+}
+
+/// The colour and marker of style index `k` (a solver's place in the
+/// registry, or a series' position): the colour cycles through the twenty,
+/// the marker changes every ten, so that no two of the first sixty indices
+/// share both (the registry's solvers each have their own colour and
+/// marker, the same in every chart).
+pub fn style_of(k: usize) -> (RGBColor, Marker) {
+    let marker = match (k / 10) % 3 {
+        0 => Marker::Circle,
+        1 => Marker::Triangle,
+        _ => Marker::Square,
+    };
+    (PALETTE[k % PALETTE.len()], marker)
+}
 
 const BLACK_INDEX: usize = usize::MAX;
 
-/// The palette index of a solver: its place in the registry.
+/// The style index of a solver (see [`style_of`]): its place in the
+/// registry (Python solvers registered at run time after the built-in
+/// ones); a name the registry does not know, by its bytes.
 pub fn solver_color(solver: &str) -> usize {
     registry::names()
         .iter()
         .position(|n| *n == solver)
-        .unwrap_or_else(|| solver.bytes().map(usize::from).sum::<usize>())
-        % PALETTE.len()
+        .unwrap_or_else(|| 60 + solver.bytes().map(usize::from).sum::<usize>() % 60)
 }
 
 const WIDTH: u32 = 980;
@@ -247,9 +288,14 @@ impl Chart {
     }
 
     fn color(&self, i: usize) -> RGBColor {
+        self.style(i).0
+    }
+
+    /// The colour and marker of series `i`.
+    fn style(&self, i: usize) -> (RGBColor, Marker) {
         match self.series[i].color.unwrap_or(i) {
-            BLACK_INDEX => BLACK,
-            k => PALETTE[k % PALETTE.len()],
+            BLACK_INDEX => (BLACK, Marker::Circle),
+            k => style_of(k),
         }
     }
 
@@ -299,6 +345,7 @@ impl Chart {
         let (series, points) = overlap::merge_identical(&self.series, &points, &|(x, y)| {
             (unit(x, x0, x1, self.log_x), unit(y, y0, y1, self.log_y))
         });
+        let (series, points) = fit_legend(series, points);
         let shown = Chart {
             series,
             ..self.clone()
@@ -310,6 +357,39 @@ impl Chart {
     pub fn write(&self, path: &Path) -> Result<()> {
         write_atomic(path, self.to_svg()?.as_bytes())
     }
+}
+
+/// The series with a legend of at most [`MAX_LEGEND`] entries where
+/// grouping can make it so: beyond, the failed points (crosses, each in its
+/// solver's colour) are listed once, as one entry in black.
+fn fit_legend(
+    mut series: Vec<Series>,
+    mut points: Vec<Vec<(f64, f64)>>,
+) -> (Vec<Series>, Vec<Vec<(f64, f64)>>) {
+    let listed = series.iter().filter(|s| s.legend).count();
+    let failed = series.iter().filter(|s| s.style == Style::Failed).count();
+    if listed > MAX_LEGEND && failed > 1 {
+        for s in series.iter_mut().filter(|s| s.style == Style::Failed) {
+            s.legend = false;
+        }
+        series.push(
+            Series::line(
+                "not certified (crosses, in each solver's colour)",
+                Vec::new(),
+            )
+            .failed()
+            .black(),
+        );
+        points.push(Vec::new());
+    }
+    (series, points)
+}
+
+/// The number of entries the legend of `chart` lists once drawn.
+pub fn legend_entries(chart: &Chart) -> usize {
+    let points = chart.drawable();
+    let (series, _) = fit_legend(chart.series.clone(), points);
+    series.iter().filter(|s| s.legend).count()
 }
 
 /// A tick label: `0` for round-off around zero, integers without decimals,

@@ -121,9 +121,21 @@ impl Chart {
             }
             match s.style {
                 Style::LineMarkers | Style::Dots => {
-                    chart
-                        .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                        .map_err(err)?;
+                    let fill = color.filled();
+                    match self.style(i).1 {
+                        Marker::Circle => chart
+                            .draw_series(pts.iter().map(|&p| Circle::new(p, 3, fill)))
+                            .map(|_| ()),
+                        Marker::Triangle => chart
+                            .draw_series(pts.iter().map(|&p| TriangleMarker::new(p, 4, fill)))
+                            .map(|_| ()),
+                        Marker::Square => chart
+                            .draw_series(pts.iter().map(|&p| {
+                                EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], fill)
+                            }))
+                            .map(|_| ()),
+                    }
+                    .map_err(err)?;
                 }
                 Style::Failed => {
                     chart
@@ -140,6 +152,7 @@ impl Chart {
     fn legend_rows(&self) -> usize {
         self.series
             .iter()
+            .filter(|s| s.legend)
             .map(|s| overlap::lines(&s.name).len())
             .sum()
     }
@@ -159,6 +172,7 @@ impl Chart {
         let longest = self
             .series
             .iter()
+            .filter(|s| s.legend)
             .flat_map(|s| overlap::lines(&s.name))
             .map(|l| l.chars().count())
             .max()
@@ -182,7 +196,7 @@ impl Chart {
         ))
         .map_err(err)?;
         let mut at = 0;
-        for (i, s) in self.series.iter().enumerate() {
+        for (i, s) in self.series.iter().enumerate().filter(|(_, s)| s.legend) {
             let lines = overlap::lines(&s.name);
             let y = top + at * row + row / 2;
             at += lines.len() as i32;
@@ -210,8 +224,16 @@ impl Chart {
             }
             match s.style {
                 Style::LineMarkers | Style::Dots => {
-                    area.draw(&Circle::new(((a + b) / 2, y), 3, color.filled()))
-                        .map_err(err)?;
+                    let (at, fill) = (((a + b) / 2, y), color.filled());
+                    match self.style(i).1 {
+                        Marker::Circle => area.draw(&Circle::new(at, 3, fill)),
+                        Marker::Triangle => area.draw(&TriangleMarker::new(at, 4, fill)),
+                        Marker::Square => area.draw(&Rectangle::new(
+                            [(at.0 - 3, at.1 - 3), (at.0 + 3, at.1 + 3)],
+                            fill,
+                        )),
+                    }
+                    .map_err(err)?;
                 }
                 Style::Failed => {
                     area.draw(&Cross::new(((a + b) / 2, y), 5, color.stroke_width(2)))

@@ -129,3 +129,61 @@ fn series_that_coincide_are_one_legend_row_naming_them_all() {
     assert!(!svg.contains("\nclarabel\n") && !svg.contains("\nclarabel-faer\n"));
     assert!(svg.contains("\nnewton\n"));
 }
+
+/// Every registered solver has its own colour and marker, the same in
+/// every chart, and the first sixty style indices are all distinct (so 16
+/// solvers, or more, never share one): with ten colours `clarabel` and
+/// `tnnmg` shared theirs.
+#[test]
+fn every_solver_has_its_own_colour_and_marker() {
+    let styles: Vec<_> = (0..60).map(style_of).collect();
+    for i in 0..styles.len() {
+        for j in i + 1..styles.len() {
+            assert_ne!(styles[i], styles[j], "style indices {i} and {j}");
+        }
+    }
+    let names = registry::names();
+    let mut of_solvers: Vec<usize> = names.iter().map(|n| solver_color(n)).collect();
+    of_solvers.sort();
+    of_solvers.dedup();
+    assert_eq!(of_solvers.len(), names.len());
+    // The first sixteen differ in colour alone, not only in marker.
+    let colours: Vec<_> = (0..16).map(|k| style_of(k).0).collect();
+    for i in 0..16 {
+        for j in i + 1..16 {
+            assert_ne!(colours[i], colours[j], "colours {i} and {j}");
+        }
+    }
+}
+
+/// A legend of more than twelve entries lists the failed points once:
+/// twenty solvers with failures give twenty lines and one cross entry, and
+/// the crosses keep their solvers' colours on the plot.
+#[test]
+fn a_long_legend_lists_the_failed_points_once() {
+    let mut series = Vec::new();
+    for k in 0..10 {
+        let name = format!("solver {k}");
+        series.extend(Series::certified_and_failed(
+            &name,
+            vec![(1.0, 1.0 + k as f64), (2.0, 2.0 + k as f64)],
+            vec![(3.0, 5.0 + k as f64)],
+        ));
+    }
+    let chart = Chart::new("many", "x", "y", false, false, series);
+    assert_eq!(chart.series.len(), 20);
+    assert_eq!(legend_entries(&chart), 11);
+    let svg = chart.to_svg().unwrap();
+    assert!(svg.contains("not certified (crosses, in each solver"));
+    assert!(!svg.contains("solver 3: not certified"));
+    // A short legend is left as it is.
+    let few = Chart::new(
+        "few",
+        "x",
+        "y",
+        false,
+        false,
+        Series::certified_and_failed("a", vec![(1.0, 1.0)], vec![(2.0, 2.0)]),
+    );
+    assert_eq!(legend_entries(&few), 2);
+}

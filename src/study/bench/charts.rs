@@ -71,7 +71,9 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
             Chart {
                 title: title.into(),
                 x_label: "unknowns".into(),
-                y_label: "median time [s], one thread".into(),
+                y_label:
+                    "median time [s] (solvers one thread, factorization two; large meshes once)"
+                        .into(),
                 log_x: true,
                 log_y: true,
                 series,

@@ -268,27 +268,25 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         }
     }
     equal_accuracy::equal_accuracy(spec, settings, &mut rows, log)?;
-    // The large meshes get the direct Coulomb solvers certified on the
-    // finest mesh above, fastest first; the next is timed only when an
-    // answer fails the certificate (a failure is a row too).
+    // The large meshes get every direct Coulomb solver certified on the
+    // finest mesh above, fastest first, so that the performance chart
+    // follows each of them as far as it goes; one whose answer fails the
+    // certificate (a failure is a row too) is not run on the finer ones.
     let finest = spec
         .meshes
         .last()
         .map(|h| h.to_string())
         .unwrap_or_default();
-    let mut candidates = direct_by_speed(&rows, &finest);
+    let mut candidates: Vec<&'static registry::Entry> = direct_by_speed(&rows, &finest)
+        .into_iter()
+        .filter_map(registry::by_name)
+        .collect();
     for &h in &spec.large {
-        let mut failed = Vec::new();
-        for &solver in &candidates {
-            let Some(entry) = registry::by_name(solver) else {
-                continue;
-            };
-            if large_mesh(spec.problem, h, entry, settings, &mut rows, log)? {
-                break;
-            }
-            failed.push(solver);
+        if candidates.is_empty() {
+            break;
         }
-        candidates.retain(|c| !failed.contains(c));
+        let failed = large_mesh(spec.problem, h, &candidates, settings, &mut rows, log)?;
+        candidates.retain(|c| !failed.contains(&c.name));
     }
     Ok(rows)
 }
@@ -362,19 +360,19 @@ impl FastestDirect {
 /// one run of `bench` to the next (1/1024: 8.1 s, 6.7 s, 7.1 s).
 pub const LARGE_FACTORIZATION_RUNS: usize = 3;
 
-/// On a large mesh: assembly and `solver` on the whole Coulomb problem,
-/// each timed once (no warm-up, no reference: the certificate alone judges
-/// the answer), and the factorization, the ratios' unit, as the median of
-/// [`LARGE_FACTORIZATION_RUNS`] after a warm-up. Returns whether it was
-/// certified.
+/// On a large mesh: assembly and each of `solvers` on the whole Coulomb
+/// problem, each timed once (no warm-up, no reference: the certificate
+/// alone judges the answer), and the factorization, the ratios' unit, as
+/// the median of [`LARGE_FACTORIZATION_RUNS`] after a warm-up. Returns the
+/// solvers whose answer was not certified.
 fn large_mesh(
     problem: u32,
     h: MeshSize,
-    solver: &'static contactlab_solvers::registry::Entry,
+    solvers: &[&'static registry::Entry],
     settings: &Settings,
     rows: &mut Vec<PerfRow>,
     log: &dyn Fn(&str),
-) -> Result<bool> {
+) -> Result<Vec<&'static str>> {
     let scene = Scene::paper_problem_to(problem, h)?;
     log(&format!(
         "h = {h}: assembly and the factorization ({LARGE_FACTORIZATION_RUNS} runs after a warm-up)"
@@ -389,25 +387,31 @@ fn large_mesh(
         factorization: median(&set_up.factorization),
     };
     push_set_up(&mut mesh, &set_up, true);
-    log(&format!("h = {h}: {} coulomb", solver.name));
-    let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
-    let m = measure(&t, None, Keep::default())?;
-    let tr = &m.trial;
-    let note = format!(
-        "once; {} friction iterations, {} outer, {} inner",
-        tr.friction_iterations, tr.outer_iterations, tr.inner_iterations
-    );
-    mesh.push(
-        "coulomb",
-        solver.name,
-        &[m.timing.seconds_median],
-        tr.status.as_str(),
-        note,
-    );
-    let row = mesh.rows.last_mut().expect("just pushed");
-    row.certificate = tr.residual();
-    row.work = tr.work;
-    Ok(tr.status == contactlab_solvers::Status::Converged)
+    let mut failed = Vec::new();
+    for &solver in solvers {
+        log(&format!("h = {h}: {} coulomb", solver.name));
+        let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
+        let m = measure(&t, None, Keep::default())?;
+        let tr = &m.trial;
+        let note = format!(
+            "once; {} friction iterations, {} outer, {} inner",
+            tr.friction_iterations, tr.outer_iterations, tr.inner_iterations
+        );
+        mesh.push(
+            "coulomb",
+            solver.name,
+            &[m.timing.seconds_median],
+            tr.status.as_str(),
+            note,
+        );
+        let row = mesh.rows.last_mut().expect("just pushed");
+        row.certificate = tr.residual();
+        row.work = tr.work;
+        if tr.status != contactlab_solvers::Status::Converged {
+            failed.push(solver.name);
+        }
+    }
+    Ok(failed)
 }
 
 /// Times a kernel step and one product with its operator, interleaved so

@@ -62,95 +62,13 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
             },
         ));
     }
-    // Contraction of each fixed point against 𝓕.
-    let mut keys: Vec<(String, String)> = steps
-        .iter()
-        .map(|s| (s.scene.clone(), s.solver.clone()))
-        .collect();
-    keys.sort();
-    keys.dedup();
-    let mut series: Vec<Series> = Vec::new();
-    for (scene, solver) in keys {
-        let mut fs: Vec<f64> = steps
-            .iter()
-            .filter(|s| s.scene == scene && s.solver == solver && s.friction_coefficient > 0.0)
-            .map(|s| s.friction_coefficient)
-            .collect();
-        fs.sort_by(f64::total_cmp);
-        fs.dedup();
-        // (𝓕, trend, whether its answer was certified)
-        let pts: Vec<(f64, f64, bool)> = fs
-            .iter()
-            .filter_map(|&f| {
-                let run: Vec<&FrictionStep> = steps
-                    .iter()
-                    .filter(|s| {
-                        s.scene == scene && s.solver == solver && s.friction_coefficient == f
-                    })
-                    .collect();
-                let q: Vec<Option<f64>> = run.iter().map(|s| s.contraction).collect();
-                let certified = run.iter().all(|s| s.certified);
-                (q.len() >= 5)
-                    .then(|| crate::study::stability::classify::trend(&q))
-                    .flatten()
-                    .map(|t| (f, t, certified))
-            })
-            .collect();
-        let of = |certified: bool| -> Vec<(f64, f64)> {
-            pts.iter()
-                .filter(|p| p.2 == certified)
-                .map(|p| (p.0, p.1))
-                .collect()
-        };
-        let (good, bad) = (of(true), of(false));
-        if !good.is_empty() {
-            // The solver's colour; the scene by style.
-            let line = Series::line(format!("{scene}, {solver}"), good).of_solver(&solver);
-            series.push(match scene.as_str() {
-                "problem 1" => line.with_markers(),
-                "problem 2" => line.dashed(),
-                _ => line.scatter(),
-            });
-        }
-        if !bad.is_empty() {
-            // A fixed point that stalled or whose answer was refused: its
-            // factor is no rate of convergence, drawn apart as crosses.
-            series.push(
-                Series::line(format!("{scene}, {solver}: not certified"), bad)
-                    .failed()
-                    .of_solver(&solver),
-            );
-        }
-    }
-    if !series.is_empty() {
-        let xs: Vec<f64> = series
-            .iter()
-            .flat_map(|s| s.points.iter().map(|p| p.0))
-            .collect();
-        let (lo, hi) = xs
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        series.push(
-            Series::line("contraction factor 1", vec![(lo, 1.0), (hi, 1.0)])
-                .dashed()
-                .black(),
-        );
-        out.push((
-            "stability_friction".into(),
-            Chart {
-                title: "Coulomb fixed point: contraction factor against 𝓕".into(),
-                x_label: "friction coefficient 𝓕".into(),
-                y_label: "contraction of max|Δg| (geometric mean over the later half of the steps)"
-                    .into(),
-                log_x: true,
-                log_y: true,
-                series,
-                y_resolution: None,
-                x_ticks: None,
-            },
-        ));
+    // Contraction of each fixed point against 𝓕: one chart per problem,
+    // one series per inner solver (a legend a reader can match).
+    let mut scenes: Vec<String> = steps.iter().map(|s| s.scene.clone()).collect();
+    scenes.sort();
+    scenes.dedup();
+    for scene in scenes {
+        out.extend(friction_chart(&scene, steps));
     }
     let load: Vec<&Trial> = trials.iter().filter(|t| t.group == LOAD).collect();
     if !load.is_empty() {
@@ -206,10 +124,104 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
 #[cfg(test)]
 mod tests;
 
+/// The contraction factor of each inner solver's fixed point against 𝓕 on
+/// `scene`: certified runs joined, the others as crosses.
+fn friction_chart(scene: &str, steps: &[FrictionStep]) -> Option<(String, Chart)> {
+    let mut solvers: Vec<String> = steps
+        .iter()
+        .filter(|s| s.scene == scene)
+        .map(|s| s.solver.clone())
+        .collect();
+    solvers.sort();
+    solvers.dedup();
+    let mut series: Vec<Series> = Vec::new();
+    for solver in solvers {
+        let mut fs: Vec<f64> = steps
+            .iter()
+            .filter(|s| s.scene == scene && s.solver == solver && s.friction_coefficient > 0.0)
+            .map(|s| s.friction_coefficient)
+            .collect();
+        fs.sort_by(f64::total_cmp);
+        fs.dedup();
+        // (𝓕, trend, whether its answer was certified)
+        let pts: Vec<(f64, f64, bool)> = fs
+            .iter()
+            .filter_map(|&f| {
+                let run: Vec<&FrictionStep> = steps
+                    .iter()
+                    .filter(|s| {
+                        s.scene == scene && s.solver == solver && s.friction_coefficient == f
+                    })
+                    .collect();
+                let q: Vec<Option<f64>> = run.iter().map(|s| s.contraction).collect();
+                let certified = run.iter().all(|s| s.certified);
+                (q.len() >= 5)
+                    .then(|| crate::study::stability::classify::trend(&q))
+                    .flatten()
+                    .map(|t| (f, t, certified))
+            })
+            .collect();
+        let of = |certified: bool| -> Vec<(f64, f64)> {
+            pts.iter()
+                .filter(|p| p.2 == certified)
+                .map(|p| (p.0, p.1))
+                .collect()
+        };
+        let (good, bad) = (of(true), of(false));
+        if !good.is_empty() {
+            series.push(
+                Series::line(solver.clone(), good)
+                    .with_markers()
+                    .of_solver(&solver),
+            );
+        }
+        if !bad.is_empty() {
+            // A fixed point that stalled or whose answer was refused: its
+            // factor is no rate of convergence, drawn apart as crosses.
+            series.push(
+                Series::line(format!("{solver}: not certified"), bad)
+                    .failed()
+                    .of_solver(&solver),
+            );
+        }
+    }
+    if !series.is_empty() {
+        let xs: Vec<f64> = series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0))
+            .collect();
+        let (lo, hi) = xs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        series.push(
+            Series::line("contraction factor 1", vec![(lo, 1.0), (hi, 1.0)])
+                .dashed()
+                .black(),
+        );
+        return Some((
+            format!("stability_friction_{}", scene.replace(' ', "_")),
+            Chart {
+                title: format!("Coulomb fixed point: contraction factor against 𝓕, {scene}"),
+                x_label: "friction coefficient 𝓕".into(),
+                y_label: "contraction of max|Δg| (geometric mean over the later half of the steps)"
+                    .into(),
+                log_x: true,
+                log_y: true,
+                series,
+                y_resolution: None,
+                x_ticks: None,
+            },
+        ));
+    }
+    None
+}
+
 /// What the chart named `name` is for, in one sentence.
 pub fn intent(name: &str) -> &'static str {
     match name {
-        "stability_friction" => {
+        n if n.starts_with("stability_friction") => {
             "Where the friction fixed point stops contracting as 𝓕 grows, for each inner solver and problem (above the line at 1 it cannot converge)."
         }
         "stability_load" => {

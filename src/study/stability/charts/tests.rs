@@ -32,18 +32,14 @@ fn a_stalled_fixed_point_is_a_cross_at_its_late_factor_not_a_point_of_the_line()
     let charts = charts(&[], &steps);
     let (_, chart) = charts
         .iter()
-        .find(|(n, _)| n == "stability_friction")
+        .find(|(n, _)| n == "stability_friction_problem_1")
         .unwrap();
-    let line = chart
-        .series
-        .iter()
-        .find(|s| s.name == "problem 1, newton")
-        .unwrap();
+    let line = chart.series.iter().find(|s| s.name == "newton").unwrap();
     assert_eq!(line.points.len(), 2, "only the certified runs on the line");
     let crosses = chart
         .series
         .iter()
-        .find(|s| s.name == "problem 1, newton: not certified")
+        .find(|s| s.name == "newton: not certified")
         .unwrap();
     assert_eq!(crosses.style, crate::io::charts::Style::Failed);
     let (f, q) = crosses.points[0];
