@@ -327,6 +327,15 @@ pub struct BenchmarkArgs {
     /// Solvers to run [default: every registered solver].
     #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
     pub solvers: Vec<String>,
+    /// Instead of the collection: the paper's problems N (e.g. 1 or 1,3),
+    /// each on the mesh --h, as the Python package's `benchmark` runs the
+    /// problems it is given (instances "problem N, h = 1/64", family
+    /// "given").
+    #[arg(long, value_delimiter = ',', value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3))]
+    pub problem: Vec<u32>,
+    /// The finest mesh of the --problem instances [default: 1/64].
+    #[arg(long, value_name = "H", requires = "problem")]
+    pub h: Option<crate::mechanics::mesh_size::MeshSize>,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,

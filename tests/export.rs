@@ -212,3 +212,34 @@ fn a_solve_can_be_certified_from_its_own_files() {
         );
     }
 }
+
+/// An export folder explains itself: its README names every file written
+/// beside it, the problem's sizes and how to hand an answer to `certify`,
+/// and `problem.json` says of S what its header says (symmetric).
+#[test]
+fn the_export_folder_has_a_readme_that_names_every_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let inst = dir.path().join("instance");
+    std::fs::create_dir(&inst).unwrap();
+    let mut scene = Scene::paper_problem(1).unwrap();
+    scene.set_finest(MeshSize::from_level(3).unwrap());
+    let d = Discretization::new(&scene, scene.finest()).unwrap();
+    export(&inst, &scene, &d, None, "test").unwrap();
+    let readme = std::fs::read_to_string(inst.join("README.md")).unwrap();
+    for entry in std::fs::read_dir(&inst).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        if name != "README.md" {
+            assert!(
+                readme.contains(&format!("`{name}`")),
+                "{name} not in the README"
+            );
+        }
+    }
+    assert!(readme.contains(&format!("n = {} unknowns", d.problem.n())));
+    assert!(readme.contains("contactlab certify --instance"));
+    assert!(readme.contains("scipy.io.mmread"));
+    let json = std::fs::read_to_string(inst.join("problem.json")).unwrap();
+    assert!(!json.contains("every entry"));
+    let s = std::fs::read_to_string(inst.join("S.mtx")).unwrap();
+    assert!(s.lines().next().unwrap().contains("symmetric"));
+}

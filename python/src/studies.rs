@@ -157,15 +157,8 @@ pub fn _benchmark<'py>(
     let solvers = entries(&solvers)?;
     let mut instances = Vec::new();
     for p in &problems {
-        let (scene, finest) = p.scene("benchmark")?;
-        let mut scene = (**scene).clone();
-        let id = format!("{}, h = {}", p.name, finest.h());
-        scene.name = id.clone();
-        instances.push(Instance {
-            id,
-            family: "given",
-            scene,
-        });
+        let (scene, _) = p.scene("benchmark")?;
+        instances.push(Instance::given((**scene).clone()));
     }
     let settings = resolved(&problems[0].settings, settings, &solvers)?;
     let mut spec = BenchmarkSpec::new(false, solvers);

@@ -9,8 +9,10 @@ use crate::commands::{run_study, solver_list};
 use crate::io::manifest::Manifest;
 use crate::io::output::{json_bytes, print, write_atomic};
 use crate::io::run_folder::RunFolder;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::benchmark::{self, Benchmark, BenchmarkSpec, Shard, views};
+use crate::study::benchmark::{self, Benchmark, BenchmarkSpec, Instance, Shard, views};
 use crate::study::lab::{Artifact, write_artifacts};
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
@@ -28,6 +30,15 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     }
     if !args.targets.is_empty() {
         spec.targets = args.targets.clone();
+    }
+    if !args.problem.is_empty() {
+        let h = args.h.unwrap_or(MeshSize::from_level(6)?);
+        spec.instances = Some(
+            args.problem
+                .iter()
+                .map(|&n| Ok(Instance::given(Scene::paper_problem_to(n, h)?)))
+                .collect::<Result<Vec<_>>>()?,
+        );
     }
     let folder = RunFolder::create(&args.out)?;
     let study = Benchmark { spec: spec.clone() };

@@ -22,6 +22,21 @@ pub struct Instance {
     pub scene: Scene,
 }
 
+impl Instance {
+    /// A problem given to the benchmark instead of the collection (on the
+    /// command line by --problem, in Python by the problems passed): named
+    /// "NAME, h = 1/64", of the family `given`.
+    pub fn given(mut scene: Scene) -> Self {
+        let id = format!("{}, h = {}", scene.name, scene.finest());
+        scene.name = id.clone();
+        Self {
+            id,
+            family: "given",
+            scene,
+        }
+    }
+}
+
 fn level(k: u32) -> MeshSize {
     MeshSize::from_level(k).expect("levels 3 to 10 exist")
 }

@@ -163,20 +163,26 @@ impl Study for Benchmark {
         let mut ids: Vec<&str> = rows.iter().map(|r| r.instance.as_str()).collect();
         ids.sort_unstable();
         ids.dedup();
+        let what = match &self.spec.instances {
+            Some(_) => format!("the {} problems given", ids.len()),
+            None => format!(
+                "{} instances{}: the collection is the paper's three problems over 𝓕 ∈ {{0, 0.25, 0.5, 1, 2}} \
+                 and h ∈ {{1/16, 1/32, 1/64}}, sideways loads (a tangential traction on the loaded part of the top \
+                 side), loads that barely satisfy condition (13), and the paper's problems at h = 1/128 and 1/256 \
+                 (`contactlab benchmark --help`)",
+                ids.len(),
+                if self.spec.core {
+                    " (its core collection: the instances finer than 1/32 are left to `--long`)"
+                } else {
+                    ""
+                }
+            ),
+        };
         let mut s = format!(
             "## Benchmark over a problem collection\n\n`benchmark.csv` has one row per run (instance, solver, target \
-             accuracy) over {} instances{}: the collection is the paper's three problems over 𝓕 ∈ {{0, 0.25, 0.5, 1, 2}} \
-             and h ∈ {{1/16, 1/32, 1/64}}, sideways loads (a tangential traction on the loaded part of the top side), \
-             loads that barely satisfy condition (13), and the paper's problems at h = 1/128 and 1/256 (`contactlab \
-             benchmark --help`). At a target accuracy τ every solver's own tolerances and ε are set to 0.1·τ and a run \
-             succeeds only if its answer passes the certificate at τ within the time limit. LaTeX (booktabs) versions \
-             of the tables: `benchmark_<τ>.tex`; `compare.tex` and `table1.tex` are the tables above.\n\n{}\n\n",
-            ids.len(),
-            if self.spec.core {
-                " (its core collection: the instances finer than 1/32 are left to `--long`)"
-            } else {
-                ""
-            },
+             accuracy) over {what}. At a target accuracy τ every solver's own tolerances and ε are set to 0.1·τ and a \
+             run succeeds only if its answer passes the certificate at τ within the time limit. LaTeX (booktabs) \
+             versions of the tables: `benchmark_<τ>.tex`.\n\n{}\n\n",
             views::report(rows)
         );
         for c in charts {
