@@ -268,28 +268,77 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         }
     }
     equal_accuracy::equal_accuracy(spec, settings, &mut rows, log)?;
-    // The large meshes get every direct Coulomb solver certified on the
-    // finest mesh above, fastest first, so that the performance chart
-    // follows each of them as far as it goes; one whose answer fails the
-    // certificate (a failure is a row too) is not run on the finer ones.
+    // The large meshes get every solver certified on the whole Coulomb
+    // problem on the finest mesh above, fastest first, so that the
+    // performance chart follows each of them as far as it goes: each run
+    // stopped at LARGE_BUDGET seconds, and not run where its last two
+    // meshes predict more (the regular meshes' rule). One whose answer is
+    // not certified (a failure is a row too) is not run on the finer ones.
     let finest = spec
         .meshes
         .last()
         .map(|h| h.to_string())
         .unwrap_or_default();
-    let mut candidates: Vec<&'static registry::Entry> = direct_by_speed(&rows, &finest)
-        .into_iter()
-        .filter_map(registry::by_name)
-        .collect();
+    let mut candidates: Vec<(&'static registry::Entry, Vec<f64>)> =
+        certified_by_speed(&rows, &finest)
+            .into_iter()
+            .filter_map(registry::by_name)
+            .map(|e| {
+                let past = rows
+                    .iter()
+                    .filter(|r| {
+                        r.what == "coulomb" && r.solver == e.name && r.status == "converged"
+                    })
+                    .map(|r| r.median_seconds)
+                    .collect();
+                (e, past)
+            })
+            .collect();
     for &h in &spec.large {
-        if candidates.is_empty() {
+        let (mut run, mut skipped) = (Vec::new(), Vec::new());
+        for (e, past) in &candidates {
+            match past[..] {
+                [.., a, b] if b * (b / a).max(4.0) > LARGE_BUDGET => skipped.push((
+                    e.name,
+                    format!(
+                        "predicted {:.0} s > budget {LARGE_BUDGET} s",
+                        b * (b / a).max(4.0)
+                    ),
+                )),
+                _ => run.push(*e),
+            }
+        }
+        if run.is_empty() {
             break;
         }
-        let failed = large_mesh(spec.problem, h, &candidates, settings, &mut rows, log)?;
-        candidates.retain(|c| !failed.contains(&c.name));
+        let times = large_mesh(spec.problem, h, (&run, &skipped), settings, &mut rows, log)?;
+        candidates.retain_mut(|(e, past)| match times.iter().find(|t| t.0 == e.name) {
+            Some((_, Some(seconds))) => {
+                past.push(*seconds);
+                true
+            }
+            _ => false,
+        });
     }
     Ok(rows)
 }
+
+/// The solvers certified on the whole Coulomb problem at `h` in `rows`
+/// (directly or inside the fixed point), fastest first.
+pub fn certified_by_speed(rows: &[PerfRow], h: &str) -> Vec<&'static str> {
+    let mut found: Vec<(&'static str, f64)> = rows
+        .iter()
+        .filter(|r| r.what == "coulomb" && r.h == h && r.status == "converged")
+        .filter_map(|r| Some((registry::by_name(&r.solver)?.name, r.median_seconds)))
+        .collect();
+    found.sort_by(|a, b| a.1.total_cmp(&b.1));
+    found.into_iter().map(|(name, _)| name).collect()
+}
+
+/// The seconds a run on a large mesh may take: beyond, it is stopped (a
+/// cross on the performance chart), and a solver predicted slower is not
+/// run.
+pub const LARGE_BUDGET: f64 = 60.0;
 
 /// The solvers of the Coulomb law itself (no fixed point around them)
 /// certified at `h` in `rows`, fastest first.
@@ -361,18 +410,19 @@ impl FastestDirect {
 pub const LARGE_FACTORIZATION_RUNS: usize = 3;
 
 /// On a large mesh: assembly and each of `solvers` on the whole Coulomb
-/// problem, each timed once (no warm-up, no reference: the certificate
-/// alone judges the answer), and the factorization, the ratios' unit, as
-/// the median of [`LARGE_FACTORIZATION_RUNS`] after a warm-up. Returns the
-/// solvers whose answer was not certified.
+/// problem, each timed once within [`LARGE_BUDGET`] (no warm-up, no
+/// reference: the certificate alone judges the answer), and the
+/// factorization, the ratios' unit, as the median of
+/// [`LARGE_FACTORIZATION_RUNS`] after a warm-up. Returns each solver's
+/// seconds if its answer was certified.
 fn large_mesh(
     problem: u32,
     h: MeshSize,
-    solvers: &[&'static registry::Entry],
+    (solvers, skipped): (&[&'static registry::Entry], &[(&'static str, String)]),
     settings: &Settings,
     rows: &mut Vec<PerfRow>,
     log: &dyn Fn(&str),
-) -> Result<Vec<&'static str>> {
+) -> Result<Vec<(&'static str, Option<f64>)>> {
     let scene = Scene::paper_problem_to(problem, h)?;
     log(&format!(
         "h = {h}: assembly and the factorization ({LARGE_FACTORIZATION_RUNS} runs after a warm-up)"
@@ -387,10 +437,14 @@ fn large_mesh(
         factorization: median(&set_up.factorization),
     };
     push_set_up(&mut mesh, &set_up, true);
-    let mut failed = Vec::new();
+    for (name, why) in skipped {
+        mesh.push("coulomb", name, &[f64::NAN], "skipped", why.clone());
+    }
+    let mut times = Vec::new();
     for &solver in solvers {
         log(&format!("h = {h}: {} coulomb", solver.name));
-        let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings);
+        let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings)
+            .with_seconds(Some(LARGE_BUDGET));
         let m = measure(&t, None, Keep::default())?;
         let tr = &m.trial;
         let note = format!(
@@ -407,11 +461,10 @@ fn large_mesh(
         let row = mesh.rows.last_mut().expect("just pushed");
         row.certificate = tr.residual();
         row.work = tr.work;
-        if tr.status != contactlab_solvers::Status::Converged {
-            failed.push(solver.name);
-        }
+        let certified = tr.status == contactlab_solvers::Status::Converged;
+        times.push((solver.name, certified.then_some(m.timing.seconds_median)));
     }
-    Ok(failed)
+    Ok(times)
 }
 
 /// Times a kernel step and one product with its operator, interleaved so
