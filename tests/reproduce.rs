@@ -320,6 +320,7 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     }
     // Charts: valid SVG, title, axis labels, one series per solver where drawn per solver.
     let mut seen = 0;
+    let mut per_law: Vec<(String, Vec<String>)> = Vec::new();
     for entry in std::fs::read_dir(out.join("charts")).unwrap() {
         let path = entry.unwrap().path();
         let texts = svg_texts(&path);
@@ -398,7 +399,10 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             has(title) && has(x) && has(y),
             "{name}: title or axis label missing in {texts:?}"
         );
-        if per_solver {
+        if per_solver && name.starts_with("performance_") {
+            // Split by family: every solver in one of the law's charts.
+            per_law.push((name.to_string(), texts.clone()));
+        } else if per_solver {
             // Charts of the given-friction subproblem: the solvers of that
             // law only.
             let subproblem = name == "performance_given_friction"
@@ -413,6 +417,26 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         }
         legend_beside_the_data(&path);
         seen += 1;
+    }
+    // The performance charts of each law, split by family: every solver of
+    // the law in one of them.
+    for law in ["coulomb", "given_friction"] {
+        let texts: Vec<&String> = per_law
+            .iter()
+            .filter(|(n, _)| n.starts_with(&format!("performance_{law}_")))
+            .flat_map(|(_, t)| t)
+            .collect();
+        assert!(!texts.is_empty(), "no performance chart of {law}");
+        for e in registry::solvers()
+            .into_iter()
+            .filter(|e| law == "coulomb" || e.solves(Law::GivenFriction))
+        {
+            assert!(
+                texts.iter().any(|t| t.contains(e.name)),
+                "performance_{law}: no series for {}",
+                e.name
+            );
+        }
     }
     assert!(seen >= 12 + 3 + 1 + 2 + 3 + 2 + 2, "only {seen} charts");
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();

@@ -7,18 +7,39 @@ use contactlab_solvers::registry;
 use crate::io::charts::{Chart, Series};
 use crate::study::bench::PerfRow;
 
+/// The two families the performance charts are split into, so that each
+/// legend stays readable: the solvers that factor a matrix (their memory
+/// grows as n log n, `Entry::memory`) and the iterative ones.
+const FAMILIES: [(&str, &str, bool); 2] = [
+    ("factored", "solvers that factor a matrix", true),
+    ("iterative", "iterative solvers", false),
+];
+
 /// Time against unknowns (log-log), one series per solver with its fitted
-/// slope, and one factorization for scale.
+/// slope, and one factorization for scale: per law, one chart per family.
 pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
     let mut out = Vec::new();
     for what in ["coulomb", "given_friction"] {
+        for (tag, family, factors) in FAMILIES {
+            out.push(chart(rows, what, tag, family, factors));
+        }
+    }
+    out
+}
+
+/// One law's chart of one family.
+fn chart(rows: &[PerfRow], what: &str, tag: &str, family: &str, factors: bool) -> (String, Chart) {
+    {
         let mut series = Vec::new();
         let factor: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.what == "factorization")
             .map(|r| (r.unknowns as f64, r.median_seconds))
             .collect();
-        for e in registry::solvers() {
+        for e in registry::solvers()
+            .into_iter()
+            .filter(|e| (e.memory.per_unknown_log2 > 0.0) == factors)
+        {
             let here = |certified: bool| -> Vec<(f64, f64)> {
                 rows.iter()
                     .filter(|r| {
@@ -62,14 +83,14 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
             .black(),
         );
         let title = if what == "coulomb" {
-            "Whole Coulomb problem: time against unknowns (problem 1)"
+            format!("Whole Coulomb problem, {family}: time against unknowns (problem 1)")
         } else {
-            "Given-friction subproblem: time against unknowns (problem 1)"
+            format!("Given-friction subproblem, {family}: time against unknowns (problem 1)")
         };
-        out.push((
-            format!("performance_{what}"),
+        (
+            format!("performance_{what}_{tag}"),
             Chart {
-                title: title.into(),
+                title,
                 x_label: "unknowns".into(),
                 y_label:
                     "median time [s] (solvers one thread, factorization two; large meshes once)"
@@ -80,9 +101,8 @@ pub fn performance_charts(rows: &[PerfRow]) -> Vec<(String, Chart)> {
                 y_resolution: None,
                 x_ticks: None,
             },
-        ));
+        )
     }
-    out
 }
 
 /// A fitted slope for a legend, only through at least

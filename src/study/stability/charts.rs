@@ -95,19 +95,22 @@ pub fn charts(trials: &[Trial], steps: &[FrictionStep]) -> Vec<(String, Chart)> 
             });
         let tolerance = load.iter().map(|t| t.tolerance).fold(0.0, f64::max);
         if lo.is_finite() && tolerance > 0.0 {
-            series.push(
-                Series::line(
-                    format!("certificate's threshold ({tolerance:e})"),
-                    vec![(lo, tolerance), (hi, tolerance)],
-                )
-                .dashed()
-                .black(),
-            );
+            // Named in the title, not the legend (a legend of every solver).
+            let mut line = Series::line(
+                format!("certificate's threshold ({tolerance:e})"),
+                vec![(lo, tolerance), (hi, tolerance)],
+            )
+            .dashed()
+            .black();
+            line.legend = false;
+            series.push(line);
         }
         out.push((
             "stability_load".into(),
             Chart {
-                title: "Stability: total vertical load approaching 0 (condition (13))".into(),
+                title: format!(
+                    "Stability: total vertical load approaching 0 (condition (13)); dashed: the certificate's threshold {tolerance:e}"
+                ),
                 x_label: "|total vertical load| [force]".into(),
                 y_label: "certificate (largest violation)".into(),
                 log_x: true,
