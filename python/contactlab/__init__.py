@@ -54,6 +54,7 @@ __all__ = [
     "compare",
     "benchmark",
     "work_precision",
+    "sweep",
 ]
 
 #: A path as Python programs give one.
@@ -897,3 +898,50 @@ def work_precision(
         except OSError as e:
             raise FileError(f"cannot write {chart}: {e.strerror}") from None
     return StudyResult(rows=_rows(files["work_precision.csv"]), files=files, charts=charts, report=d["report"])
+
+
+def sweep(
+    problem: Problem,
+    solvers: Solvers,
+    settings: Optional[Mapping[str, object]] = None,
+    quick: bool = False,
+    work_precision: bool = True,
+    repeats: int = 2,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """Each solver's settings swept on the problem's scene and mesh:
+    ``contactlab sweep``.
+
+    Every setting the registry's study plans vary for the solver (one at a
+    time, on the Coulomb problem), and its accuracy knob on the
+    given-friction subproblem (the work-precision diagram), each trial
+    certified and measured against the earned reference.
+
+    Parameters
+    ----------
+    quick : bool
+        The registry's short value lists (``--quick``).
+    work_precision : bool
+        False skips the work-precision diagram (``--no-work-precision``).
+    repeats : int
+        Timed runs of each work-precision trial after the first (``--runs``).
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: ``sweep.csv``; ``report``: the sweep's README section.
+    """
+    _problem(problem)
+    if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
+        raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
+    d = _contactlab._sweep(
+        problem._p,
+        _solver_names(solvers),
+        _settings(settings),
+        bool(quick),
+        bool(work_precision),
+        int(repeats),
+        _out(out),
+    )
+    files = dict(d["files"])
+    return StudyResult(rows=_rows(files["sweep.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])

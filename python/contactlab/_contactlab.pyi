@@ -109,3 +109,12 @@ def _work_precision(
     repeats: int = ...,
     out: Optional[str] = ...,
 ) -> Dict[str, Any]: ...
+def _sweep(
+    problem: Problem,
+    solvers: List[str],
+    settings: Sequence[Tuple[str, str]] = ...,
+    quick: bool = ...,
+    work_precision: bool = ...,
+    repeats: int = ...,
+    out: Optional[str] = ...,
+) -> Dict[str, Any]: ...

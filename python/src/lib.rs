@@ -535,5 +535,6 @@ fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(studies::_compare, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_benchmark, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_work_precision, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_sweep, m)?)?;
     add_errors(m)
 }

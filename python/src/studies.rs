@@ -15,6 +15,7 @@ use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
 use contactlab::study::lab::{Content, Lab, Quiet, Study, write_artifacts};
+use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::work_precision::WorkPrecision;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -197,6 +198,51 @@ pub fn _work_precision<'py>(
         solvers,
         targets,
         repeats,
+    };
+    run(py, study, settings, out)
+}
+
+/// `contactlab sweep` on the problem's scene and mesh: each solver's
+/// registry variations of the Coulomb problem and its accuracy knob on the
+/// subproblem (work-precision), against the earned reference.
+#[pyfunction]
+#[pyo3(signature = (problem, solvers, settings=Vec::new(), quick=false, work_precision=true, repeats=2, out=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _sweep<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    solvers: Vec<String>,
+    settings: Vec<(String, String)>,
+    quick: bool,
+    work_precision: bool,
+    repeats: usize,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (scene, finest) = problem.scene("sweep")?;
+    let solvers = entries(&solvers)?;
+    let settings = resolved(&problem.settings, settings, &solvers)?;
+    let spec = SweepSpec {
+        scenes: vec![(**scene).clone()],
+        meshes: vec![finest.h()],
+        fine_meshes: Vec::new(),
+        solvers,
+        variations: true,
+        work_precision,
+        quick,
+        repeats,
+        work_scale: 1.0,
+    };
+    let planned = contactlab::study::sweep::plan(&spec, &settings).map_err(crate::error_of)?;
+    if planned.is_empty() {
+        return Err(input_error(
+            "the sweep plans no trials: these solvers have no settings to vary in the registry's sweeps \
+             and work_precision=False skips the work-precision diagram",
+        ));
+    }
+    let study = Sweep {
+        spec,
+        extra: Vec::new(),
+        references_file: "references.csv",
     };
     run(py, study, settings, out)
 }

@@ -311,6 +311,24 @@ def test_compare_and_benchmark_write_the_command_lines_files(tmp_path):
     assert all(row["success"] for row in r.rows)
 
 
+def test_sweep_writes_the_command_lines_sweep(tmp_path):
+    # The sweep from Python is `contactlab sweep` on the same scene: its
+    # accuracy file, row by row.
+    p = cl.Problem.paper(1, h="1/8")
+    r = cl.sweep(p, ["relaxation", "tnnmg"], quick=True, repeats=0, out=tmp_path / "py")
+    subprocess.run(
+        [str(cli()), "sweep", "--problems", "1", "--h", "1/8", "--solvers", "relaxation,tnnmg",
+         "--quick", "--runs", "0", "--out", str(tmp_path / "cli")],
+        check=True,
+        capture_output=True,
+    )
+    assert (tmp_path / "py" / "sweep.csv").read_bytes() == (tmp_path / "cli" / "sweep.csv").read_bytes()
+    assert {row["solver"] for row in r.rows} == {"relaxation", "tnnmg"}
+    assert "## Speed against accuracy" in r.report
+    with pytest.raises(cl.InputError, match="plans no trials"):
+        cl.sweep(p, ["newton-coulomb"], work_precision=False)
+
+
 def test_status_is_an_enum_that_compares_equal_to_its_name(p32):
     # Statuses were strings; Clarabel users expect an enum.
     assert [s.value for s in cl.Status] == list(cl._contactlab.statuses())
