@@ -189,7 +189,7 @@ pub struct CompareArgs {
     pub solvers: Vec<String>,
     /// Timed runs per trial after the first, warm-up run (times: their
     /// minimum and median). Formerly `--repeats`.
-    #[arg(long = "runs", alias = "repeats", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
+    #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
     /// Folder for compare.csv, compare_timing.csv and references.csv (replaced whole).
     #[arg(long, value_name = "DIR")]
@@ -235,7 +235,7 @@ pub struct SweepArgs {
     pub quick: bool,
     /// Timed runs of each work-precision trial after the first, warm-up
     /// run. Formerly `--repeats`.
-    #[arg(long = "runs", alias = "repeats", default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
+    #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
@@ -262,8 +262,8 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Timed runs after the first, warm-up run (the median is reported)
-    /// [default: 3; quick: 1].
-    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=100))]
+    /// [default: 3; quick: 1]. Formerly `--repeats`.
+    #[arg(long, alias = "repeats", value_name = "RUNS", value_parser = clap::value_parser!(u64).range(1..=100))]
     pub runs: Option<u64>,
     /// Wall-clock limit per run in seconds; a solver slower than this on one
     /// mesh (or predicted to be on the next) is not run on finer meshes
@@ -421,7 +421,7 @@ pub struct CertifyArgs {
     /// The certificate's tolerance: the largest violation of any condition,
     /// in the problem's scales, that certifies the answer (as `--certify-tol`
     /// everywhere else; `--tolerance` is kept as an alias).
-    #[arg(long = "certify-tol", alias = "tolerance", value_name = "TOL", default_value_t = crate::certificate::DEFAULT_TOLERANCE, value_parser = positive_tolerance)]
+    #[arg(long = "certify-tol", alias = "tolerance", value_name = "TOL", default_value = "1e-5", value_parser = positive_tolerance)]
     pub tolerance: f64,
 }
 

@@ -274,3 +274,39 @@ fn the_later_of_a_flag_and_a_set_of_one_setting_wins() {
         }
     }
 }
+
+/// One spelling per concept: the timed runs are `--runs RUNS` in every
+/// command that times (`--repeats` accepted, as the README says), and
+/// `certify`'s default tolerance is the certificate's own, written as the
+/// help of every other command writes it (1e-5, not 0.00001).
+#[test]
+fn runs_are_spelled_alike_and_certify_states_its_default_as_written() {
+    use clap::{CommandFactory, Parser};
+    use contactlab::cli::{Cli, Command};
+    for cmd in ["bench", "compare", "sweep"] {
+        let help = Cli::command()
+            .find_subcommand(cmd)
+            .unwrap()
+            .get_arguments()
+            .find(|a| a.get_long() == Some("runs"))
+            .map(|a| a.get_value_names().map(|v| v[0].to_string()))
+            .unwrap_or_else(|| panic!("{cmd} has --runs"));
+        assert_eq!(help.as_deref(), Some("RUNS"), "{cmd}");
+    }
+    Cli::try_parse_from(["contactlab", "bench", "--repeats", "2", "--out", "x"]).unwrap();
+    let parsed = Cli::try_parse_from([
+        "contactlab",
+        "certify",
+        "--instance",
+        "x",
+        "--displacements",
+        "v",
+    ])
+    .unwrap();
+    match parsed.command {
+        Command::Certify(a) => assert_eq!(a.tolerance, contactlab::certificate::DEFAULT_TOLERANCE),
+        _ => panic!("certify parses as certify"),
+    }
+    let help = String::from_utf8(contactlab(&["certify", "--help"]).stdout).unwrap();
+    assert!(help.contains("[default: 1e-5]"), "{help}");
+}
