@@ -148,7 +148,7 @@ pub struct SolveArgs {
     /// The solver [default: the conic oracle].
     #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
     pub solver: Option<String>,
-    /// Folder for profile.csv and summary.json (replaced whole).
+    /// Folder for profile.csv, summary.json, displacements.mtx and forces.csv (with --vtu also field.vtu; replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Also write field.vtu into --out: both bodies for ParaView, with
@@ -173,7 +173,7 @@ pub struct Table1Args {
     /// Plane strain or plane stress.
     #[arg(long, value_parser = choices::plane(), default_value_t = PlaneModel::Strain)]
     pub plane: PlaneModel,
-    /// Folder for table1.csv and table1_trials.csv (replaced whole).
+    /// Folder for table1.csv, table1.tex and table1_trials.csv (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     #[command(flatten)]
@@ -191,7 +191,7 @@ pub struct CompareArgs {
     /// minimum and median). Formerly `--repeats`.
     #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
-    /// Folder for compare.csv, compare_timing.csv and references.csv (replaced whole).
+    /// Folder for compare.csv, compare_timing.csv, compare.tex and references.csv (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     #[command(flatten)]

@@ -310,3 +310,37 @@ fn runs_are_spelled_alike_and_certify_states_its_default_as_written() {
     let help = String::from_utf8(contactlab(&["certify", "--help"]).stdout).unwrap();
     assert!(help.contains("[default: 1e-5]"), "{help}");
 }
+
+/// Every file a command writes is named in its help (`table1 --help` and
+/// `compare --help` left out the .tex tables they write).
+#[test]
+fn help_names_every_file_a_command_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    for (cmd, args) in [
+        ("solve", vec!["--problem", "1", "--h", "1/8"]),
+        (
+            "compare",
+            vec!["--problem", "1", "--h", "1/8", "--runs", "0"],
+        ),
+        ("table1", vec!["--h", "1/8", "--problems", "1"]),
+    ] {
+        let out = dir.path().join(cmd);
+        let mut all = vec![cmd];
+        all.extend(&args);
+        all.extend(["--out", out.to_str().unwrap()]);
+        let o = contactlab(&all);
+        assert!(
+            o.status.success(),
+            "{cmd}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let help = String::from_utf8(contactlab(&[cmd, "--help"]).stdout).unwrap();
+        for entry in std::fs::read_dir(&out).unwrap() {
+            let name = entry.unwrap().file_name().into_string().unwrap();
+            if name.starts_with('.') {
+                continue;
+            }
+            assert!(help.contains(&name), "{cmd} --help does not name {name}");
+        }
+    }
+}
