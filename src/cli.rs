@@ -14,7 +14,7 @@ use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 
 mod choices;
-mod scene_args;
+pub mod scene_args;
 pub mod settings_args;
 
 pub use scene_args::SceneArgs;
@@ -237,6 +237,8 @@ pub struct SweepArgs {
     /// run. Formerly `--repeats`.
     #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
+    #[command(flatten)]
+    pub material: crate::cli::scene_args::MaterialArgs,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,

@@ -344,3 +344,38 @@ fn help_names_every_file_a_command_writes() {
         }
     }
 }
+
+/// `sweep` takes the scene overrides every other command takes: the
+/// frictionless sweep is another sweep, and a bad value is refused naming
+/// its flag.
+#[test]
+fn sweep_takes_the_scene_overrides() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec![
+            "sweep",
+            "--problems",
+            "1",
+            "--h",
+            "1/8",
+            "--solvers",
+            "tnnmg",
+            "--quick",
+            "--runs",
+            "0",
+        ];
+        args.extend(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        (contactlab(&args), out)
+    };
+    let (o, with) = run(&[], "with");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (o, without) = run(&["--friction", "0"], "without");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let read = |p: &std::path::Path| std::fs::read_to_string(p.join("sweep.csv")).unwrap();
+    assert_ne!(read(&with), read(&without), "--friction changed nothing");
+    let (o, _) = run(&["--friction", "-1"], "bad");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--friction"));
+}

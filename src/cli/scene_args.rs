@@ -73,3 +73,35 @@ impl SceneArgs {
         Ok((scene, settings))
     }
 }
+
+/// The material and friction overrides of a command that takes several
+/// scenes (`sweep`): the same flags as a single scene's, applied to each.
+#[derive(Debug, Clone, Default, Args)]
+pub struct MaterialArgs {
+    /// Young's modulus E (default 73e3).
+    #[arg(long, value_name = "E", allow_hyphen_values = true)]
+    pub young: Option<f64>,
+    /// Poisson's ratio ν, in (-1, 0.5) (default 0.34).
+    #[arg(long, value_name = "NU", allow_hyphen_values = true)]
+    pub poisson: Option<f64>,
+    /// Plane strain or plane stress (default strain; the paper does not say).
+    #[arg(long, value_parser = super::choices::plane())]
+    pub plane: Option<PlaneModel>,
+    /// Coulomb friction coefficient 𝓕 ≥ 0 (default 0.5; 0 is frictionless).
+    #[arg(long, value_name = "F", allow_hyphen_values = true)]
+    pub friction: Option<f64>,
+}
+
+impl MaterialArgs {
+    /// `scene` with these overrides, validated (condition (13) included).
+    pub fn apply(&self, scene: Scene) -> Result<Scene> {
+        Ok(Overrides {
+            h: None,
+            young: self.young,
+            poisson: self.poisson,
+            plane: self.plane,
+            friction: self.friction,
+        }
+        .apply(scene)?)
+    }
+}

@@ -27,6 +27,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
             Settings::default(),
         ),
     };
+    let scenes = scenes
+        .into_iter()
+        .map(|s| args.material.apply(s))
+        .collect::<Result<Vec<_>>>()?;
     let solvers = solver_list(&args.solvers)?;
     let settings = args.settings.resolve_for(base, &solvers)?;
     let spec = SweepSpec {
