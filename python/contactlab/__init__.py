@@ -179,6 +179,19 @@ def _path(p, name: str) -> str:
         raise InputError(f"{name} = {p!r}: give a path (str, bytes or os.PathLike)") from None
 
 
+def _overrides(h, young, poisson, plane, friction) -> tuple:
+    """A scene's overrides, checked, in the binding's order (h, E, ν, the
+    plane model, 𝓕), as the command line's --h, --young, --poisson,
+    --plane, --friction."""
+    return (
+        _h(h),
+        _number(young, "young"),
+        _number(poisson, "poisson"),
+        _text(plane, "plane"),
+        _number(friction, "friction"),
+    )
+
+
 def _csr(parts, shape) -> scipy.sparse.csr_array:
     indptr, indices, data = parts
     return scipy.sparse.csr_array((data, indices, indptr), shape=shape)
@@ -255,14 +268,7 @@ class Problem:
         if isinstance(number, bool) or not isinstance(number, numbers.Integral):
             raise InputError(f"number = {number!r}: give the paper's problem 1, 2 or 3")
         return cls(
-            _contactlab.Problem.paper(
-                int(number),
-                _h(h),
-                _number(young, "young"),
-                _number(poisson, "poisson"),
-                _text(plane, "plane"),
-                _number(friction, "friction"),
-            )
+            _contactlab.Problem.paper(int(number), *_overrides(h, young, poisson, plane, friction))
         )
 
     @classmethod
@@ -279,14 +285,7 @@ class Problem:
         settings it brings (every solve and study of the problem starts from
         them). The overrides are as for ``paper``."""
         return cls(
-            _contactlab.Problem.from_scene(
-                _path(path, "path"),
-                _h(h),
-                _number(young, "young"),
-                _number(poisson, "poisson"),
-                _text(plane, "plane"),
-                _number(friction, "friction"),
-            )
+            _contactlab.Problem.from_scene(_path(path, "path"), *_overrides(h, young, poisson, plane, friction))
         )
 
     @classmethod

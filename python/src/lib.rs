@@ -288,13 +288,7 @@ fn solve<'py>(
         .map(|s| s.name)
         .collect();
     stages.push(contactlab::coulomb::fixed_point::STAGE);
-    let source = match &problem.source {
-        Source::Scene { scene, finest } => Source::Scene {
-            scene: scene.clone(),
-            finest: finest.clone(),
-        },
-        Source::Algebraic(p) => Source::Algebraic(p.clone()),
-    };
+    let source = problem.source.clone();
     let (theirs, stop) = (raised.clone(), stopped.clone());
     let (outcome, profile) = interruptible(py, move |cancel| {
         let friction = match &bound {

@@ -19,7 +19,8 @@ use pyo3::types::PyDict;
 
 use crate::{error_of, input_error, interruptible};
 
-/// Where a problem comes from.
+/// Where a problem comes from (a clone shares the assembly).
+#[derive(Clone)]
 pub enum Source {
     /// A scene, with its finest level assembled.
     Scene {

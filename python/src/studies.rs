@@ -34,6 +34,21 @@ fn entries(names: &[String]) -> PyResult<Vec<&'static Entry>> {
         .collect()
 }
 
+/// Target accuracies: at least one, each a tolerance the certificate takes
+/// (`example`: what to write instead of none).
+fn check_targets(targets: &[f64], example: &str) -> PyResult<()> {
+    if targets.is_empty() {
+        return Err(input_error(format!(
+            "targets: give at least one accuracy, such as {example}"
+        )));
+    }
+    for t in targets {
+        contactlab::certificate::check_tolerance(*t)
+            .map_err(|m| input_error(format!("targets: {m}")))?;
+    }
+    Ok(())
+}
+
 /// `base` with `settings` applied for a run of `running`.
 fn resolved(
     base: &Settings,
@@ -141,15 +156,7 @@ pub fn _benchmark<'py>(
     if problems.is_empty() {
         return Err(input_error("problems: give at least one problem"));
     }
-    if targets.is_empty() {
-        return Err(input_error(
-            "targets: give at least one accuracy, such as [1e-4]",
-        ));
-    }
-    for t in &targets {
-        contactlab::certificate::check_tolerance(*t)
-            .map_err(|m| input_error(format!("targets: {m}")))?;
-    }
+    check_targets(&targets, "[1e-4]")?;
     if !(time_limit.is_finite() && time_limit > 0.0) {
         return Err(input_error(format!(
             "time_limit = {time_limit}: give a positive number of seconds"
@@ -182,15 +189,7 @@ pub fn _work_precision<'py>(
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (scene, _) = problem.scene("work_precision")?;
-    if targets.is_empty() {
-        return Err(input_error(
-            "targets: give at least one accuracy, such as [1e-4, 1e-8]",
-        ));
-    }
-    for t in &targets {
-        contactlab::certificate::check_tolerance(*t)
-            .map_err(|m| input_error(format!("targets: {m}")))?;
-    }
+    check_targets(&targets, "[1e-4, 1e-8]")?;
     let solvers = entries(&solvers)?;
     let settings = resolved(&problem.settings, settings, &solvers)?;
     let study = WorkPrecision {

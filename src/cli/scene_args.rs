@@ -32,18 +32,8 @@ pub struct SceneArgs {
     /// (the paper's 1/8 to 1/64).
     #[arg(long, value_name = "1/2^k")]
     pub h: Option<MeshSize>,
-    /// Young's modulus E (default 73e3).
-    #[arg(long, value_name = "E", allow_hyphen_values = true)]
-    pub young: Option<f64>,
-    /// Poisson's ratio ν, in (-1, 0.5) (default 0.34).
-    #[arg(long, value_name = "NU", allow_hyphen_values = true)]
-    pub poisson: Option<f64>,
-    /// Plane strain or plane stress (default strain; the paper does not say).
-    #[arg(long, value_parser = super::choices::plane())]
-    pub plane: Option<PlaneModel>,
-    /// Coulomb friction coefficient 𝓕 ≥ 0 (default 0.5; 0 is frictionless).
-    #[arg(long, value_name = "F", allow_hyphen_values = true)]
-    pub friction: Option<f64>,
+    #[command(flatten)]
+    pub material: MaterialArgs,
 }
 
 impl SceneArgs {
@@ -62,20 +52,13 @@ impl SceneArgs {
                 "no scene given: add --problem N (the paper's problem 1, 2 or 3) or --scene FILE (a scene file)"
             ),
         };
-        let scene = Overrides {
-            h: self.h,
-            young: self.young,
-            poisson: self.poisson,
-            plane: self.plane,
-            friction: self.friction,
-        }
-        .apply(scene)?;
-        Ok((scene, settings))
+        Ok((self.material.apply(scene, self.h)?, settings))
     }
 }
 
-/// The material and friction overrides of a command that takes several
-/// scenes (`sweep`): the same flags as a single scene's, applied to each.
+/// The material and friction overrides: a single scene's (with its --h,
+/// [`SceneArgs`]), and those of a command that takes several scenes
+/// (`sweep`), applied to each.
 #[derive(Debug, Clone, Default, Args)]
 pub struct MaterialArgs {
     /// Young's modulus E (default 73e3).
@@ -93,10 +76,11 @@ pub struct MaterialArgs {
 }
 
 impl MaterialArgs {
-    /// `scene` with these overrides, validated (condition (13) included).
-    pub fn apply(&self, scene: Scene) -> Result<Scene> {
+    /// `scene` with these overrides and the finest mesh `h` (None: its
+    /// own), validated (condition (13) included).
+    pub fn apply(&self, scene: Scene, h: Option<MeshSize>) -> Result<Scene> {
         Ok(Overrides {
-            h: None,
+            h,
             young: self.young,
             poisson: self.poisson,
             plane: self.plane,

@@ -29,7 +29,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     };
     let scenes = scenes
         .into_iter()
-        .map(|s| args.material.apply(s))
+        .map(|s| args.material.apply(s, None))
         .collect::<Result<Vec<_>>>()?;
     let solvers = solver_list(&args.solvers)?;
     let settings = args.settings.resolve_for(base, &solvers)?;

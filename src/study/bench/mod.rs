@@ -343,16 +343,10 @@ pub const LARGE_BUDGET: f64 = 60.0;
 /// The solvers of the Coulomb law itself (no fixed point around them)
 /// certified at `h` in `rows`, fastest first.
 pub fn direct_by_speed(rows: &[PerfRow], h: &str) -> Vec<&'static str> {
-    let mut found: Vec<(&'static str, f64)> = rows
-        .iter()
-        .filter(|r| r.what == "coulomb" && r.h == h && r.status == "converged")
-        .filter_map(|r| {
-            let e = registry::by_name(&r.solver)?;
-            e.solves(Law::Coulomb).then_some((e.name, r.median_seconds))
-        })
-        .collect();
-    found.sort_by(|a, b| a.1.total_cmp(&b.1));
-    found.into_iter().map(|(name, _)| name).collect()
+    certified_by_speed(rows, h)
+        .into_iter()
+        .filter(|name| registry::by_name(name).is_some_and(|e| e.solves(Law::Coulomb)))
+        .collect()
 }
 
 /// The direct Coulomb solver certified at `h` in `rows`, the fastest if
