@@ -6,6 +6,7 @@ use contactlab_solvers::registry;
 
 use crate::study::bench::goals::{BenchOutput, equal_accuracy_markdown, goals_markdown};
 use crate::study::bench::memory;
+use crate::study::bench::set_up::FACTORIZATION;
 use crate::study::lab::chart_markdown;
 
 /// The whole section.
@@ -29,7 +30,7 @@ pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
           is the paper's Gauss–Seidel, 1.5 the over-relaxed sweep. The oracle runs at its own settings. Each run is \
           once and cold, without the budget; its certificate (the same code for every solver) says what accuracy it \
           reached.\n";
-    s += &speed_table(bench);
+    s += &speed_table(&bench.rows);
     s += "\n";
     for c in charts.iter().filter(|c| c.starts_with("performance_")) {
         s += &chart_markdown(
@@ -42,8 +43,7 @@ pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
     s
 }
 
-fn speed_table(bench: &BenchOutput) -> String {
-    let rows = &bench.rows;
+fn speed_table(rows: &[super::PerfRow]) -> String {
     // Each mesh once, in the order of its first row (later studies revisit
     // meshes).
     let mut meshes: Vec<&str> = Vec::new();
@@ -61,44 +61,77 @@ fn speed_table(bench: &BenchOutput) -> String {
     s += "\n|---|";
     s += &"---|".repeat(meshes.len());
     s += "\n";
-    let mut names = vec!["faer LLᵀ"];
+    let mut names = vec![FACTORIZATION];
     names.extend(registry::names());
     for name in names {
+        let cells: Vec<String> = meshes
+            .iter()
+            .map(|h| {
+                rows.iter()
+                    .find(|r| {
+                        r.solver == name
+                            && r.h == *h
+                            && (r.what == "coulomb" || r.what == "factorization")
+                    })
+                    .map(|r| {
+                        if r.median_seconds.is_finite() {
+                            let st = if r.what == "factorization" {
+                                String::new()
+                            } else {
+                                format!(", {}", r.status)
+                            };
+                            format!(
+                                "{:.4} ({:.1}×{st})",
+                                r.median_seconds, r.ratio_to_factorization
+                            )
+                        } else {
+                            r.status.clone()
+                        }
+                    })
+                    .unwrap_or_default()
+            })
+            .collect();
+        // A solver that ran on no mesh has no row.
+        if cells.iter().all(String::is_empty) {
+            continue;
+        }
         s += &format!(
             "| {} |",
-            if name == "faer LLᵀ" {
+            if name == FACTORIZATION {
                 "best factorization + solve (2 threads)"
             } else {
                 name
             }
         );
-        for h in &meshes {
-            let cell = rows
-                .iter()
-                .find(|r| {
-                    r.solver == name
-                        && r.h == *h
-                        && (r.what == "coulomb" || r.what == "factorization")
-                })
-                .map(|r| {
-                    if r.median_seconds.is_finite() {
-                        let st = if r.what == "factorization" {
-                            String::new()
-                        } else {
-                            format!(", {}", r.status)
-                        };
-                        format!(
-                            "{:.4} ({:.1}×{st})",
-                            r.median_seconds, r.ratio_to_factorization
-                        )
-                    } else {
-                        r.status.clone()
-                    }
-                })
-                .unwrap_or_default();
+        for cell in cells {
             s += &format!(" {cell} |");
         }
         s += "\n";
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::bench::PerfRow;
+
+    /// The factorization's row is found by the name the benchmark gives it
+    /// (it was once empty: the table looked for another name), and a solver
+    /// that ran on no mesh has no row.
+    #[test]
+    fn the_speed_table_has_the_factorization_and_no_empty_row() {
+        let mut rows = vec![
+            PerfRow::sample("factorization", FACTORIZATION, 100, 0.5, "done"),
+            PerfRow::sample("coulomb", "tnnmg", 100, 0.25, "converged"),
+        ];
+        for r in &mut rows {
+            r.h = "1/8".into();
+        }
+        let table = speed_table(&rows);
+        let body: Vec<&str> = table.lines().filter(|l| l.starts_with("| ")).collect();
+        assert_eq!(body.len(), 3, "{table}");
+        assert!(body[1].contains("best factorization") && body[1].contains("0.5000"));
+        assert!(body[2].starts_with("| tnnmg |") && body[2].contains("0.2500"));
+    }
 }

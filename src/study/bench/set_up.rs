@@ -79,6 +79,9 @@ pub(super) struct SetUp {
     pub(super) sequential: Vec<f64>,
 }
 
+/// The solver column of the best factorization's rows.
+pub const FACTORIZATION: &str = "faer LLᵀ, 2 threads";
+
 /// The threads of the best factorization: the machine's two cores.
 pub const FACTORIZATION_THREADS: usize = 2;
 
@@ -137,7 +140,7 @@ pub(super) fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, large: bool) {
     };
     mesh.push(
         "factorization",
-        "faer LLᵀ, 2 threads",
+        FACTORIZATION,
         &times.factorization,
         "done",
         f,

@@ -95,21 +95,23 @@ pub(super) fn time_at(points: &[(f64, f64)], target: f64) -> Option<f64> {
 
 /// For each variation: the values certified, and the cheapest certified one.
 pub(super) fn variations_text(sweep: &[Measured]) -> String {
-    let mut groups: Vec<&str> = sweep
-        .iter()
-        .map(|m| m.trial.group.as_str())
-        .filter(|g| *g != WORK_PRECISION && *g != WORK_PRECISION_COULOMB)
-        .collect();
-    groups.dedup();
-    let main_mesh = sweep.first().map(|m| m.trial.h);
-    let mut seen = Vec::new();
-    let mut lines = Vec::new();
-    for g in groups {
-        if seen.contains(&g) {
-            continue;
+    // A variation is a group of one solver: a group that varies the same
+    // setting of two solvers (the schedule) is two lines, each quoting its
+    // own solver's trials, since work is counted in each solver's own unit.
+    let mut groups: Vec<(&str, &str)> = Vec::new();
+    for m in sweep {
+        let key = (m.trial.group.as_str(), m.trial.solver.name);
+        if key.0 != WORK_PRECISION && key.0 != WORK_PRECISION_COULOMB && !groups.contains(&key) {
+            groups.push(key);
         }
-        seen.push(g);
-        let measured: Vec<&Measured> = sweep.iter().filter(|m| m.trial.group == g).collect();
+    }
+    let main_mesh = sweep.first().map(|m| m.trial.h);
+    let mut lines = Vec::new();
+    for (g, solver) in groups {
+        let measured: Vec<&Measured> = sweep
+            .iter()
+            .filter(|m| m.trial.group == g && m.trial.solver.name == solver)
+            .collect();
         let runs: Vec<&Trial> = measured.iter().map(|m| &m.trial).collect();
         let certified: Vec<&&Trial> = runs.iter().filter(|t| t.certified()).collect();
         let failed: Vec<String> = runs
@@ -134,8 +136,7 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
             )
         });
         lines.push(format!(
-            "- `{g}` ({}{}): certified at {}; {}{}{}",
-            runs.first().map(|t| t.solver.name).unwrap_or(""),
+            "- `{g}` ({solver}{}): certified at {}; {}{}{}",
             elsewhere.map(|h| format!(", h = {h}")).unwrap_or_default(),
             if certified.is_empty() {
                 "no value".to_string()
@@ -174,5 +175,59 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
             "One factor at a time around the defaults, on the whole Coulomb problem (every trial stops at a work cap):\n\n{}\n",
             lines.join("\n")
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::Settings;
+    use crate::study::runner::{Keep, measure};
+    use crate::study::sweep::{SCHEDULE, SweepSpec, plan};
+    use contactlab_solvers::registry;
+
+    /// The schedule varies one setting of every solver that warm-starts:
+    /// each solver gets its own line, quoting its own trials' work. (The
+    /// README once quoted tnnmg's least work under relaxation's name.)
+    #[test]
+    fn each_solver_of_a_shared_variation_quotes_its_own_trials() {
+        let spec = SweepSpec {
+            meshes: vec![crate::mechanics::mesh_size::MeshSize::from_level(3).unwrap()],
+            solvers: ["relaxation", "tnnmg"]
+                .map(|n| registry::by_name(n).unwrap())
+                .to_vec(),
+            work_precision: false,
+            quick: true,
+            ..SweepSpec::default()
+        };
+        let keep = Keep {
+            history: false,
+            solution: false,
+        };
+        let measured: Vec<Measured> = plan(&spec, &Settings::default())
+            .unwrap()
+            .iter()
+            .filter(|t| t.group == SCHEDULE)
+            .map(|t| measure(t, None, keep).unwrap())
+            .collect();
+        assert_eq!(measured.len(), 4);
+        let text = variations_text(&measured);
+        for solver in ["relaxation", "tnnmg"] {
+            let line = text
+                .lines()
+                .find(|l| l.starts_with(&format!("- `{SCHEDULE}` ({solver})")))
+                .unwrap_or_else(|| panic!("no line for {solver} in\n{text}"));
+            let least = measured
+                .iter()
+                .filter(|m| m.trial.solver.name == solver && m.trial.certified())
+                .map(|m| m.trial.work)
+                .min()
+                .unwrap();
+            assert!(line.contains(&format!("({least} work")), "{line}");
+            assert!(
+                line.contains("certified at revisit, finest-only;"),
+                "{line}"
+            );
+        }
     }
 }
