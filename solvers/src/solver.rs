@@ -130,4 +130,17 @@ pub trait Solver {
     /// levels. What is kept changes no answer, only the work of a repeated
     /// solve; by default nothing is kept.
     fn release(&mut self) {}
+
+    /// Tightens the solver's own stopping tolerance by one step, for a
+    /// caller that found its answers not accurate enough: the friction
+    /// fixed point when it stalls at the noise of the solves, a
+    /// given-friction solve the certificate rejected. Says what changed
+    /// (`clarabel.tol 1e-10 → 1e-11`), or None when the solver cannot
+    /// tighten further (by default: it has no such tolerance). An interior
+    /// point's accuracy at its default tolerance falls as the mesh is
+    /// refined; this is how the oracle certifies at every h without a
+    /// tolerance chosen for the finest mesh slowing the coarse ones.
+    fn tighten(&mut self) -> Option<String> {
+        None
+    }
 }

@@ -242,6 +242,10 @@ impl GivenFrictionStep for Continuation<'_> {
         self.last = Some(solution);
     }
 
+    fn tighten(&mut self) -> Option<String> {
+        self.solver.tighten()
+    }
+
     /// The nested schedule: the fixed point on each coarse level in turn,
     /// to the larger of ε and `coarse_epsilon` (each level's answer only
     /// starts the next: nested iteration); returns 𝓕p⁺ of the level below the finest, on the finest, and keeps
@@ -325,6 +329,10 @@ impl GivenFrictionStep for NestedLevel<'_> {
 
     fn keep(&mut self, solution: Solution) {
         self.inner.keep(solution);
+    }
+
+    fn tighten(&mut self) -> Option<String> {
+        self.inner.tighten()
     }
 
     fn initial_bound(&mut self, _: &CoulombSettings, _: &mut dyn Observer) -> Option<Vec<f64>> {

@@ -177,6 +177,13 @@ pub trait GivenFrictionStep {
     /// of tnnmg's peak at h = 1/1024). A caller that does not hand it back
     /// gets a next step started afresh.
     fn keep(&mut self, _solution: Solution) {}
+    /// Tightens the solver's own tolerance one step ([`Solver::tighten`]),
+    /// saying what changed; None: it cannot.
+    ///
+    /// [`Solver::tighten`]: contactlab_solvers::Solver::tighten
+    fn tighten(&mut self) -> Option<String> {
+        None
+    }
     /// The first bound g⁰ of the fixed point, when the step can do better
     /// than g⁰ = 0 (the nested schedule: the Coulomb problem solved on the
     /// coarser meshes first); None: g⁰ = 0.
@@ -284,6 +291,22 @@ pub fn friction_fixed_point(
     settings: &CoulombSettings,
     observer: &mut dyn Observer,
 ) -> CoulombSolution {
+    friction_fixed_point_accepting(step, settings, observer, &|_, _| true)
+}
+
+/// [`friction_fixed_point`] whose convergence must also pass `accept` on
+/// the step's problem (the
+/// harness's certificate of the answer, code the fixed point does not
+/// share): a converged step that `accept` rejects tightens the solver
+/// ([`GivenFrictionStep::tighten`]) and the fixed point goes on from it;
+/// a solver that cannot tighten ends it as converged, and the certificate
+/// then says what it says.
+pub fn friction_fixed_point_accepting(
+    step: &mut dyn GivenFrictionStep,
+    settings: &CoulombSettings,
+    observer: &mut dyn Observer,
+    accept: &dyn Fn(&ContactProblem, &Solution) -> bool,
+) -> CoulombSolution {
     let start = Instant::now();
     let tolerance = settings.tolerance(step.problem());
     let coefficient: Vec<f64> = step
@@ -298,6 +321,11 @@ pub fn friction_fixed_point(
         .unwrap_or_else(|| vec![0.0; coefficient.len()]);
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
+    // The stall test looks back only to the last tightening of the solver
+    // (its steps before it were at another accuracy), and what was
+    // tightened goes into the detail.
+    let mut stall_from = 0;
+    let tightened: std::cell::RefCell<Vec<String>> = Default::default();
     // The relative change of g is max|Δg| over 𝓕P.
     let bound_scale =
         coefficient.iter().fold(0.0f64, |m, c| m.max(*c)) * step.problem().scales().pressure;
@@ -335,6 +363,15 @@ pub fn friction_fixed_point(
             seconds: start.elapsed().as_secs_f64(),
         });
         let finish = |status, ending, detail: String, solution: Solution, g: Vec<f64>, history| {
+            let tightened = tightened.borrow();
+            let detail = if tightened.is_empty() {
+                detail
+            } else {
+                format!(
+                    "{detail} (the solver tightened: {})",
+                    tightened.join(", then ")
+                )
+            };
             CoulombSolution {
                 solution,
                 g,
@@ -381,7 +418,18 @@ pub fn friction_fixed_point(
             .diagnostics
             .iter()
             .any(|&(name, need)| name == STOPPED_AT_NEED && need * bound_scale > tolerance);
-        if change <= tolerance && !inexact {
+        let mut converged = change <= tolerance && !inexact;
+        if converged
+            && !accept(step.problem(), &solution)
+            && let Some(what) = step.tighten()
+        {
+            tightened
+                .borrow_mut()
+                .push(format!("{what} at step {m}, its answer rejected"));
+            stall_from = m;
+            converged = false;
+        }
+        if converged {
             let detail =
                 format!("max|Δg| = {change:.3e} ≤ {tolerance:.3e} after {m} friction iterations");
             return finish(
@@ -401,21 +449,30 @@ pub fn friction_fixed_point(
         // fixed point was a loose one: its change proved nothing, and is
         // no baseline of the stall test either.
         let w = settings.stall_window;
-        let baseline = (w > 0 && m > w)
+        let baseline = (w > 0 && m > stall_from + w)
             .then(|| history[m - 1 - w].change)
             .filter(|&c| c > tolerance);
         if let Some(before) = baseline.filter(|&c| change >= c) {
-            let detail = format!(
-                "the fixed point is not contracting: max|Δg| went from {before:.3e} to {change:.3e} over the last {w} friction iterations"
-            );
-            return finish(
-                Status::InsufficientProgress,
-                Ending::NotContracting,
-                detail,
-                solution,
-                g,
-                history,
-            );
+            // A stall at the noise of the solves: a solver that can solve
+            // more accurately does so, and the fixed point goes on.
+            if let Some(what) = step.tighten() {
+                tightened
+                    .borrow_mut()
+                    .push(format!("{what} at step {m}, the fixed point stalled"));
+                stall_from = m;
+            } else {
+                let detail = format!(
+                    "the fixed point is not contracting: max|Δg| went from {before:.3e} to {change:.3e} over the last {w} friction iterations"
+                );
+                return finish(
+                    Status::InsufficientProgress,
+                    Ending::NotContracting,
+                    detail,
+                    solution,
+                    g,
+                    history,
+                );
+            }
         }
         if m == settings.max_iterations {
             let detail = format!(

@@ -198,3 +198,100 @@ fn each_solution_but_the_answer_is_handed_back_to_the_step() {
     assert_eq!(step.kept, step.returned[..n - 1]);
     assert_eq!(out.solution.pressure, step.returned[n - 1]);
 }
+
+/// An affine step whose answers carry noise of alternating sign (an
+/// interior point stopped at its tolerance), which tightening divides by
+/// ten, at most `tightenings` times.
+struct Noisy {
+    affine: Affine,
+    noise: std::rc::Rc<std::cell::Cell<f64>>,
+    calls: usize,
+    tightenings: usize,
+}
+
+impl GivenFrictionStep for Noisy {
+    fn problem(&self) -> &ContactProblem {
+        &self.affine.problem
+    }
+
+    fn solve_step(&mut self, g: &[f64], a: Option<f64>, o: &mut dyn Observer) -> Solution {
+        self.calls += 1;
+        let sign = if self.calls.is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
+        let mut s = self.affine.solve_step(g, a, o);
+        for p in &mut s.pressure {
+            *p += sign * self.noise.get();
+        }
+        s
+    }
+
+    fn tighten(&mut self) -> Option<String> {
+        (self.tightenings > 0).then(|| {
+            self.tightenings -= 1;
+            self.noise.set(self.noise.get() / 10.0);
+            format!("noise {:.0e}", self.noise.get())
+        })
+    }
+}
+
+/// A fixed point stalled at the noise of its solves tightens the solver
+/// and goes on to converge, saying so; a solver that cannot tighten ends
+/// it as not contracting, as before.
+#[test]
+fn a_stall_at_the_solves_noise_tightens_the_solver() {
+    let noisy = |tightenings| Noisy {
+        affine: affine(vec![10.0, 20.0], 0.8),
+        noise: std::rc::Rc::new(std::cell::Cell::new(1e-7)),
+        calls: 0,
+        tightenings,
+    };
+    let mut step = noisy(3);
+    let out = friction_fixed_point(&mut step, &tight(), &mut Silent);
+    assert_eq!(out.ending, Ending::Converged, "{}", out.detail);
+    // Noise 1e-7 stalls above ε = 1e-9; after one tightening it no
+    // longer does, and the fixed point stops tightening.
+    assert_eq!(step.tightenings, 2, "{}", out.detail);
+    assert!(
+        out.detail
+            .ends_with("(the solver tightened: noise 1e-8 at step 26, the fixed point stalled)"),
+        "{}",
+        out.detail
+    );
+    let mut stuck = noisy(0);
+    let out = friction_fixed_point(&mut stuck, &tight(), &mut Silent);
+    assert_eq!(out.ending, Ending::NotContracting, "{}", out.detail);
+}
+
+/// A converged fixed point whose answer the harness rejects tightens the
+/// solver and goes on; without `accept` it ends at its tolerance.
+#[test]
+fn a_rejected_answer_tightens_the_solver_and_the_fixed_point_goes_on() {
+    let noisy = || Noisy {
+        affine: affine(vec![10.0, 20.0], 0.8),
+        noise: std::rc::Rc::new(std::cell::Cell::new(1e-10)),
+        calls: 0,
+        tightenings: 3,
+    };
+    // The harness accepts only answers with noise below 1e-11 (what a
+    // certificate would see, here read from the step).
+    let mut step = noisy();
+    let noise = step.noise.clone();
+    let out = friction_fixed_point_accepting(&mut step, &tight(), &mut Silent, &|_, _| {
+        noise.get() < 0.5e-11
+    });
+    assert_eq!(out.ending, Ending::Converged, "{}", out.detail);
+    assert_eq!(step.tightenings, 1, "{}", out.detail);
+    assert!(out.detail.contains("noise 1e-11 at step"), "{}", out.detail);
+    assert!(
+        out.detail.contains("then noise 1e-12 at step"),
+        "{}",
+        out.detail
+    );
+    let mut plain = noisy();
+    let out = friction_fixed_point(&mut plain, &tight(), &mut Silent);
+    assert_eq!(out.ending, Ending::Converged);
+    assert_eq!(plain.tightenings, 3, "{}", out.detail);
+}

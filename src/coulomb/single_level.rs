@@ -67,4 +67,8 @@ impl GivenFrictionStep for SingleLevel<'_> {
     fn keep(&mut self, solution: Solution) {
         self.last = Some(solution);
     }
+
+    fn tighten(&mut self) -> Option<String> {
+        self.solver.tighten()
+    }
 }
