@@ -191,9 +191,12 @@ pub struct CompareArgs {
     /// minimum and median). Formerly `--repeats`.
     #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
-    /// Folder for compare.csv, compare_timing.csv, compare.tex and references.csv (replaced whole).
+    /// Folder for compare.csv, compare_timing.csv, compare_given_friction.tex and compare_coulomb.tex (LaTeX, one table per law) and references.csv (replaced whole); with --side-by-side for side_by_side.csv, side_by_side_<A>_<B>.csv and charts/.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Instead of every solver against the reference: two answers of the Coulomb problem node by node, `A,B`, each a solver, `reference` (the earned one) or a profile.csv of `contactlab solve --out` (repeatable). Writes side_by_side_<A>_<B>.csv (u, jump, slip, p, q of both at every contact node, their differences over U and P, contact states matched), side_by_side.csv (the largest differences) and two charts per pair (overlay, difference).
+    #[arg(long = "side-by-side", value_name = "A,B", conflicts_with = "solvers")]
+    pub side_by_side: Vec<String>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }

@@ -19,14 +19,15 @@ use contactlab::study::trial::{Trial, TrialSpec};
 
 /// Files a reproduce run must write (besides profiles and charts): one or
 /// more per study, the manifest and the README.
-const FILES: [&str; 27] = [
+const FILES: [&str; 28] = [
     "README.md",
     "manifest.json",
     "table1.csv",
     "table1.tex",
     "table1_trials.csv",
     "compare.csv",
-    "compare.tex",
+    "compare_given_friction.tex",
+    "compare_coulomb.tex",
     "compare_timing.csv",
     "references.csv",
     "separation.csv",
@@ -181,6 +182,8 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
             path.display()
         );
     }
+    // Every LaTeX table of the run compiles, as a paper would include it.
+    common::latex_tables_compile(&out);
     // The memory probe ran in its fresh process and its table was written.
     let goals = std::fs::read_to_string(out.join("performance_goals.md")).unwrap();
     assert!(goals.contains("### Where the memory goes"), "{goals}");

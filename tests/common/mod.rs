@@ -109,3 +109,77 @@ pub fn true_answer(scene: &contactlab::mechanics::scene::Scene) -> contactlab::s
     assert!(run.outcome.status.is_converged(), "{}", run.outcome.detail);
     run
 }
+
+/// Every `.tex` table in `dir`: plain ASCII, booktabs rules, at most
+/// [`contactlab::io::latex::MAX_COLUMNS`] columns, and compiled together by
+/// pdfLaTeX in one document ([`contactlab::io::latex::document`]). Without
+/// pdfLaTeX the compile is skipped with a line saying so, unless
+/// `CONTACTLAB_REQUIRE_LATEX` is set (CI sets it when it could install TeX).
+pub fn latex_tables_compile(dir: &std::path::Path) {
+    use contactlab::io::latex::{MAX_COLUMNS, document};
+    let mut tables: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tex"))
+        .collect();
+    tables.sort();
+    assert!(!tables.is_empty(), "no .tex in {}", dir.display());
+    for t in &tables {
+        let tex = std::fs::read_to_string(dir.join(t)).unwrap();
+        assert!(tex.is_ascii(), "{t} is not plain ASCII:\n{tex}");
+        for rule in ["\\toprule", "\\midrule", "\\bottomrule"] {
+            assert!(tex.contains(rule), "{t} has no {rule}");
+        }
+        let spec = tex
+            .split("\\begin{tabular}{")
+            .nth(1)
+            .and_then(|s| s.split('}').next())
+            .unwrap_or_else(|| panic!("{t} has no tabular"));
+        assert!(
+            spec.len() <= MAX_COLUMNS,
+            "{t} has {} columns: {spec}",
+            spec.len()
+        );
+        assert!(
+            !tex.lines().any(|l| !l.starts_with('%')
+                && l.contains("e-")
+                && l.split(|c: char| !c.is_ascii_alphanumeric() && c != '.' && c != '-')
+                    .any(|w| w.contains("e-") && w.starts_with(|c: char| c.is_ascii_digit()))),
+            "{t} has a number not in math mode:\n{tex}"
+        );
+    }
+    if std::process::Command::new("pdflatex")
+        .arg("--version")
+        .output()
+        .is_err()
+    {
+        assert!(
+            std::env::var_os("CONTACTLAB_REQUIRE_LATEX").is_none(),
+            "pdflatex is required (CONTACTLAB_REQUIRE_LATEX) but not found"
+        );
+        eprintln!("skipped: compiling the LaTeX tables (no pdflatex here)");
+        return;
+    }
+    let names: Vec<&str> = tables.iter().map(|t| t.trim_end_matches(".tex")).collect();
+    std::fs::write(dir.join("tables_document.tex"), document(&names)).unwrap();
+    let o = std::process::Command::new("pdflatex")
+        .args([
+            "-interaction=nonstopmode",
+            "-halt-on-error",
+            "tables_document.tex",
+        ])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "pdflatex failed:\n{log}");
+    assert!(!log.contains("Missing character"), "{log}");
+    for extra in [
+        "tables_document.tex",
+        "tables_document.aux",
+        "tables_document.log",
+        "tables_document.pdf",
+    ] {
+        let _ = std::fs::remove_file(dir.join(extra));
+    }
+}

@@ -6,7 +6,6 @@ use anyhow::Result;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::Entry;
 
-use crate::io::latex::booktabs;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
@@ -17,11 +16,13 @@ use crate::study::trial::{Trial, TrialSpec, intervals_text};
 pub const STUDY: &str = "compare";
 
 pub mod charts;
+pub mod latex;
 pub mod paper;
 pub mod section;
 
 /// The comparison of `solvers` on one scene, as a study: compare.csv,
-/// compare_timing.csv, compare.tex and references.csv.
+/// compare_timing.csv, compare_<law>.tex (one LaTeX table per law) and
+/// references.csv.
 pub struct Compare {
     pub scene: Scene,
     pub solvers: Vec<&'static Entry>,
@@ -60,13 +61,9 @@ impl Study for Compare {
         let specs = plan(&self.scene, &lab.settings, &self.solvers, self.repeats);
         let measured = lab.measure(&specs, Keep::default())?;
         let mut artifacts = Artifact::trials(STUDY, &measured)?;
-        artifacts.push(Artifact::text(
-            "compare.tex",
-            &booktabs(
-                &markdown_of(&measured),
-                "every solver against the earned reference (contactlab compare)",
-            ),
-        ));
+        for (name, tex) in latex::tables(&measured, "contactlab compare") {
+            artifacts.push(Artifact::text(&name, &tex));
+        }
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
         Ok(Ran {
             findings: measured,

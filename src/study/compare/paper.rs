@@ -10,14 +10,13 @@ use contactlab_solvers::registry::{self, Role};
 use serde::Serialize;
 
 use crate::io::csv::fixed;
-use crate::io::latex::booktabs;
 use crate::mechanics::contact_zone::{PROFILE_COLUMNS, contact_profile};
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::compare::charts::{ProfilePair, convergence_charts, profile_charts};
-use crate::study::compare::{STUDY, markdown_of, plan};
+use crate::study::compare::{STUDY, plan};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::{TrialSpec, intervals_text};
@@ -140,13 +139,9 @@ impl Study for PaperCompare {
             .collect();
         artifacts.extend(Artifact::trials(STUDY, &all)?);
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
-        artifacts.push(Artifact::text(
-            "compare.tex",
-            &booktabs(
-                &markdown_of(&all),
-                "every solver on the paper's problems against the earned reference (contactlab reproduce)",
-            ),
-        ));
+        for (name, tex) in super::latex::tables(&all, "contactlab reproduce") {
+            artifacts.push(Artifact::text(&name, &tex));
+        }
         artifacts.push(Artifact::csv("separation.csv", &findings.separation, &[])?);
         let mut stress = Scene::paper_problem_to(1, self.h)?;
         stress.material.plane = PlaneModel::Stress;
