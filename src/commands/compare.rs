@@ -9,8 +9,12 @@ use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
 use crate::study::compare::{self, Compare};
 use crate::study::lab::write_artifacts;
+use crate::study::side_by_side::{self, Side, SideBySide, parse_pair};
 
 pub fn run(args: &CompareArgs) -> Result<()> {
+    if !args.side_by_side.is_empty() {
+        return side_by_side(args);
+    }
     let (scene, base) = args.scene.load()?;
     let solvers = solver_list(&args.solvers)?;
     let settings = args.settings.resolve_for(base, &solvers)?;
@@ -27,6 +31,49 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let files = write_artifacts(folder.path(), &artifacts)?;
         let target = folder.commit()?;
         report += &format!("\nwrote {} into {}\n", files.join(", "), target.display());
+    }
+    print(&report)
+}
+
+/// `compare --side-by-side A,B`: the pairs node by node.
+fn side_by_side(args: &CompareArgs) -> Result<()> {
+    let (scene, base) = args.scene.load()?;
+    let pairs = args
+        .side_by_side
+        .iter()
+        .map(|w| parse_pair(w))
+        .collect::<Result<Vec<_>>>()?;
+    let solvers: Vec<_> = pairs
+        .iter()
+        .flat_map(|(a, b)| [a, b])
+        .filter_map(|s| match s {
+            Side::Solver(e) => Some(*e),
+            _ => None,
+        })
+        .collect();
+    let settings = args.settings.resolve_for(base, &solvers)?;
+    let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
+    let study = SideBySide { scene, pairs };
+    let (pairs, artifacts) = run_study(&study, settings)?;
+    let charts: Vec<String> = artifacts
+        .iter()
+        .filter_map(|a| a.chart_name().map(String::from))
+        .collect();
+    let mut report = side_by_side::markdown(&study.scene, &pairs, &[]);
+    if let Some(folder) = folder {
+        let files = write_artifacts(folder.path(), &artifacts)?;
+        let target = folder.commit()?;
+        report += &format!(
+            "\nwrote {} and {} charts into {}\n",
+            files
+                .iter()
+                .filter(|f| !f.starts_with("charts/"))
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", "),
+            charts.len(),
+            target.display()
+        );
     }
     print(&report)
 }

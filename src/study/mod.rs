@@ -14,6 +14,7 @@ pub mod plans;
 pub mod reference;
 pub mod reproduce;
 pub mod runner;
+pub mod side_by_side;
 pub mod stability;
 pub mod sweep;
 pub mod table1;

@@ -1,0 +1,627 @@
+//! Two answers of the Coulomb problem node by node along Γ_K: a solver
+//! against another, against the earned reference, or against an answer
+//! imported from a `profile.csv` (`contactlab solve --out`). The
+//! verification a researcher does by joining two profiles, done once:
+//! per contact node both answers' displacements, jump, slip, pressure and
+//! friction traction, their differences in the problem's scales (U for
+//! displacements, P for forces per length: the scales of the certificate,
+//! `Scales` in the solvers crate), and whether the contact states match;
+//! an overlay chart of p and q and a chart of the differences.
+
+use anyhow::{Result, bail};
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::Entry;
+use serde::Serialize;
+
+use crate::io::charts::{Chart, Series};
+use crate::io::csv::fixed;
+use crate::mechanics::contact_zone::{ContactState, ProfileRow, contact_profile};
+use crate::mechanics::scene::Scene;
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::runner::Keep;
+use crate::study::trial::TrialSpec;
+
+/// The study's name in trial records.
+pub const STUDY: &str = "side_by_side";
+
+/// One side of a comparison.
+#[derive(Clone, Debug)]
+pub enum Side {
+    /// A registered solver at the run's settings.
+    Solver(&'static Entry),
+    /// The earned reference: the exact solvers at their tightest settings,
+    /// the certified answer with the smallest certificate.
+    Reference,
+    /// An answer read from a profile (`name`: where it came from).
+    Imported {
+        name: String,
+        rows: Vec<ImportedRow>,
+    },
+}
+
+/// A node of an imported profile: the columns a comparison reads.
+#[derive(Clone, Debug, serde::Deserialize)]
+pub struct ImportedRow {
+    pub x: f64,
+    pub u1_lower: f64,
+    pub u2_lower: f64,
+    pub u1_upper: f64,
+    pub u2_upper: f64,
+    pub jump: f64,
+    pub slip: f64,
+    pub pressure: f64,
+    pub friction_traction: f64,
+    pub state: String,
+}
+
+impl Side {
+    /// Its name in files and tables.
+    pub fn name(&self) -> String {
+        match self {
+            Side::Solver(e) => e.name.to_string(),
+            Side::Reference => "reference".into(),
+            Side::Imported { name, .. } => name.clone(),
+        }
+    }
+}
+
+/// One answer along Γ_K with what it is.
+struct Answer {
+    /// `relaxation`, or `reference (newton-coulomb)`.
+    label: String,
+    status: String,
+    rows: Vec<ImportedRow>,
+}
+
+fn from_profile(rows: &[ProfileRow]) -> Vec<ImportedRow> {
+    rows.iter()
+        .map(|r| ImportedRow {
+            x: r.x,
+            u1_lower: r.u1_lower,
+            u2_lower: r.u2_lower,
+            u1_upper: r.u1_upper,
+            u2_upper: r.u2_upper,
+            jump: r.jump,
+            slip: r.slip,
+            pressure: r.pressure,
+            friction_traction: r.friction_traction,
+            state: state_name(r.state).into(),
+        })
+        .collect()
+}
+
+fn state_name(s: ContactState) -> &'static str {
+    match s {
+        ContactState::Stick => "stick",
+        ContactState::Slip => "slip",
+        ContactState::Open => "open",
+    }
+}
+
+/// A row of `side_by_side_<a>_<b>.csv`: one contact node.
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeRow {
+    #[serde(serialize_with = "fixed")]
+    pub x: f64,
+    #[serde(serialize_with = "fixed")]
+    pub u2_upper_a: f64,
+    #[serde(serialize_with = "fixed")]
+    pub u2_upper_b: f64,
+    #[serde(serialize_with = "fixed")]
+    pub jump_a: f64,
+    #[serde(serialize_with = "fixed")]
+    pub jump_b: f64,
+    #[serde(serialize_with = "fixed")]
+    pub slip_a: f64,
+    #[serde(serialize_with = "fixed")]
+    pub slip_b: f64,
+    #[serde(serialize_with = "fixed")]
+    pub pressure_a: f64,
+    #[serde(serialize_with = "fixed")]
+    pub pressure_b: f64,
+    #[serde(serialize_with = "fixed")]
+    pub friction_traction_a: f64,
+    #[serde(serialize_with = "fixed")]
+    pub friction_traction_b: f64,
+    pub state_a: String,
+    pub state_b: String,
+    /// max over both bodies and both components of |u_a − u_b| / U.
+    #[serde(serialize_with = "fixed")]
+    pub du_over_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub djump_over_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub dslip_over_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub dp_over_p: f64,
+    #[serde(serialize_with = "fixed")]
+    pub dq_over_p: f64,
+    pub states_match: bool,
+}
+
+/// The largest differences of a pair, in the problem's scales.
+#[derive(Clone, Debug, Serialize)]
+pub struct PairSummary {
+    pub scene: String,
+    pub h: String,
+    pub a: String,
+    pub b: String,
+    pub status_a: String,
+    pub status_b: String,
+    pub nodes: usize,
+    #[serde(serialize_with = "fixed")]
+    pub max_du_over_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub max_djump_over_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub max_dslip_over_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub max_dp_over_p: f64,
+    #[serde(serialize_with = "fixed")]
+    pub max_dq_over_p: f64,
+    /// Nodes whose contact states differ, and where (x).
+    pub states_differ: usize,
+    pub differing_at: String,
+    /// The scales: U = F/K and P = N/L of the problem.
+    #[serde(serialize_with = "fixed")]
+    pub scale_u: f64,
+    #[serde(serialize_with = "fixed")]
+    pub scale_p: f64,
+}
+
+/// One pair, compared.
+#[derive(Clone, Debug)]
+pub struct Pair {
+    pub summary: PairSummary,
+    pub nodes: Vec<NodeRow>,
+}
+
+/// The node-by-node comparison of `a` and `b` (same nodes, in order) in
+/// the scales `u` and `p`.
+fn pair(a: &Answer, b: &Answer, u: f64, p: f64) -> Result<Vec<NodeRow>> {
+    if a.rows.len() != b.rows.len() {
+        bail!(
+            "{} has {} contact nodes and {} has {}: not the same mesh",
+            a.label,
+            a.rows.len(),
+            b.label,
+            b.rows.len()
+        );
+    }
+    let mut out = Vec::with_capacity(a.rows.len());
+    for (ra, rb) in a.rows.iter().zip(&b.rows) {
+        if (ra.x - rb.x).abs() > 1e-9 * (1.0 + ra.x.abs()) {
+            bail!(
+                "contact node at x = {} in {} is at x = {} in {}: not the same mesh",
+                ra.x,
+                a.label,
+                rb.x,
+                b.label
+            );
+        }
+        let du = [
+            ra.u1_lower - rb.u1_lower,
+            ra.u2_lower - rb.u2_lower,
+            ra.u1_upper - rb.u1_upper,
+            ra.u2_upper - rb.u2_upper,
+        ]
+        .iter()
+        .fold(0.0f64, |m, d| m.max(d.abs()));
+        out.push(NodeRow {
+            x: ra.x,
+            u2_upper_a: ra.u2_upper,
+            u2_upper_b: rb.u2_upper,
+            jump_a: ra.jump,
+            jump_b: rb.jump,
+            slip_a: ra.slip,
+            slip_b: rb.slip,
+            pressure_a: ra.pressure,
+            pressure_b: rb.pressure,
+            friction_traction_a: ra.friction_traction,
+            friction_traction_b: rb.friction_traction,
+            state_a: ra.state.clone(),
+            state_b: rb.state.clone(),
+            du_over_u: du / u,
+            djump_over_u: (ra.jump - rb.jump).abs() / u,
+            dslip_over_u: (ra.slip - rb.slip).abs() / u,
+            dp_over_p: (ra.pressure - rb.pressure).abs() / p,
+            dq_over_p: (ra.friction_traction - rb.friction_traction).abs() / p,
+            states_match: ra.state == rb.state,
+        });
+    }
+    Ok(out)
+}
+
+fn summary(
+    scene: &Scene,
+    a: &Answer,
+    b: &Answer,
+    nodes: &[NodeRow],
+    u: f64,
+    p: f64,
+) -> PairSummary {
+    let max = |f: fn(&NodeRow) -> f64| nodes.iter().map(f).fold(0.0f64, f64::max);
+    let differing: Vec<String> = nodes
+        .iter()
+        .filter(|n| !n.states_match)
+        .map(|n| format!("{:.4}", n.x))
+        .collect();
+    PairSummary {
+        scene: scene.name.clone(),
+        h: scene.finest().to_string(),
+        a: a.label.clone(),
+        b: b.label.clone(),
+        status_a: a.status.clone(),
+        status_b: b.status.clone(),
+        nodes: nodes.len(),
+        max_du_over_u: max(|n| n.du_over_u),
+        max_djump_over_u: max(|n| n.djump_over_u),
+        max_dslip_over_u: max(|n| n.dslip_over_u),
+        max_dp_over_p: max(|n| n.dp_over_p),
+        max_dq_over_p: max(|n| n.dq_over_p),
+        states_differ: differing.len(),
+        differing_at: differing.join(" "),
+        scale_u: u,
+        scale_p: p,
+    }
+}
+
+/// The file stem of a pair: `side_by_side_relaxation_clarabel`.
+pub fn stem(a: &str, b: &str) -> String {
+    let clean = |s: &str| {
+        s.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '-' {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect::<String>()
+    };
+    format!("{STUDY}_{}_{}", clean(a), clean(b))
+}
+
+/// The overlay: p and q of both answers along Γ_K.
+fn overlay(scene: &Scene, a: &Answer, b: &Answer) -> Chart {
+    let along = |rows: &[ImportedRow], f: fn(&ImportedRow) -> f64| {
+        rows.iter().map(|r| (r.x, f(r))).collect::<Vec<_>>()
+    };
+    let series = vec![
+        Series::line(format!("p, {}", a.label), along(&a.rows, |r| r.pressure)).colored(0),
+        Series::line(format!("p, {}", b.label), along(&b.rows, |r| r.pressure))
+            .colored(1)
+            .dashed(),
+        Series::line(
+            format!("q, {}", a.label),
+            along(&a.rows, |r| r.friction_traction),
+        )
+        .colored(2),
+        Series::line(
+            format!("q, {}", b.label),
+            along(&b.rows, |r| r.friction_traction),
+        )
+        .colored(3)
+        .dashed(),
+    ];
+    Chart::new(
+        format!(
+            "{} against {}: {}, h = {}",
+            a.label,
+            b.label,
+            scene.name,
+            scene.finest()
+        ),
+        "x along the contact boundary",
+        "pressure p and friction traction q",
+        false,
+        false,
+        series,
+    )
+}
+
+/// The differences along Γ_K in the problem's scales (log axis; exact
+/// agreement at a node is drawn at the axis' floor, 1e-16).
+fn differences(scene: &Scene, a: &Answer, b: &Answer, nodes: &[NodeRow]) -> Chart {
+    let floor = 1e-16;
+    let along = |f: fn(&NodeRow) -> f64| {
+        nodes
+            .iter()
+            .map(|n| (n.x, f(n).max(floor)))
+            .collect::<Vec<_>>()
+    };
+    let series = vec![
+        Series::line("|Δu| / U", along(|n| n.du_over_u)).colored(0),
+        Series::line("|Δjump| / U", along(|n| n.djump_over_u)).colored(4),
+        Series::line("|Δp| / P", along(|n| n.dp_over_p)).colored(1),
+        Series::line("|Δq| / P", along(|n| n.dq_over_p)).colored(2),
+    ];
+    Chart::new(
+        format!(
+            "{} minus {}: {}, h = {}",
+            a.label,
+            b.label,
+            scene.name,
+            scene.finest()
+        ),
+        "x along the contact boundary",
+        "difference in the problem's scales",
+        false,
+        true,
+        series,
+    )
+}
+
+/// Pairs of answers on one scene, node by node.
+pub struct SideBySide {
+    pub scene: Scene,
+    pub pairs: Vec<(Side, Side)>,
+}
+
+/// What it found: each pair compared.
+pub type Pairs = Vec<Pair>;
+
+impl SideBySide {
+    /// The answer of `side` on the scene: solvers measured once each.
+    fn answer(&self, side: &Side, lab: &mut Lab, solved: &mut Vec<(String, Answer)>) -> Result<()> {
+        let name = side.name();
+        if solved.iter().any(|(n, _)| *n == name) {
+            return Ok(());
+        }
+        let answer = match side {
+            Side::Solver(entry) => {
+                let spec = TrialSpec::new(
+                    STUDY,
+                    entry.name,
+                    &self.scene,
+                    entry,
+                    Law::Coulomb,
+                    &lab.settings,
+                )
+                .without_reference();
+                let keep = Keep {
+                    history: false,
+                    solution: true,
+                };
+                let m = lab.measure(&[spec], keep)?.remove(0);
+                let status = m.trial.status;
+                let rows = match m.solution() {
+                    Some((d, s, g)) => from_profile(&contact_profile(d, s, g, status)),
+                    None => bail!("{} gave no answer: {}", entry.name, m.trial.detail),
+                };
+                Answer {
+                    label: entry.name.to_string(),
+                    status: status.as_str().into(),
+                    rows,
+                }
+            }
+            Side::Reference => {
+                let settings = lab.settings.clone();
+                let Some(r) = lab.reference(&self.scene, &settings)? else {
+                    bail!(
+                        "no exact solver certified {} at h = {}: there is no reference to compare with",
+                        self.scene.name,
+                        self.scene.finest()
+                    );
+                };
+                Answer {
+                    label: format!("reference ({})", r.solver),
+                    status: r.coulomb.outcome.status.as_str().into(),
+                    rows: from_profile(&r.coulomb.profile()),
+                }
+            }
+            Side::Imported { name, rows } => Answer {
+                label: name.clone(),
+                status: "imported".into(),
+                rows: rows.clone(),
+            },
+        };
+        solved.push((name, answer));
+        Ok(())
+    }
+
+    /// The problem's scales U and P on the scene's finest mesh.
+    fn scales(&self) -> Result<(f64, f64)> {
+        let d = crate::solve::level_for(
+            &self.scene,
+            self.scene.finest(),
+            crate::solve::solver_entry("newton-coulomb")?,
+        )?;
+        let s = d.problem.scales();
+        Ok((s.displacement, s.pressure))
+    }
+}
+
+impl Study for SideBySide {
+    type Findings = Pairs;
+
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        // Dominated by the paper's method and the oracle at the finest
+        // mesh: about 40 s each at 1/128 on this machine.
+        let n = self.scene.finest().divisions() as f64;
+        let s = 2.0 * self.pairs.len() as f64 * 40.0 * (n / 128.0).powi(3);
+        if length == RunLength::Quick {
+            s / 10.0
+        } else {
+            s
+        }
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Pairs>> {
+        let mut solved: Vec<(String, Answer)> = Vec::new();
+        for (a, b) in &self.pairs {
+            self.answer(a, lab, &mut solved)?;
+            self.answer(b, lab, &mut solved)?;
+        }
+        let (u, p) = self.scales()?;
+        let find = |s: &Side| {
+            let name = s.name();
+            solved
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, a)| a)
+                .expect("every side was solved above")
+        };
+        let mut pairs = Vec::new();
+        let mut artifacts = Vec::new();
+        for (sa, sb) in &self.pairs {
+            let (a, b) = (find(sa), find(sb));
+            let nodes = pair(a, b, u, p)?;
+            let stem = stem(&sa.name(), &sb.name());
+            artifacts.push(Artifact::csv(&format!("{stem}.csv"), &nodes, &[])?);
+            artifacts.push(Artifact::chart(
+                &format!("{stem}_overlay"),
+                overlay(&self.scene, a, b),
+            ));
+            artifacts.push(Artifact::chart(
+                &format!("{stem}_difference"),
+                differences(&self.scene, a, b, &nodes),
+            ));
+            pairs.push(Pair {
+                summary: summary(&self.scene, a, b, &nodes, u, p),
+                nodes,
+            });
+        }
+        let summaries: Vec<&PairSummary> = pairs.iter().map(|p| &p.summary).collect();
+        artifacts.push(Artifact::csv("side_by_side.csv", &summaries, &[])?);
+        Ok(Ran {
+            findings: pairs,
+            artifacts,
+        })
+    }
+
+    fn section(&self, pairs: &Pairs, _: &Lab, charts: &[String]) -> Result<Section> {
+        Ok(Section {
+            markdown: markdown(&self.scene, pairs, charts),
+        })
+    }
+}
+
+/// The section: a table of the largest differences per pair, then the
+/// charts.
+pub fn markdown(scene: &Scene, pairs: &Pairs, charts: &[String]) -> String {
+    let mut s = format!(
+        "## Side by side ({}, h = {})\n\nTwo answers of the Coulomb problem node by node along Γ_K \
+         (`side_by_side_<a>_<b>.csv`: both answers and their differences at every contact node). \
+         Differences in the problem's scales: displacements over U = F/K, pressures and tractions over P = N/L.\n\n\
+         | a | b | status of a, b | max\\|Δu\\|/U | max\\|Δjump\\|/U | max\\|Δp\\|/P | max\\|Δq\\|/P | contact states |\n\
+         |---|---|---|---|---|---|---|---|\n",
+        scene.name,
+        scene.finest()
+    );
+    for p in pairs {
+        let x = &p.summary;
+        let states = if x.states_differ == 0 {
+            format!("equal at all {} nodes", x.nodes)
+        } else {
+            format!(
+                "differ at {} of {} (x = {})",
+                x.states_differ, x.nodes, x.differing_at
+            )
+        };
+        s += &format!(
+            "| {} | {} | {}, {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {states} |\n",
+            x.a,
+            x.b,
+            x.status_a,
+            x.status_b,
+            x.max_du_over_u,
+            x.max_djump_over_u,
+            x.max_dp_over_p,
+            x.max_dq_over_p
+        );
+    }
+    s += "\n";
+    for c in charts {
+        let intent = if c.ends_with("_overlay") {
+            "Pressure and friction traction of both answers along Γ_K (the second dashed)."
+        } else {
+            "Where along Γ_K the two answers differ, in the problem's scales."
+        };
+        s += &chart_markdown(c, intent);
+    }
+    s
+}
+
+/// The largest profile read: 64 MB, some 400 000 contact nodes.
+pub const MAX_PROFILE_BYTES: u64 = 64 << 20;
+
+/// A side named on the command line or in Python: `reference`, a
+/// registered solver, or the path of a `profile.csv`.
+pub fn parse_side(word: &str) -> Result<Side> {
+    let word = word.trim();
+    if word == "reference" {
+        return Ok(Side::Reference);
+    }
+    if let Some(e) = contactlab_solvers::registry::by_name(word) {
+        return Ok(Side::Solver(e));
+    }
+    let path = std::path::Path::new(word);
+    if !path.exists() {
+        bail!(
+            "side-by-side: `{word}` is neither `reference`, a solver ({}) nor a profile.csv file",
+            contactlab_solvers::registry::names().join(", ")
+        );
+    }
+    let text = crate::io::guarded::read_small_text(path, MAX_PROFILE_BYTES)
+        .map_err(|e| anyhow::anyhow!("side-by-side: {}: {e}", path.display()))?;
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
+    let mut rows = Vec::new();
+    for (k, r) in reader.deserialize::<ImportedRow>().enumerate() {
+        let r = r.map_err(|e| {
+            anyhow::anyhow!(
+                "side-by-side: {} row {}: {e} (a profile.csv of `contactlab solve --out` has the columns x, u1_lower, …, state)",
+                path.display(),
+                k + 1
+            )
+        })?;
+        let values = [
+            r.x,
+            r.u1_lower,
+            r.u2_lower,
+            r.u1_upper,
+            r.u2_upper,
+            r.jump,
+            r.slip,
+            r.pressure,
+            r.friction_traction,
+        ];
+        if values.iter().any(|v| !v.is_finite()) {
+            bail!(
+                "side-by-side: {} row {}: a value is not finite",
+                path.display(),
+                k + 1
+            );
+        }
+        rows.push(r);
+    }
+    if rows.is_empty() {
+        bail!("side-by-side: {} has no contact nodes", path.display());
+    }
+    let name = path
+        .parent()
+        .and_then(|p| p.file_name())
+        .map(|d| {
+            format!(
+                "{}/{}",
+                d.to_string_lossy(),
+                path.file_name().unwrap_or_default().to_string_lossy()
+            )
+        })
+        .unwrap_or_else(|| word.to_string());
+    Ok(Side::Imported { name, rows })
+}
+
+/// A pair `A,B` of sides.
+pub fn parse_pair(words: &str) -> Result<(Side, Side)> {
+    match words.split_once(',') {
+        Some((a, b)) if !b.contains(',') => Ok((parse_side(a)?, parse_side(b)?)),
+        _ => bail!(
+            "--side-by-side takes two answers, `A,B` (e.g. relaxation,clarabel or relaxation,reference), got `{words}`"
+        ),
+    }
+}
