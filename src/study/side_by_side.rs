@@ -420,15 +420,17 @@ impl SideBySide {
         Ok(())
     }
 
-    /// The problem's scales U and P on the scene's finest mesh.
-    fn scales(&self) -> Result<(f64, f64)> {
+    /// The problem's scales U and P on the scene's finest mesh, and the
+    /// positions of its contact nodes.
+    fn mesh(&self) -> Result<(f64, f64, Vec<f64>)> {
         let d = crate::solve::level_for(
             &self.scene,
             self.scene.finest(),
             crate::solve::solver_entry("newton-coulomb")?,
         )?;
         let s = d.problem.scales();
-        Ok((s.displacement, s.pressure))
+        let xs = d.dofs.contacts().iter().map(|c| c.x).collect();
+        Ok((s.displacement, s.pressure, xs))
     }
 }
 
@@ -452,12 +454,33 @@ impl Study for SideBySide {
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Pairs>> {
+        // The scales, and an imported answer checked against the mesh
+        // before anything is solved.
+        let (u, p, xs) = self.mesh()?;
+        for side in self.pairs.iter().flat_map(|(a, b)| [a, b]) {
+            if let Side::Imported { name, rows } = side {
+                let fits = rows.len() == xs.len()
+                    && rows
+                        .iter()
+                        .zip(&xs)
+                        .all(|(r, x)| (r.x - x).abs() <= 1e-9 * (1.0 + x.abs()));
+                if !fits {
+                    bail!(
+                        "side-by-side: {name} has {} contact nodes, {} at h = {} has {}: not the same mesh (solve it at --h {})",
+                        rows.len(),
+                        self.scene.name,
+                        self.scene.finest(),
+                        xs.len(),
+                        self.scene.finest()
+                    );
+                }
+            }
+        }
         let mut solved: Vec<(String, Answer)> = Vec::new();
         for (a, b) in &self.pairs {
             self.answer(a, lab, &mut solved)?;
             self.answer(b, lab, &mut solved)?;
         }
-        let (u, p) = self.scales()?;
         let find = |s: &Side| {
             let name = s.name();
             solved
