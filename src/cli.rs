@@ -230,6 +230,21 @@ pub struct SweepArgs {
     /// PATH=V1,V2,... (repeatable), e.g. --vary SOLVER.KNOB=1e3,1e5,1e7.
     #[arg(long, value_name = "PATH=VALUES")]
     pub vary: Vec<String>,
+    /// A tuning map instead of the one-factor sweeps: a joint grid over
+    /// two or three settings of one solver, PATH=V1,V2,... each (e.g.
+    /// --grid relaxation.r=1e3,1e5,1e7 --grid relaxation.epsilon=1e-4,1e-6).
+    /// Every point timed over --runs and certified; heat maps of time and
+    /// work, the best setting with its margin, ties within the timing noise
+    /// marked. Beyond h = 1/64 a solver is mapped in its fast form (the
+    /// paper's method with inner = multigrid) unless --set says otherwise.
+    /// Writes tuning_map_<solver>_<law>_h<N>.csv, its trials and charts.
+    #[arg(long, value_name = "PATH=VALUES", conflicts_with_all = ["vary", "fine_meshes"])]
+    pub grid: Vec<String>,
+    /// The law a tuning map solves: the whole Coulomb problem, or the
+    /// given-friction subproblem at the reference's bound (faster: one
+    /// solve a point).
+    #[arg(long, value_enum, default_value = "coulomb", requires = "grid")]
+    pub law: MapLaw,
     /// Skip the work-precision diagram.
     #[arg(long)]
     pub no_work_precision: bool,
@@ -247,6 +262,22 @@ pub struct SweepArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub settings: SettingsArgs,
+}
+
+/// The law of a tuning map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MapLaw {
+    Coulomb,
+    GivenFriction,
+}
+
+impl MapLaw {
+    pub fn law(self) -> contactlab_solvers::Law {
+        match self {
+            MapLaw::Coulomb => contactlab_solvers::Law::Coulomb,
+            MapLaw::GivenFriction => contactlab_solvers::Law::GivenFriction,
+        }
+    }
 }
 
 #[derive(Debug, Args)]

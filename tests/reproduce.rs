@@ -19,7 +19,7 @@ use contactlab::study::trial::{Trial, TrialSpec};
 
 /// Files a reproduce run must write (besides profiles and charts): one or
 /// more per study, the manifest and the README.
-const FILES: [&str; 28] = [
+const FILES: [&str; 35] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -48,6 +48,13 @@ const FILES: [&str; 28] = [
     "benchmark_1e-4.tex",
     "benchmark_1e-8.tex",
     "discretization_error.csv",
+    "oracle.csv",
+    "oracle_timing.csv",
+    "side_by_side.csv",
+    "side_by_side_relaxation_clarabel.csv",
+    "side_by_side_relaxation_reference.csv",
+    "tuning_map_relaxation_given_friction_h16.csv",
+    "tuning_map_relaxation_coulomb_h128.csv",
 ];
 
 /// The committed reference: `compare.csv` of `reproduce --quick`.

@@ -98,6 +98,14 @@ where
                     a.chart_name().unwrap_or_default().to_string(),
                     c.to_svg()?.into_bytes(),
                 )),
+                Content::HeatMap(m) => charts.push((
+                    a.chart_name().unwrap_or_default().to_string(),
+                    m.to_svg()?.into_bytes(),
+                )),
+                Content::Panels(p) => charts.push((
+                    a.chart_name().unwrap_or_default().to_string(),
+                    p.to_svg()?.into_bytes(),
+                )),
             }
         }
         Ok((files, charts, section.markdown))

@@ -12,6 +12,7 @@ use crate::settings::Settings;
 use crate::study::lab::write_artifacts;
 use crate::study::sweep::{STUDY, Sweep, SweepSpec, work_cap};
 use crate::study::trial::TrialSpec;
+use crate::study::tuning_map::{Axis, TuningMap};
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     let (scenes, base) = match &args.scene {
@@ -31,6 +32,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         .into_iter()
         .map(|s| args.material.apply(s, None))
         .collect::<Result<Vec<_>>>()?;
+    if !args.grid.is_empty() {
+        return map(args, scenes, base);
+    }
     let solvers = solver_list(&args.solvers)?;
     let settings = args.settings.resolve_for(base, &solvers)?;
     let spec = SweepSpec {
@@ -107,4 +111,70 @@ fn varied(args: &SweepArgs, spec: &SweepSpec, settings: &Settings) -> Result<Vec
         }
     }
     Ok(out)
+}
+
+/// `sweep --grid`: a tuning map per scene and mesh, into one folder.
+fn map(args: &SweepArgs, scenes: Vec<Scene>, base: Settings) -> Result<()> {
+    let axes = args
+        .grid
+        .iter()
+        .map(|g| Axis::parse(g))
+        .collect::<Result<Vec<_>>>()?;
+    if !(2..=3).contains(&axes.len()) {
+        bail!(
+            "--grid: a tuning map takes two or three settings, got {}; for one, use --vary",
+            axes.len()
+        );
+    }
+    let owners: Vec<&str> = axes
+        .iter()
+        .map(|a| a.path.split('.').next().unwrap_or(""))
+        .filter(|o| *o != "coulomb")
+        .collect();
+    let Some(&owner) = owners.first() else {
+        bail!("--grid: name at least one setting of a solver (SOLVER.KNOB=...), e.g. relaxation.r");
+    };
+    if owners.iter().any(|o| *o != owner) {
+        bail!(
+            "--grid: a tuning map is of one solver; the settings name {}",
+            owners.join(", ")
+        );
+    }
+    let solver = crate::solve::solver_entry(owner)?;
+    if !args.solvers.is_empty() && args.solvers.iter().any(|s| s != owner) {
+        bail!("--grid maps {owner}, the owner of its settings; drop --solvers or name {owner}");
+    }
+    let law = args.law.law();
+    if !solver.solves(law) {
+        bail!("--law: {owner} does not solve the {} law", law.as_str());
+    }
+    let settings = args.settings.resolve_for(base, &[solver])?;
+    let folder = RunFolder::create(&args.out)?;
+    let mut lines = Vec::new();
+    for scene in &scenes {
+        for &h in &args.meshes {
+            let mut scene = scene.clone();
+            scene.set_finest(h);
+            let study = TuningMap {
+                scene,
+                solver,
+                law,
+                axes: axes.clone(),
+                repeats: args.repeats as usize,
+            };
+            let (found, artifacts) = run_study(&study, settings.clone())?;
+            write_artifacts(folder.path(), &artifacts)?;
+            lines.push(format!(
+                "{}, h = {h}: {}",
+                study.scene.name,
+                crate::study::tuning_map::verdict(&axes, &found.points)
+            ));
+        }
+    }
+    let target = folder.commit()?;
+    print(&format!(
+        "{}\nwrote the tuning maps (tuning_map_*.csv, their trials and charts) into {}\n",
+        lines.join("\n"),
+        target.display()
+    ))
 }

@@ -44,6 +44,8 @@ pub struct Series {
     /// Whether the legend lists it (a chart with more than
     /// [`MAX_LEGEND`] entries lists its failed points once for all).
     pub legend: bool,
+    /// Points labelled on the chart (a work-precision point's target).
+    pub labels: Vec<((f64, f64), String)>,
 }
 
 /// The most entries a legend lists: beyond, a reader cannot match colours
@@ -58,7 +60,14 @@ impl Series {
             style: Style::Line,
             color: None,
             legend: true,
+            labels: Vec::new(),
         }
+    }
+
+    /// Labels drawn beside these points.
+    pub fn with_labels(mut self, labels: Vec<((f64, f64), String)>) -> Self {
+        self.labels = labels;
+        self
     }
 
     pub fn with_markers(mut self) -> Self {
@@ -227,6 +236,16 @@ fn decades(lo: f64, hi: f64) -> Vec<f64> {
             .collect();
     }
     out.retain(|v| *v >= lo && *v <= hi);
+    // A range within a factor of ten can hold one of 1, 2, 5 or none: every
+    // integer mantissa then (the axis spans at least a factor 2.25, so at
+    // least two of them fall in it), since one tick cannot be read as a
+    // scale.
+    if out.len() < 2 {
+        out = (a..=b)
+            .flat_map(|k| (1..10).map(move |m| m as f64 * 10f64.powi(k)))
+            .filter(|v| *v >= lo && *v <= hi)
+            .collect();
+    }
     out
 }
 
@@ -301,6 +320,14 @@ impl Chart {
 
     /// Renders the chart as SVG text.
     pub fn to_svg(&self) -> Result<String> {
+        let (shown, points, xr, yr) = self.prepared();
+        shown.render(&points, xr, yr)
+    }
+
+    /// What is drawn: the chart with identical series merged and its
+    /// legend fitted, the drawable points, and the axis ranges.
+    #[allow(clippy::type_complexity)]
+    fn prepared(&self) -> (Chart, Vec<Vec<(f64, f64)>>, (f64, f64), (f64, f64)) {
         let points = self.drawable();
         let all: Vec<(f64, f64)> = points.iter().flatten().copied().collect();
         let range = |values: Vec<f64>, log: bool, floor: Option<f64>| -> (f64, f64) {
@@ -350,7 +377,7 @@ impl Chart {
             series,
             ..self.clone()
         };
-        shown.render(&points, (x0, x1), (y0, y1))
+        (shown, points, (x0, x1), (y0, y1))
     }
 
     /// Writes the chart to `path` (atomically).
@@ -411,6 +438,9 @@ pub fn tick_label(v: f64, log: bool, scale: f64) -> String {
 }
 
 pub mod overlap;
+mod panels;
 mod render;
+
+pub use panels::Panels;
 #[cfg(test)]
 mod tests;

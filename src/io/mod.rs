@@ -6,6 +6,7 @@
 pub mod charts;
 pub mod csv;
 pub mod guarded;
+pub mod heatmap;
 pub mod latex;
 pub mod manifest;
 pub mod matrix_market;

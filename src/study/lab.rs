@@ -11,8 +11,9 @@ use std::path::Path;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 
-use crate::io::charts::Chart;
+use crate::io::charts::{Chart, Panels};
 use crate::io::csv::to_csv;
+use crate::io::heatmap::HeatMap;
 use crate::io::output::write_atomic;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
@@ -26,10 +27,13 @@ pub struct Artifact {
     pub content: Content,
 }
 
-/// What an artifact holds: bytes as written, or a chart drawn when written.
+/// What an artifact holds: bytes as written, or a chart or heat map drawn
+/// when written.
 pub enum Content {
     Bytes(Vec<u8>),
     Chart(Chart),
+    HeatMap(HeatMap),
+    Panels(Panels),
 }
 
 impl Artifact {
@@ -57,6 +61,22 @@ impl Artifact {
         }
     }
 
+    /// A heat map, drawn as `charts/NAME.svg`.
+    pub fn heat_map(name: &str, map: HeatMap) -> Self {
+        Self {
+            path: format!("charts/{name}.svg"),
+            content: Content::HeatMap(map),
+        }
+    }
+
+    /// Small multiples, drawn as `charts/NAME.svg`.
+    pub fn panels(name: &str, panels: Panels) -> Self {
+        Self {
+            path: format!("charts/{name}.svg"),
+            content: Content::Panels(panels),
+        }
+    }
+
     /// Charts given as (name, chart).
     pub fn charts(charts: Vec<(String, Chart)>) -> Vec<Self> {
         charts
@@ -78,7 +98,7 @@ impl Artifact {
     /// Whether it is a chart (its name without folder and extension then).
     pub fn chart_name(&self) -> Option<&str> {
         match self.content {
-            Content::Chart(_) => self
+            Content::Chart(_) | Content::HeatMap(_) | Content::Panels(_) => self
                 .path
                 .strip_prefix("charts/")
                 .and_then(|p| p.strip_suffix(".svg")),
@@ -94,6 +114,8 @@ pub fn write_artifacts(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<String>
         match &a.content {
             Content::Bytes(b) => write_atomic(&path, b)?,
             Content::Chart(c) => c.write(&path)?,
+            Content::HeatMap(m) => m.write(&path)?,
+            Content::Panels(p) => p.write(&path)?,
         }
     }
     Ok(artifacts.iter().map(|a| a.path.clone()).collect())

@@ -442,10 +442,17 @@ impl Study for SideBySide {
     }
 
     fn estimated_seconds(&self, length: RunLength) -> f64 {
-        // Dominated by the paper's method and the oracle at the finest
-        // mesh: about 40 s each at 1/128 on this machine.
+        // Each side solved once: about 80 s a side at 1/128 on this
+        // machine (the paper's method 160 s, the oracle 40 s, the
+        // reference's candidates about a minute), cubic in 1/h.
+        let mut sides: Vec<String> = Vec::new();
+        for s in self.pairs.iter().flat_map(|(a, b)| [a, b]) {
+            if !matches!(s, Side::Imported { .. }) && !sides.contains(&s.name()) {
+                sides.push(s.name());
+            }
+        }
         let n = self.scene.finest().divisions() as f64;
-        let s = 2.0 * self.pairs.len() as f64 * 40.0 * (n / 128.0).powi(3);
+        let s = 80.0 * sides.len() as f64 * (n / 128.0).powi(3);
         if length == RunLength::Quick {
             s / 10.0
         } else {

@@ -61,21 +61,33 @@ pub fn chart(title: &str, measured: &[Measured]) -> Chart {
     }
     let mut series = Vec::new();
     for name in names {
+        // Each point labelled with its target.
         let points = |ok: bool| {
-            let mut p: Vec<(f64, f64)> = measured
+            let mut p: Vec<((f64, f64), String)> = measured
                 .iter()
                 .filter(|m| m.trial.solver.name == name && m.trial.certified() == ok)
-                .map(|m| (m.trial.residual(), m.timing.seconds_min))
-                .filter(|(x, y)| *x > 0.0 && x.is_finite() && *y > 0.0)
+                .map(|m| {
+                    (
+                        (m.trial.residual(), m.timing.seconds_min),
+                        m.trial.knob().1.to_string(),
+                    )
+                })
+                .filter(|((x, y), _)| *x > 0.0 && x.is_finite() && *y > 0.0)
                 .collect();
-            p.sort_by(|a, b| a.0.total_cmp(&b.0));
+            p.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
             p
         };
-        series.extend(Series::certified_and_failed(
+        let (ok, failed) = (points(true), points(false));
+        let labels: Vec<((f64, f64), String)> = ok.iter().chain(&failed).cloned().collect();
+        let mut drawn = Series::certified_and_failed(
             name,
-            points(true),
-            points(false),
-        ));
+            ok.into_iter().map(|(p, _)| p).collect(),
+            failed.into_iter().map(|(p, _)| p).collect(),
+        );
+        if let Some(first) = drawn.first_mut() {
+            first.labels = labels;
+        }
+        series.extend(drawn);
     }
     Chart::new(
         title,

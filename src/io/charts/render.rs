@@ -27,40 +27,52 @@ impl Chart {
                     .into_drawing_area();
             root.fill(&WHITE).map_err(|e| anyhow!("chart: {e}"))?;
             let (plot, legend) = root.split_horizontally(WIDTH - LEGEND_WIDTH);
-            let scales = (x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
-            let kx = match &self.x_ticks {
-                Some(t) => t.iter().map(|p| p.0).collect(),
-                None => decades(x0, x1),
-            };
-            let ky = decades(y0, y1);
-            match (self.log_x, self.log_y) {
-                (false, false) => self.draw(&plot, points, x0..x1, y0..y1, scales),
-                (true, false) => self.draw(
-                    &plot,
-                    points,
-                    (x0..x1).log_scale().with_key_points(kx),
-                    y0..y1,
-                    scales,
-                ),
-                (false, true) => self.draw(
-                    &plot,
-                    points,
-                    x0..x1,
-                    (y0..y1).log_scale().with_key_points(ky),
-                    scales,
-                ),
-                (true, true) => self.draw(
-                    &plot,
-                    points,
-                    (x0..x1).log_scale().with_key_points(kx),
-                    (y0..y1).log_scale().with_key_points(ky),
-                    scales,
-                ),
-            }?;
+            self.plot_in(&plot, points, (x0, x1), (y0, y1))?;
             self.draw_legend(&legend)?;
             root.present().map_err(|e| anyhow!("chart: {e}"))?;
         }
         Ok(svg)
+    }
+
+    /// Draws the plot (axes, series, no legend) into `plot`.
+    pub(super) fn plot_in(
+        &self,
+        plot: &DrawingArea<SVGBackend<'_>, Shift>,
+        points: &[Vec<(f64, f64)>],
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+    ) -> Result<()> {
+        let scales = (x0.abs().max(x1.abs()), y0.abs().max(y1.abs()));
+        let kx = match &self.x_ticks {
+            Some(t) => t.iter().map(|p| p.0).collect(),
+            None => decades(x0, x1),
+        };
+        let ky = decades(y0, y1);
+        match (self.log_x, self.log_y) {
+            (false, false) => self.draw(plot, points, x0..x1, y0..y1, scales),
+            (true, false) => self.draw(
+                plot,
+                points,
+                (x0..x1).log_scale().with_key_points(kx),
+                y0..y1,
+                scales,
+            ),
+            (false, true) => self.draw(
+                plot,
+                points,
+                x0..x1,
+                (y0..y1).log_scale().with_key_points(ky),
+                scales,
+            ),
+            (true, true) => self.draw(
+                plot,
+                points,
+                (x0..x1).log_scale().with_key_points(kx),
+                (y0..y1).log_scale().with_key_points(ky),
+                scales,
+            ),
+        }?;
+        Ok(())
     }
 
     fn draw<X, Y>(
@@ -79,7 +91,10 @@ impl Chart {
     {
         let err = |e: DrawingAreaErrorKind<_>| anyhow!("chart '{}': {e}", self.title);
         let mut chart = ChartBuilder::on(area)
-            .caption(&self.title, ("sans-serif", 17))
+            .caption(
+                &self.title,
+                ("sans-serif", title_size(&self.title, area.dim_in_pixel().0)),
+            )
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(78)
@@ -144,6 +159,25 @@ impl Chart {
                 }
                 _ => {}
             }
+            // Point labels (a work-precision point's target), beside the
+            // point in the series' colour; those a log axis cannot draw
+            // are left out.
+            let drawable = |&&((x, y), _): &&((f64, f64), String)| {
+                x.is_finite()
+                    && y.is_finite()
+                    && (!self.log_x || x > 0.0)
+                    && (!self.log_y || y > 0.0)
+            };
+            chart
+                .draw_series(s.labels.iter().filter(drawable).map(|(p, text)| {
+                    EmptyElement::at(*p)
+                        + Text::new(
+                            text.clone(),
+                            (5, -14),
+                            ("sans-serif", 10).into_font().color(&color),
+                        )
+                }))
+                .map_err(err)?;
         }
         Ok(())
     }
@@ -252,4 +286,14 @@ impl Chart {
         }
         Ok(())
     }
+}
+
+/// The title's font size: 17 px, or smaller so that the title fits the
+/// plot's width in any renderer (its width estimated at 0.6 em a
+/// character, wider than DejaVu Sans and Arial average; centred, a longer
+/// title is cut on both sides), down to 10 px.
+pub(super) fn title_size(title: &str, width: u32) -> u32 {
+    let chars = title.chars().count().max(1) as f64;
+    let fits = (width as f64 - 28.0) / (0.6 * chars);
+    fits.floor().clamp(10.0, 17.0) as u32
 }

@@ -19,6 +19,25 @@ fn log_axes_are_labelled_at_every_decade() {
     );
     // Less than two decades: 1, 2, 5 in each.
     assert_eq!(decades(1.5, 30.0), vec![2.0, 5.0, 10.0, 20.0]);
+    // Times of 2.0-2.15 s, padded by 1.5: 2 alone of 1, 2, 5 would be one
+    // tick; every integer mantissa gives two.
+    assert_eq!(decades(2.0 / 1.5, 2.15 * 1.5), vec![2.0, 3.0]);
+    // Every range the charts draw (at least a factor 2.25) has two ticks.
+    for k in 0..200 {
+        let lo = 10f64.powf(-3.0 + k as f64 * 0.037);
+        assert!(decades(lo, 2.25 * lo).len() >= 2, "{lo}");
+    }
+}
+
+/// A long title shrinks to the plot's width instead of running off both
+/// sides; a short one keeps its size.
+#[test]
+fn titles_fit_the_plot() {
+    use super::render::title_size;
+    assert_eq!(title_size("A title", 720), 17);
+    let long = "Iterations against relaxation.epsilon (inner = multigrid), problem 1, h = 1/256, and more words";
+    let size = title_size(long, 720);
+    assert!(size < 17 && (0.6 * size as f64 * long.chars().count() as f64) <= 720.0 - 28.0);
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use contactlab_solvers::registry;
 
 use crate::coulomb::fixed_point::STAGE;
-use crate::io::charts::{Chart, Series};
+use crate::io::charts::{Chart, Panels, Series};
 use crate::mechanics::contact_zone::ProfileRow;
 use crate::study::runner::Measured;
 
@@ -182,13 +182,12 @@ pub fn profile_charts(
 }
 
 /// Residual against iteration for each solver's Coulomb solve, from a
-/// comparison's measured trials of one problem: two charts, so that no axis
-/// carries two kinds of loop: the friction fixed point's max|Δg| (a direct
-/// Coulomb solver's own steps stand in its place), and every inner loop
-/// (log iteration axis: counts run from tens to thousands).
+/// comparison's measured trials of one problem: the chart that
+/// shows the outer loop: the friction fixed point's max|Δg| (a direct
+/// Coulomb solver's own steps stand in its place); the inner loops are
+/// small multiples of their own ([`inner_convergence_panels`]).
 pub fn convergence_charts(problem: u32, h: &str, measured: &[Measured]) -> Vec<(String, Chart)> {
     let mut outer = Vec::new();
-    let mut inner = Vec::new();
     for m in measured
         .iter()
         .filter(|m| m.trial.law == contactlab_solvers::Law::Coulomb)
@@ -227,10 +226,9 @@ pub fn convergence_charts(problem: u32, h: &str, measured: &[Measured]) -> Vec<(
                 continue;
             }
             let line = Series::line(format!("{solver}: {stage}"), pts).of_solver(solver);
+            // The inner loops are drawn apart ([`inner_convergence_panels`]).
             if direct {
                 outer.push(line.with_markers());
-            } else {
-                inner.push(line);
             }
         }
         if direct && m.history.is_empty() {
@@ -244,30 +242,70 @@ pub fn convergence_charts(problem: u32, h: &str, measured: &[Measured]) -> Vec<(
             );
         }
     }
-    vec![
-        (
-            format!("convergence_p{problem}"),
-            Chart::new(
-                format!("Convergence of the Coulomb problem {problem}, h = {h}: the outer loop"),
-                "iteration (friction fixed point; a direct solver's own steps)",
-                "residual: max|Δg| (or the solver's own)",
-                false,
-                true,
-                outer,
-            ),
+    vec![(
+        format!("convergence_p{problem}"),
+        Chart::new(
+            format!("Convergence of the Coulomb problem {problem}, h = {h}: the outer loop"),
+            "iteration (friction fixed point; a direct solver's own steps)",
+            "residual: max|Δg| (or the solver's own)",
+            false,
+            true,
+            outer,
         ),
-        (
-            format!("convergence_inner_p{problem}"),
-            Chart::new(
-                format!(
-                    "Convergence histories of the inner loops, Coulomb problem {problem}, h = {h}"
-                ),
-                "iteration of the inner loop, counted over the whole run",
-                "residual of that loop",
-                true,
-                true,
-                inner,
-            ),
+    )]
+}
+
+/// The inner loops' histories as small multiples, one panel per solver:
+/// on one axis nine histories from ten to ten thousand iterations could
+/// not be told apart.
+pub fn inner_convergence_panels(problem: u32, h: &str, measured: &[Measured]) -> Panels {
+    let mut panels = Vec::new();
+    for m in measured
+        .iter()
+        .filter(|m| m.trial.law == contactlab_solvers::Law::Coulomb)
+    {
+        let solver = m.trial.solver.name;
+        let Some(entry) = registry::by_name(solver) else {
+            continue;
+        };
+        if entry.solves(contactlab_solvers::Law::Coulomb) {
+            continue;
+        }
+        let series: Vec<Series> = entry
+            .stages
+            .iter()
+            .filter(|s| s.history)
+            .filter_map(|stage| {
+                let pts: Vec<(f64, f64)> = m
+                    .history
+                    .iter()
+                    .filter(|p| p.stage == stage.name)
+                    .enumerate()
+                    .map(|(i, p)| ((i + 1) as f64, p.residual))
+                    .collect();
+                (!pts.is_empty()).then(|| {
+                    Series::line(format!("{solver}: {}", stage.name), pts).of_solver(solver)
+                })
+            })
+            .collect();
+        if series.is_empty() {
+            continue;
+        }
+        let stage = entry.work_stage;
+        panels.push(Chart::new(
+            format!("{solver} ({stage})"),
+            "inner iteration, over the whole run",
+            "residual",
+            true,
+            true,
+            series,
+        ));
+    }
+    Panels {
+        title: format!(
+            "Convergence histories of the inner loops, Coulomb problem {problem}, h = {h}: each solver's residual over all its friction iterations"
         ),
-    ]
+        panels,
+        columns: 3,
+    }
 }

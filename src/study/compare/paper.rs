@@ -15,7 +15,9 @@ use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::compare::charts::{ProfilePair, convergence_charts, profile_charts};
+use crate::study::compare::charts::{
+    ProfilePair, convergence_charts, inner_convergence_panels, profile_charts,
+};
 use crate::study::compare::{STUDY, plan};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
@@ -121,15 +123,17 @@ impl Study for PaperCompare {
             .with_repeats(self.repeats);
             measured.extend(lab.measure(&[at_paper], Keep::default())?);
             artifacts.extend(self.profiles(lab, problem, &sc, &measured, findings)?);
-            artifacts.extend(Artifact::charts(convergence_charts(
-                problem,
-                &self.h.to_string(),
-                &measured
-                    .iter()
-                    .filter(|m| m.trial.study == STUDY)
-                    .map(Measured::without_finest)
-                    .collect::<Vec<_>>(),
-            )));
+            let ours: Vec<Measured> = measured
+                .iter()
+                .filter(|m| m.trial.study == STUDY)
+                .map(Measured::without_finest)
+                .collect();
+            let h = self.h.to_string();
+            artifacts.extend(Artifact::charts(convergence_charts(problem, &h, &ours)));
+            artifacts.push(Artifact::panels(
+                &format!("convergence_inner_p{problem}"),
+                inner_convergence_panels(problem, &h, &ours),
+            ));
             findings.measured.push((problem, measured));
         }
         let all: Vec<Measured> = findings

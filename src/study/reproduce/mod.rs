@@ -15,12 +15,14 @@ use std::path::Path;
 use anyhow::Result;
 use serde::Serialize;
 
-use contactlab_solvers::registry;
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::{self, Role};
 
 use crate::coulomb::continuation::Schedule;
 use crate::io::manifest::utc_now;
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::bench::BenchSpec;
 use crate::study::bench::goals::Bench;
@@ -28,10 +30,13 @@ use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::discretization_error::{ErrorSpec, Errors};
 use crate::study::lab::{Content, Lab, Planned, RunLength, Section, write_artifacts};
+use crate::study::oracle::Oracle;
 use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
+use crate::study::side_by_side::{Side, SideBySide};
 use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
+use crate::study::tuning_map::{Axis, TuningMap};
 
 /// What `reproduce` runs.
 #[derive(Clone, Serialize)]
@@ -56,6 +61,16 @@ pub struct ReproduceSpec {
     pub benchmark: BenchmarkSpec,
     /// The discretization-error study.
     pub errors: ErrorSpec,
+    /// The oracle family on meshes finer than the comparison's.
+    pub oracle: Oracle,
+    /// The mesh of the side-by-side of the paper's method against the
+    /// oracle and against the reference (problem 1).
+    pub side_by_side_h: MeshSize,
+    /// The tuning maps of the paper's method over r × ε: (mesh, law).
+    #[serde(skip)]
+    pub maps: Vec<(MeshSize, Law)>,
+    /// Timed runs of each map point after the first.
+    pub map_repeats: usize,
 }
 
 impl ReproduceSpec {
@@ -100,6 +115,18 @@ impl ReproduceSpec {
             bench: BenchSpec::standard(),
             benchmark: BenchmarkSpec::new(false, registry::solvers()),
             errors: ErrorSpec::standard(),
+            oracle: Oracle::standard(),
+            side_by_side_h: MeshSize::from_level(7).expect("in range"),
+            // The paper's own form (sweeps) at 1/64, where a point takes
+            // about a second; multigrid inside at 1/256 (tuning_map).
+            maps: vec![
+                (
+                    MeshSize::from_level(6).expect("in range"),
+                    Law::GivenFriction,
+                ),
+                (MeshSize::from_level(8).expect("in range"), Law::Coulomb),
+            ],
+            map_repeats: 2,
         }
     }
 
@@ -125,6 +152,13 @@ impl ReproduceSpec {
             bench: BenchSpec::quick(),
             benchmark: BenchmarkSpec::new(true, registry::solvers()),
             errors: ErrorSpec::quick(),
+            oracle: Oracle::quick(),
+            side_by_side_h: h,
+            maps: vec![
+                (h, Law::GivenFriction),
+                (MeshSize::from_level(7).expect("in range"), Law::Coulomb),
+            ],
+            map_repeats: 1,
         }
     }
 }
@@ -146,7 +180,7 @@ impl ReproduceSpec {
 pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned>> {
     let mut paper = Settings::paper();
     paper.certificate = settings.certificate;
-    vec![
+    let studies: Vec<Box<dyn Planned>> = vec![
         Box::new(PaperCompare {
             h: spec.h,
             problems: spec.problems.clone(),
@@ -177,7 +211,59 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
         Box::new(Errors {
             spec: spec.errors.clone(),
         }),
-    ]
+        Box::new(spec.oracle.clone()),
+        Box::new(side_by_side(spec)),
+    ];
+    studies.into_iter().chain(tuning_maps(spec)).collect()
+}
+
+/// The paper's method beside the oracle and beside the reference, node by
+/// node, on problem 1.
+fn side_by_side(spec: &ReproduceSpec) -> SideBySide {
+    let mut scene = Scene::paper_problem(1).expect("the paper's problem 1");
+    scene.set_finest(spec.side_by_side_h);
+    let entry = |role| registry::with_role(role).expect("registered");
+    let (paper, oracle) = (entry(Role::PapersMethod), entry(Role::Oracle));
+    SideBySide {
+        scene,
+        pairs: vec![
+            (Side::Solver(paper), Side::Solver(oracle)),
+            (Side::Solver(paper), Side::Reference),
+        ],
+    }
+}
+
+/// The paper's method over r × ε on problem 1, on each mesh of the spec.
+fn tuning_maps(spec: &ReproduceSpec) -> Vec<Box<dyn Planned>> {
+    let paper = registry::with_role(Role::PapersMethod).expect("registered");
+    let axis = |knob: &str, values: &[&str]| Axis {
+        path: format!("{}.{knob}", paper.name),
+        values: values.iter().map(|v| v.to_string()).collect(),
+    };
+    spec.maps
+        .iter()
+        .map(|&(h, law)| {
+            let mut scene = Scene::paper_problem(1).expect("the paper's problem 1");
+            scene.set_finest(h);
+            Box::new(TuningMap {
+                scene,
+                solver: paper,
+                law,
+                axes: if spec.quick {
+                    vec![
+                        axis("r", &["1e5", "1e7"]),
+                        axis("epsilon", &["1e-5", "1e-6"]),
+                    ]
+                } else {
+                    vec![
+                        axis("r", &["1e3", "1e5", "1e7", "1e9", "1e11"]),
+                        axis("epsilon", &["1e-4", "1e-5", "1e-6", "1e-7"]),
+                    ]
+                },
+                repeats: spec.map_repeats,
+            }) as Box<dyn Planned>
+        })
+        .collect()
 }
 
 /// A duration for people: seconds, minutes or hours.
@@ -306,8 +392,17 @@ pub fn run_studies(
         if length == RunLength::Quick {
             // A smoke run cannot be mistaken for the study: every chart says so.
             for a in &mut artifacts {
-                if let Content::Chart(c) = &mut a.content {
-                    c.title = format!("SMOKE RUN (--quick), not results: {}", c.title);
+                match &mut a.content {
+                    Content::Chart(c) => {
+                        c.title = format!("SMOKE RUN (--quick), not results: {}", c.title)
+                    }
+                    Content::HeatMap(m) => {
+                        m.title = format!("SMOKE RUN (--quick), not results: {}", m.title)
+                    }
+                    Content::Panels(p) => {
+                        p.title = format!("SMOKE RUN (--quick), not results: {}", p.title)
+                    }
+                    Content::Bytes(_) => {}
                 }
             }
         }

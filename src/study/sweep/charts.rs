@@ -94,8 +94,10 @@ pub fn sweep_charts(trials: &[(&Trial, &TrialTiming)]) -> Vec<(String, Chart)> {
 fn work_precision_series(here: &[&(&Trial, &TrialTiming)], group: &str) -> Vec<Series> {
     let mut wp: Vec<Series> = Vec::new();
     for e in registry::solvers() {
-        let points = |certified: bool| -> Vec<(f64, f64)> {
-            let mut pts: Vec<(f64, f64)> = here
+        // Each point labelled with the target it was run at: the
+        // accuracy knob's value, or the fixed point's ε.
+        let points = |certified: bool| -> Vec<((f64, f64), String)> {
+            let mut pts: Vec<((f64, f64), String)> = here
                 .iter()
                 .filter(|(t, _)| {
                     t.group == group
@@ -105,17 +107,23 @@ fn work_precision_series(here: &[&(&Trial, &TrialTiming)], group: &str) -> Vec<S
                 })
                 .filter_map(|(t, tm)| {
                     t.pressure_error()
-                        .map(|p| (p.max(WP_FLOOR), tm.seconds_min))
+                        .map(|p| ((p.max(WP_FLOOR), tm.seconds_min), t.knob().1.to_string()))
                 })
                 .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pts.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
             pts
         };
-        wp.extend(Series::certified_and_failed(
+        let (ok, failed) = (points(true), points(false));
+        let labels: Vec<((f64, f64), String)> = ok.iter().chain(&failed).cloned().collect();
+        let mut series = Series::certified_and_failed(
             e.name,
-            points(true),
-            points(false),
-        ));
+            ok.into_iter().map(|(p, _)| p).collect(),
+            failed.into_iter().map(|(p, _)| p).collect(),
+        );
+        if let Some(first) = series.first_mut() {
+            first.labels = labels;
+        }
+        wp.extend(series);
     }
     wp
 }
@@ -146,42 +154,54 @@ fn variation_charts(
         .iter()
         .filter_map(|t| numeric(t))
         .fold(f64::NEG_INFINITY, f64::max);
-    let metric = |name: &str, f: &dyn Fn(&Trial) -> Option<f64>| -> Vec<Series> {
+    // Each metric in one colour (its index on the chart): its line, its
+    // failed points' crosses and its level at a non-numeric value.
+    let metric = |color: usize, name: &str, f: &dyn Fn(&Trial) -> Option<f64>| -> Vec<Series> {
         let mut v = Vec::new();
         let pts: Vec<(f64, f64)> = runs
             .iter()
             .filter(|t| t.certified())
             .filter_map(|t| Some((numeric(t)?, f(t)?)))
             .collect();
-        v.push(Series::line(name, pts).with_markers());
+        v.push(Series::line(name, pts).with_markers().colored(color));
         let failed: Vec<(f64, f64)> = runs
             .iter()
             .filter(|t| !t.certified())
             .filter_map(|t| Some((numeric(t)?, f(t)?)))
             .collect();
         if !failed.is_empty() {
-            v.push(Series::line(format!("{name}, not certified"), failed).failed());
+            v.push(
+                Series::line(format!("{name}, not certified"), failed)
+                    .failed()
+                    .colored(color),
+            );
         }
         for t in runs.iter().filter(|t| numeric(t).is_none()) {
             if let Some(y) = f(t) {
                 v.push(
                     Series::line(format!("{name} at {}", t.knob().1), vec![(lo, y), (hi, y)])
-                        .dashed(),
+                        .dashed()
+                        .colored(color),
                 );
             }
         }
         v
     };
     let count = |f: fn(&Trial) -> usize| move |t: &Trial| Some(f(t).max(1) as f64);
-    let mut iterations = metric("inner iterations", &count(|t| t.inner_iterations));
-    iterations.extend(metric("outer iterations", &count(|t| t.outer_iterations)));
+    let mut iterations = metric(0, "inner iterations", &count(|t| t.inner_iterations));
     iterations.extend(metric(
+        1,
+        "outer iterations",
+        &count(|t| t.outer_iterations),
+    ));
+    iterations.extend(metric(
+        2,
         "friction iterations",
         &count(|t| t.friction_iterations),
     ));
-    let mut errors = metric("max displacement error", &|t| t.displacement_error());
-    errors.extend(metric("max pressure error", &|t| t.pressure_error()));
-    errors.extend(metric("certificate", &|t| Some(t.residual())));
+    let mut errors = metric(0, "max displacement error", &|t| t.displacement_error());
+    errors.extend(metric(1, "max pressure error", &|t| t.pressure_error()));
+    errors.extend(metric(2, "certificate", &|t| Some(t.residual())));
     // Without a reference the errors have no points: not in the legend.
     errors.retain(|s| !s.points.is_empty());
     let slug = file_slug(group);

@@ -1,0 +1,616 @@
+//! Tuning as a map: one solver on a joint grid of two or three of its
+//! settings (the paper's r × ε of the modified Lagrangian, section 3, or
+//! a relaxation factor ω), every point timed over repeated runs and
+//! certified. The one-factor sweeps ([`crate::study::sweep`]) move one
+//! setting around the defaults; a map shows how the settings act together
+//! and where the method fails.
+//!
+//! On meshes finer than [`OWN_FORM_FINEST`] a solver is mapped in its fast
+//! form ([`crate::study::plans::Fine`]: the paper's method with its inner
+//! minimization by multigrid), unless the user set those settings: a point
+//! of the paper's own sweeps takes 127-179 s at 1/128 (measured), so a
+//! grid there does not fit a run. Fine meshes carry no reference (the
+//! certificate measures each answer), as in the sweep.
+//!
+//! Time is the median over the runs. The run's noise is the largest
+//! relative spread (median less fastest run) of any certified point; a
+//! point whose median is within twice that of the best median is a tie:
+//! timing alone cannot rank it, and the map says so instead of naming a
+//! winner by chance. Work (iterations) is exact and has a map of its own.
+
+use anyhow::{Result, bail};
+use contactlab_solvers::Law;
+use contactlab_solvers::registry::Entry;
+use serde::Serialize;
+
+use crate::io::csv::fixed;
+use crate::io::heatmap::{Cell, HeatMap, Mark};
+use crate::mechanics::scene::Scene;
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::plans;
+use crate::study::runner::{Keep, Measured};
+use crate::study::sweep::work_cap;
+use crate::study::trial::{Setting, TrialSpec};
+
+/// The study's name in trial records.
+pub const STUDY: &str = "tuning_map";
+
+/// The finest mesh (level k of h = 1/2^k) mapped in a solver's own form.
+pub const OWN_FORM_FINEST: u32 = 6;
+
+/// Settings of a solver's fast form, (knob, value), as the command line
+/// writes them.
+pub type Form = Vec<(String, String)>;
+
+/// One axis of the grid: a setting's path and its values.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    pub path: String,
+    pub values: Vec<String>,
+}
+
+impl Axis {
+    /// `PATH=V1,V2,...`.
+    pub fn parse(text: &str) -> Result<Self> {
+        let Some((path, values)) = text.split_once('=') else {
+            bail!(
+                "--grid '{text}': write it as PATH=V1,V2,..., e.g. --grid relaxation.r=1e3,1e5,1e7"
+            );
+        };
+        let values: Vec<String> = values
+            .split(',')
+            .map(|v| v.trim().to_string())
+            .filter(|v| !v.is_empty())
+            .collect();
+        if values.len() < 2 {
+            bail!("--grid '{text}': give at least two values, PATH=V1,V2,...");
+        }
+        Ok(Self {
+            path: path.trim().to_string(),
+            values,
+        })
+    }
+
+    /// The knob's name without its owner: `r` of `relaxation.r`.
+    pub fn knob(&self) -> &str {
+        self.path.rsplit('.').next().unwrap_or(&self.path)
+    }
+}
+
+/// A map of `solver` on `scene` over `axes` (two or three).
+pub struct TuningMap {
+    pub scene: Scene,
+    pub solver: &'static Entry,
+    pub law: Law,
+    pub axes: Vec<Axis>,
+    /// Timed runs of each point after the first.
+    pub repeats: usize,
+}
+
+/// One point of the map, measured and ranked.
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    /// The values of the axes, in order.
+    pub values: Vec<String>,
+    pub status: String,
+    pub certified: bool,
+    #[serde(serialize_with = "fixed")]
+    pub seconds_median: f64,
+    #[serde(serialize_with = "fixed")]
+    pub seconds_min: f64,
+    pub runs: usize,
+    pub work: usize,
+    #[serde(serialize_with = "fixed")]
+    pub certificate: f64,
+    #[serde(serialize_with = "fixed")]
+    pub pressure_error: f64,
+    /// `best`, `tie` (within the noise of the best) or empty.
+    pub mark: String,
+}
+
+impl Point {
+    fn noise(&self) -> f64 {
+        (self.seconds_median - self.seconds_min).max(0.0)
+    }
+}
+
+/// What a map found: its points, ranked, and the trials behind them.
+pub struct MapFindings {
+    pub points: Vec<Point>,
+    pub measured: Vec<Measured>,
+    /// The settings of the form mapped (`inner = multigrid`), if not the
+    /// solver's own.
+    pub form: Form,
+}
+
+impl TuningMap {
+    /// The settings every point shares, and the fast form's settings when
+    /// the mesh is finer than [`OWN_FORM_FINEST`].
+    fn base(&self, lab: &Lab) -> Result<(crate::settings::Settings, Form)> {
+        let mut settings = lab.settings.clone();
+        let mut form = Vec::new();
+        if self.scene.finest().level() > OWN_FORM_FINEST
+            && let Some(fine) = plans::plan(self.solver).fine
+        {
+            for (knob, value) in fine.settings {
+                let path = format!("{}.{knob}", self.solver.name);
+                if !settings.overrides().contains_key(&path) {
+                    settings
+                        .set_text(&path, value)
+                        .map_err(anyhow::Error::msg)?;
+                    form.push((knob.to_string(), value.to_string()));
+                }
+            }
+        }
+        Ok((settings, form))
+    }
+
+    /// Every combination of the axes' values, the first axis fastest.
+    pub fn grid(&self) -> Vec<Vec<String>> {
+        let mut out: Vec<Vec<String>> = vec![Vec::new()];
+        for axis in &self.axes {
+            out = axis
+                .values
+                .iter()
+                .flat_map(|v| {
+                    out.iter().map(move |p| {
+                        let mut p = p.clone();
+                        p.push(v.clone());
+                        p
+                    })
+                })
+                .collect();
+        }
+        out
+    }
+
+    /// The trials: one per point of the grid.
+    pub fn plan(&self, lab: &Lab) -> Result<(Vec<TrialSpec>, Form)> {
+        if !(2..=3).contains(&self.axes.len()) {
+            bail!(
+                "a tuning map takes two or three settings (--grid PATH=V1,V2,... two or three times), got {}",
+                self.axes.len()
+            );
+        }
+        let (base, form) = self.base(lab)?;
+        let fine = self.scene.finest().level() > OWN_FORM_FINEST;
+        let paths: Vec<&str> = self.axes.iter().map(|a| a.path.as_str()).collect();
+        let mut out = Vec::new();
+        for values in self.grid() {
+            let mut settings = base.clone();
+            for (path, value) in paths.iter().zip(&values) {
+                settings
+                    .set_text(path, value)
+                    .map_err(|e| anyhow::anyhow!("--grid {path}={value}: {e}"))?;
+            }
+            let mut t = TrialSpec::new(
+                STUDY,
+                self.group(),
+                &self.scene,
+                self.solver,
+                self.law,
+                &settings,
+            )
+            .with_work(work_cap(self.solver, 1.0))
+            .with_repeats(self.repeats);
+            t.setting = Some(Setting::new(&paths.join(" × "), &values.join(" × ")));
+            if fine && self.law == Law::Coulomb {
+                t = t.without_reference();
+            }
+            out.push(t);
+        }
+        Ok((out, form))
+    }
+
+    /// The trials' group: `relaxation.r × relaxation.epsilon`.
+    fn group(&self) -> String {
+        let paths: Vec<&str> = self.axes.iter().map(|a| a.path.as_str()).collect();
+        paths.join(" × ")
+    }
+
+    /// The file stem: `tuning_map_relaxation_coulomb_h256`.
+    pub fn stem(&self) -> String {
+        format!(
+            "{STUDY}_{}_{}_h{}",
+            self.solver.name,
+            self.law.as_str(),
+            self.scene.finest().divisions()
+        )
+    }
+}
+
+/// The run's timing noise: the largest relative spread (median less the
+/// fastest run, over the median) of any certified point. Noise is the
+/// machine's, not a point's: a point timed twice can happen to agree with
+/// itself, so the map takes the largest spread it saw.
+pub fn noise(points: &[Point]) -> f64 {
+    points
+        .iter()
+        .filter(|p| p.certified && p.seconds_median > 0.0)
+        .map(|p| p.noise() / p.seconds_median)
+        .fold(0.0f64, f64::max)
+}
+
+/// Ranks `points` in place: the certified point of least median time is
+/// `best`, and a certified point whose median is within twice the run's
+/// relative [`noise`] of it is a `tie`.
+pub fn rank(points: &mut [Point]) {
+    let best = points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.certified)
+        .min_by(|a, b| a.1.seconds_median.total_cmp(&b.1.seconds_median))
+        .map(|(k, _)| k);
+    let Some(b) = best else { return };
+    let limit = points[b].seconds_median * (1.0 + 2.0 * noise(points));
+    for (k, p) in points.iter_mut().enumerate() {
+        p.mark = if k == b {
+            "best".into()
+        } else if p.certified && p.seconds_median <= limit {
+            "tie".into()
+        } else {
+            String::new()
+        };
+    }
+}
+
+/// The sentence stating the best setting with its margin.
+pub fn verdict(axes: &[Axis], points: &[Point]) -> String {
+    let name = |p: &Point| {
+        axes.iter()
+            .zip(&p.values)
+            .map(|(a, v)| format!("{} = {v}", a.knob()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let Some(best) = points.iter().find(|p| p.mark == "best") else {
+        return "No point of the grid was certified.".into();
+    };
+    let mut s = format!(
+        "Fastest certified: {} in {:.3} s (median of {} runs, the fastest {:.3} s; {} work).",
+        name(best),
+        best.seconds_median,
+        best.runs,
+        best.seconds_min,
+        best.work
+    );
+    let ties: Vec<&Point> = points.iter().filter(|p| p.mark == "tie").collect();
+    if best.runs < 2 {
+        s += " One run a point: the timing noise is not measured, so no tie can be told.";
+    } else if !ties.is_empty() {
+        s += &format!(
+            " Within twice the run's timing noise ({:.1}%) of it ({} {}), so not ranked by time: {}.",
+            100.0 * noise(points),
+            ties.len(),
+            if ties.len() == 1 {
+                "setting"
+            } else {
+                "settings"
+            },
+            ties.iter()
+                .map(|p| format!("{} ({:.3} s, {} work)", name(p), p.seconds_median, p.work))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+    }
+    let next = points
+        .iter()
+        .filter(|p| p.certified && p.mark.is_empty())
+        .min_by(|a, b| a.seconds_median.total_cmp(&b.seconds_median));
+    match next {
+        Some(n) => {
+            s += &format!(
+                " The fastest setting beyond the noise: {} in {:.3} s, {:.0}% slower.",
+                name(n),
+                n.seconds_median,
+                100.0 * (n.seconds_median / best.seconds_median - 1.0)
+            )
+        }
+        None => s += " Every other certified setting is within the noise.",
+    }
+    let failed = points.iter().filter(|p| !p.certified).count();
+    if failed > 0 {
+        s += &format!(" {failed} of {} points not certified.", points.len());
+    }
+    s
+}
+
+/// The heat maps of a two-axis slice (`third`: the value of a third axis
+/// fixed in this slice).
+fn heat_maps(
+    map: &TuningMap,
+    points: &[&Point],
+    third: Option<&str>,
+    form: &[(String, String)],
+) -> (HeatMap, HeatMap) {
+    let (ax, ay) = (&map.axes[0], &map.axes[1]);
+    let cell = |i: usize, j: usize, value: &dyn Fn(&Point) -> f64, marks: bool| {
+        let p = points
+            .iter()
+            .find(|p| p.values[0] == ax.values[i] && p.values[1] == ay.values[j])
+            .expect("every grid point was measured");
+        if p.certified {
+            Cell::Value {
+                value: value(p),
+                mark: match (marks, p.mark.as_str()) {
+                    (true, "best") => Mark::Best,
+                    (true, "tie") => Mark::Tie,
+                    _ => Mark::None,
+                },
+            }
+        } else {
+            Cell::Failed(p.status.clone())
+        }
+    };
+    let grid = |value: &dyn Fn(&Point) -> f64, marks: bool| {
+        (0..ay.values.len())
+            .map(|j| {
+                (0..ax.values.len())
+                    .map(|i| cell(i, j, value, marks))
+                    .collect()
+            })
+            .collect()
+    };
+    let form = if form.is_empty() {
+        String::new()
+    } else {
+        let f: Vec<String> = form.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        format!(", {}", f.join(", "))
+    };
+    let third = third
+        .map(|v| format!(", {} = {v}", map.axes[2].knob()))
+        .unwrap_or_default();
+    let title = |what: &str| {
+        format!(
+            "{what}: {}{form}{third}, {} law, {}, h = {}",
+            map.solver.name,
+            map.law.as_str().replace('_', "-"),
+            map.scene.name,
+            map.scene.finest()
+        )
+    };
+    let runs = points.first().map_or(1, |p| p.runs);
+    let time = HeatMap {
+        title: title("Time to a certified answer"),
+        x_label: ax.path.clone(),
+        y_label: ay.path.clone(),
+        x_values: ax.values.clone(),
+        y_values: ay.values.clone(),
+        cells: grid(&|p| p.seconds_median, true),
+        value_label: format!("seconds, median of {runs}"),
+    };
+    let work = HeatMap {
+        title: title("Work"),
+        cells: grid(&|p| p.work as f64, false),
+        value_label: format!("work ({})", map.solver.work_stage),
+        ..time.clone()
+    };
+    (time, work)
+}
+
+impl Study for TuningMap {
+    type Findings = MapFindings;
+
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        let points: usize = self.axes.iter().map(|a| a.values.len()).product();
+        let n = self.scene.finest().divisions() as f64;
+        // About 1.3 s a given-friction point at 1/64 and 2 s a Coulomb
+        // point at 1/256 with multigrid inside, on this machine.
+        let per = 1.5 * (n / 64.0).powi(2).min(2.0);
+        let s = per * (points * (1 + self.repeats)) as f64;
+        if length == RunLength::Quick {
+            s / 10.0
+        } else {
+            s
+        }
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<MapFindings>> {
+        let (specs, form) = self.plan(lab)?;
+        let measured = lab.measure(&specs, Keep::default())?;
+        let mut points: Vec<Point> = measured
+            .iter()
+            .map(|m| {
+                let values = m
+                    .trial
+                    .setting
+                    .as_ref()
+                    .map(|s| s.value.split(" × ").map(String::from).collect())
+                    .unwrap_or_default();
+                Point {
+                    values,
+                    status: m.trial.status.as_str().into(),
+                    certified: m.trial.certified(),
+                    seconds_median: m.timing.seconds_median,
+                    seconds_min: m.timing.seconds_min,
+                    runs: m.timing.runs,
+                    work: m.trial.work,
+                    certificate: m.trial.residual(),
+                    pressure_error: m.trial.pressure_error().unwrap_or(f64::NAN),
+                    mark: String::new(),
+                }
+            })
+            .collect();
+        rank(&mut points);
+        let stem = self.stem();
+        let mut artifacts = Artifact::trials(&format!("{stem}_trials"), &measured)?;
+        let mut header: Vec<String> = self.axes.iter().map(|a| a.path.clone()).collect();
+        header.extend(
+            [
+                "status",
+                "certified",
+                "seconds_median",
+                "seconds_min",
+                "runs",
+                "work",
+                "certificate",
+                "pressure_error",
+                "mark",
+            ]
+            .map(String::from),
+        );
+        let mut table = csv::Writer::from_writer(Vec::new());
+        table.write_record(&header)?;
+        for p in &points {
+            let mut row = p.values.clone();
+            row.extend([
+                p.status.clone(),
+                p.certified.to_string(),
+                format!("{:.9e}", p.seconds_median),
+                format!("{:.9e}", p.seconds_min),
+                p.runs.to_string(),
+                p.work.to_string(),
+                format!("{:.9e}", p.certificate),
+                format!("{:.9e}", p.pressure_error),
+                p.mark.clone(),
+            ]);
+            table.write_record(&row)?;
+        }
+        artifacts.push(Artifact::bytes(
+            &format!("{stem}.csv"),
+            table.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?,
+        ));
+        let slices: Vec<Option<&str>> = match self.axes.get(2) {
+            Some(a) => a.values.iter().map(|v| Some(v.as_str())).collect(),
+            None => vec![None],
+        };
+        for third in slices {
+            let slice: Vec<&Point> = points
+                .iter()
+                .filter(|p| third.is_none_or(|v| p.values.get(2).map(String::as_str) == Some(v)))
+                .collect();
+            let (time, work) = heat_maps(self, &slice, third, &form);
+            let tail = third
+                .map(|v| format!("_{}{v}", self.axes[2].knob()))
+                .unwrap_or_default();
+            artifacts.push(Artifact::heat_map(&format!("{stem}{tail}_time"), time));
+            artifacts.push(Artifact::heat_map(&format!("{stem}{tail}_work"), work));
+        }
+        Ok(Ran {
+            findings: MapFindings {
+                points,
+                measured,
+                form,
+            },
+            artifacts,
+        })
+    }
+
+    fn section(&self, found: &MapFindings, _: &Lab, charts: &[String]) -> Result<Section> {
+        let form = if found.form.is_empty() {
+            String::new()
+        } else {
+            let f: Vec<String> = found
+                .form
+                .iter()
+                .map(|(k, v)| format!("{k} = {v}"))
+                .collect();
+            format!(
+                " in its fast form on this mesh ({}: the paper's own form takes minutes a point here)",
+                f.join(", ")
+            )
+        };
+        let axes: Vec<String> = self
+            .axes
+            .iter()
+            .map(|a| format!("`{}` ∈ {{{}}}", a.path, a.values.join(", ")))
+            .collect();
+        let mut markdown = format!(
+            "## Tuning map: {} ({}, h = {}, {} law)\n\n`{}`{form} on the joint grid {} (`{}.csv`); each point timed over {} runs and certified. {}\n\n",
+            self.group(),
+            self.scene.name,
+            self.scene.finest(),
+            self.law.as_str().replace('_', "-"),
+            self.solver.name,
+            axes.join(" × "),
+            self.stem(),
+            1 + self.repeats,
+            verdict(&self.axes, &found.points)
+        );
+        for c in charts {
+            let intent = if c.ends_with("_work") {
+                "Work at each point of the grid (exact: no timing noise); grey cells were not certified."
+            } else {
+                "Time to a certified answer at each point of the grid; the best framed, ties within the timing noise marked =, failures grey with their status."
+            };
+            markdown += &chart_markdown(c, intent);
+        }
+        Ok(Section { markdown })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(values: &[&str], certified: bool, median: f64, min: f64) -> Point {
+        Point {
+            values: values.iter().map(|v| v.to_string()).collect(),
+            status: if certified {
+                "converged"
+            } else {
+                "max_iterations"
+            }
+            .into(),
+            certified,
+            seconds_median: median,
+            seconds_min: min,
+            runs: 3,
+            work: 10,
+            certificate: 1e-7,
+            pressure_error: f64::NAN,
+            mark: String::new(),
+        }
+    }
+
+    /// The best is the least median among certified points; a point
+    /// within twice the run's noise of it ties (a failed point's spread
+    /// does not count); a faster failed point is no best.
+    #[test]
+    fn the_best_is_certified_and_ties_are_within_the_noise() {
+        // The largest spread: 5% (1e5); ties within 10% of the best.
+        let mut points = vec![
+            point(&["1e3", "1e-4"], false, 0.5, 0.3),
+            point(&["1e5", "1e-4"], true, 1.00, 0.95),
+            point(&["1e7", "1e-4"], true, 1.09, 1.08),
+            point(&["1e3", "1e-6"], true, 1.20, 1.18),
+        ];
+        rank(&mut points);
+        let marks: Vec<&str> = points.iter().map(|p| p.mark.as_str()).collect();
+        assert_eq!(marks, ["", "best", "tie", ""]);
+        let axes = [
+            Axis::parse("relaxation.r=1e3,1e5,1e7").unwrap(),
+            Axis::parse("relaxation.epsilon=1e-4,1e-6").unwrap(),
+        ];
+        let v = verdict(&axes, &points);
+        assert!(
+            v.starts_with("Fastest certified: r = 1e5, epsilon = 1e-4 in 1.000 s"),
+            "{v}"
+        );
+        assert!(
+            v.contains(
+                "noise (5.0%) of it (1 setting), so not ranked by time: r = 1e7, epsilon = 1e-4"
+            ),
+            "{v}"
+        );
+        assert!(
+            v.contains("beyond the noise: r = 1e3, epsilon = 1e-6 in 1.200 s, 20% slower"),
+            "{v}"
+        );
+        assert!(v.contains("1 of 4 points not certified"), "{v}");
+    }
+
+    #[test]
+    fn an_axis_needs_a_path_and_two_values() {
+        assert!(Axis::parse("relaxation.r").is_err());
+        assert!(Axis::parse("relaxation.r=1e3").is_err());
+        let a = Axis::parse("relaxation.r = 1e3, 1e5").unwrap();
+        assert_eq!(a.path, "relaxation.r");
+        assert_eq!(a.values, ["1e3", "1e5"]);
+        assert_eq!(a.knob(), "r");
+    }
+}
