@@ -164,8 +164,9 @@ pub struct Table1Args {
     /// Finest mesh (continuation runs 1/8, ..., h).
     #[arg(long, value_name = "1/2^k", default_value = "1/64")]
     pub h: MeshSize,
-    /// Problems to run (`1 3` or `1,3`).
-    #[arg(long, value_delimiter = ',', num_args = 1.., default_values_t = [1, 2, 3])]
+    /// The paper's problems to run, `1,3` (or `1 3`); `--problems` is the
+    /// older spelling.
+    #[arg(long = "problem", alias = "problems", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1, 2, 3])]
     pub problems: Vec<u32>,
     /// Continuation schedules to run (`revisit finest-only` or with commas).
     #[arg(long, value_parser = choices::schedule(), value_delimiter = ',', num_args = 1.., default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
@@ -203,8 +204,9 @@ pub struct CompareArgs {
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {
-    /// Problems of the paper to sweep.
-    #[arg(long, value_delimiter = ',', default_values_t = [1], conflicts_with = "scene")]
+    /// The paper's problems to sweep, `1,3` (or `1 3`); `--problems` is
+    /// the older spelling.
+    #[arg(long = "problem", alias = "problems", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1], conflicts_with = "scene")]
     pub problems: Vec<u32>,
     /// A scene file to sweep instead (its settings are the base settings).
     #[arg(long, value_name = "FILE")]

@@ -149,22 +149,20 @@ fn every_subcommand_has_help() {
     }
 }
 
-/// `table1 --problems 1 3` (the form its help's `[default: 1 2 3]` shows)
-/// runs those two problems, as `--problems 1,3` does; and its help states
-/// the stopping mode it uses, the paper's (it said `[default: relative]`).
+/// `table1 --problem 1 3` (the form its help's `[default: 1 2 3]` shows)
+/// runs those two problems, as `--problem 1,3` and the older `--problems`
+/// do; and its help states the stopping mode it uses, the paper's (it
+/// said `[default: relative]`).
 #[test]
 fn table1_takes_the_problem_list_its_help_shows() {
-    for list in [&["1", "3"][..], &["1,3"][..]] {
+    for (flag, list) in [
+        ("--problem", &["1", "3"][..]),
+        ("--problem", &["1,3"][..]),
+        ("--problems", &["1,3"][..]),
+    ] {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("t");
-        let mut args = vec![
-            "table1",
-            "--h",
-            "1/8",
-            "--schedules",
-            "revisit",
-            "--problems",
-        ];
+        let mut args = vec!["table1", "--h", "1/8", "--schedules", "revisit", flag];
         args.extend_from_slice(list);
         args.extend(["--out", out.to_str().unwrap()]);
         let o = contactlab(&args);

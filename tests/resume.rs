@@ -96,7 +96,7 @@ fn an_interrupted_reproduce_resumes_where_it_stopped() {
     assert_eq!(names, ["compare", "table1"], "{resumed:?}");
     assert_eq!(
         manifest["run"]["study_seconds"].as_object().unwrap().len(),
-        7
+        10
     );
     // The README says so, and lists every file of the run, both
     // processes' (besides charts and profiles, listed by pattern).

@@ -27,7 +27,7 @@ import numbers
 import os
 import re
 from dataclasses import dataclass
-from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Union
+from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import scipy.sparse
@@ -55,6 +55,8 @@ __all__ = [
     "benchmark",
     "work_precision",
     "sweep",
+    "side_by_side",
+    "tuning_map",
 ]
 
 #: A path as Python programs give one.
@@ -944,3 +946,88 @@ def sweep(
     )
     files = dict(d["files"])
     return StudyResult(rows=_rows(files["sweep.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+
+
+def side_by_side(
+    problem: Problem,
+    pairs: Sequence[Tuple[str, str]],
+    settings: Optional[Mapping[str, object]] = None,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """Pairs of answers node by node: ``contactlab compare --side-by-side``.
+
+    Each side is a solver's name, ``"reference"`` (the earned reference:
+    the exact solvers at their tightest settings, never the method under
+    test) or the path of a ``profile.csv`` written by ``solve(..., out=)``
+    or ``contactlab solve --out``.
+
+    Parameters
+    ----------
+    problem : Problem
+        Built from a scene.
+    pairs : sequence of (a, b)
+        E.g. ``[("relaxation", "clarabel"), ("relaxation", "reference")]``.
+    settings : mapping, optional
+        As for ``solve``.
+    out : path, optional
+        Writes the run folder as ``contactlab compare --side-by-side
+        ... --out`` does.
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: ``side_by_side.csv`` (per pair the largest differences in
+        the problem's scales and the nodes whose contact states differ);
+        ``table("side_by_side_<a>_<b>.csv")``: every contact node of a pair.
+    """
+    _problem(problem)
+    pairs = [(str(a), str(b)) for a, b in pairs]
+    d = _contactlab._side_by_side(problem._p, pairs, _settings(settings), _out(out))
+    files = dict(d["files"])
+    return StudyResult(rows=_rows(files["side_by_side.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+
+
+def tuning_map(
+    problem: Problem,
+    solver: str,
+    axes: Mapping[str, Sequence[object]],
+    law: str = "coulomb",
+    repeats: int = 2,
+    settings: Optional[Mapping[str, object]] = None,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """A solver on a joint grid of two or three of its settings:
+    ``contactlab sweep --grid ...``.
+
+    Parameters
+    ----------
+    problem : Problem
+        Built from a scene.
+    solver : str
+        The solver mapped (its fast form beyond h = 1/64, e.g. the paper's
+        method with ``inner = multigrid``, unless ``settings`` chooses).
+    axes : mapping path -> values
+        Two or three settings, e.g. ``{"relaxation.r": [1e3, 1e5, 1e7],
+        "relaxation.epsilon": [1e-4, 1e-6]}``.
+    law : "coulomb" or "given_friction"
+    repeats : int
+        Timed runs of each point after the first (``--runs``).
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: the map (one row per point: its values, status, median
+        and fastest seconds, work, certificate, and ``mark``: ``best``,
+        ``tie`` within the run's timing noise, or empty); ``report``
+        states the best setting with its margin.
+    """
+    _problem(problem)
+    if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
+        raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
+    grid = [(str(path), [str(v) for v in values]) for path, values in axes.items()]
+    d = _contactlab._tuning_map(
+        problem._p, str(solver), grid, str(law), int(repeats), _settings(settings), _out(out)
+    )
+    files = dict(d["files"])
+    main = next(f for f in files if f.startswith("tuning_map_") and f.endswith(".csv") and "_trials" not in f)
+    return StudyResult(rows=_rows(files[main]), files=files, charts=dict(d["charts"]), report=d["report"])

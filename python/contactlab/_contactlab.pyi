@@ -93,6 +93,21 @@ def _compare(
     repeats: int = ...,
     out: Optional[str] = ...,
 ) -> Dict[str, Any]: ...
+def _side_by_side(
+    problem: Problem,
+    pairs: List[Tuple[str, str]],
+    settings: Sequence[Tuple[str, str]] = ...,
+    out: Optional[str] = ...,
+) -> Dict[str, Any]: ...
+def _tuning_map(
+    problem: Problem,
+    solver: str,
+    axes: List[Tuple[str, List[str]]],
+    law: str,
+    repeats: int,
+    settings: Sequence[Tuple[str, str]] = ...,
+    out: Optional[str] = ...,
+) -> Dict[str, Any]: ...
 def _benchmark(
     problems: List[Problem],
     solvers: List[str],

@@ -14,6 +14,8 @@ use contactlab::solve::solver_entry;
 use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
+use contactlab::study::side_by_side::{Side, SideBySide, parse_side};
+use contactlab::study::tuning_map::{Axis, TuningMap};
 use contactlab::study::lab::{Content, Lab, Quiet, Study, write_artifacts};
 use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::work_precision::WorkPrecision;
@@ -143,6 +145,103 @@ pub fn _compare<'py>(
     let study = Compare {
         scene: (**scene).clone(),
         solvers,
+        repeats,
+    };
+    run(py, study, settings, out)
+}
+
+/// `contactlab compare --side-by-side A,B ...`: each pair of answers node
+/// by node; a side is a solver, `reference` (the earned one) or the path of
+/// a `profile.csv`.
+#[pyfunction]
+#[pyo3(signature = (problem, pairs, settings=Vec::new(), out=None))]
+pub fn _side_by_side<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    pairs: Vec<(String, String)>,
+    settings: Vec<(String, String)>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (scene, _) = problem.scene("side_by_side")?;
+    if pairs.is_empty() {
+        return Err(input_error(
+            "pairs: give at least one pair, such as [(\"relaxation\", \"reference\")]",
+        ));
+    }
+    let pairs = pairs
+        .iter()
+        .map(|(a, b)| Ok((parse_side(a)?, parse_side(b)?)))
+        .collect::<anyhow::Result<Vec<_>>>()
+        .map_err(crate::error_of)?;
+    let running: Vec<&'static Entry> = pairs
+        .iter()
+        .flat_map(|(a, b)| [a, b])
+        .filter_map(|s| match s {
+            Side::Solver(e) => Some(*e),
+            _ => None,
+        })
+        .collect();
+    let settings = resolved(&problem.settings, settings, &running)?;
+    let study = SideBySide {
+        scene: (**scene).clone(),
+        pairs,
+    };
+    run(py, study, settings, out)
+}
+
+/// `contactlab sweep --grid ... --grid ...`: a tuning map of one solver.
+#[pyfunction]
+#[pyo3(signature = (problem, solver, axes, law, repeats, settings=Vec::new(), out=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn _tuning_map<'py>(
+    py: Python<'py>,
+    problem: &Problem,
+    solver: String,
+    axes: Vec<(String, Vec<String>)>,
+    law: String,
+    repeats: usize,
+    settings: Vec<(String, String)>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (scene, _) = problem.scene("tuning_map")?;
+    let entry = solver_entry(&solver).map_err(crate::error_of)?;
+    if !(2..=3).contains(&axes.len()) {
+        return Err(input_error(format!(
+            "axes: a tuning map takes two or three settings, got {}",
+            axes.len()
+        )));
+    }
+    let axes: Vec<Axis> = axes
+        .into_iter()
+        .map(|(path, values)| {
+            if values.len() < 2 {
+                Err(input_error(format!("axes: {path}: give at least two values")))
+            } else {
+                Ok(Axis { path, values })
+            }
+        })
+        .collect::<PyResult<_>>()?;
+    let law = match law.as_str() {
+        "coulomb" => contactlab::solvers::Law::Coulomb,
+        "given_friction" | "given-friction" => contactlab::solvers::Law::GivenFriction,
+        other => {
+            return Err(input_error(format!(
+                "law = {other:?}: give \"coulomb\" or \"given_friction\""
+            )));
+        }
+    };
+    if !entry.solves(law) {
+        return Err(input_error(format!(
+            "law: {solver} does not solve the {} law",
+            law.as_str()
+        )));
+    }
+    let settings = resolved(&problem.settings, settings, &[entry])?;
+    let study = TuningMap {
+        scene: (**scene).clone(),
+        solver: entry,
+        law,
+        axes,
         repeats,
     };
     run(py, study, settings, out)

@@ -329,6 +329,48 @@ def test_sweep_writes_the_command_lines_sweep(tmp_path):
         cl.sweep(p, ["newton-coulomb"], work_precision=False)
 
 
+def test_side_by_side_and_tuning_map_are_the_command_lines(tmp_path):
+    # Side by side and the tuning map from Python are the command line's
+    # studies: the same node-by-node file and the same map, the reference
+    # the earned one (never the method under test).
+    p = cl.Problem.paper(1, h="1/16")
+    r = cl.side_by_side(p, [("relaxation", "reference")], out=tmp_path / "py")
+    subprocess.run(
+        [str(cli()), "compare", "--problem", "1", "--h", "1/16", "--side-by-side", "relaxation,reference",
+         "--out", str(tmp_path / "cli")],
+        check=True,
+        capture_output=True,
+    )
+    name = "side_by_side_relaxation_reference.csv"
+    assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    (row,) = r.rows
+    assert row["b"].startswith("reference (") and "relaxation" not in row["b"]
+    assert 0 < row["max_dp_over_p"] < 1e-4 and row["states_differ"] == 0
+    assert len(r.table(name)) == 17
+
+    m = cl.tuning_map(p, "relaxation", {"relaxation.r": ["1e5", "1e7"], "relaxation.epsilon": ["1e-5", "1e-6"]},
+                      law="given_friction", repeats=0, out=tmp_path / "map")
+    subprocess.run(
+        [str(cli()), "sweep", "--problem", "1", "--h", "1/16", "--grid", "relaxation.r=1e5,1e7",
+         "--grid", "relaxation.epsilon=1e-5,1e-6", "--law", "given-friction", "--runs", "0",
+         "--out", str(tmp_path / "mapcli")],
+        check=True,
+        capture_output=True,
+    )
+    assert len(m.rows) == 4 and sum(row["mark"] == "best" for row in m.rows) == 1
+    deterministic = ("relaxation.r", "relaxation.epsilon", "status", "work", "certificate")
+    import csv
+
+    def table(folder):
+        path = folder / "tuning_map_relaxation_given_friction_h16.csv"
+        return [{k: row[k] for k in deterministic} for row in csv.DictReader(path.open())]
+
+    assert table(tmp_path / "map") == table(tmp_path / "mapcli")
+    assert "Fastest certified" in m.report
+    with pytest.raises(cl.InputError, match="two or three"):
+        cl.tuning_map(p, "relaxation", {"relaxation.r": [1e5, 1e7]})
+
+
 def test_status_is_an_enum_that_compares_equal_to_its_name(p32):
     # Statuses were strings; Clarabel users expect an enum.
     assert [s.value for s in cl.Status] == list(cl._contactlab.statuses())

@@ -236,13 +236,14 @@ fn decades(lo: f64, hi: f64) -> Vec<f64> {
             .collect();
     }
     out.retain(|v| *v >= lo && *v <= hi);
-    // A range within a factor of ten can hold one of 1, 2, 5 or none: every
-    // integer mantissa then (the axis spans at least a factor 2.25, so at
-    // least two of them fall in it), since one tick cannot be read as a
-    // scale.
+    // A range within a factor of ten can hold one of 1, 2, 5 or none, and
+    // one tick cannot be read as a scale: then every half mantissa (1, 1.5,
+    // 2, ..., 9.5). The axis spans at least a factor 2.25 (the data's range
+    // padded by 1.5 each way), an interval of length at least 1.25 in
+    // mantissa, so at least two of them fall in it.
     if out.len() < 2 {
         out = (a..=b)
-            .flat_map(|k| (1..10).map(move |m| m as f64 * 10f64.powi(k)))
+            .flat_map(|k| (2..20).map(move |m| m as f64 / 2.0 * 10f64.powi(k)))
             .filter(|v| *v >= lo && *v <= hi)
             .collect();
     }

@@ -543,6 +543,52 @@ impl Study for TuningMap {
     }
 }
 
+/// Several maps as one study (a run's studies have distinct names: the
+/// checkpoint and the manifest record them by name): `reproduce`'s maps.
+pub struct TuningMaps {
+    pub maps: Vec<TuningMap>,
+}
+
+impl Study for TuningMaps {
+    type Findings = Vec<MapFindings>;
+
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        self.maps.iter().map(|m| m.estimated_seconds(length)).sum()
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<MapFindings>>> {
+        let mut findings = Vec::new();
+        let mut artifacts = Vec::new();
+        for map in &self.maps {
+            let ran = map.run(lab)?;
+            findings.push(ran.findings);
+            artifacts.extend(ran.artifacts);
+        }
+        Ok(Ran {
+            findings,
+            artifacts,
+        })
+    }
+
+    fn section(&self, found: &Vec<MapFindings>, lab: &Lab, charts: &[String]) -> Result<Section> {
+        let mut markdown = String::new();
+        for (map, f) in self.maps.iter().zip(found) {
+            let stem = map.stem();
+            let mine: Vec<String> = charts
+                .iter()
+                .filter(|c| c.starts_with(&format!("{stem}_")))
+                .cloned()
+                .collect();
+            markdown += &map.section(f, lab, &mine)?.markdown;
+        }
+        Ok(Section { markdown })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

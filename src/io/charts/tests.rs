@@ -20,8 +20,8 @@ fn log_axes_are_labelled_at_every_decade() {
     // Less than two decades: 1, 2, 5 in each.
     assert_eq!(decades(1.5, 30.0), vec![2.0, 5.0, 10.0, 20.0]);
     // Times of 2.0-2.15 s, padded by 1.5: 2 alone of 1, 2, 5 would be one
-    // tick; every integer mantissa gives two.
-    assert_eq!(decades(2.0 / 1.5, 2.15 * 1.5), vec![2.0, 3.0]);
+    // tick; every half mantissa gives more.
+    assert_eq!(decades(2.0 / 1.5, 2.15 * 1.5), vec![1.5, 2.0, 2.5, 3.0]);
     // Every range the charts draw (at least a factor 2.25) has two ticks.
     for k in 0..200 {
         let lo = 10f64.powf(-3.0 + k as f64 * 0.037);

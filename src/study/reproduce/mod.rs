@@ -36,7 +36,7 @@ use crate::study::side_by_side::{Side, SideBySide};
 use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
-use crate::study::tuning_map::{Axis, TuningMap};
+use crate::study::tuning_map::{Axis, TuningMap, TuningMaps};
 
 /// What `reproduce` runs.
 #[derive(Clone, Serialize)]
@@ -180,7 +180,7 @@ impl ReproduceSpec {
 pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned>> {
     let mut paper = Settings::paper();
     paper.certificate = settings.certificate;
-    let studies: Vec<Box<dyn Planned>> = vec![
+    vec![
         Box::new(PaperCompare {
             h: spec.h,
             problems: spec.problems.clone(),
@@ -213,8 +213,8 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
         }),
         Box::new(spec.oracle.clone()),
         Box::new(side_by_side(spec)),
-    ];
-    studies.into_iter().chain(tuning_maps(spec)).collect()
+        Box::new(tuning_maps(spec)),
+    ]
 }
 
 /// The paper's method beside the oracle and beside the reference, node by
@@ -234,18 +234,19 @@ fn side_by_side(spec: &ReproduceSpec) -> SideBySide {
 }
 
 /// The paper's method over r × ε on problem 1, on each mesh of the spec.
-fn tuning_maps(spec: &ReproduceSpec) -> Vec<Box<dyn Planned>> {
+fn tuning_maps(spec: &ReproduceSpec) -> TuningMaps {
     let paper = registry::with_role(Role::PapersMethod).expect("registered");
     let axis = |knob: &str, values: &[&str]| Axis {
         path: format!("{}.{knob}", paper.name),
         values: values.iter().map(|v| v.to_string()).collect(),
     };
-    spec.maps
+    let maps = spec
+        .maps
         .iter()
         .map(|&(h, law)| {
             let mut scene = Scene::paper_problem(1).expect("the paper's problem 1");
             scene.set_finest(h);
-            Box::new(TuningMap {
+            TuningMap {
                 scene,
                 solver: paper,
                 law,
@@ -261,9 +262,10 @@ fn tuning_maps(spec: &ReproduceSpec) -> Vec<Box<dyn Planned>> {
                     ]
                 },
                 repeats: spec.map_repeats,
-            }) as Box<dyn Planned>
+            }
         })
-        .collect()
+        .collect();
+    TuningMaps { maps }
 }
 
 /// A duration for people: seconds, minutes or hours.
@@ -451,4 +453,26 @@ fn add(done: &mut Done, record: &StudyRecord) {
         .extend(record.files.iter().map(|f| f.path.clone()));
     done.charts.extend(record.charts.iter().cloned());
     done.seconds.push((record.study.clone(), record.seconds));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The checkpoint and the manifest record a run's studies by name: two
+    /// studies of one name would overwrite each other's record (the two
+    /// tuning maps once did).
+    #[test]
+    fn a_runs_studies_have_distinct_names() {
+        for spec in [ReproduceSpec::quick(), ReproduceSpec::standard()] {
+            let names: Vec<&str> = studies(&spec, &Settings::default())
+                .iter()
+                .map(|s| s.name())
+                .collect();
+            let mut unique = names.clone();
+            unique.sort();
+            unique.dedup();
+            assert_eq!(unique.len(), names.len(), "{names:?}");
+        }
+    }
 }
