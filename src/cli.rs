@@ -62,9 +62,10 @@ pub enum Command {
     Sweep(SweepArgs),
     /// The main job: Table 1, the comparison of every solver on the paper's
     /// three problems, profiles, a sweep, the stability map, the speed
-    /// measurements of `bench`, the benchmark, the discretization error,
+    /// measurements of `bench`, the benchmark, the discretization error, the
+    /// oracle at 1/128 and 1/256, a side-by-side at 1/128, r × ε maps,
     /// charts, a manifest and a README, all into --out (default results/).
-    /// About 20 min on 2 cores; --long adds the studies that take hours (the
+    /// About 45 min on 2 cores; --long adds the studies that take hours (the
     /// paper's method by sweeps at equal accuracy on 1/128 and 1/256, the
     /// whole benchmark collection): about 2.5 h. It states its estimate as it
     /// starts; the manifest records each study's time (--quick: a minute).
@@ -195,6 +196,11 @@ pub struct CompareArgs {
     /// Folder for compare.csv, compare_timing.csv, compare_given_friction.tex and compare_coulomb.tex (LaTeX, one table per law) and references.csv (replaced whole); with --side-by-side for side_by_side.csv, side_by_side_<A>_<B>.csv and charts/.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// The reference to measure against, a solver's name: its answer at its
+    /// tightest settings, if certified [default: earned, the most accurate
+    /// certified answer of the exact solvers].
+    #[arg(long, value_name = "SOLVER", value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
+    pub reference: Option<String>,
     /// Instead of every solver against the reference: two answers of the Coulomb problem node by node, `A,B`, each a solver, `reference` (the earned one) or a profile.csv of `contactlab solve --out` (repeatable). Writes side_by_side_<A>_<B>.csv (u, jump, slip, p, q of both at every contact node, their differences over U and P, contact states matched), side_by_side.csv (the largest differences) and two charts per pair (overlay, difference).
     #[arg(long = "side-by-side", value_name = "A,B", conflicts_with = "solvers")]
     pub side_by_side: Vec<String>,
@@ -329,7 +335,7 @@ pub struct ReproduceArgs {
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
     /// bench's solvers with three timed runs each and 15 s per run, and the whole
     /// benchmark collection (73 instances, not its core 42 up to h = 1/32).
-    /// Without it the run takes about 20 minutes.
+    /// Without it the run takes about 45 minutes.
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:

@@ -377,3 +377,53 @@ fn sweep_takes_the_scene_overrides() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--friction"));
 }
+
+/// `compare --reference SOLVER` measures against that solver's answer:
+/// every row names it, and the named solver differs from itself (at its
+/// tightest settings) by no more than its own accuracy; without the flag
+/// the reference is earned among the exact solvers, never the paper's
+/// method under test.
+#[test]
+fn compare_measures_against_the_reference_the_user_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = vec![
+            "compare",
+            "--problem",
+            "1",
+            "--h",
+            "1/8",
+            "--solvers",
+            "relaxation,tnnmg",
+            "--runs",
+            "0",
+            "--out",
+        ];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(extra);
+        let o = contactlab(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mut r = csv::Reader::from_path(out.join("compare.csv")).unwrap();
+        let header = r.headers().unwrap().clone();
+        let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+        r.records()
+            .map(|x| {
+                let x = x.unwrap();
+                (
+                    x[col("solver")].to_string(),
+                    x[col("reference")].to_string(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let named = run(&["--reference", "tnnmg"], "named");
+    assert!(named.iter().all(|(_, r)| r == "tnnmg"), "{named:?}");
+    let earned = run(&[], "earned");
+    assert!(
+        earned
+            .iter()
+            .all(|(_, r)| r != "relaxation" && r != "tnnmg" && !r.is_empty()),
+        "{earned:?}"
+    );
+}

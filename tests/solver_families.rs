@@ -55,6 +55,7 @@ fn check_all_agree(scene: &Scene) -> (Vec<Measured>, References) {
         scene: scene.clone(),
         solvers: registry::solvers(),
         repeats: 0,
+        reference: None,
     };
     let measured = lab.run(&study).unwrap().findings;
     let references = std::mem::take(&mut lab.references);

@@ -243,6 +243,7 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         scene: scene(),
         solvers: registry::solvers(),
         repeats: 0,
+        reference: None,
     };
     let measured = &lab.run(&study).unwrap().findings;
     let toy: Vec<&Trial> = measured

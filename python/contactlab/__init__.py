@@ -770,6 +770,7 @@ def compare(
     settings: Optional[Mapping[str, object]] = None,
     repeats: int = 0,
     out: Optional[PathLike] = None,
+    reference: Optional[str] = None,
 ) -> StudyResult:
     """Every solver against the earned reference: ``contactlab compare``.
 
@@ -791,6 +792,9 @@ def compare(
         Timed runs after the first (``--runs`` less one).
     out : path, optional
         Writes the run folder as ``contactlab compare --out`` does.
+    reference : str, optional
+        A solver whose answer (at its tightest settings, if certified) is
+        the reference instead of the earned one (``--reference``).
 
     Returns
     -------
@@ -801,7 +805,12 @@ def compare(
     if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
         raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
     d = _contactlab._compare(
-        problem._p, _solver_names(solvers), _settings(settings), int(repeats), _out(out)
+        problem._p,
+        _solver_names(solvers),
+        _settings(settings),
+        int(repeats),
+        _out(out),
+        None if reference is None else str(reference),
     )
     files = dict(d["files"])
     return StudyResult(rows=_rows(files["compare.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])

@@ -92,6 +92,7 @@ def _compare(
     settings: Sequence[Tuple[str, str]] = ...,
     repeats: int = ...,
     out: Optional[str] = ...,
+    reference: Optional[str] = ...,
 ) -> Dict[str, Any]: ...
 def _side_by_side(
     problem: Problem,

@@ -130,7 +130,7 @@ where
 /// `contactlab compare`: every solver on the problem's scene against the
 /// earned reference.
 #[pyfunction]
-#[pyo3(signature = (problem, solvers, settings=Vec::new(), repeats=0, out=None))]
+#[pyo3(signature = (problem, solvers, settings=Vec::new(), repeats=0, out=None, reference=None))]
 pub fn _compare<'py>(
     py: Python<'py>,
     problem: &Problem,
@@ -138,14 +138,19 @@ pub fn _compare<'py>(
     settings: Vec<(String, String)>,
     repeats: usize,
     out: Option<PathBuf>,
+    reference: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (scene, _) = problem.scene("compare")?;
     let solvers = entries(&solvers)?;
     let settings = resolved(&problem.settings, settings, &solvers)?;
+    let reference = reference
+        .map(|r| solver_entry(&r).map_err(crate::error_of))
+        .transpose()?;
     let study = Compare {
         scene: (**scene).clone(),
         solvers,
         repeats,
+        reference,
     };
     run(py, study, settings, out)
 }

@@ -369,6 +369,9 @@ def test_side_by_side_and_tuning_map_are_the_command_lines(tmp_path):
     assert "Fastest certified" in m.report
     with pytest.raises(cl.InputError, match="two or three"):
         cl.tuning_map(p, "relaxation", {"relaxation.r": [1e5, 1e7]})
+    # A reference the user names is the reference of every row.
+    named = cl.compare(p, ["relaxation"], reference="tnnmg")
+    assert {row["reference"] for row in named.rows} == {"tnnmg"}
 
 
 def test_status_is_an_enum_that_compares_equal_to_its_name(p32):

@@ -1,7 +1,7 @@
 //! `contactlab compare`: every solver on one scene against the earned
 //! reference; a Markdown table on stdout, files with --out.
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 
 use crate::cli::CompareArgs;
 use crate::commands::{run_study, solver_list};
@@ -23,6 +23,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         scene,
         solvers,
         repeats: args.repeats as usize,
+        reference: args
+            .reference
+            .as_deref()
+            .map(crate::solve::solver_entry)
+            .transpose()?,
     };
     let (findings, artifacts) = run_study(&study, settings)?;
     let measured = &findings;
@@ -37,6 +42,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 
 /// `compare --side-by-side A,B`: the pairs node by node.
 fn side_by_side(args: &CompareArgs) -> Result<()> {
+    if args.reference.is_some() {
+        bail!(
+            "--reference names compare's reference; with --side-by-side name it as a side (e.g. relaxation,newton-coulomb)"
+        );
+    }
     let (scene, base) = args.scene.load()?;
     let pairs = args
         .side_by_side

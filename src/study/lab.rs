@@ -261,6 +261,12 @@ impl<'a> Lab<'a> {
         measured
     }
 
+    /// Takes `entry`'s answer as the reference of every scene (the user
+    /// named it), instead of earning it among the exact solvers.
+    pub fn name_reference(&mut self, entry: &'static contactlab_solvers::registry::Entry) {
+        self.references.named = Some(entry);
+    }
+
     /// The reference of `scene`, earned on first use.
     pub fn reference(&mut self, scene: &Scene, settings: &Settings) -> Result<Option<&Reference>> {
         self.ask(scene)?;

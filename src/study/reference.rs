@@ -82,17 +82,35 @@ pub fn reference_settings(entry: &Entry, base: &Settings) -> Result<Settings> {
 /// exact solver's answer passes the certificate (then trials carry no
 /// differences, only their certificates).
 pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Reference>> {
+    earn_among(scene, base, seconds, None)
+}
+
+/// [`earn`], or with `named` the reference the user named: that solver
+/// alone, at its tightest settings, and only if certified. (The
+/// given-friction reference is earned among the exact solvers as usual
+/// when the named one does not solve that law.)
+pub fn earn_among(
+    scene: &Scene,
+    base: &Settings,
+    seconds: f64,
+    named: Option<&'static Entry>,
+) -> Result<Option<Reference>> {
     let exact: Vec<&'static Entry> = registry::solvers()
         .into_iter()
         .filter(|e| e.accuracy.exact)
         .collect();
+    let coulomb_candidates: Vec<&'static Entry> = named.map_or_else(|| exact.clone(), |e| vec![e]);
+    let friction_candidates: Vec<&'static Entry> = match named {
+        Some(e) if e.solves(Law::GivenFriction) => vec![e],
+        _ => exact.clone(),
+    };
     let caps = Caps {
         work: None,
         seconds: Some(seconds),
     };
     let mut candidates = Vec::new();
     let mut best: Option<(&'static Entry, Solved)> = None;
-    for &entry in &exact {
+    for &entry in &coulomb_candidates {
         // A candidate that cannot run on this mesh does not compete.
         if let Err(e) = refuse_too_large(scene, entry) {
             candidates.push(refused(scene, Law::Coulomb, entry, &e));
@@ -123,7 +141,10 @@ pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Refer
     mark_chosen(&mut candidates, Law::Coulomb, entry.name);
     let g = coulomb.outcome.bound.clone();
     let mut gf_best: Option<GivenFrictionReference> = None;
-    for &e in exact.iter().filter(|e| e.solves(Law::GivenFriction)) {
+    for &e in friction_candidates
+        .iter()
+        .filter(|e| e.solves(Law::GivenFriction))
+    {
         if let Err(refusal) = refuse_too_large(scene, e) {
             candidates.push(refused(scene, Law::GivenFriction, e, &refusal));
             continue;
@@ -205,6 +226,9 @@ pub struct References {
     enabled: bool,
     /// Wall-clock seconds a candidate may take.
     pub candidate_seconds: f64,
+    /// The reference the user named (None: earned among the exact
+    /// solvers).
+    pub named: Option<&'static Entry>,
 }
 
 impl Default for References {
@@ -213,6 +237,7 @@ impl Default for References {
             earned: Vec::new(),
             enabled: true,
             candidate_seconds: CANDIDATE_SECONDS,
+            named: None,
         }
     }
 }
@@ -235,7 +260,7 @@ impl References {
         let index = match self.earned.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let r = earn(scene, base, self.candidate_seconds)?;
+                let r = earn_among(scene, base, self.candidate_seconds, self.named)?;
                 self.earned.push((key, r));
                 self.earned.len() - 1
             }

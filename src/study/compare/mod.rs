@@ -27,6 +27,9 @@ pub struct Compare {
     pub scene: Scene,
     pub solvers: Vec<&'static Entry>,
     pub repeats: usize,
+    /// The reference the user named (None: the earned one, among the exact
+    /// solvers at their tightest settings).
+    pub reference: Option<&'static Entry>,
 }
 
 impl Study for Compare {
@@ -58,6 +61,9 @@ impl Study for Compare {
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<Measured>>> {
+        if let Some(e) = self.reference {
+            lab.name_reference(e);
+        }
         let specs = plan(&self.scene, &lab.settings, &self.solvers, self.repeats);
         let measured = lab.measure(&specs, Keep::default())?;
         let mut artifacts = Artifact::trials(STUDY, &measured)?;
@@ -166,8 +172,8 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
     out + &format!(
         "\nStatus: certified (a claim of convergence that fails the certificate is `inaccurate`); claim: the solver's own. \
-         Δ: max difference from the reference, relative to its largest value; the reference is the most accurate certified \
-         answer among the exact solvers at their tightest settings: {}. Certificate: the largest violation of any condition \
+         Δ: max difference from the reference, relative to its largest value; the reference: {} (unless named \
+         with --reference, the most accurate certified answer among the exact solvers at their tightest settings). Certificate: the largest violation of any condition \
          of the law, in the problem's scales (tolerance {tol:e}; failing conditions named). Iterations: [friction \
          iterations:] outer [/ inner]. Time: minimum over the runs.\n",
         if reference.is_empty() {
