@@ -14,10 +14,10 @@ use contactlab::solve::solver_entry;
 use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
-use contactlab::study::side_by_side::{Side, SideBySide, parse_side};
-use contactlab::study::tuning_map::{Axis, TuningMap};
 use contactlab::study::lab::{Content, Lab, Quiet, Study, write_artifacts};
+use contactlab::study::side_by_side::{SideBySide, parse_side, solvers_of};
 use contactlab::study::sweep::{Sweep, SweepSpec};
+use contactlab::study::tuning_map::{Axis, TuningMap};
 use contactlab::study::work_precision::WorkPrecision;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -178,15 +178,7 @@ pub fn _side_by_side<'py>(
         .map(|(a, b)| Ok((parse_side(a)?, parse_side(b)?)))
         .collect::<anyhow::Result<Vec<_>>>()
         .map_err(crate::error_of)?;
-    let running: Vec<&'static Entry> = pairs
-        .iter()
-        .flat_map(|(a, b)| [a, b])
-        .filter_map(|s| match s {
-            Side::Solver(e) => Some(*e),
-            _ => None,
-        })
-        .collect();
-    let settings = resolved(&problem.settings, settings, &running)?;
+    let settings = resolved(&problem.settings, settings, &solvers_of(&pairs))?;
     let study = SideBySide {
         scene: (**scene).clone(),
         pairs,
@@ -220,7 +212,9 @@ pub fn _tuning_map<'py>(
         .into_iter()
         .map(|(path, values)| {
             if values.len() < 2 {
-                Err(input_error(format!("axes: {path}: give at least two values")))
+                Err(input_error(format!(
+                    "axes: {path}: give at least two values"
+                )))
             } else {
                 Ok(Axis { path, values })
             }

@@ -9,7 +9,7 @@ use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
 use crate::study::compare::{self, Compare};
 use crate::study::lab::write_artifacts;
-use crate::study::side_by_side::{self, Side, SideBySide, parse_pair};
+use crate::study::side_by_side::{self, SideBySide, parse_pair, solvers_of};
 
 pub fn run(args: &CompareArgs) -> Result<()> {
     if !args.side_by_side.is_empty() {
@@ -53,15 +53,7 @@ fn side_by_side(args: &CompareArgs) -> Result<()> {
         .iter()
         .map(|w| parse_pair(w))
         .collect::<Result<Vec<_>>>()?;
-    let solvers: Vec<_> = pairs
-        .iter()
-        .flat_map(|(a, b)| [a, b])
-        .filter_map(|s| match s {
-            Side::Solver(e) => Some(*e),
-            _ => None,
-        })
-        .collect();
-    let settings = args.settings.resolve_for(base, &solvers)?;
+    let settings = args.settings.resolve_for(base, &solvers_of(&pairs))?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
     let study = SideBySide { scene, pairs };
     let (pairs, artifacts) = run_study(&study, settings)?;

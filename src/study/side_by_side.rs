@@ -358,6 +358,18 @@ pub struct SideBySide {
     pub pairs: Vec<(Side, Side)>,
 }
 
+/// The solvers that `pairs` run (their settings are resolved for them).
+pub fn solvers_of(pairs: &[(Side, Side)]) -> Vec<&'static Entry> {
+    pairs
+        .iter()
+        .flat_map(|(a, b)| [a, b])
+        .filter_map(|s| match s {
+            Side::Solver(e) => Some(*e),
+            _ => None,
+        })
+        .collect()
+}
+
 /// What it found: each pair compared.
 pub type Pairs = Vec<Pair>;
 
