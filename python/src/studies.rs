@@ -94,20 +94,12 @@ where
         let mut files = Vec::new();
         let mut charts = Vec::new();
         for a in &ran.artifacts {
-            match &a.content {
-                Content::Bytes(b) => files.push((a.path.clone(), b.clone())),
-                Content::Chart(c) => charts.push((
-                    a.chart_name().unwrap_or_default().to_string(),
-                    c.to_svg()?.into_bytes(),
-                )),
-                Content::HeatMap(m) => charts.push((
-                    a.chart_name().unwrap_or_default().to_string(),
-                    m.to_svg()?.into_bytes(),
-                )),
-                Content::Panels(p) => charts.push((
-                    a.chart_name().unwrap_or_default().to_string(),
-                    p.to_svg()?.into_bytes(),
-                )),
+            if let Content::Bytes(b) = &a.content {
+                files.push((a.path.clone(), b.clone()));
+            }
+            if let Some(svg) = a.content.svg() {
+                let name = a.chart_name().unwrap_or_default().to_string();
+                charts.push((name, svg?.into_bytes()));
             }
         }
         Ok((files, charts, section.markdown))

@@ -115,6 +115,23 @@ impl Series {
         out
     }
 
+    /// [`Series::certified_and_failed`] of points each labelled (a
+    /// work-precision point with its target): the labels drawn beside
+    /// the points, certified and failed alike.
+    pub fn certified_and_failed_labelled(
+        solver: &str,
+        certified: Vec<((f64, f64), String)>,
+        failed: Vec<((f64, f64), String)>,
+    ) -> Vec<Series> {
+        let labels: Vec<((f64, f64), String)> = certified.iter().chain(&failed).cloned().collect();
+        let points = |p: Vec<((f64, f64), String)>| p.into_iter().map(|(p, _)| p).collect();
+        let mut series = Series::certified_and_failed(solver, points(certified), points(failed));
+        if let Some(first) = series.first_mut() {
+            first.labels = labels;
+        }
+        series
+    }
+
     /// The colour of `solver` (the same in every chart).
     pub fn of_solver(mut self, solver: &str) -> Self {
         self.color = Some(solver_color(solver));

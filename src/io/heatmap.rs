@@ -7,8 +7,6 @@ use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::io::output::write_atomic;
-
 /// One cell of the grid.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Cell {
@@ -238,11 +236,6 @@ impl HeatMap {
             root.present().map_err(err)?;
         }
         Ok(svg)
-    }
-
-    /// Writes it to `path` (atomically).
-    pub fn write(&self, path: &std::path::Path) -> Result<()> {
-        write_atomic(path, self.to_svg()?.as_bytes())
     }
 }
 

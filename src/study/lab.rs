@@ -107,15 +107,37 @@ impl Artifact {
     }
 }
 
+impl Content {
+    /// A drawing's SVG (None: bytes, written as they are).
+    pub fn svg(&self) -> Option<Result<String>> {
+        match self {
+            Content::Bytes(_) => None,
+            Content::Chart(c) => Some(c.to_svg()),
+            Content::HeatMap(m) => Some(m.to_svg()),
+            Content::Panels(p) => Some(p.to_svg()),
+        }
+    }
+
+    /// A drawing's title (None: bytes).
+    pub fn title_mut(&mut self) -> Option<&mut String> {
+        match self {
+            Content::Bytes(_) => None,
+            Content::Chart(c) => Some(&mut c.title),
+            Content::HeatMap(m) => Some(&mut m.title),
+            Content::Panels(p) => Some(&mut p.title),
+        }
+    }
+}
+
 /// Writes every artifact into `dir` (each atomically); gives their paths.
 pub fn write_artifacts(dir: &Path, artifacts: &[Artifact]) -> Result<Vec<String>> {
     for a in artifacts {
         let path = dir.join(&a.path);
-        match &a.content {
-            Content::Bytes(b) => write_atomic(&path, b)?,
-            Content::Chart(c) => c.write(&path)?,
-            Content::HeatMap(m) => m.write(&path)?,
-            Content::Panels(p) => p.write(&path)?,
+        if let Content::Bytes(b) = &a.content {
+            write_atomic(&path, b)?;
+        }
+        if let Some(svg) = a.content.svg() {
+            write_atomic(&path, svg?.as_bytes())?;
         }
     }
     Ok(artifacts.iter().map(|a| a.path.clone()).collect())

@@ -77,17 +77,11 @@ pub fn chart(title: &str, measured: &[Measured]) -> Chart {
             p.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
             p
         };
-        let (ok, failed) = (points(true), points(false));
-        let labels: Vec<((f64, f64), String)> = ok.iter().chain(&failed).cloned().collect();
-        let mut drawn = Series::certified_and_failed(
+        series.extend(Series::certified_and_failed_labelled(
             name,
-            ok.into_iter().map(|(p, _)| p).collect(),
-            failed.into_iter().map(|(p, _)| p).collect(),
-        );
-        if let Some(first) = drawn.first_mut() {
-            first.labels = labels;
-        }
-        series.extend(drawn);
+            points(true),
+            points(false),
+        ));
     }
     Chart::new(
         title,

@@ -8,7 +8,6 @@ use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 
 use super::Chart;
-use crate::io::output::write_atomic;
 
 /// Charts drawn as panels of one figure.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,10 +46,5 @@ impl Panels {
             root.present().map_err(err)?;
         }
         Ok(svg)
-    }
-
-    /// Writes the figure to `path` (atomically).
-    pub fn write(&self, path: &std::path::Path) -> Result<()> {
-        write_atomic(path, self.to_svg()?.as_bytes())
     }
 }

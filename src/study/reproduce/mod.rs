@@ -29,7 +29,7 @@ use crate::study::bench::goals::Bench;
 use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::discretization_error::{ErrorSpec, Errors};
-use crate::study::lab::{Content, Lab, Planned, RunLength, Section, write_artifacts};
+use crate::study::lab::{Lab, Planned, RunLength, Section, write_artifacts};
 use crate::study::oracle::Oracle;
 use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
 use crate::study::side_by_side::{Side, SideBySide};
@@ -394,17 +394,8 @@ pub fn run_studies(
         if length == RunLength::Quick {
             // A smoke run cannot be mistaken for the study: every chart says so.
             for a in &mut artifacts {
-                match &mut a.content {
-                    Content::Chart(c) => {
-                        c.title = format!("SMOKE RUN (--quick), not results: {}", c.title)
-                    }
-                    Content::HeatMap(m) => {
-                        m.title = format!("SMOKE RUN (--quick), not results: {}", m.title)
-                    }
-                    Content::Panels(p) => {
-                        p.title = format!("SMOKE RUN (--quick), not results: {}", p.title)
-                    }
-                    Content::Bytes(_) => {}
+                if let Some(title) = a.content.title_mut() {
+                    *title = format!("SMOKE RUN (--quick), not results: {title}");
                 }
             }
         }

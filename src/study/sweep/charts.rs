@@ -113,17 +113,11 @@ fn work_precision_series(here: &[&(&Trial, &TrialTiming)], group: &str) -> Vec<S
             pts.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
             pts
         };
-        let (ok, failed) = (points(true), points(false));
-        let labels: Vec<((f64, f64), String)> = ok.iter().chain(&failed).cloned().collect();
-        let mut series = Series::certified_and_failed(
+        wp.extend(Series::certified_and_failed_labelled(
             e.name,
-            ok.into_iter().map(|(p, _)| p).collect(),
-            failed.into_iter().map(|(p, _)| p).collect(),
-        );
-        if let Some(first) = series.first_mut() {
-            first.labels = labels;
-        }
-        wp.extend(series);
+            points(true),
+            points(false),
+        ));
     }
     wp
 }
