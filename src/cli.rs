@@ -475,9 +475,10 @@ pub struct BenchOneArgs {
     pub scene: SceneArgs,
     #[arg(long)]
     pub solver: String,
-    /// Mesh continuation of a solver that warm-starts.
-    #[arg(long, value_parser = choices::schedule(), default_value_t = Schedule::Revisit)]
-    pub schedule: Schedule,
+    /// Mesh continuation of a solver that warm-starts [default: the
+    /// solver's own].
+    #[arg(long, value_parser = choices::schedule())]
+    pub schedule: Option<Schedule>,
 }
 
 /// Parses the command line and runs it; errors are one line on stderr with a

@@ -255,6 +255,7 @@ static LIAR: Entry = Entry {
     source: "none",
     laws: &[Law::Coulomb],
     warm_starts: false,
+    schedule: contactlab_solvers::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: "lie",
         about: "never reported",

@@ -218,6 +218,47 @@ fn the_nested_schedule_needs_less_work_on_the_finest_mesh() {
     assert!(nested < finest_only, "{nested} vs {finest_only}");
 }
 
+/// tnnmg's defaults are its fastest schedule: without a schedule chosen it
+/// runs the nested one (the same work, level by level), and that does less
+/// work over all levels than either of the paper's readings, problem 1 at
+/// 1/64: iterations weighted by the level's unknowns (a quarter of the
+/// next finer level's), in finest-level iterations. Fails if the registry's default schedule is not the one used, or
+/// stops being the cheapest.
+#[test]
+fn tnnmg_runs_its_cheapest_schedule_by_default() {
+    let scene = problem(1, 6);
+    let work = |schedule: Option<&str>| {
+        let mut settings = Settings::default();
+        if let Some(s) = schedule {
+            settings.set_text("schedule", s).unwrap();
+        }
+        let entry = solver_entry("tnnmg").unwrap();
+        let o = solve_scene(&scene, Friction::Coulomb, entry, &settings, &mut Silent)
+            .unwrap()
+            .outcome;
+        assert!(o.status.is_converged(), "{schedule:?}: {}", o.detail);
+        o.levels.iter().map(|l| l.uzawa).collect::<Vec<_>>()
+    };
+    let default = work(None);
+    assert_eq!(default, work(Some("nested")));
+    let total = |w: &[usize]| {
+        w.iter()
+            .rev()
+            .enumerate()
+            .map(|(below, &k)| k as f64 / 4f64.powi(below as i32))
+            .sum::<f64>()
+    };
+    for other in ["revisit", "finest-only"] {
+        let w = work(Some(other));
+        eprintln!(
+            "tnnmg iterations per level: default {default:?} ({:.1}), {other} {w:?} ({:.1})",
+            total(&default),
+            total(&w)
+        );
+        assert!(total(&default) < total(&w), "{default:?} vs {other} {w:?}");
+    }
+}
+
 /// The nested schedule solves the coarse levels only to
 /// `coulomb.coarse_epsilon` (their answers start the next level), the
 /// finest to ε: fewer friction steps below the finest than with the coarse

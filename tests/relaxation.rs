@@ -154,7 +154,7 @@ fn schedules_visit_the_levels_as_documented() {
         assert!(level.uzawa >= mpp, "{level:?}");
     }
     let mut finest_only = Settings::paper();
-    finest_only.schedule = Schedule::FinestOnly;
+    finest_only.schedule = Some(Schedule::FinestOnly);
     let run = solve_scene(
         &scene(1, 5),
         Friction::Coulomb,

@@ -159,6 +159,7 @@ static TOY: Entry = Entry {
     source: "Beck & Teboulle (2009), FISTA",
     laws: &[Law::GivenFriction],
     warm_starts: false,
+    schedule: contactlab_solvers::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: "gradient",
         about: "one proximal gradient step; residual max|Δv|",

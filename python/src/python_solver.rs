@@ -89,6 +89,7 @@ pub fn register(name: &str, f: Py<PyAny>) -> Result<&'static Entry, String> {
         source: "the user's Python code",
         laws: &[Law::Coulomb],
         warm_starts: false,
+        schedule: contactlab::solvers::schedule::Schedule::Revisit,
         stages: &[StageInfo {
             name: "python",
             about: "the Python function's one call",

@@ -99,6 +99,10 @@ pub struct Entry {
     /// Whether it uses a starting point, so that mesh continuation (coarse
     /// levels first) pays off.
     pub warm_starts: bool,
+    /// The mesh continuation it runs unless the user names one: its
+    /// fastest certified schedule, measured (for a solver that does not
+    /// warm-start it is never used).
+    pub schedule: crate::schedule::Schedule,
     pub stages: &'static [StageInfo],
     /// The stage whose events count as its work (for budgets and "slow").
     pub work_stage: &'static str,

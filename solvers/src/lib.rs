@@ -20,6 +20,7 @@ pub mod problem;
 pub mod reduction;
 pub mod registry;
 pub mod relaxation;
+pub mod schedule;
 pub mod settings;
 pub mod solution;
 pub mod solver;

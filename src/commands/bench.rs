@@ -48,6 +48,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 pub fn run_one(args: &BenchOneArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     faer::set_global_parallelism(faer::Par::Seq);
-    let used = measure_here(&scene, &args.solver, args.schedule)?;
+    let schedule = match args.schedule {
+        Some(s) => s,
+        None => crate::solve::solver_entry(&args.solver)?.schedule,
+    };
+    let used = measure_here(&scene, &args.solver, schedule)?;
     print(&format!("{}\n", serde_json::to_string(&used)?))
 }

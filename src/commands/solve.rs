@@ -24,8 +24,13 @@ pub fn run(args: &SolveArgs) -> Result<()> {
     };
     let settings = args.settings.resolve_for(base, &[solver])?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
+    let continuation = if solver.warm_starts && scene.levels.len() > 1 {
+        format!(" ({} schedule)", settings.schedule_of(solver))
+    } else {
+        String::new()
+    };
     log(format!(
-        "solving {} at h = {} with {}",
+        "solving {} at h = {} with {}{continuation}",
         scene.name,
         scene.finest(),
         solver.name

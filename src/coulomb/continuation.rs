@@ -22,7 +22,7 @@
 use contactlab_solvers::{
     ContactProblem, Friction, Iterations, Observer, Solution, Solver, Start, Timing,
 };
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::coulomb::fixed_point::{
     CoulombSettings, GivenFrictionStep, SingleLevel, bound_of, friction_fixed_point,
@@ -30,43 +30,7 @@ use crate::coulomb::fixed_point::{
 use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 
-/// Whether coarse levels are revisited in every friction iteration.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Schedule {
-    #[default]
-    /// All levels in every friction iteration.
-    Revisit,
-    /// All levels in the first friction iteration, then the finest only.
-    FinestOnly,
-    /// The fixed point on each level in turn, each started from the level
-    /// below (see the module).
-    Nested,
-}
-
-impl Schedule {
-    pub const ALL: [Self; 3] = [Self::Revisit, Self::FinestOnly, Self::Nested];
-
-    /// Its name in scene files and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Schedule::Revisit => "revisit",
-            Schedule::FinestOnly => "finest-only",
-            Schedule::Nested => "nested",
-        }
-    }
-
-    /// The schedule of a name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|s| s.name() == name.trim())
-    }
-}
-
-impl std::fmt::Display for Schedule {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+pub use contactlab_solvers::schedule::Schedule;
 
 /// Work done on one level, summed over all friction iterations: the paper's
 /// Table 1 counts Uzawa iterations (MU) and relaxation sweeps (MPR).

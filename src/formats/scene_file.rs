@@ -73,7 +73,7 @@ impl SceneFile {
     pub fn split(self) -> Result<(Scene, Settings), String> {
         let mut settings = Settings::default();
         settings.stopping = self.stopping.unwrap_or_default();
-        settings.schedule = self.schedule.unwrap_or_default();
+        settings.schedule = self.schedule;
         settings.certificate = self.certificate.unwrap_or_default();
         let tree = |v: &toml::Value| serde_json::to_value(v).map_err(|e| e.to_string());
         for (name, value) in &self.coulomb {

@@ -43,8 +43,9 @@ impl Default for CertificateSettings {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Settings {
     pub stopping: Stopping,
-    /// Mesh continuation schedule for solvers that warm-start.
-    pub schedule: Schedule,
+    /// Mesh continuation schedule for solvers that warm-start; None: each
+    /// solver's own (its registry entry's fastest, [`Settings::schedule_of`]).
+    pub schedule: Option<Schedule>,
     pub certificate: CertificateSettings,
     /// Changes to the defaults, by path (one settings field each).
     overrides: BTreeMap<String, Value>,
@@ -124,9 +125,9 @@ impl Settings {
     pub fn set_text(&mut self, path: &str, text: &str) -> Result<(), String> {
         match path {
             "schedule" => {
-                self.schedule = Schedule::from_name(text).ok_or_else(|| {
+                self.schedule = Some(Schedule::from_name(text).ok_or_else(|| {
                     format!("schedule = '{text}' is invalid: give revisit, finest-only or nested")
-                })?;
+                })?);
                 return Ok(());
             }
             "stopping" => {
@@ -240,6 +241,11 @@ impl Settings {
         Ok(())
     }
 
+    /// The mesh continuation `entry` runs: the one chosen, else its own.
+    pub fn schedule_of(&self, entry: &Entry) -> Schedule {
+        self.schedule.unwrap_or(entry.schedule)
+    }
+
     /// Every setting, resolved, as one tree (for summaries and manifests).
     pub fn resolved(&self) -> Value {
         let mut solvers = serde_json::Map::new();
@@ -250,12 +256,15 @@ impl Settings {
                     "laws".into(),
                     Value::from(e.laws.iter().map(|l| l.as_str()).collect::<Vec<_>>()),
                 );
+                if e.warm_starts {
+                    o.insert("schedule".into(), Value::from(self.schedule_of(e).name()));
+                }
             }
             solvers.insert(e.name.into(), tree);
         }
         serde_json::json!({
             "stopping": self.stopping,
-            "schedule": self.schedule,
+            "schedule": self.schedule.map_or("each solver's own", Schedule::name),
             "certificate": self.certificate,
             "coulomb": self.tree(COULOMB),
             "solvers": solvers,

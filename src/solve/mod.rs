@@ -204,7 +204,8 @@ pub fn solve(
         let done = Done::direct(&finest, s, bound, start.elapsed().as_secs_f64());
         (done, finest)
     } else if problem.levels.len() > 1 {
-        let mut step = Continuation::new(problem.levels, solver.as_mut(), settings.schedule);
+        let mut step =
+            Continuation::new(problem.levels, solver.as_mut(), settings.schedule_of(entry));
         let done = steps(&mut step, friction, settings, &mut budget, start)?;
         let done = Done {
             levels: step.counts.clone(),

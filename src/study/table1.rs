@@ -73,7 +73,7 @@ pub fn plan(
             let mut scene = Scene::paper_problem_to(problem, finest)?;
             scene.material.plane = plane;
             let mut s = settings.clone();
-            s.schedule = schedule;
+            s.schedule = Some(schedule);
             out.push(
                 TrialSpec::new(STUDY, schedule.to_string(), &scene, entry, Law::Coulomb, &s)
                     .with_work(Some(crate::study::plans::plan(entry).work * 20)),
@@ -183,7 +183,7 @@ fn rows(measured: &[Measured], specs: &[TrialSpec], problems: &[u32]) -> Vec<Tab
         .iter()
         .zip(specs)
         .zip(problems.iter().cycle())
-        .map(|((m, spec), &problem)| row(m, spec.settings.schedule, problem))
+        .map(|((m, spec), &problem)| row(m, spec.settings.schedule_of(spec.solver), problem))
         .collect()
 }
 

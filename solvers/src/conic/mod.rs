@@ -53,6 +53,7 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Goulart & Chen (2024), Clarabel; the subproblem is paper (10) as a conic program",
     laws: &[Law::GivenFriction],
     warm_starts: false,
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: INTERIOR_POINT,
         about: "one interior-point iteration; residual max(primal, dual residual, gap)",

@@ -58,6 +58,7 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Fischer (1992), Billups (1995); the FB form of the Coulomb problem in Acary, Brémond & Huber (2018), Inria RR-9118, section 3",
     laws: &[Law::Coulomb],
     warm_starts: false,
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: NEWTON_STEP,
         about: "one Newton step on the Coulomb system; residual max|Φ| / ‖b̂‖∞",

@@ -45,6 +45,7 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Fischer (1992) and Billups (1995) NCP/box functions; De Luca, Facchinei & Kanzow (1996) globalization on the merit ½‖Φ‖²",
     laws: &[Law::GivenFriction],
     warm_starts: false,
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: NEWTON_STEP,
         about: "one Newton step; residual max|Φ| / ‖b̂‖∞ (condensed KKT system)",

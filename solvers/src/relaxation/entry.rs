@@ -34,6 +34,9 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Zhiltsov & Namm (2019), sections 3-5: modified Lagrangian (Theorem 2), Uzawa (14), proximal regularization (15)-(16), Algorithm 1",
     laws: &[Law::GivenFriction],
     warm_starts: true,
+    // The paper's method keeps the paper's reading of Algorithm 1 (every
+    // level in every friction iteration), as its Table 1 is reproduced.
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[
         StageInfo {
             name: UZAWA,

@@ -53,6 +53,7 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Glowinski & Marrocco (1975); Boyd et al. (2011), Distributed optimization ... ADMM, sections 3 and 5",
     laws: &[Law::GivenFriction],
     warm_starts: false,
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: STEP,
         about: "one ADMM step; residual max(primal ‖y − z‖∞/U, dual ρ‖Δz‖∞/(P·w))",

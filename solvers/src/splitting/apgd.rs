@@ -47,6 +47,7 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Beck & Teboulle (2009), FISTA; O'Donoghue & Candès (2015), adaptive restart; Mazhar et al. (2015), APGD for frictional contact",
     laws: &[Law::GivenFriction],
     warm_starts: false,
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: STEP,
         about: "one accelerated projected gradient step; residual: the natural map of the contact law in the problem's scales (every tenth step)",

@@ -48,6 +48,7 @@ pub(crate) const ENTRY: Entry = Entry {
     source: "Jean (1999), the non-smooth contact dynamics method; Acary, Brémond & Huber (2018), Inria RR-9118, section 4",
     laws: &[Law::GivenFriction, Law::Coulomb],
     warm_starts: false,
+    schedule: crate::schedule::Schedule::Revisit,
     stages: &[StageInfo {
         name: SWEEP,
         about: "one sweep over the contact nodes; residual max|Δr| over the nodal force scale",

@@ -376,7 +376,11 @@ pub fn measure_bench(
             "memory of {} at h = {h} (fresh process)",
             fastest.solver
         ));
-        match measure_in_fresh_process(spec.problem, h, &fastest.solver, settings.schedule) {
+        let schedule = registry::by_name(&fastest.solver)
+            .map_or(settings.schedule.unwrap_or_default(), |e| {
+                settings.schedule_of(e)
+            });
+        match measure_in_fresh_process(spec.problem, h, &fastest.solver, schedule) {
             Ok(used) => memory.push(used),
             Err(e) => {
                 log(&format!("memory at h = {h} not measured: {e:#}"));

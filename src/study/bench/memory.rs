@@ -92,7 +92,7 @@ pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<M
         .ok_or_else(unread)?
         .saturating_sub(before);
     let mut settings = Settings::default();
-    settings.schedule = schedule;
+    settings.schedule = Some(schedule);
     let silent = &mut contactlab_solvers::Silent;
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)

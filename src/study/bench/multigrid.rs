@@ -227,7 +227,7 @@ fn agreement_at(problem: u32, h: MeshSize) -> Result<f64> {
             .then_some((o.solution.pressure, scale)))
     };
     let mut tight = Settings::default();
-    tight.schedule = Schedule::Nested;
+    tight.schedule = Some(Schedule::Nested);
     tight
         .set("tnnmg.tolerance", json!(1e-12))
         .map_err(anyhow::Error::msg)?;

@@ -240,7 +240,7 @@ pub fn run(spec: &ErrorSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<
     let solver = solver(spec)?;
     let mut settings = settings.clone();
     if let Some(schedule) = spec.schedule {
-        settings.schedule = schedule;
+        settings.schedule = Some(schedule);
     }
     let settings = &settings;
     for &problem in &spec.problems {
