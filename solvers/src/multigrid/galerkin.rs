@@ -10,6 +10,7 @@
 //! correction always lies on it.
 
 use crate::numerics::linalg::{Csr, RowValues};
+use crate::numerics::threads::threads;
 use crate::with_values;
 
 /// One block of consecutive coarse rows, offsets from 0, with the dense
@@ -99,17 +100,29 @@ fn rows_of_product_with<'v>(
     }
 }
 
-/// R A P for R = Pᵀ (CSR), on two threads (the rows in two halves).
+/// R A P for R = Pᵀ (CSR), on two threads (the rows in two halves) unless
+/// one is asked for ([`threads`]): a set-up step, once per operator.
 pub(crate) fn galerkin(r: &Csr, a: &Csr, p: &Csr) -> Csr {
     let (n, nc) = (r.nrows(), p.ncols());
-    let half = n / 2;
+    let half = if threads() < 2 { n } else { n / 2 };
     // On nested P1 meshes a coarse row has about as many entries as a
     // fine one; a wrong guess only costs a reallocation.
     let per_row = a.nnz().div_ceil(a.nrows().max(1)) + 2;
-    let (mut lower, mut upper) = (
-        Rows::new(half, nc, per_row),
-        Rows::new(n - half, nc, per_row),
-    );
+    let mut lower = Rows::new(half, nc, per_row);
+    if half == n {
+        rows_of_product(r, a, p, 0..n, &mut lower);
+        let Rows {
+            offsets,
+            mut cols,
+            mut vals,
+            ..
+        } = lower;
+        cols.shrink_to_fit();
+        vals.shrink_to_fit();
+        return Csr::try_from_csr_data(n, nc, offsets, cols, vals)
+            .expect("the rows of a product are sorted and in range");
+    }
+    let mut upper = Rows::new(n - half, nc, per_row);
     std::thread::scope(|scope| {
         let upper = &mut upper;
         scope.spawn(move || rows_of_product(r, a, p, half..n, upper));
@@ -187,5 +200,8 @@ mod tests {
         assert!(shared(&a).is_shared() && shared(&p).is_shared());
         let from_shared = galerkin(&shared(&r), &shared(&a), &shared(&p));
         assert_eq!(from_shared.to_nalgebra(), got);
+        // On one thread: the same rows, to the bit.
+        let _one = crate::numerics::threads::Threads::set(1);
+        assert_eq!(galerkin(&csr(&r), &csr(&a), &csr(&p)).to_nalgebra(), got);
     }
 }

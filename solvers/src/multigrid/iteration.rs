@@ -28,6 +28,7 @@ use super::line_search::exact_step;
 use super::smoother::{Local, nonlinear_sweep};
 use super::vcycle::Hierarchy;
 use crate::numerics::linalg::spmv_into;
+use crate::numerics::threads::{Disjoint, copy, dot, fill, for_each_chunk};
 
 /// The energy: its quadratic part, its laws and A's kernel.
 pub(crate) struct Energy<'a> {
@@ -108,8 +109,18 @@ impl Cycle {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+/// x += alpha·y, by chunks on the
+/// solve's threads.
+fn axpy(x: &mut [f64], alpha: f64, y: &[f64]) {
+    let n = x.len();
+    let dx = Disjoint::of(x);
+    for_each_chunk(n, |r| {
+        // SAFETY: each chunk once.
+        let xs = unsafe { dx.slice(r.clone()) };
+        for (xk, yk) in xs.iter_mut().zip(&y[r]) {
+            *xk += alpha * yk;
+        }
+    });
 }
 
 /// One iteration from v (see the module); `p` the hierarchy's
@@ -123,12 +134,13 @@ pub(crate) fn iterate(
     v: &mut [f64],
 ) {
     let (a, laws, contact) = (energy.a, energy.laws, energy.contact);
+    let n = v.len();
     // The presmoothing; its last sweep leaves the defect b − A v behind
     // (without one, a product computes it).
-    let halves = hierarchy.halves.as_ref();
+    let parts = hierarchy.parts.as_ref();
     for sweep in 1..=cycle.presmoothing {
         let last = (sweep == cycle.presmoothing).then_some(&mut ws.r[..]);
-        nonlinear_sweep(a, &hierarchy.diag, halves, energy.b, laws, v, last);
+        nonlinear_sweep(a, &hierarchy.diag, parts, energy.b, laws, v, last);
     }
     if cycle.presmoothing == 0 {
         spmv_into(a, v, &mut ws.r);
@@ -138,7 +150,7 @@ pub(crate) fn iterate(
     }
     // The truncated set, the Newton step's curvature and its defect d (the
     // conjugate gradients' first residual, kept in their vector).
-    ws.lin_r.copy_from_slice(&ws.r);
+    copy(&mut ws.lin_r, &ws.r);
     let mut kernel_free = energy.kernel.is_some();
     for &k in contact {
         let law = laws[k];
@@ -160,9 +172,7 @@ pub(crate) fn iterate(
     }
     if let (true, Some((z, zz))) = (kernel_free, energy.kernel) {
         let along = dot(&ws.lin_r, z) / zz;
-        for (dk, zk) in ws.lin_r.iter_mut().zip(z) {
-            *dk -= along * zk;
-        }
+        axpy(&mut ws.lin_r, -along, z);
     }
     hierarchy.truncate(a, p, &ws.truncated, &ws.shift);
     // Conjugate gradients on T(A + D)T c = d preconditioned by the V-cycle
@@ -180,13 +190,13 @@ pub(crate) fn iterate(
         shift: _,
         r,
     } = ws;
-    c.fill(0.0);
-    w.fill(0.0);
+    fill(c, 0.0);
+    fill(w, 0.0);
     // Each V-cycle also returns A_T z (its last sweep leaves it), and the
     // search directions' products follow: A_T p = A_T z + β A_T p.
     hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);
-    lin_p.copy_from_slice(lin_z);
-    ac.copy_from_slice(lin_az);
+    copy(lin_p, lin_z);
+    copy(ac, lin_az);
     let mut rz = dot(lin_r, lin_z);
     for step in 0..cycle.linear_steps {
         let pq = dot(lin_p, ac);
@@ -194,16 +204,28 @@ pub(crate) fn iterate(
             break;
         }
         let step_length = rz / pq;
-        for (((ck, wk), rk), (pk, qk)) in c
-            .iter_mut()
-            .zip(w.iter_mut())
-            .zip(lin_r.iter_mut())
-            .zip(lin_p.iter().zip(&*ac))
-        {
-            *ck += step_length * pk;
-            *wk += step_length * qk;
-            *rk -= step_length * qk;
-        }
+        let (dc, dw, dr) = (Disjoint::of(c), Disjoint::of(w), Disjoint::of(lin_r));
+        let (ps, qs) = (&*lin_p, &*ac);
+        for_each_chunk(n, |k| {
+            // SAFETY: each chunk once.
+            let (c, w, r) = unsafe {
+                (
+                    dc.slice(k.clone()),
+                    dw.slice(k.clone()),
+                    dr.slice(k.clone()),
+                )
+            };
+            for (((ck, wk), rk), (pk, qk)) in c
+                .iter_mut()
+                .zip(w.iter_mut())
+                .zip(r.iter_mut())
+                .zip(ps[k.clone()].iter().zip(&qs[k]))
+            {
+                *ck += step_length * pk;
+                *wk += step_length * qk;
+                *rk -= step_length * qk;
+            }
+        });
         if step + 1 == cycle.linear_steps {
             break;
         }
@@ -211,14 +233,20 @@ pub(crate) fn iterate(
         let rz_next = dot(lin_r, lin_z);
         let beta = rz_next / rz;
         rz = rz_next;
-        for ((pk, zk), (qk, azk)) in lin_p
-            .iter_mut()
-            .zip(&*lin_z)
-            .zip(ac.iter_mut().zip(&*lin_az))
-        {
-            *pk = zk + beta * *pk;
-            *qk = azk + beta * *qk;
-        }
+        let (dp, dq) = (Disjoint::of(lin_p), Disjoint::of(ac));
+        let (zs, azs) = (&*lin_z, &*lin_az);
+        for_each_chunk(n, |k| {
+            // SAFETY: each chunk once.
+            let (p, q) = unsafe { (dp.slice(k.clone()), dq.slice(k.clone())) };
+            for ((pk, zk), (qk, azk)) in p
+                .iter_mut()
+                .zip(&zs[k.clone()])
+                .zip(q.iter_mut().zip(&azs[k]))
+            {
+                *pk = zk + beta * *pk;
+                *qk = azk + beta * *qk;
+            }
+        });
     }
     // The projection onto the admissible set: v + c keeps t ≤ 0, so that a
     // full step is admissible (Gräser & Sander 2019, Algorithm 1, step 4).
@@ -238,10 +266,8 @@ pub(crate) fn iterate(
         }
     }
     let alpha = exact_step(laws, contact, v, c, dot(c, w), dot(c, r));
-    for ((vk, ck), (rk, qk)) in v.iter_mut().zip(&*c).zip(r.iter_mut().zip(&*w)) {
-        *vk += alpha * ck;
-        *rk -= alpha * qk;
-    }
+    axpy(v, alpha, c);
+    axpy(r, -alpha, w);
     // The near-kernel step: while a few closed jumps hold the upper body,
     // T z (the rigid mode without the truncated unknowns) is a direction
     // of very low energy that the V-cycle barely sees (a point constraint
@@ -280,8 +306,6 @@ pub(crate) fn iterate(
             }
         }
         let beta = exact_step(laws, contact, v, c, cac, cr.abs());
-        for (vk, ck) in v.iter_mut().zip(&*c) {
-            *vk += beta * ck;
-        }
+        axpy(v, beta, c);
     }
 }

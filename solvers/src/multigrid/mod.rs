@@ -32,16 +32,18 @@
 //! It stops when an iteration moves no unknown by more than tolerance · U
 //! (U the problem's displacement scale).
 //!
-//! Both cores: above [`crate::numerics::linalg::PARALLEL_NNZ`] stored
-//! entries (h ≤ 1/128 for the paper's scenes) the products split their rows
-//! in two, and the Gauss-Seidel sweeps, nonlinear and linear, run in the
-//! two-halves ordering of [`halves`]: two blocks of unknowns that do not
-//! couple at the same time, then their separator.
+//! Several cores (`threads`, default every core): above
+//! [`crate::numerics::linalg::PARALLEL_NNZ`] stored entries (h ≤ 1/128 for
+//! the paper's scenes) the products split their rows in as many chunks, and
+//! the Gauss-Seidel sweeps, nonlinear and linear, run in the ordering of
+//! [`parts`]: bands of unknowns that do not couple, one thread each, then
+//! their separator. The line search and the coarse correction are
+//! unchanged, so J still never increases.
 
 mod galerkin;
-mod halves;
 pub(crate) mod iteration;
 mod kernel;
+mod parts;
 pub use kernel::BOUND_OF_SCALE;
 pub(crate) mod laws;
 mod line_search;
@@ -58,6 +60,7 @@ use crate::numerics::linalg::Csr;
 
 use crate::numerics::linalg::row_dot;
 use crate::numerics::resolution::Resolution;
+use crate::numerics::threads::Threads;
 use crate::observer::{Control, Observer, Progress};
 use crate::problem::ContactProblem;
 use crate::settings::{Kind, Validate, from_tree, to_tree};
@@ -126,6 +129,12 @@ pub(crate) const ENTRY: Entry = Entry {
             help: "the same on the finest level, where a sweep costs three times all the levels below",
             kind: Kind::Count,
         },
+        Knob {
+            name: "threads",
+            fields: &["threads"],
+            help: "threads of the Gauss-Seidel sweeps (in as many bands of unknowns and their separator) and of the products, above 2^18 stored entries; 0: every core; 1: the sequential method",
+            kind: Kind::Whole,
+        },
     ],
     defaults: |_| to_tree(&TnnmgSettings::default()),
     build: crate::entry::Build::Fn(|tree| Ok(Box::new(Tnnmg::new(from_tree(tree)?)))),
@@ -156,6 +165,10 @@ pub struct TnnmgSettings {
     pub linear_steps: usize,
     pub linear_sweeps: usize,
     pub finest_sweeps: usize,
+    /// Threads of the sweeps and products (0: every core the machine
+    /// offers; 1: sequential). More threads change the sweeps' ordering,
+    /// so the iterates' bits, not the method.
+    pub threads: usize,
 }
 
 impl Default for TnnmgSettings {
@@ -167,6 +180,7 @@ impl Default for TnnmgSettings {
             linear_steps: 3,
             linear_sweeps: 2,
             finest_sweeps: DEFAULT_FINEST_SWEEPS,
+            threads: 0,
         }
     }
 }
@@ -372,6 +386,7 @@ impl Solver for Tnnmg {
     ) -> Solution {
         let (n, contacts) = (problem.n(), problem.contacts());
         let m = contacts.len();
+        let _threads = Threads::set(self.settings.threads);
         let bound = match Solution::given_bound(problem, friction, self.settings.validate()) {
             Ok(g) => g,
             Err(refused) => return *refused,

@@ -17,8 +17,8 @@
 use crate::numerics::linalg::{Csr, RowValues};
 use crate::with_values;
 
-use super::halves::{Halves, Shared, sweep};
 use super::laws::Laws;
+use super::parts::{Parts, Shared, sweep};
 use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 
 /// The contact law along one coordinate.
@@ -145,7 +145,7 @@ impl<'a> Row<'a> {
 ///
 /// # Safety
 /// A's column indices are below x's length, and no other thread writes the
-/// unknowns of row k's pattern meanwhile (see [`Halves`]).
+/// unknowns of row k's pattern meanwhile (see [`Parts`]).
 #[inline]
 unsafe fn off_diagonal_rhs(row: Row<'_>, b: f64, x: Shared) -> f64 {
     // SAFETY: by the contract.
@@ -182,18 +182,11 @@ fn check_sizes(a: &Csr, diag: &[Position], b: &[f64], x: &[f64]) {
 }
 
 /// r_j = b_j − ((A + D) x)_j afresh for the separator's rows: after a
-/// backward sweep on two threads, whose halves leave them alone (see
+/// backward sweep on several threads, whose parts leave them alone (see
 /// [`scatter_to_swept`]). The separator is O(h⁻¹) rows of O(h⁻²): the
 /// sums cost a small fraction of the sweep. Fixed rows are zeroed after.
-fn separator_residuals(
-    a: &Csr,
-    halves: &Halves,
-    shift: &[f64],
-    b: &[f64],
-    x: &[f64],
-    r: &mut [f64],
-) {
-    for &j in halves.separator() {
+fn separator_residuals(a: &Csr, parts: &Parts, shift: &[f64], b: &[f64], x: &[f64], r: &mut [f64]) {
+    for &j in parts.separator() {
         let row = a.row(j);
         // SAFETY: a Csr keeps its column indices below ncols =
         // x.len() (checked by the sweep).
@@ -206,7 +199,7 @@ fn separator_residuals(
 /// (`forward` or backward) visits before k (A symmetric: A_jk = A_kj):
 /// after x_k moved by δ, the residuals those rows left are brought up to
 /// date, so that a sweep leaves b − A x behind without a product of its
-/// own. In the ordering of `separator` ([`Halves::in_separator`]) a forward
+/// own. In the ordering of `separator` ([`Parts::in_separator`]) a forward
 /// sweep visits a half's rows ascending, then the separator's; a backward
 /// one the separator's descending, then each half's. Without one, the
 /// natural order. Column indices ascend within a row, so the rows below k
@@ -215,7 +208,7 @@ fn separator_residuals(
 ///
 /// # Safety
 /// A's column indices are below r's length, and no other thread touches r
-/// at the rows written (the halves' own rows: see [`Halves`]).
+/// at the rows written (the parts' own rows: see [`Parts`]).
 #[inline]
 unsafe fn scatter_to_swept(
     row: Row<'_>,
@@ -241,9 +234,9 @@ unsafe fn scatter_to_swept(
     match separator {
         None if forward => below.for_each(update),
         None => above.for_each(update),
-        // A separator's row, forward: every half's row and the separator's
+        // A separator's row, forward: every part's row and the separator's
         // rows below it. Backward, none: the separator's residuals are
-        // recomputed after the halves ([`separator_residuals`]).
+        // recomputed after the parts ([`separator_residuals`]).
         Some(sep) if sep[k] => {
             if forward {
                 below
@@ -252,19 +245,20 @@ unsafe fn scatter_to_swept(
                     .for_each(update);
             }
         }
-        // A half's row: its half's rows below it (forward); backward, its
-        // half's rows above it, and not the separator's rows, although swept
-        // before: both halves' rows reach them, and the two threads would
+        // A part's row: its part's rows below it (forward); backward, its
+        // part's rows above it (a row of another part that it couples to is
+        // in the separator, see [`Parts`]), and not the separator's rows, although swept
+        // before: the parts' rows reach them, and their threads would
         // race on their residuals (lost updates: the residuals, and the
         // runs, differed from one run to the next). The sweep recomputes
-        // them once both halves are done ([`separator_residuals`]).
+        // them once all parts are done ([`separator_residuals`]).
         Some(sep) if forward => below.filter(|&q| !sep[cols[q] as usize]).for_each(update),
         Some(sep) => above.filter(|&q| !sep[cols[q] as usize]).for_each(update),
     }
 }
 
 /// One forward sweep of the nonlinear Gauss-Seidel on J (see the module),
-/// on two threads in the ordering of `halves` when given. With `defect`
+/// on several threads in the ordering of `parts` when given. With `defect`
 /// it also leaves f − A v of the swept v there, in the same pass over A:
 /// row k's defect is c − A_kk v_k when it is swept, and each later move of
 /// a neighbour is scattered into it ([`scatter_to_swept`]); this replaced
@@ -272,7 +266,7 @@ unsafe fn scatter_to_swept(
 pub(crate) fn nonlinear_sweep(
     a: &Csr,
     diag: &[Position],
-    halves: Option<&Halves>,
+    parts: Option<&Parts>,
     f: &[f64],
     laws: &Laws,
     v: &mut [f64],
@@ -282,10 +276,10 @@ pub(crate) fn nonlinear_sweep(
     if let Some(r) = &defect {
         assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
     }
-    let separator = halves.map(Halves::in_separator);
+    let separator = parts.map(Parts::in_separator);
     let rs = defect.map(Shared::of);
-    with_values!(a.values(), vals => sweep(halves, v, true, |k, x| {
-        // SAFETY: sizes checked above; the halves' ordering keeps the other
+    with_values!(a.values(), vals => sweep(parts, v, true, |k, x| {
+        // SAFETY: sizes checked above; the parts' ordering keeps the other
         // thread off row k's pattern and off the defects it writes.
         unsafe {
             let row = Row::of(a, vals, k, diag[k] as usize);
@@ -304,7 +298,7 @@ pub(crate) fn nonlinear_sweep(
 
 /// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,
 /// D = diag(`shift`) (empty: none), keeping x_k = 0 where `fixed` says so
-/// (the truncated coordinates); on two threads in the ordering of `halves`
+/// (the truncated coordinates); on several threads in the ordering of `parts`
 /// when given. With `residual` it also leaves b − (A + D) x of the swept x
 /// there (zero where `fixed`), in the same pass over A (see
 /// [`nonlinear_sweep`]): the V-cycle's presmoothing and its residual, one
@@ -314,7 +308,7 @@ pub(crate) fn nonlinear_sweep(
 pub(crate) fn linear_sweep(
     a: &Csr,
     diag: &[Position],
-    halves: Option<&Halves>,
+    parts: Option<&Parts>,
     shift: &[f64],
     b: &[f64],
     x: &mut [f64],
@@ -327,9 +321,9 @@ pub(crate) fn linear_sweep(
     if let Some(r) = &residual {
         assert_eq!(r.len(), x.len(), "a sweep: one residual per unknown");
     }
-    let separator = halves.map(Halves::in_separator);
+    let separator = parts.map(Parts::in_separator);
     let rs = residual.as_deref_mut().map(Shared::of);
-    with_values!(a.values(), vals => sweep(halves, x, forward, |k, x| {
+    with_values!(a.values(), vals => sweep(parts, x, forward, |k, x| {
         // SAFETY: as in the nonlinear sweep.
         unsafe {
             if fixed[k] {
@@ -353,7 +347,7 @@ pub(crate) fn linear_sweep(
             }
         }
     }));
-    if let (Some(h), Some(r), false) = (halves, residual.as_deref_mut(), forward) {
+    if let (Some(h), Some(r), false) = (parts, residual.as_deref_mut(), forward) {
         separator_residuals(a, h, shift, b, x, r);
     }
     // A later row's move reached the fixed rows' residuals too.

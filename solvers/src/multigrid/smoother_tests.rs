@@ -1,5 +1,5 @@
 use super::*;
-use crate::multigrid::halves::tests::grid;
+use crate::multigrid::parts::tests::grid;
 use crate::numerics::linalg::spmv_into;
 
 /// b − (A + D) x, zero where `fixed`, by a product.
@@ -26,7 +26,7 @@ fn largest_gap(p: &[f64], q: &[f64]) -> f64 {
 
 /// The sweeps that leave a residual move x exactly as the plain ones (same bits) and
 /// leave the residual a product computes afterwards, to rounding: in
-/// the two-halves ordering (separator rows last) and in the natural
+/// the orderings in two and three parts (separator rows last) and in the natural
 /// one, from a nonzero start, with fixed rows, a shift and every law.
 /// A scatter to a row swept later, or none to a separator row swept
 /// earlier, leaves residuals off by O(1).
@@ -51,8 +51,11 @@ fn fused_sweeps_leave_the_residual_of_a_product() {
         })
         .collect();
     let laws = Laws::of(&laws);
-    let halves = Halves::new(&a).expect("a grid splits");
-    for split in [Some(&halves), None] {
+    let (two, three) = (
+        Parts::new(&a, 2).expect("a grid splits"),
+        Parts::new(&a, 3).expect("a grid splits"),
+    );
+    for split in [Some(&two), Some(&three), None] {
         for forward in [true, false] {
             let (mut plain, mut fused, mut r) = (start.clone(), start.clone(), vec![7.0; n]);
             linear_sweep(
@@ -88,19 +91,20 @@ fn fused_sweeps_leave_the_residual_of_a_product() {
     }
 }
 
-/// The two threads of a split sweep write disjoint residuals: a half's
-/// row scatters its move into rows of its own half only, forward and
+/// The threads of a split sweep write disjoint residuals: a part's
+/// row scatters its move into rows of its own part only, forward and
 /// backward, and never into the separator's (their residuals are set
 /// by their own visit, or recomputed after a backward sweep). The
 /// backward sweep's half rows once scattered into the separator's rows,
 /// both threads into the same ones: lost updates that no run showed
 /// twice alike. This checks the writes themselves, not a run's timing.
 #[test]
-fn a_half_row_scatters_into_its_own_half_only() {
+fn a_part_row_scatters_into_its_own_part_only() {
     let a = grid(300);
     let diag = diagonal_positions(&a).expect("a grid has its diagonal");
-    let halves = Halves::new(&a).expect("a grid splits");
-    let sep = halves.in_separator();
+    // Three parts: the middle one has a neighbour on either side.
+    let parts = Parts::new(&a, 3).expect("a grid splits");
+    let sep = parts.in_separator();
     let mut r = vec![0.0; a.nrows()];
     let mut written = 0;
     for k in (0..a.nrows()).filter(|&k| !sep[k]) {
@@ -126,9 +130,9 @@ fn a_half_row_scatters_into_its_own_half_only() {
                     "row {k} (forward {forward}) wrote separator row {j}"
                 );
                 assert_eq!(
-                    halves.in_first_half(j),
-                    halves.in_first_half(k),
-                    "row {k} (forward {forward}) wrote row {j} of the other half"
+                    parts.part_of(j),
+                    parts.part_of(k),
+                    "row {k} (forward {forward}) wrote row {j} of another part"
                 );
             }
         }

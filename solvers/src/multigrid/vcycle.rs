@@ -21,9 +21,10 @@
 use crate::numerics::linalg::Csr;
 
 use crate::multigrid::galerkin::galerkin;
-use crate::multigrid::halves::Halves;
+use crate::multigrid::parts::Parts;
 use crate::multigrid::smoother::{Position, diagonal_position, linear_sweep, shift_at};
 use crate::numerics::linalg::{spmv_into, spmv_transpose_into};
+use crate::numerics::threads::threads;
 
 /// Eigenvalues below this fraction of the largest are the coarsest
 /// operator's kernel (the rigid mode, when no jump is truncated): its
@@ -101,8 +102,8 @@ struct Level {
     a: Csr,
     untruncated_diagonal: Vec<f64>,
     diag: Vec<Position>,
-    /// The two-core Gauss-Seidel ordering of `a`'s rows, if it has one.
-    halves: Option<Halves>,
+    /// The several-core Gauss-Seidel ordering of `a`'s rows, if it has one.
+    parts: Option<Parts>,
     fixed: Vec<bool>,
     /// The untruncated values' table length, when `a`'s rows are shared: a
     /// truncation gives the few rows it changes copies of their own past
@@ -145,7 +146,7 @@ impl Level {
             .collect();
         Self {
             untruncated_diagonal,
-            halves: Halves::new(&a),
+            parts: Parts::new(&a, threads()),
             shared_len: if a.is_shared() { a.stored_values() } else { 0 },
             a,
             diag,
@@ -232,8 +233,8 @@ fn galerkin_triplets(p: &Csr, c: &[(usize, usize, f64)]) -> Vec<(usize, usize, f
 pub(crate) struct Hierarchy {
     /// The positions of A's diagonal entries.
     pub(crate) diag: Vec<Position>,
-    /// The two-core Gauss-Seidel ordering of A's rows, if it has one.
-    pub(crate) halves: Option<Halves>,
+    /// The several-core Gauss-Seidel ordering of A's rows, if it has one.
+    pub(crate) parts: Option<Parts>,
     truncated: Vec<bool>,
     /// The diagonal D added to A on the finest level.
     shift: Vec<f64>,
@@ -273,7 +274,7 @@ impl Hierarchy {
         let coarsest = CoarsestSolve::new(&levels[0]);
         Self {
             diag,
-            halves: Halves::new(a),
+            parts: Parts::new(a, threads()),
             truncated: vec![false; a.nrows()],
             shift: Vec::new(),
             coarsest,
@@ -347,7 +348,7 @@ impl Hierarchy {
     ) {
         let Self {
             diag,
-            halves,
+            parts,
             truncated,
             shift,
             levels,
@@ -361,11 +362,11 @@ impl Hierarchy {
             Some(lv) => (
                 &lv.a,
                 &lv.diag[..],
-                lv.halves.as_ref(),
+                lv.parts.as_ref(),
                 &[][..],
                 &lv.fixed[..],
             ),
-            None => (a, &diag[..], halves.as_ref(), &shift[..], &truncated[..]),
+            None => (a, &diag[..], parts.as_ref(), &shift[..], &truncated[..]),
         };
         let sweeps = |l: usize| {
             if l == top {

@@ -11,3 +11,4 @@ pub(crate) mod ncp;
 pub(crate) mod random;
 pub mod resolution;
 pub(crate) mod roots;
+pub mod threads;

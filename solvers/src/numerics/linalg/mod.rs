@@ -12,6 +12,8 @@ pub use values::{RowValues, SharedRows, Values};
 
 use thiserror::Error;
 
+use crate::numerics::threads::threads;
+
 /// A failed factorization.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum LinalgError {
@@ -81,25 +83,34 @@ pub(crate) fn spmv_values_into<'v>(
             *yi = unsafe { row_dot(&cols[lo..hi], values.row(i, lo, hi), x) };
         }
     };
-    if pattern.nnz() < PARALLEL_NNZ {
+    let threads = threads();
+    if pattern.nnz() < PARALLEL_NNZ || threads < 2 {
         rows(0, y);
     } else {
-        // Each row is the same sum on either thread: the product is the
-        // same to the bit as the sequential one.
-        let half = y.len() / 2;
-        let (lower, upper) = y.split_at_mut(half);
+        // Each row is the same sum on any thread: the product is the same
+        // to the bit as the sequential one.
+        let chunk = y.len().div_ceil(threads);
         std::thread::scope(|scope| {
-            scope.spawn(|| rows(half, upper));
-            rows(0, lower);
+            let mut chunks = y.chunks_mut(chunk).enumerate();
+            let first = chunks.next();
+            for (c, ys) in chunks {
+                scope.spawn(move || rows(c * chunk, ys));
+            }
+            if let Some((_, ys)) = first {
+                rows(0, ys);
+            }
         });
     }
 }
 
 /// y = Pᵀ x for a CSR matrix P, without Pᵀ stored: each row i of P
-/// scatters P_iI·x_i into y_I. Above [`PARALLEL_NNZ`] the rows are split in
-/// two halves, the upper one scattering into `scratch` (P's column count),
-/// which is then added: a half's columns may overlap the other's. Bits
-/// depend only on the matrix, not on the machine. No allocation.
+/// scatters P_iI·x_i into y_I. Above [`PARALLEL_NNZ`], and with more than
+/// one thread ([`threads`]), the rows are split in two halves, the upper
+/// one scattering into `scratch` (P's column count), which is then added:
+/// a half's columns may overlap the other's. Two, not one per thread: each
+/// more would need a scratch vector of its own, and a restriction is a
+/// small share of a V-cycle. Bits depend only on the matrix and whether
+/// one thread is asked for. No allocation.
 pub(crate) fn spmv_transpose_into(
     p: &impl SparseRows,
     x: &[f64],
@@ -131,7 +142,7 @@ fn transpose_product<'v>(
         }
     };
     let n = x.len();
-    if p.nnz() < PARALLEL_NNZ {
+    if p.nnz() < PARALLEL_NNZ || threads() < 2 {
         scatter(0..n, y);
     } else {
         assert_eq!(
@@ -150,7 +161,7 @@ fn transpose_product<'v>(
     }
 }
 
-/// Stored entries from which a matrix-vector product runs on both cores:
+/// Stored entries from which a matrix-vector product runs on several cores:
 /// below it (h ≥ 1/64 for the paper's scenes) the thread's start costs more
 /// than it saves, and a product stays the single-thread one that the
 /// sweep-against-product goal compares.

@@ -1,48 +1,54 @@
-//! Gauss-Seidel on both cores: an ordering of the unknowns in two halves
+//! Gauss-Seidel on several cores: an ordering of the unknowns in parts
 //! that do not couple, and the separator between them.
 //!
 //! Gauss-Seidel converges in any ordering of the unknowns (it is the
-//! coordinate descent of a convex energy), so an ordering that lets two
+//! coordinate descent of a convex energy), so an ordering that lets several
 //! threads sweep at once changes the smoother's bits, not what it is. The
-//! classic one is a nested-dissection split (George 1973): rows [0, m) and
-//! the rows ≥ m that couple to none of them sweep at the same time, then the
-//! separator S = {k ≥ m : A_kj ≠ 0 for some j < m} in order. In the paper's
-//! meshes, numbered row by row, S is a band of about two mesh rows, so the
-//! sequential tail is O(h⁻¹) of O(h⁻²) unknowns. Nothing here looks at a
-//! mesh: m is chosen from A's pattern alone, for the least work on the
-//! longer of the two threads plus the separator, and the split is checked
-//! entry by entry (no half reads an unknown the other half writes).
+//! classic one is a nested-dissection split (George 1973), here in bands:
+//! the rows are cut at m_1 < … < m_{t−1} into t parts of equal work; the
+//! separator S is every row ≥ m_j of part j that couples to a row below m_j.
+//! The parts' other rows (their interiors) sweep at the same time, one
+//! thread each, then S in order. For a symmetric pattern an interior row
+//! of part j reads only its own part and S: a row of another part that it
+//! reads couples back to below that part's start, so it is in S. In the
+//! paper's meshes, numbered row by row, each cut adds a band of about two
+//! mesh rows to S, so the sequential tail is O(t·h⁻¹) of O(h⁻²) unknowns.
+//! Nothing here looks at a mesh: the cuts are chosen from A's pattern alone
+//! (equal stored entries per part), and the split is checked entry by entry
+//! (no interior reads an unknown another part writes).
 //!
-//! Forward: both halves ascending, then S ascending. Backward: the exact
-//! reverse (S descending, then both halves descending), so that a forward
-//! and a backward sweep make a symmetric Gauss-Seidel as before.
+//! Forward: every part ascending, then S ascending. Backward: the exact
+//! reverse (S descending, then every part descending), so that a forward
+//! and a backward sweep make a symmetric Gauss-Seidel as before. How many
+//! parts: [`crate::numerics::threads`].
 
 use crate::numerics::linalg::{Csr, PARALLEL_NNZ, row_dot_by};
 
 /// Above this share of the stored entries in the separator the split is
-/// not worth a thread (a matrix numbered without locality).
+/// not worth the threads (a matrix numbered without locality, or too many
+/// parts for its size).
 const LARGEST_SEPARATOR_SHARE: f64 = 0.05;
 
-/// The two halves of a matrix's rows and their separator.
+/// The parts of a matrix's rows and their separator.
 #[derive(Clone, Debug)]
-pub(crate) struct Halves {
-    /// Rows [0, split) are the first half.
-    split: usize,
-    /// Rows ≥ split in the separator (the rest of them: the second half).
+pub(crate) struct Parts {
+    /// Part j is rows [cuts[j], cuts[j + 1]): cuts[0] = 0, the last n.
+    cuts: Vec<usize>,
+    /// Whether each row is in the separator.
     in_separator: Vec<bool>,
     /// The separator's rows, ascending.
     separator: Vec<usize>,
 }
 
-/// The vector a sweep updates, shared by the two threads of a split sweep.
-/// Each writes only the unknowns of its half and reads only its half and
+/// The vector a sweep updates, shared by the threads of a split sweep.
+/// Each writes only the unknowns of its part and reads only its part and
 /// the separator, which nobody writes meanwhile (checked by
-/// [`Halves::new`]): the accesses through it never race.
+/// [`Parts::new`]): the accesses through it never race.
 #[derive(Clone, Copy)]
 pub(crate) struct Shared(*mut f64);
 
-// SAFETY: see the type: the two threads touch disjoint unknowns, except the
-// separator's, which both only read.
+// SAFETY: see the type: the threads touch disjoint unknowns, except the
+// separator's, which they only read.
 unsafe impl Send for Shared {}
 unsafe impl Sync for Shared {}
 
@@ -86,76 +92,69 @@ impl Shared {
     }
 }
 
-impl Halves {
-    /// The split of `a`'s rows, or None when `a` is too small for a second
-    /// thread to pay (fewer than [`PARALLEL_NNZ`] stored entries, as for the
-    /// product) or has no split with a small separator.
-    pub(crate) fn new(a: &Csr) -> Option<Self> {
+impl Parts {
+    /// The split of `a`'s rows in `threads` parts, or None for one thread,
+    /// for a matrix too small for more threads to pay (fewer than
+    /// [`PARALLEL_NNZ`] stored entries, as for the product) or one without
+    /// a split with a small separator.
+    pub(crate) fn new(a: &Csr, threads: usize) -> Option<Self> {
         let n = a.nrows();
-        if a.nnz() < PARALLEL_NNZ || n != a.ncols() {
+        if threads < 2 || a.nnz() < PARALLEL_NNZ || n != a.ncols() || n < threads {
             return None;
         }
         let (offsets, cols) = (a.row_offsets(), a.col_indices());
-        let work = |k: usize| (offsets[k + 1] - offsets[k]) as i64;
-        // Row k is in S(m) for m in (first column of k, k]: difference
-        // arrays of |S(m)|'s work over every m at once.
-        let mut in_s = vec![0i64; n + 2];
-        for k in 0..n {
-            let Some(first) = cols[offsets[k]..offsets[k + 1]]
-                .first()
-                .map(|&j| j as usize)
-            else {
-                continue;
-            };
-            if first < k {
-                in_s[first + 1] += work(k);
-                in_s[k + 1] -= work(k);
+        let total = a.nnz();
+        // Cut j at the first row whose entries before it reach j/t of all.
+        let mut cuts = vec![0];
+        for (k, &before) in offsets.iter().enumerate().take(n).skip(1) {
+            if cuts.len() < threads && before * threads >= cuts.len() * total {
+                cuts.push(k);
             }
         }
-        let total = a.nnz() as i64;
-        let (mut best, mut best_cost) = (0, i64::MAX);
-        let (mut before, mut separator_work) = (0i64, 0i64);
-        for (m, entering) in in_s.iter().enumerate().take(n).skip(1) {
-            before += work(m - 1);
-            separator_work += entering;
-            let after = total - before - separator_work;
-            let cost = before.max(after) + separator_work;
-            if cost < best_cost {
-                (best, best_cost) = (m, cost);
-            }
-        }
-        let split = best;
+        cuts.push(n);
         let mut in_separator = vec![false; n];
-        for (k, flag) in in_separator.iter_mut().enumerate().skip(split) {
-            *flag = cols[offsets[k]..offsets[k + 1]]
-                .first()
-                .is_some_and(|&j| (j as usize) < split);
+        for part in cuts.windows(2).skip(1) {
+            for k in part[0]..part[1] {
+                in_separator[k] = cols[offsets[k]..offsets[k + 1]]
+                    .first()
+                    .is_some_and(|&j| (j as usize) < part[0]);
+            }
         }
-        let separator: Vec<usize> = (split..n).filter(|&k| in_separator[k]).collect();
-        let separator_work: i64 = separator.iter().map(|&k| work(k)).sum();
+        let separator: Vec<usize> = (0..n).filter(|&k| in_separator[k]).collect();
+        let separator_work: usize = separator.iter().map(|&k| offsets[k + 1] - offsets[k]).sum();
         if separator_work as f64 > LARGEST_SEPARATOR_SHARE * total as f64 {
             return None;
         }
-        // The halves must not read what the other writes: a first-half row
-        // sees only the first half and S, a second-half row only rows ≥ m
-        // (a pattern that is not symmetric could break the first).
-        let sound = (0..n).all(|k| {
-            let row = &cols[offsets[k]..offsets[k + 1]];
-            if k < split {
-                row.iter()
-                    .all(|&j| (j as usize) < split || in_separator[j as usize])
-            } else {
-                in_separator[k] || row.iter().all(|&j| j as usize >= split)
-            }
-        });
-        sound.then_some(Self {
-            split,
+        // An interior row must read only its own part and S (a pattern
+        // that is not symmetric could break it).
+        let split = Self {
+            cuts,
             in_separator,
             separator,
-        })
+        };
+        let sound = (0..n).all(|k| {
+            split.in_separator[k] || {
+                let own = split.part_of(k);
+                cols[offsets[k]..offsets[k + 1]]
+                    .iter()
+                    .all(|&j| split.in_separator[j as usize] || split.part_of(j as usize) == own)
+            }
+        });
+        sound.then_some(split)
     }
 
-    /// Whether each row is in the separator (swept after both halves).
+    /// How many parts sweep at once.
+    #[cfg(test)]
+    pub(crate) fn count(&self) -> usize {
+        self.cuts.len() - 1
+    }
+
+    /// The part of row k.
+    pub(crate) fn part_of(&self, k: usize) -> usize {
+        self.cuts.partition_point(|&c| c <= k) - 1
+    }
+
+    /// Whether each row is in the separator (swept after all parts).
     pub(crate) fn in_separator(&self) -> &[bool] {
         &self.in_separator
     }
@@ -165,15 +164,10 @@ impl Halves {
         &self.separator
     }
 
-    /// Whether row k (not in the separator) is in the first half.
-    #[cfg(test)]
-    pub(crate) fn in_first_half(&self, k: usize) -> bool {
-        k < self.split
-    }
-
     /// One Gauss-Seidel sweep over x in this ordering (see the module),
-    /// `update(k, x)` setting x[k] from the others; the halves on two
-    /// threads. `update` must read only the unknowns of row k's pattern.
+    /// `update(k, x)` setting x[k] from the others; the parts on one thread
+    /// each (the first on the calling thread). `update` must read only the
+    /// unknowns of row k's pattern.
     pub(crate) fn sweep<F>(&self, x: &mut [f64], forward: bool, update: F)
     where
         F: Fn(usize, Shared) + Sync,
@@ -181,16 +175,10 @@ impl Halves {
         let n = x.len();
         assert_eq!(n, self.in_separator.len(), "a sweep of the split's size");
         let shared = Shared(x.as_mut_ptr());
-        let (split, skip) = (self.split, &self.in_separator);
-        let first = || {
-            if forward {
-                (0..split).for_each(|k| update(k, shared));
-            } else {
-                (0..split).rev().for_each(|k| update(k, shared));
-            }
-        };
-        let second = || {
-            let rows = (split..n).filter(|&k| !skip[k]);
+        let skip = &self.in_separator;
+        let update = &update;
+        let part = move |(lo, hi): (usize, usize)| {
+            let rows = (lo..hi).filter(|&k| !skip[k]);
             if forward {
                 rows.for_each(|k| update(k, shared));
             } else {
@@ -201,8 +189,11 @@ impl Halves {
             self.separator.iter().rev().for_each(|&k| update(k, shared));
         }
         std::thread::scope(|scope| {
-            scope.spawn(second);
-            first();
+            for w in self.cuts.windows(2).skip(1) {
+                let (lo, hi) = (w[0], w[1]);
+                scope.spawn(move || part((lo, hi)));
+            }
+            part((self.cuts[0], self.cuts[1]));
         });
         if forward {
             self.separator.iter().for_each(|&k| update(k, shared));
@@ -210,14 +201,14 @@ impl Halves {
     }
 }
 
-/// One sweep over x: in the split's ordering on two threads when there is
+/// One sweep over x: in the split's ordering on its threads when there is
 /// one, else in the natural order (forward: 0, 1, …; backward: the reverse).
-pub(crate) fn sweep<F>(halves: Option<&Halves>, x: &mut [f64], forward: bool, update: F)
+pub(crate) fn sweep<F>(parts: Option<&Parts>, x: &mut [f64], forward: bool, update: F)
 where
     F: Fn(usize, Shared) + Sync,
 {
-    match halves {
-        Some(h) => h.sweep(x, forward, update),
+    match parts {
+        Some(p) => p.sweep(x, forward, update),
         None => {
             let shared = Shared(x.as_mut_ptr());
             if forward {
@@ -254,16 +245,22 @@ pub(crate) mod tests {
         Csr::try_from(CsrMatrix::from(&coo)).expect("a small grid")
     }
 
-    /// On a grid numbered row by row the separator is one grid row in the
-    /// middle, and the halves are balanced.
+    /// On a grid numbered row by row each cut's separator is one grid row,
+    /// and the parts are balanced to a grid row, for 2 and 5 parts; one
+    /// thread has no split.
     #[test]
-    fn a_grid_splits_at_one_row_in_the_middle() {
+    fn a_grid_splits_at_one_row_per_cut() {
         let q = 300;
         let a = grid(q);
-        let h = Halves::new(&a).expect("a grid splits");
-        assert_eq!(h.separator.len(), q, "one grid row");
-        let second = q * q - h.split - q;
-        assert!(h.split.abs_diff(second) <= 2 * q, "{} vs {second}", h.split);
+        assert!(Parts::new(&a, 1).is_none());
+        for t in [2, 5] {
+            let p = Parts::new(&a, t).expect("a grid splits");
+            assert_eq!(p.count(), t);
+            assert_eq!(p.separator.len(), (t - 1) * q, "one grid row per cut");
+            for w in p.cuts.windows(2) {
+                assert!((w[1] - w[0]).abs_diff(q * q / t) <= q, "{:?}", p.cuts);
+            }
+        }
     }
 
     /// A matrix whose rows all couple to the first has no useful split.
@@ -282,21 +279,27 @@ pub(crate) mod tests {
                 coo.push(k + 1, k, -0.5);
             }
         }
-        assert!(Halves::new(&Csr::try_from(CsrMatrix::from(&coo)).unwrap()).is_none());
+        assert!(Parts::new(&Csr::try_from(CsrMatrix::from(&coo)).unwrap(), 2).is_none());
     }
 
     /// A split sweep is the Gauss-Seidel sweep of its ordering: the same
-    /// bits as the sequential sweep over (halves, separator), forward and
-    /// backward; and the two orderings differ (the split is used).
+    /// bits as the sequential sweep over (parts, separator), forward and
+    /// backward; and the two orderings differ (the split is used); for 2
+    /// and 3 parts.
     #[test]
     fn a_split_sweep_is_the_sequential_sweep_in_its_order() {
         let a = grid(300);
-        let h = Halves::new(&a).expect("a grid splits");
+        for t in [2, 3] {
+            split_sweep_in_order(&a, &Parts::new(&a, t).expect("a grid splits"));
+        }
+    }
+
+    fn split_sweep_in_order(a: &Csr, h: &Parts) {
         let n = a.nrows();
         let b: Vec<f64> = (0..n).map(|k| ((k * 37) % 11) as f64 - 5.0).collect();
         let update = |k: usize, x: Shared| {
             let (cols, vals) = a.row(k);
-            // SAFETY: the grid's columns are below n; the split's halves
+            // SAFETY: the grid's columns are below n; the split's parts
             // read only their own rows and the separator.
             unsafe {
                 let sum = x.row_dot(cols, vals);
@@ -304,9 +307,7 @@ pub(crate) mod tests {
                 x.set(k, xk + (b[k] - sum) / 4.0);
             }
         };
-        let mut order: Vec<usize> = (0..n)
-            .filter(|&k| k < h.split || !h.in_separator[k])
-            .collect();
+        let mut order: Vec<usize> = (0..n).filter(|&k| !h.in_separator[k]).collect();
         order.extend(&h.separator);
         for forward in [true, false] {
             let mut split = vec![0.5; n];
