@@ -479,6 +479,9 @@ pub struct BenchOneArgs {
     /// solver's own].
     #[arg(long, value_parser = choices::schedule())]
     pub schedule: Option<Schedule>,
+    /// A setting by path, e.g. --set tnnmg.threads=1 (repeatable).
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// Parses the command line and runs it; errors are one line on stderr with a

@@ -52,6 +52,6 @@ pub fn run_one(args: &BenchOneArgs) -> Result<()> {
         Some(s) => s,
         None => crate::solve::solver_entry(&args.solver)?.schedule,
     };
-    let used = measure_here(&scene, &args.solver, schedule)?;
+    let used = measure_here(&scene, &args.solver, schedule, &args.set)?;
     print(&format!("{}\n", serde_json::to_string(&used)?))
 }

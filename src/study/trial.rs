@@ -21,6 +21,10 @@ use crate::study::agreement::Agreement;
 use crate::study::class::Class;
 pub use crate::study::class::WRONG_PRESSURE;
 
+/// The ending of a diagnostic that is a time (kept out of the trial
+/// rows: they are compared between runs).
+pub const SECONDS_SUFFIX: &str = "_seconds";
+
 /// A setting a trial varies: its path (`relaxation.r`, `epsilon`, or a
 /// study's own name for what it varies, such as `friction`) and its value
 /// as the command line writes it (`1e-3`, `exact`).
@@ -327,9 +331,12 @@ impl Trial {
             separated: intervals_text(&self.separated),
             separated_fraction: self.separated_fraction,
             detail: self.detail.clone(),
+            // Seconds (a solver's phases) are timings: not in the columns
+            // that a rerun reproduces.
             diagnostics: self
                 .diagnostics
                 .iter()
+                .filter(|(k, _)| !k.ends_with(SECONDS_SUFFIX))
                 .map(|(k, v)| format!("{k}={v:e}"))
                 .collect::<Vec<_>>()
                 .join(";"),

@@ -21,6 +21,8 @@
 //! [`vcycle`]: super::vcycle
 //! [`line_search`]: super::line_search
 
+use std::time::Instant;
+
 use crate::numerics::linalg::Csr;
 
 use super::laws::Laws;
@@ -57,8 +59,62 @@ pub(crate) struct Cycle {
     pub finest_sweeps: usize,
 }
 
+/// Where the seconds of TNNMG went, by phase (a clock read a few times per
+/// iteration: tens of nanoseconds against milliseconds): the work units of
+/// `bench` are these divided by one product A·v on the finest level.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Phases {
+    /// The Galerkin hierarchies built (once per operator).
+    pub setup: f64,
+    /// The nonlinear presmoothing and the V-cycles' work on the finest
+    /// level (its linear sweeps and the transfers to and from it).
+    pub smoothing: f64,
+    /// The V-cycles below the finest level, and the truncation's updates
+    /// of the coarse matrices.
+    pub coarse: f64,
+    /// The conjugate gradients' vector updates and inner products.
+    pub krylov: f64,
+    /// The projection, the exact line searches (the correction's and the
+    /// rigid mode's) and the stopping test.
+    pub line_search: f64,
+}
+
+impl Phases {
+    /// Their names as diagnostics: each ends in `_seconds`, which keeps
+    /// them out of the trials' reproducible columns.
+    pub(crate) const NAMES: [&'static str; 5] = [
+        "tnnmg_setup_seconds",
+        "tnnmg_smoothing_seconds",
+        "tnnmg_coarse_seconds",
+        "tnnmg_krylov_seconds",
+        "tnnmg_line_search_seconds",
+    ];
+
+    pub(crate) fn add(&mut self, o: &Phases) {
+        self.setup += o.setup;
+        self.smoothing += o.smoothing;
+        self.coarse += o.coarse;
+        self.krylov += o.krylov;
+        self.line_search += o.line_search;
+    }
+
+    /// (name, seconds) of each phase.
+    pub(crate) fn diagnostics(&self) -> [(&'static str, f64); 5] {
+        let s = [
+            self.setup,
+            self.smoothing,
+            self.coarse,
+            self.krylov,
+            self.line_search,
+        ];
+        std::array::from_fn(|k| (Self::NAMES[k], s[k]))
+    }
+}
+
 /// The iteration's vectors, allocated once per solve.
 pub(crate) struct Workspace {
+    /// The seconds of the iterations run with it, by phase.
+    pub phases: Phases,
     /// b − A v after the presmoothing.
     pub r: Vec<f64>,
     c: Vec<f64>,
@@ -80,6 +136,7 @@ impl Workspace {
     pub(crate) fn new(n: usize) -> Self {
         let zeros = || vec![0.0; n];
         Self {
+            phases: Phases::default(),
             r: zeros(),
             c: zeros(),
             w: zeros(),
@@ -137,6 +194,7 @@ pub(crate) fn iterate(
     let n = v.len();
     // The presmoothing; its last sweep leaves the defect b − A v behind
     // (without one, a product computes it).
+    let clock = Instant::now();
     let parts = hierarchy.parts.as_ref();
     for sweep in 1..=cycle.presmoothing {
         let last = (sweep == cycle.presmoothing).then_some(&mut ws.r[..]);
@@ -148,6 +206,8 @@ pub(crate) fn iterate(
             *rk = bk - *rk;
         }
     }
+    let mut lap = lap_timer(clock);
+    ws.phases.smoothing += lap();
     // The truncated set, the Newton step's curvature and its defect d (the
     // conjugate gradients' first residual, kept in their vector).
     copy(&mut ws.lin_r, &ws.r);
@@ -175,6 +235,7 @@ pub(crate) fn iterate(
         axpy(&mut ws.lin_r, -along, z);
     }
     hierarchy.truncate(a, p, &ws.truncated, &ws.shift);
+    ws.phases.coarse += lap();
     // Conjugate gradients on T(A + D)T c = d preconditioned by the V-cycle
     // (its symmetric Gauss-Seidel makes it symmetric positive definite on
     // the free unknowns).
@@ -189,6 +250,7 @@ pub(crate) fn iterate(
         truncated,
         shift: _,
         r,
+        phases,
     } = ws;
     fill(c, 0.0);
     fill(w, 0.0);
@@ -248,6 +310,14 @@ pub(crate) fn iterate(
             }
         });
     }
+    // The conjugate gradients' time: the V-cycles' (finest level and
+    // coarse levels) and their own vector work.
+    let cg = lap();
+    let finest = hierarchy.take_finest_seconds();
+    let cycles = hierarchy.take_cycle_seconds();
+    phases.smoothing += finest;
+    phases.coarse += cycles - finest;
+    phases.krylov += cg - cycles;
     // The projection onto the admissible set: v + c keeps t ≤ 0, so that a
     // full step is admissible (Gräser & Sander 2019, Algorithm 1, step 4).
     // A c follows the few entries the projection moved: A is symmetric, so
@@ -307,5 +377,18 @@ pub(crate) fn iterate(
         }
         let beta = exact_step(laws, contact, v, c, cac, cr.abs());
         axpy(v, beta, c);
+    }
+    phases.line_search += lap();
+}
+
+/// A lap clock from `start`: each call returns the seconds since the last
+/// (or since `start`).
+fn lap_timer(start: Instant) -> impl FnMut() -> f64 {
+    let mut last = start;
+    move || {
+        let now = Instant::now();
+        let lap = (now - last).as_secs_f64();
+        last = now;
+        lap
     }
 }

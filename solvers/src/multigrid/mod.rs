@@ -66,7 +66,7 @@ use crate::problem::ContactProblem;
 use crate::settings::{Kind, Validate, from_tree, to_tree};
 use crate::solution::{Iterations, Solution, Status, Timing};
 use crate::solver::{Friction, Law, Solver, Start};
-use iteration::{Cycle, Energy, Workspace, iterate};
+use iteration::{Cycle, Energy, Phases, Workspace, iterate};
 use laws::Laws;
 use line_search::closing_translation;
 use smoother::{Local, diagonal_positions};
@@ -248,7 +248,20 @@ pub struct Tnnmg {
     /// 34 MB, above the size that the allocator maps afresh, and faulting
     /// their pages in again took a sixth of a friction step.
     buffers: Option<Buffers>,
+    /// The seconds of every solve since it was built, by phase, and in
+    /// all: across a Coulomb problem every level and friction step. Each
+    /// solve reports them in its diagnostics (`bench`'s work units).
+    phases: Phases,
+    seconds: f64,
 }
+
+/// The diagnostic of all of TNNMG's seconds since it was built (set-up
+/// and solves); the rest of a Coulomb solve is the friction fixed point's.
+pub const TOTAL_SECONDS: &str = "tnnmg_total_seconds";
+
+/// The names of the phase diagnostics, in order: set-up, smoothing, coarse
+/// levels, Krylov updates, line search ([`iteration::Phases`]).
+pub const PHASE_SECONDS: [&str; 5] = Phases::NAMES;
 
 /// The vectors of one solve.
 struct Buffers {
@@ -403,6 +416,7 @@ impl Solver for Tnnmg {
             Err(e) => return Solution::failed(n, m, Status::NumericalError, e),
         };
         let setup = t0.elapsed().as_secs_f64();
+        self.phases.setup += setup;
         let t1 = Instant::now();
         let Buffers {
             mut ws,
@@ -452,6 +466,7 @@ impl Solver for Tnnmg {
             iterations = k;
             previous.copy_from_slice(&v);
             iterate(&energy, hierarchy, p, cycle, &mut ws, &mut v);
+            let stop_clock = Instant::now();
             // The exact minimization along the rigid mode.
             if let Some((z, beta)) =
                 z.and_then(|z| closing_translation(&laws, &contact, &v, z, fz).map(|b| (z, b)))
@@ -508,6 +523,7 @@ impl Solver for Tnnmg {
                 );
                 break;
             }
+            ws.phases.line_search += stop_clock.elapsed().as_secs_f64();
             if let Control::Stop(s) = control {
                 status = s;
                 detail = format!("stopped by the harness after {k} iterations");
@@ -516,6 +532,8 @@ impl Solver for Tnnmg {
         }
         let mut pressure = vec![0.0; m];
         contact_pressure(a, f, contacts, &v, &mut pressure);
+        self.phases.add(&std::mem::take(&mut ws.phases));
+        self.seconds += t0.elapsed().as_secs_f64();
         self.buffers = Some(Buffers { ws, laws, previous });
         let traction = contacts
             .iter()
@@ -536,8 +554,11 @@ impl Solver for Tnnmg {
                 solve: t1.elapsed().as_secs_f64(),
             },
             diagnostics: stopped_at_need
-                .map(|need| vec![(crate::solver::STOPPED_AT_NEED, need)])
-                .unwrap_or_default(),
+                .map(|need| (crate::solver::STOPPED_AT_NEED, need))
+                .into_iter()
+                .chain(self.phases.diagnostics())
+                .chain([(TOTAL_SECONDS, self.seconds)])
+                .collect(),
         }
         .flag_non_finite()
     }

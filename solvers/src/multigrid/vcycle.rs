@@ -18,6 +18,8 @@
 //! of rebuilding the products (which was a fifth of a 1/256 solve). A
 //! coarse unknown whose fine support is truncated entirely is left at zero.
 
+use std::time::Instant;
+
 use crate::numerics::linalg::Csr;
 
 use crate::multigrid::galerkin::galerkin;
@@ -248,6 +250,12 @@ pub(crate) struct Hierarchy {
     /// Each coarse level's residual (the finest level's lives in the
     /// V-cycle's `ac` argument).
     r: Vec<Vec<f64>>,
+    /// Seconds the V-cycles spent on the finest level (its sweeps and
+    /// transfers), summed until the caller takes them
+    /// ([`Hierarchy::take_finest_seconds`]).
+    finest_seconds: f64,
+    /// Seconds of whole V-cycles, likewise ([`Hierarchy::take_cycle_seconds`]).
+    cycle_seconds: f64,
 }
 
 impl Hierarchy {
@@ -282,7 +290,20 @@ impl Hierarchy {
             b: zeros(),
             r: zeros(),
             levels,
+            finest_seconds: 0.0,
+            cycle_seconds: 0.0,
         }
+    }
+
+    /// The seconds of whole V-cycles since the last call.
+    pub(crate) fn take_cycle_seconds(&mut self) -> f64 {
+        std::mem::take(&mut self.cycle_seconds)
+    }
+
+    /// The seconds the V-cycles spent on the finest level since the last
+    /// call (the rest of a V-cycle is its coarse levels).
+    pub(crate) fn take_finest_seconds(&mut self) -> f64 {
+        std::mem::take(&mut self.finest_seconds)
     }
 
     /// Makes the hierarchy that of T(A + D)T for the truncated set
@@ -356,7 +377,10 @@ impl Hierarchy {
             x,
             b,
             r,
+            finest_seconds,
+            cycle_seconds,
         } = self;
+        let cycle_clock = Instant::now();
         let top = levels.len();
         let level = |l: usize| match levels.get(l) {
             Some(lv) => (
@@ -378,6 +402,7 @@ impl Hierarchy {
         // Down: smooth, restrict the residual (zero on the truncated set,
         // so Pᵀ r = P_Tᵀ r on the finest level).
         for l in (1..=top).rev() {
+            let clock = (l == top).then(Instant::now);
             let (matrix, dg, split, dk, fixed) = level(l);
             let (x_below, x_here) = x.split_at_mut(l);
             let (b_below, b_here) = b.split_at_mut(l);
@@ -405,11 +430,15 @@ impl Hierarchy {
             // x below is free until the coarse solve: the scratch of the
             // two-core restriction.
             spmv_transpose_into(&p[l - 1], rl, &mut b_below[l - 1], &mut x_below[l - 1]);
+            if let Some(t) = clock {
+                *finest_seconds += t.elapsed().as_secs_f64();
+            }
         }
         coarsest.solve(&b[0], &mut x[0]);
         // Up: prolongate (P_T = T P on the finest level), add, smooth
         // backward.
         for l in 1..=top {
+            let clock = (l == top).then(Instant::now);
             let (matrix, dg, split, dk, fixed) = level(l);
             let (below, here) = x.split_at_mut(l);
             let (xl, bl): (&mut [f64], &[f64]) = if l == top {
@@ -436,6 +465,9 @@ impl Hierarchy {
                     *q = bk - *q;
                 }
             }
+            if let Some(t) = clock {
+                *finest_seconds += t.elapsed().as_secs_f64();
+            }
         }
         if sweeps(top) == 0 {
             spmv_into(a, c, ac);
@@ -447,6 +479,7 @@ impl Hierarchy {
                 };
             }
         }
+        *cycle_seconds += cycle_clock.elapsed().as_secs_f64();
     }
 }
 

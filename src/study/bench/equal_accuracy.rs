@@ -16,9 +16,11 @@ use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry, Role};
 use contactlab_solvers::{Law, relaxation};
 
+use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::bench::memory;
 use crate::study::bench::{BenchSpec, PerfRow, STUDY};
 use crate::study::runner::{Keep, measure};
 use crate::study::trial::TrialSpec;
@@ -73,7 +75,7 @@ fn run_once(
     entry: &'static Entry,
     varied: &[(String, String)],
     settings: &Settings,
-    (factorization, unknowns): (f64, usize),
+    (factorization, unknowns, product): (f64, usize, f64),
     log: &dyn Fn(&str),
 ) -> Result<PerfRow> {
     let mut t = TrialSpec::new(STUDY, what, scene, entry, Law::Coulomb, settings)
@@ -101,6 +103,7 @@ fn run_once(
         median_seconds: seconds,
         min_seconds: seconds,
         ratio_to_factorization: seconds / factorization,
+        work_units: seconds / product,
         status: tr.status.as_str().into(),
         certificate: tr.residual(),
         pressure_error: f64::NAN,
@@ -125,15 +128,21 @@ pub fn equal_accuracy(
         return Ok(());
     };
     let oracle = fastest_oracle(rows);
-    let factorization = |rows: &[PerfRow], h: MeshSize| {
-        rows.iter()
+    // The factorization's median and the unknowns from the benchmark's
+    // rows, and one product A·v on the mesh, timed here.
+    let factorization = |rows: &[PerfRow], scene: &Scene, h: MeshSize| -> Result<_> {
+        let product = memory::product_seconds(Discretization::new(scene, h)?.problem.a());
+        Ok(rows
+            .iter()
             .find(|r| r.what == "factorization" && r.h == h.to_string())
-            .map_or((f64::NAN, 0), |r| (r.median_seconds, r.unknowns))
+            .map_or((f64::NAN, 0, product), |r| {
+                (r.median_seconds, r.unknowns, product)
+            }))
     };
     let target = format!("{:e}", spec.accuracy_target);
     for &h in &spec.equal_accuracy {
         let scene = Scene::paper_problem_to(spec.problem, h)?;
-        let f = factorization(rows, h);
+        let f = factorization(rows, &scene, h)?;
         let knob = |name: &str, value: String| (format!("{}.{name}", paper.name), value);
         let by_sweeps = [1.0, relaxation::STUDIED_OMEGA]
             .map(|omega| knob(relaxation::OVER_RELAXATION_KNOB, format!("{omega}")));
@@ -153,7 +162,7 @@ pub fn equal_accuracy(
     }
     if let (Some(h), Some(oracle)) = (spec.oracle_mesh, oracle) {
         let scene = Scene::paper_problem_to(spec.problem, h)?;
-        let f = factorization(rows, h);
+        let f = factorization(rows, &scene, h)?;
         let row = run_once(ORACLE_GOAL, &scene, h, oracle, &[], settings, f, log)?;
         rows.push(row);
     }

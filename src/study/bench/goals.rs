@@ -257,11 +257,11 @@ pub fn equal_accuracy_markdown(rows: &[PerfRow], problem: u32) -> String {
         return String::new();
     }
     let mut s = format!(
-        "\n### The paper's method at a certified accuracy, against the oracle (problem {problem}, once each)\n\n| h | solver | settings | status | certificate | seconds | × factorization | work |\n|---|---|---|---|---|---|---|---|\n",
+        "\n### The paper's method at a certified accuracy, against the oracle (problem {problem}, once each)\n\n| h | solver | settings | status | certificate | seconds | × factorization | work units (A·v) | work |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in compared {
         s += &format!(
-            "| {} | {} | {} | {} | {:.1e} | {:.2} | {:.0} | {} |\n",
+            "| {} | {} | {} | {} | {:.1e} | {:.2} | {:.0} | {:.0} | {} |\n",
             r.h,
             r.solver,
             if r.variant.is_empty() {
@@ -273,6 +273,7 @@ pub fn equal_accuracy_markdown(rows: &[PerfRow], problem: u32) -> String {
             r.certificate,
             r.median_seconds,
             r.ratio_to_factorization,
+            r.work_units,
             r.note.trim_start_matches("once; ")
         );
     }
@@ -380,7 +381,7 @@ pub fn measure_bench(
             .map_or(settings.schedule.unwrap_or_default(), |e| {
                 settings.schedule_of(e)
             });
-        match measure_in_fresh_process(spec.problem, h, &fastest.solver, schedule) {
+        match measure_in_fresh_process(spec.problem, h, &fastest.solver, schedule, &[]) {
             Ok(used) => memory.push(used),
             Err(e) => {
                 log(&format!("memory at h = {h} not measured: {e:#}"));

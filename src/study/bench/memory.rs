@@ -37,6 +37,36 @@ pub struct MemoryUse {
     pub factor_values_bytes: Option<f64>,
     /// The dense Schur complement S, as the solver reports (bytes).
     pub schur_bytes: Option<f64>,
+    /// Seconds of one product A·v with the finest level's A as the solve
+    /// got it (its storage) and the machine's cores, the median of
+    /// [`PRODUCTS`] after the solve: the work unit of [`MemoryUse::phases`].
+    #[serde(default)]
+    pub product_seconds: Option<f64>,
+    /// The solver's seconds by phase, as it reports them (its diagnostics
+    /// ending in `_seconds`), in its order.
+    #[serde(default)]
+    pub phases: Vec<(String, f64)>,
+}
+
+/// Products timed for [`MemoryUse::product_seconds`], after one warm-up.
+pub const PRODUCTS: usize = 11;
+
+/// The median seconds of one product A·v (x all ones) over [`PRODUCTS`],
+/// after a warm-up.
+pub fn product_seconds(a: &contactlab_solvers::Csr) -> f64 {
+    let x = vec![1.0; a.ncols()];
+    let mut y = vec![0.0; a.nrows()];
+    contactlab_solvers::numerics::linalg::spmv_into(a, &x, &mut y);
+    let mut times: Vec<f64> = (0..PRODUCTS)
+        .map(|_| {
+            let t = std::time::Instant::now();
+            contactlab_solvers::numerics::linalg::spmv_into(a, &x, &mut y);
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    std::hint::black_box(&y);
+    times[PRODUCTS / 2]
 }
 
 /// A field of `/proc/self/status` in KiB (Linux), e.g. `VmHWM` or `VmRSS`.
@@ -75,7 +105,12 @@ fn peak_memory_kb() -> Option<u64> {
 /// continuation gets the coarser levels assembled beside it, as `solve`
 /// does: the finest mesh is assembled once). Meaningful only in a fresh
 /// process.
-pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<MemoryUse> {
+pub fn measure_here(
+    scene: &Scene,
+    solver: &str,
+    schedule: Schedule,
+    set: &[String],
+) -> Result<MemoryUse> {
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
     let entry = solver_entry(solver)?;
@@ -93,21 +128,31 @@ pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<M
         .saturating_sub(before);
     let mut settings = Settings::default();
     settings.schedule = Some(schedule);
+    for change in set {
+        let (path, value) = change
+            .split_once('=')
+            .with_context(|| format!("--set {change}: write it as PATH=VALUE"))?;
+        settings
+            .set_text(path.trim(), value.trim())
+            .map_err(anyhow::Error::msg)?;
+    }
     let silent = &mut contactlab_solvers::Silent;
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)
     } else {
         Assembled::with_finest(scene, entry, d)?
     };
-    let run = solve(
+    let solved = solve(
         problem,
         Friction::Coulomb,
         entry,
         &settings,
         Caps::default(),
         silent,
-    )?
-    .outcome;
+    )?;
+    let peak_kb = peak_memory_kb().ok_or_else(unread)?;
+    let product = product_seconds(solved.finest.problem.a());
+    let run = solved.outcome;
     let diagnostic = |name: &str| {
         run.solution
             .diagnostics
@@ -120,11 +165,19 @@ pub fn measure_here(scene: &Scene, solver: &str, schedule: Schedule) -> Result<M
         solver: solver.to_string(),
         status: run.status.to_string(),
         seconds: run.timing.total(),
-        peak_kb: peak_memory_kb().ok_or_else(unread)?,
+        peak_kb,
         assembly_peak_kb,
         problem_kb,
         factor_values_bytes: diagnostic("factor_values_bytes"),
         schur_bytes: diagnostic("schur_bytes"),
+        product_seconds: Some(product),
+        phases: run
+            .solution
+            .diagnostics
+            .iter()
+            .filter(|(k, _)| k.ends_with(crate::study::trial::SECONDS_SUFFIX))
+            .map(|&(k, v)| (k.to_string(), v))
+            .collect(),
     })
 }
 
@@ -135,6 +188,7 @@ pub fn measure_in_fresh_process(
     h: MeshSize,
     solver: &str,
     schedule: Schedule,
+    set: &[&str],
 ) -> Result<MemoryUse> {
     let o = std::process::Command::new(std::env::current_exe()?)
         .args([
@@ -148,6 +202,7 @@ pub fn measure_in_fresh_process(
             "--schedule",
             schedule.name(),
         ])
+        .args(set.iter().flat_map(|s| ["--set", s]))
         .output()?;
     anyhow::ensure!(
         o.status.success(),

@@ -131,6 +131,11 @@ pub struct PerfRow {
     /// median / the factorization's median on the same mesh.
     #[serde(serialize_with = "fixed")]
     pub ratio_to_factorization: f64,
+    /// median / one product A·v on the same mesh (the assembled problem's
+    /// A, as the solvers get it, on the machine's cores): the time in work
+    /// units, which the machine's speed divides out of.
+    #[serde(serialize_with = "fixed")]
+    pub work_units: f64,
     /// Certified status (`done` for the measurements without one, `skipped`).
     pub status: String,
     #[serde(serialize_with = "fixed")]
@@ -161,6 +166,7 @@ impl PerfRow {
             median_seconds: seconds,
             min_seconds: seconds,
             ratio_to_factorization: f64::NAN,
+            work_units: f64::NAN,
             status: status.into(),
             certificate: f64::NAN,
             pressure_error: f64::NAN,
@@ -189,6 +195,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             h,
             unknowns: d.problem.n(),
             factorization: median(&set_up.factorization),
+            product: memory::product_seconds(d.problem.a()),
         };
         push_set_up(&mut mesh, &set_up, false);
         for entry in registry::solvers() {
@@ -423,12 +430,14 @@ fn large_mesh(
     ));
     let (d, set_up) = assemble_and_factor(&scene, h, 0, LARGE_FACTORIZATION_RUNS)?;
     let unknowns = d.problem.n();
+    let product = memory::product_seconds(d.problem.a());
     drop(d);
     let mut mesh = MeshRows {
         rows,
         h,
         unknowns,
         factorization: median(&set_up.factorization),
+        product,
     };
     push_set_up(&mut mesh, &set_up, true);
     for (name, why) in skipped {

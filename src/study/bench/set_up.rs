@@ -166,6 +166,8 @@ pub(super) struct MeshRows<'a> {
     pub(super) h: MeshSize,
     pub(super) unknowns: usize,
     pub(super) factorization: f64,
+    /// One product A·v on the mesh (median seconds): the work unit.
+    pub(super) product: f64,
 }
 
 impl MeshRows<'_> {
@@ -188,6 +190,7 @@ impl MeshRows<'_> {
             median_seconds: m,
             min_seconds: times.iter().copied().fold(f64::INFINITY, f64::min),
             ratio_to_factorization: m / self.factorization,
+            work_units: m / self.product,
             status: status.into(),
             certificate: f64::NAN,
             pressure_error: f64::NAN,
