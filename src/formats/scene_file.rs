@@ -23,7 +23,7 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 /// name = "problem 1"
 /// friction = 0.5                  # Coulomb coefficient
 /// levels = ["1/8", "1/16", "1/32", "1/64"]
-/// schedule = "revisit"            # optional
+/// schedule = "revisit"            # optional (unset: each solver's own)
 /// stopping = "relative"           # optional: relative (default) or paper
 ///
 /// [material]                      # optional, the paper's values by default

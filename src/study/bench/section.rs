@@ -12,10 +12,12 @@ use crate::study::lab::chart_markdown;
 /// The whole section.
 pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
     let mut s = String::from(
-        "## Speed (problem 1, one thread, medians after a warm-up)\n\n\
+        "## Speed (problem 1, medians after a warm-up)\n\n\
          Every time is also a ratio to one sparse Cholesky factorization and solve of the stiffness matrix with the \
          semicoercive mode removed, measured in the same run (`performance.csv`, a timing file; `contactlab bench` \
-         reruns it alone). A solver stops at a stated budget per run. The program keeps freed memory for reuse \
+         reruns it alone), and a number of work units: the time over one product A·v with the problem's own A on \
+         the same mesh (the storage the solvers get, on the machine's cores), timed in the same run, which divides \
+         the machine's speed out (`work_units`; for `tnnmg` the goals split them by phase). A solver stops at a stated budget per run. The program keeps freed memory for reuse \
          (`src/allocator.rs`), so a repeated run does not fault its pages in again: medians are warm, and the rows \
          marked *once* are cold.\n\n",
     );
@@ -53,7 +55,7 @@ fn speed_table(rows: &[super::PerfRow]) -> String {
         }
     }
     let mut s = String::from(
-        "\nWhole Coulomb problem, median seconds (× the best factorization: 2 threads, symbolic once), certified status:\n\n| solver |",
+        "\nWhole Coulomb problem, median seconds (× the best factorization: 2 threads, symbolic once; work units, WU: ÷ one product A·v), certified status:\n\n| solver |",
     );
     for h in &meshes {
         s += &format!(" {h} |");
@@ -80,8 +82,13 @@ fn speed_table(rows: &[super::PerfRow]) -> String {
                             } else {
                                 format!(", {}", r.status)
                             };
+                            let wu = if r.work_units.is_finite() {
+                                format!(", {:.0} WU", r.work_units)
+                            } else {
+                                String::new()
+                            };
                             format!(
-                                "{:.4} ({:.1}×{st})",
+                                "{:.4} ({:.1}×{wu}{st})",
                                 r.median_seconds, r.ratio_to_factorization
                             )
                         } else {
@@ -128,10 +135,15 @@ mod tests {
         for r in &mut rows {
             r.h = "1/8".into();
         }
+        rows[1].work_units = 12.4;
         let table = speed_table(&rows);
         let body: Vec<&str> = table.lines().filter(|l| l.starts_with("| ")).collect();
         assert_eq!(body.len(), 3, "{table}");
         assert!(body[1].contains("best factorization") && body[1].contains("0.5000"));
         assert!(body[2].starts_with("| tnnmg |") && body[2].contains("0.2500"));
+        assert!(
+            body[2].contains("12 WU") && !body[1].contains("WU"),
+            "{table}"
+        );
     }
 }
