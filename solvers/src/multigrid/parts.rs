@@ -103,15 +103,7 @@ impl Parts {
             return None;
         }
         let (offsets, cols) = (a.row_offsets(), a.col_indices());
-        let total = a.nnz();
-        // Cut j at the first row whose entries before it reach j/t of all.
-        let mut cuts = vec![0];
-        for (k, &before) in offsets.iter().enumerate().take(n).skip(1) {
-            if cuts.len() < threads && before * threads >= cuts.len() * total {
-                cuts.push(k);
-            }
-        }
-        cuts.push(n);
+        let cuts = cuts(offsets, cols, threads);
         let mut in_separator = vec![false; n];
         for part in cuts.windows(2).skip(1) {
             for k in part[0]..part[1] {
@@ -122,7 +114,7 @@ impl Parts {
         }
         let separator: Vec<usize> = (0..n).filter(|&k| in_separator[k]).collect();
         let separator_work: usize = separator.iter().map(|&k| offsets[k + 1] - offsets[k]).sum();
-        if separator_work as f64 > LARGEST_SEPARATOR_SHARE * total as f64 {
+        if separator_work as f64 > LARGEST_SEPARATOR_SHARE * a.nnz() as f64 {
             return None;
         }
         // An interior row must read only its own part and S (a pattern
@@ -132,13 +124,15 @@ impl Parts {
             in_separator,
             separator,
         };
-        let sound = (0..n).all(|k| {
-            split.in_separator[k] || {
-                let own = split.part_of(k);
-                cols[offsets[k]..offsets[k + 1]]
-                    .iter()
-                    .all(|&j| split.in_separator[j as usize] || split.part_of(j as usize) == own)
-            }
+        let sep = &split.in_separator;
+        let sound = split.cuts.windows(2).all(|part| {
+            let own = part[0]..part[1];
+            own.clone().all(|k| {
+                sep[k]
+                    || cols[offsets[k]..offsets[k + 1]]
+                        .iter()
+                        .all(|&j| sep[j as usize] || own.contains(&(j as usize)))
+            })
         });
         sound.then_some(split)
     }
@@ -150,6 +144,7 @@ impl Parts {
     }
 
     /// The part of row k.
+    #[cfg(test)]
     pub(crate) fn part_of(&self, k: usize) -> usize {
         self.cuts.partition_point(|&c| c <= k) - 1
     }
@@ -199,6 +194,62 @@ impl Parts {
             self.separator.iter().for_each(|&k| update(k, shared));
         }
     }
+}
+
+/// The cuts 0 = m_0 < m_1 < … < m_{t−1} < m_t = n of a split in t parts,
+/// each chosen in turn for the least work on the longest thread plus the
+/// separator: cut j minimizes max(interior of part j − 1, what remains ÷
+/// the parts left) + S(m_j), where S(m) is the work of the rows ≥ m that
+/// couple below m (the separator a cut at m makes) and work is stored
+/// entries. For two parts this is the least max(before, after) + S(m)
+/// over every m, the rule of the two-core sweep it generalizes. S(m) of
+/// every m at once by difference arrays: row k is in S(m) for m in (its
+/// first column, k].
+fn cuts(offsets: &[usize], cols: &[u32], threads: usize) -> Vec<usize> {
+    let n = offsets.len() - 1;
+    let work = |k: usize| (offsets[k + 1] - offsets[k]) as i64;
+    let mut entering = vec![0i64; n + 2];
+    for k in 0..n {
+        if let Some(&first) = cols[offsets[k]..offsets[k + 1]].first()
+            && (first as usize) < k
+        {
+            entering[first as usize + 1] += work(k);
+            entering[k + 1] -= work(k);
+        }
+    }
+    let total = offsets[n] as i64;
+    let mut cuts = vec![0];
+    // The row m of the last cut, the entries before it and its separator's.
+    let (mut m, mut before, mut s) = (0usize, 0i64, 0i64);
+    for left in (1..threads).rev() {
+        let (mut best, mut best_cost) = (None, i64::MAX);
+        let (mut mm, mut bb, mut ss) = (m, before, 0i64);
+        // S of a cut at mm: the rows entering from m on (those entering
+        // before m were counted in the last cut's; a cut ≥ m sees them
+        // again only if they reach past it, which `entering` keeps).
+        ss += (0..=m).map(|i| entering[i]).sum::<i64>();
+        while mm + 1 < n {
+            bb += work(mm);
+            mm += 1;
+            ss += entering[mm];
+            let interior = bb - before - s;
+            let remaining = total - bb - ss;
+            let cost = interior.max(remaining / left as i64) + ss;
+            if cost < best_cost {
+                (best, best_cost) = (Some((mm, bb, ss)), cost);
+            }
+            // Past the balance the interior only grows; the last cut
+            // scans on (a smaller separator further on may still win).
+            if left > 1 && interior > remaining {
+                break;
+            }
+        }
+        let Some(cut) = best else { break };
+        (m, before, s) = cut;
+        cuts.push(m);
+    }
+    cuts.push(n);
+    cuts
 }
 
 /// One sweep over x: in the split's ordering on its threads when there is
@@ -261,6 +312,53 @@ pub(crate) mod tests {
                 assert!((w[1] - w[0]).abs_diff(q * q / t) <= q, "{:?}", p.cuts);
             }
         }
+    }
+
+    /// For two parts the cut attains the least max(before, after) + S(m)
+    /// over every m, each S(m) counted row by row here (not by difference
+    /// arrays): on a grid and on a grid with long couplings. For three,
+    /// the parts' interiors differ by at most two grid rows' work.
+    #[test]
+    fn the_cuts_balance_the_interiors() {
+        let q = 40;
+        let mut coo = CooMatrix::new(q * q, q * q);
+        let g = grid(q).to_nalgebra();
+        for (i, j, v) in g.triplet_iter() {
+            coo.push(i, j, *v);
+        }
+        for k in (3 * q..q * q).step_by(97) {
+            coo.push(k, k - 3 * q, -0.1);
+            coo.push(k - 3 * q, k, -0.1);
+        }
+        let long = Csr::try_from(CsrMatrix::from(&coo)).unwrap();
+        for a in [grid(q), long] {
+            let (offsets, cols) = (a.row_offsets(), a.col_indices());
+            let n = a.nrows();
+            let work = |k: usize| (offsets[k + 1] - offsets[k]) as i64;
+            let cost = |m: usize| {
+                let s: i64 = (m..n)
+                    .filter(|&k| (cols[offsets[k]] as usize) < m)
+                    .map(work)
+                    .sum();
+                let before = offsets[m] as i64;
+                before.max(offsets[n] as i64 - before - s) + s
+            };
+            let best = (1..n).map(cost).min().unwrap();
+            let c = cuts(offsets, cols, 2);
+            assert_eq!(c.len(), 3);
+            assert_eq!(cost(c[1]), best, "cut {} of {n}", c[1]);
+        }
+        let p = Parts::new(&grid(300), 3).unwrap();
+        let interiors: Vec<usize> = p
+            .cuts
+            .windows(2)
+            .map(|w| (w[0]..w[1]).filter(|&k| !p.in_separator[k]).count())
+            .collect();
+        let (lo, hi) = (
+            interiors.iter().min().unwrap(),
+            interiors.iter().max().unwrap(),
+        );
+        assert!(hi - lo <= 2 * 300, "{interiors:?}");
     }
 
     /// A matrix whose rows all couple to the first has no useful split.
