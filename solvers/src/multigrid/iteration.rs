@@ -30,7 +30,7 @@ use super::line_search::exact_step;
 use super::smoother::{Local, nonlinear_sweep};
 use super::vcycle::Hierarchy;
 use crate::numerics::linalg::spmv_into;
-use crate::numerics::threads::{Disjoint, copy, dot, fill, for_each_chunk};
+use crate::numerics::threads::{Disjoint, axpy, copy, dot, fill, for_each_chunk};
 
 /// The energy: its quadratic part, its laws and A's kernel.
 pub(crate) struct Energy<'a> {
@@ -164,20 +164,6 @@ impl Cycle {
     fn sweeps(&self) -> (usize, usize) {
         (self.linear_sweeps, self.finest_sweeps)
     }
-}
-
-/// x += alpha·y, by chunks on the
-/// solve's threads.
-fn axpy(x: &mut [f64], alpha: f64, y: &[f64]) {
-    let n = x.len();
-    let dx = Disjoint::of(x);
-    for_each_chunk(n, |r| {
-        // SAFETY: each chunk once.
-        let xs = unsafe { dx.slice(r.clone()) };
-        for (xk, yk) in xs.iter_mut().zip(&y[r]) {
-            *xk += alpha * yk;
-        }
-    });
 }
 
 /// One iteration from v (see the module); `p` the hierarchy's

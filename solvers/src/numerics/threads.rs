@@ -152,6 +152,20 @@ pub fn fill(x: &mut [f64], value: f64) {
     for_each_chunk(n, |r| unsafe { d.slice(r) }.fill(value));
 }
 
+/// x += alpha·y, by chunks on [`threads`] threads.
+pub fn axpy(x: &mut [f64], alpha: f64, y: &[f64]) {
+    assert_eq!(x.len(), y.len(), "axpy: vectors of one length");
+    let n = x.len();
+    let dx = Disjoint::of(x);
+    for_each_chunk(n, |r| {
+        // SAFETY: each chunk once.
+        let xs = unsafe { dx.slice(r.clone()) };
+        for (xk, yk) in xs.iter_mut().zip(&y[r]) {
+            *xk += alpha * yk;
+        }
+    });
+}
+
 /// aᵀb, by chunks on [`threads`] threads.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len(), "dot: vectors of one length");
@@ -183,6 +197,13 @@ mod tests {
                 }
             });
             assert!(x.iter().enumerate().all(|(k, &v)| v == k as f64), "{t}");
+            axpy(&mut x, 2.0, &a);
+            assert!(
+                x.iter()
+                    .enumerate()
+                    .all(|(k, &v)| v == k as f64 + 2.0 * a[k]),
+                "axpy, {t} threads"
+            );
         }
     }
 
