@@ -477,13 +477,9 @@ pub struct BenchOneArgs {
     pub scene: SceneArgs,
     #[arg(long)]
     pub solver: String,
-    /// Mesh continuation of a solver that warm-starts [default: the
-    /// solver's own].
-    #[arg(long, value_parser = choices::schedule())]
-    pub schedule: Option<Schedule>,
-    /// A setting by path, e.g. --set tnnmg.threads=1 (repeatable).
-    #[arg(long = "set", value_name = "PATH=VALUE")]
-    pub set: Vec<String>,
+    /// The settings flags of every command (--schedule, --set, …).
+    #[command(flatten)]
+    pub settings: SettingsArgs,
 }
 
 /// Parses the command line and runs it; errors are one line on stderr with a

@@ -7,6 +7,7 @@ use crate::cli::{BenchArgs, BenchOneArgs};
 use crate::commands::run_study;
 use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
+use crate::settings::Settings;
 use crate::study::bench::BenchSpec;
 use crate::study::bench::goals::{Bench, goals_markdown};
 use crate::study::bench::memory::measure_here;
@@ -48,10 +49,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 pub fn run_one(args: &BenchOneArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     faer::set_global_parallelism(faer::Par::Seq);
-    let schedule = match args.schedule {
-        Some(s) => s,
-        None => crate::solve::solver_entry(&args.solver)?.schedule,
-    };
-    let used = measure_here(&scene, &args.solver, schedule, &args.set)?;
+    let entry = crate::solve::solver_entry(&args.solver)?;
+    let settings = args.settings.resolve_for(Settings::default(), &[entry])?;
+    let used = measure_here(&scene, &args.solver, &settings)?;
     print(&format!("{}\n", serde_json::to_string(&used)?))
 }

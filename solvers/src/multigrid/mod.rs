@@ -259,10 +259,6 @@ pub struct Tnnmg {
 /// and solves); the rest of a Coulomb solve is the friction fixed point's.
 pub const TOTAL_SECONDS: &str = "tnnmg_total_seconds";
 
-/// The names of the phase diagnostics, in order: set-up, smoothing, coarse
-/// levels, Krylov updates, line search ([`iteration::Phases`]).
-pub const PHASE_SECONDS: [&str; 5] = Phases::NAMES;
-
 /// The vectors of one solve.
 struct Buffers {
     ws: Workspace,

@@ -105,12 +105,7 @@ fn peak_memory_kb() -> Option<u64> {
 /// continuation gets the coarser levels assembled beside it, as `solve`
 /// does: the finest mesh is assembled once). Meaningful only in a fresh
 /// process.
-pub fn measure_here(
-    scene: &Scene,
-    solver: &str,
-    schedule: Schedule,
-    set: &[String],
-) -> Result<MemoryUse> {
+pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<MemoryUse> {
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
     let entry = solver_entry(solver)?;
@@ -126,16 +121,6 @@ pub fn measure_here(
     let problem_kb = status_kb("VmRSS")
         .ok_or_else(unread)?
         .saturating_sub(before);
-    let mut settings = Settings::default();
-    settings.schedule = Some(schedule);
-    for change in set {
-        let (path, value) = change
-            .split_once('=')
-            .with_context(|| format!("--set {change}: write it as PATH=VALUE"))?;
-        settings
-            .set_text(path.trim(), value.trim())
-            .map_err(anyhow::Error::msg)?;
-    }
     let silent = &mut contactlab_solvers::Silent;
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)
@@ -146,7 +131,7 @@ pub fn measure_here(
         problem,
         Friction::Coulomb,
         entry,
-        &settings,
+        settings,
         Caps::default(),
         silent,
     )?;
