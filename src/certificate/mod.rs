@@ -40,6 +40,14 @@
 //! A value that is not finite, or a residual that overflows (inf − inf),
 //! is an infinite violation: every maximum here counts a NaN as infinite.
 
+pub mod energy_solve;
+pub mod error_bound;
+
+pub use error_bound::{
+    BoundError, BoundKind, BoundReport, ErrorBound, ErrorBounder, SOLVE_BOUND_MAX_UNKNOWNS,
+    bound_room, error_bound,
+};
+
 use contactlab_solvers::{ContactProblem, Friction, Law, Solution, Status};
 use serde::{Deserialize, Serialize};
 

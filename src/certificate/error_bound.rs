@@ -1,0 +1,581 @@
+//! An upper bound on an answer's error, from the duality gap (issue 51): how
+//! far the displacements and pressures can be from the exact solution of
+//! the discrete problem, computed from the answer alone.
+//!
+//! The given-friction problem (paper (10), in the unknowns of
+//! [`ContactProblem`]) is
+//!
+//! ```text
+//! minimize J(v) = ½ vᵀA v − fᵀv + Σ_i w_i g_i |s_i|   over t_i ≤ 0.
+//! ```
+//!
+//! For multipliers (p, q) with p ≥ 0 and |q_i| ≤ g_i, the Lagrangian
+//! L(v; p, q) = ½ vᵀA v − rᵀv with r = f − Σ w_i p_i e_{t_i} + Σ w_i q_i e_{s_i}
+//! is below J on the admissible set, so its minimum over all v, the dual
+//! value D(p, q) = −½ rᵀA⁺r, is below J(v*) (weak duality). It is finite
+//! only if r carries no load along the rigid mode z: zᵀr = 0, the balance
+//! (13) of the semicoercive problem. And since J is ½‖·‖²_A plus convex
+//! terms and v* minimizes it over a convex set, J(v) − J(v*) ≥ ½‖v − v*‖²_A
+//! for every admissible v. Hence
+//!
+//! ```text
+//! ½‖v − v*‖²_A ≤ J(v) − D(p, q) = C + ½ ρᵀA⁺ρ,
+//! C = Σ_i w_i (g_i |s_i| + q_i s_i − p_i t_i) ≥ 0   (the complementarity gap),
+//! ρ = A v − r                                        (the stationarity residual),
+//! ```
+//!
+//! which needs one solve with A ([`EnergySolve`], the certificate's own).
+//! An answer is first repaired into that setting, each step keeping the
+//! bound valid:
+//! - v with some t_i > 0 is replaced by v_c with those jumps set to 0, and
+//!   ‖v − v*‖_A ≤ ‖v − v_c‖_A + ‖v_c − v*‖_A (the first term computed);
+//! - p is clipped to p ≥ 0 and q to |q| ≤ g, then the pressures are scaled
+//!   (or, failing that, shifted) so that the load along z is balanced
+//!   exactly;
+//! - both the forces given and those the displacements imply are tried,
+//!   and the smaller bound kept (each is an upper bound).
+//!
+//! The pressure follows by Cauchy–Schwarz in the A inner product: at the
+//! exact solution w_i p*_i = −(A v* − f)_{t_i}, so for the pressure the
+//! displacements imply, |p_i(v) − p*_i| = |e_{t_i}ᵀA(v − v*)| / w_i ≤
+//! √A_{t_i t_i} ‖v − v*‖_A / w_i, and the answer's own pressure adds its
+//! distance from the implied one.
+//!
+//! For the Coulomb law the bound is that of the given-friction problem at
+//! the answer's own bound g = 𝓕 max(p, 0) ([`BoundKind::AtOwnBound`]): it
+//! is rigorous for that problem; the distance from there to the Coulomb
+//! solution (the fixed point's part) is not included.
+//!
+//! The energy seminorm does not see the rigid translation z: a bound on
+//! ‖v − v*‖_A says nothing about how far the upper body sits along z.
+//!
+//! Rounding: the solve is refined once and the refinement's change added;
+//! the long sums of ‖d‖_A carry an allowance of 32 ε |d|ᵀ|A| |d|, and the
+//! stationarity residual one of ‖b‖_{A⁺} with b = 32 ε (|A| |v| + |f|), the
+//! size of its rounding (an estimate: see [`ErrorBounder::rounding_allowance`]).
+//! The bound is rigorous up to these allowances for floating point, which
+//! are its floor: about 1e-10 of the energy of a displacement of size U
+//! (measured on problem 1 at h = 1/32, `tests/error_bound.rs`).
+
+use contactlab_solvers::{ContactProblem, Friction, Law};
+use serde::{Deserialize, Serialize};
+
+use super::energy_solve::{EnergySolve, EnergySolveError};
+
+/// What a bound is a bound on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BoundKind {
+    /// On the distance to the exact solution of the given-friction problem
+    /// that was solved.
+    Rigorous,
+    /// On the distance to the given-friction solution at the answer's own
+    /// bound g = 𝓕p (a Coulomb answer); the fixed point's part, up to the
+    /// Coulomb solution, is not included.
+    AtOwnBound,
+}
+
+impl BoundKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            BoundKind::Rigorous => "rigorous",
+            BoundKind::AtOwnBound => "rigorous at g = 𝓕p (fixed-point part not included)",
+        }
+    }
+}
+
+/// An upper bound on the error of an answer (v, p, q).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorBound {
+    /// ‖v − v*‖_A, in the problem's units (√(force·length)).
+    pub energy: f64,
+    /// The same over √K·U (the problem's stiffness and displacement
+    /// scales): dimensionless, unchanged by the units.
+    pub displacement: f64,
+    /// max_i |p_i − p*_i| over the pressure scale P.
+    pub pressure: f64,
+    pub kind: BoundKind,
+}
+
+/// Why no bound was computed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BoundError {
+    #[error("the answer does not fit the problem (sizes, or a value that is not finite)")]
+    Malformed,
+    #[error("the problem has {0} rigid modes; the bound handles at most one")]
+    RigidModes(usize),
+    #[error(
+        "no reading of the answer could be repaired: its pressures cannot balance the load along the rigid mode, or the extension of its change at Γ_K failed"
+    )]
+    Unbalanced,
+    #[error("the solve with A: {0}")]
+    Solve(#[from] EnergySolveError),
+}
+
+/// The certificate's factorizations, kept to bound several answers of one
+/// problem: A with one unknown per rigid mode pinned (for A⁺), and A
+/// without the contact unknowns (for the least-energy extension of a
+/// change made at Γ_K).
+pub struct ErrorBounder<'a> {
+    problem: &'a ContactProblem,
+    solve: EnergySolve,
+    /// Built on first use: an answer that needs no change at Γ_K needs no
+    /// extension.
+    interior: std::cell::OnceCell<Result<EnergySolve, EnergySolveError>>,
+    room: f64,
+    /// ‖z‖_A of the rigid mode as assembled: zero in exact arithmetic,
+    /// about 1e-16·K·max|z| per row in floating point. A shift along z
+    /// adds |τ|·‖z‖_A to the bound, so that the bound holds for the
+    /// matrix as it is, not only for the exact one.
+    rigid_energy: f64,
+}
+
+/// One way of reading an answer: its forces as given or as its
+/// displacements imply them, and the displacements shifted along the
+/// rigid mode or not.
+struct Reading<'r> {
+    p: &'r [f64],
+    q: &'r [f64],
+    shift: bool,
+}
+
+impl<'a> ErrorBounder<'a> {
+    /// Factors A (one pinned unknown per rigid mode) and A without the
+    /// contact unknowns, refusing if either factor would take more than
+    /// `room` bytes.
+    pub fn new(problem: &'a ContactProblem, room: f64) -> Result<Self, BoundError> {
+        let modes = problem.rigid_modes();
+        if modes.len() > 1 {
+            return Err(BoundError::RigidModes(modes.len()));
+        }
+        let pinned: Vec<usize> = modes
+            .iter()
+            .map(|z| {
+                (0..z.len())
+                    .max_by(|&a, &b| z[a].abs().total_cmp(&z[b].abs()))
+                    .unwrap_or(0)
+            })
+            .collect();
+        let solve = EnergySolve::new(problem, &pinned, room)?;
+        let mut out = Self {
+            problem,
+            solve,
+            interior: std::cell::OnceCell::new(),
+            room,
+            rigid_energy: 0.0,
+        };
+        if let Some(z) = modes.first() {
+            out.rigid_energy = (0..z.len())
+                .map(|i| z[i] * out.row_product(i, z))
+                .sum::<f64>()
+                .abs()
+                .sqrt();
+        }
+        Ok(out)
+    }
+
+    /// The bound for the answer (v, p, q) under `friction`.
+    pub fn bound(
+        &self,
+        friction: Friction<'_>,
+        v: &[f64],
+        p: &[f64],
+        q: &[f64],
+    ) -> Result<ErrorBound, BoundError> {
+        let problem = self.problem;
+        let (n, m) = (problem.n(), problem.contacts().len());
+        let finite = |x: &[f64]| x.iter().all(|y| y.is_finite());
+        if v.len() != n
+            || p.len() != m
+            || q.len() != m
+            || friction.check(problem).is_err()
+            || !(finite(v) && finite(p) && finite(q))
+        {
+            return Err(BoundError::Malformed);
+        }
+        let contacts = problem.contacts();
+        // The bound of the given-friction problem: the problem's g, or the
+        // answer's own g = 𝓕 max(p, 0) for the Coulomb law.
+        let g: Vec<f64> = contacts
+            .iter()
+            .enumerate()
+            .map(|(i, c)| friction.bound(i, c.coefficient, p[i]))
+            .collect();
+        let elastic: Vec<f64> = (0..n)
+            .map(|i| self.row_product(i, v) - problem.f()[i])
+            .collect();
+        let implied: (Vec<f64>, Vec<f64>) = contacts
+            .iter()
+            .map(|c| (-elastic[c.t] / c.weight, elastic[c.s] / c.weight))
+            .unzip();
+        let rounding = self.rounding_allowance(v);
+        let mut best: Option<f64> = None;
+        for (pr, qr) in [(p, q), (&implied.0[..], &implied.1[..])] {
+            for shift in [false, true] {
+                let reading = Reading {
+                    p: pr,
+                    q: qr,
+                    shift,
+                };
+                if let Some(e) = self.energy(v, &elastic, &g, &reading)
+                    && best.is_none_or(|b| e < b)
+                {
+                    best = Some(e);
+                }
+            }
+        }
+        let energy = best.ok_or(BoundError::Unbalanced)? + rounding;
+        let s = problem.scales();
+        let pressure = contacts
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let diagonal = self.entry(c.t, c.t).max(0.0);
+                ((p[i] - implied.0[i]).abs() + diagonal.sqrt() * energy / c.weight) / s.pressure
+            })
+            .fold(0.0, f64::max);
+        Ok(ErrorBound {
+            energy,
+            displacement: energy / (s.stiffness.sqrt() * s.displacement),
+            pressure,
+            kind: match friction.law() {
+                Law::GivenFriction => BoundKind::Rigorous,
+                Law::Coulomb => BoundKind::AtOwnBound,
+            },
+        })
+    }
+
+    /// The bound ‖v_c − v‖_A + √(2 (J(v_c) − D(p̂, q̂))) of one reading:
+    /// (p, q) repaired into the dual-feasible set, v moved to an admissible
+    /// v_c; None if the pressures cannot balance the load.
+    ///
+    /// Each contact node's share of the complementarity gap C is first
+    /// weighed against what removing it would cost, estimated from the
+    /// diagonal of A: a pressure p̂ > 0 against an open jump t < 0 costs
+    /// w p̂ |t| in C, ½ A_tt t² if the jump is closed (v_c), or about
+    /// ½ (w p̂)²/A_tt if the pressure is dropped (in ρ); likewise a traction
+    /// short of its bound at a slipping node. The cheapest is taken. The
+    /// choice only sharpens the bound: any choice gives an upper bound.
+    fn energy(&self, v: &[f64], elastic: &[f64], g: &[f64], reading: &Reading<'_>) -> Option<f64> {
+        let problem = self.problem;
+        let contacts = problem.contacts();
+        let z = problem.rigid_modes().first();
+        let mut vs = v.to_vec();
+        let mut shifted = 0.0;
+        if reading.shift
+            && let Some(z) = z
+        {
+            // Along z the energy norm is blind: shift v so that the jumps
+            // at nodes that carry pressure are closed on average.
+            let (mut num, mut den) = (0.0, 0.0);
+            for (i, c) in contacts.iter().enumerate() {
+                if reading.p[i] > 0.0 {
+                    num -= c.weight * v[c.t] * z[c.t];
+                    den += c.weight * z[c.t] * z[c.t];
+                }
+            }
+            let tau = num / den;
+            if !(tau.is_finite()) {
+                return None;
+            }
+            vs.iter_mut().zip(z).for_each(|(x, zk)| *x += tau * zk);
+            shifted = tau.abs() * self.rigid_energy;
+        }
+        let mut ph: Vec<f64> = reading.p.iter().map(|x| x.max(0.0)).collect();
+        let mut qh: Vec<f64> = reading
+            .q
+            .iter()
+            .zip(g)
+            .map(|(x, gi)| x.clamp(-gi, *gi))
+            .collect();
+        // Pressures against open jumps and tractions short of their bound
+        // at slipping nodes: drop them where that is cheapest.
+        for (i, c) in contacts.iter().enumerate() {
+            let (att, ass) = (self.entry(c.t, c.t), self.entry(c.s, c.s));
+            let t = vs[c.t];
+            if t < 0.0 && ph[i] > 0.0 {
+                let keep = c.weight * ph[i] * -t;
+                let close = 0.5 * att * t * t;
+                let drop = 0.5 * (c.weight * ph[i]).powi(2) / att;
+                if drop < keep.min(close) {
+                    ph[i] = 0.0;
+                }
+            }
+            let s = vs[c.s];
+            let slack = g[i] * s.abs() + qh[i] * s;
+            if s != 0.0 && slack > 0.0 {
+                let keep = c.weight * slack;
+                let stop = 0.5 * ass * s * s;
+                let full = -g[i] * s.signum();
+                let turn = 0.5 * (c.weight * (full - qh[i])).powi(2) / ass;
+                if turn < keep.min(stop) {
+                    qh[i] = full;
+                }
+            }
+        }
+        if let Some(z) = z {
+            balance(problem, z, &mut ph, &qh)?;
+        }
+        // v_c: complementary to (p̂, q̂) at every node, so that the gap's
+        // C is zero: a jump closed where a pressure acts on it or where it
+        // penetrates, a slip stopped where the traction is short of its
+        // bound or points along it. The change at Γ_K is extended into
+        // the bodies with least energy.
+        let mut d = vec![0.0; vs.len()];
+        for (i, c) in contacts.iter().enumerate() {
+            let t = vs[c.t];
+            if t > 0.0 || (t < 0.0 && ph[i] > 0.0) {
+                d[c.t] = -t;
+            }
+            let s = vs[c.s];
+            if g[i] * s.abs() + qh[i] * s > 0.0 {
+                d[c.s] = -s;
+            }
+        }
+        let ad = self.extend(&mut d).ok()?;
+        let correction = self.energy_norm(&d, &ad);
+        // ρ = A v_c − f + Σ w p̂ e_t − Σ w q̂ e_s (A z = 0: the shift adds nothing).
+        let mut rho: Vec<f64> = elastic.iter().zip(&ad).map(|(a, b)| a + b).collect();
+        for (i, c) in contacts.iter().enumerate() {
+            rho[c.t] += c.weight * ph[i];
+            rho[c.s] -= c.weight * qh[i];
+        }
+        if let Some(z) = z {
+            // Balanced exactly above, up to rounding: take ρ's part
+            // orthogonal to z, the part A⁺ is defined on.
+            let zz: f64 = z.iter().map(|x| x * x).sum();
+            let zr: f64 = z.iter().zip(&rho).map(|(a, b)| a * b).sum();
+            for (r, zk) in rho.iter_mut().zip(z) {
+                *r -= zr / zz * zk;
+            }
+        }
+        let y = self.solve.solve(&rho);
+        // One refinement: the residual ρ − A y solved again; its change
+        // to ρᵀy is counted as rounding allowance.
+        let residual: Vec<f64> = (0..rho.len())
+            .map(|i| rho[i] - self.row_product(i, &y))
+            .collect();
+        let dy = self.solve.solve(&residual);
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let first = dot(&rho, &y);
+        let change = dot(&rho, &dy);
+        let quadratic = (first + change).max(0.0) + change.abs();
+        let quadratic = quadratic * (1.0 + 4.0 * f64::EPSILON);
+        Some(quadratic.sqrt() + correction + shifted)
+    }
+
+    /// Extends `d`, given at the contact unknowns (zero elsewhere on
+    /// entry), into the bodies with least energy: d_F = −A_FF⁻¹ A_FS d_S.
+    /// Returns A d.
+    fn extend(&self, d: &mut [f64]) -> Result<Vec<f64>, EnergySolveError> {
+        let support: Vec<usize> = (0..d.len()).filter(|&k| d[k] != 0.0).collect();
+        if support.is_empty() {
+            return Ok(vec![0.0; d.len()]);
+        }
+        let interior = self
+            .interior
+            .get_or_init(|| {
+                let contact: Vec<usize> = self
+                    .problem
+                    .contacts()
+                    .iter()
+                    .flat_map(|c| [c.t, c.s])
+                    .collect();
+                EnergySolve::new(self.problem, &contact, self.room)
+            })
+            .as_ref()
+            .map_err(Clone::clone)?;
+        let mut rhs = self.product_on(d, &support);
+        rhs.iter_mut().for_each(|x| *x = -*x);
+        let inside = interior.solve(&rhs);
+        for (k, x) in inside.iter().enumerate() {
+            if *x != 0.0 {
+                d[k] = *x;
+            }
+        }
+        Ok((0..d.len()).map(|i| self.row_product(i, d)).collect())
+    }
+
+    /// ‖d‖_A from d and A d, with the rounding of the long sums dᵀA d
+    /// allowed for: γ |d|ᵀ|A| |d| with γ = 32 ε (for a rigid shift, where
+    /// dᵀA d is zero in exact arithmetic, this allowance is the whole).
+    fn energy_norm(&self, d: &[f64], ad: &[f64]) -> f64 {
+        let value: f64 = d.iter().zip(ad).map(|(a, b)| a * b).sum();
+        let size: f64 = (0..d.len())
+            .filter(|&i| d[i] != 0.0)
+            .map(|i| {
+                let (cols, vals) = self.problem.a().row(i);
+                d[i].abs()
+                    * cols
+                        .iter()
+                        .zip(vals)
+                        .map(|(&c, a)| (a * d[c as usize]).abs())
+                        .sum::<f64>()
+            })
+            .sum();
+        (value.max(0.0) + 32.0 * f64::EPSILON * size).sqrt()
+    }
+
+    /// ‖b‖_{A⁺} for b_i = γ (Σ_j |A_ij v_j| + |f_i|), γ = 32 ε: the size of
+    /// the rounding in the stationarity residual ρ, a difference of terms
+    /// of the size of b/γ, measured as ρ's bound measures it. An estimate
+    /// of that rounding, not a bound on it: its signs are taken alike,
+    /// which A⁺ (smoothing) damps least.
+    fn rounding_allowance(&self, v: &[f64]) -> f64 {
+        let problem = self.problem;
+        let mut b: Vec<f64> = (0..v.len())
+            .map(|i| {
+                let (cols, vals) = problem.a().row(i);
+                let size: f64 = cols
+                    .iter()
+                    .zip(vals)
+                    .map(|(&c, a)| (a * v[c as usize]).abs())
+                    .sum();
+                32.0 * f64::EPSILON * (size + problem.f()[i].abs())
+            })
+            .collect();
+        if let Some(z) = problem.rigid_modes().first() {
+            let zz: f64 = z.iter().map(|x| x * x).sum();
+            let zb: f64 = z.iter().zip(&b).map(|(a, c)| a * c).sum();
+            for (x, zk) in b.iter_mut().zip(z) {
+                *x -= zb / zz * zk;
+            }
+        }
+        let y = self.solve.solve(&b);
+        b.iter()
+            .zip(&y)
+            .map(|(a, c)| a * c)
+            .sum::<f64>()
+            .max(0.0)
+            .sqrt()
+    }
+
+    /// Row i of A times x, summed by the certificate's own loop.
+    fn row_product(&self, i: usize, x: &[f64]) -> f64 {
+        let (cols, vals) = self.problem.a().row(i);
+        cols.iter().zip(vals).map(|(&c, a)| a * x[c as usize]).sum()
+    }
+
+    /// A x for an x that is zero outside `support` (a few entries).
+    fn product_on(&self, x: &[f64], support: &[usize]) -> Vec<f64> {
+        let mut out = vec![0.0; x.len()];
+        for &j in support {
+            // A is symmetric: column j is row j.
+            let (cols, vals) = self.problem.a().row(j);
+            for (&c, a) in cols.iter().zip(vals) {
+                out[c as usize] += a * x[j];
+            }
+        }
+        out
+    }
+
+    fn entry(&self, i: usize, j: usize) -> f64 {
+        let (cols, vals) = self.problem.a().row(i);
+        cols.iter()
+            .zip(vals)
+            .find(|&(&c, _)| c as usize == j)
+            .map_or(0.0, |(_, &a)| a)
+    }
+}
+
+/// Makes the pressures `p` (≥ 0) carry the load along the rigid mode z
+/// with the tractions `q`: zᵀ(f − Σ w p e_t + Σ w q e_s) = 0, by scaling p
+/// or, if that cannot keep p ≥ 0, by adding one pressure to every node.
+fn balance(problem: &ContactProblem, z: &[f64], p: &mut [f64], q: &[f64]) -> Option<()> {
+    let load: f64 = z.iter().zip(problem.f()).map(|(a, b)| a * b).sum();
+    let (mut carried, mut unit, mut traction) = (0.0, 0.0, 0.0);
+    for (i, c) in problem.contacts().iter().enumerate() {
+        carried += c.weight * p[i] * z[c.t];
+        unit += c.weight * z[c.t];
+        traction += c.weight * q[i] * z[c.s];
+    }
+    let need = load + traction;
+    let scale = need / carried;
+    if scale.is_finite() && scale >= 0.0 {
+        p.iter_mut().for_each(|x| *x *= scale);
+        return Some(());
+    }
+    let shift = (need - carried) / unit;
+    if shift.is_finite() && p.iter().all(|x| x + shift >= 0.0) {
+        p.iter_mut().for_each(|x| *x += shift);
+        return Some(());
+    }
+    None
+}
+
+/// The bound for one answer, with a factorization of its own (see
+/// [`ErrorBounder`] to bound several answers of one problem).
+pub fn error_bound(
+    problem: &ContactProblem,
+    friction: Friction<'_>,
+    v: &[f64],
+    p: &[f64],
+    q: &[f64],
+    room: f64,
+) -> Result<ErrorBound, BoundError> {
+    ErrorBounder::new(problem, room)?.bound(friction, v, p, q)
+}
+
+/// The largest problem whose bound `solve` computes beside its answer
+/// (h = 1/128 has 33 282 unknowns): the bound takes one or two sparse
+/// factorizations, which at finer h cost more than the fast solvers: at
+/// 1/256 they took a relaxation solve from 213 MB (its estimate) to 339
+/// MB, and at 1/512 they add 4.6 s and 1.3 GB to tnnmg's 0.7 s and 0.16 GB. `certify`
+/// bounds an answer at any h whose factors fit in memory.
+pub const SOLVE_BOUND_MAX_UNKNOWNS: usize = 40_000;
+
+/// The bound of an answer as reported beside its certificate: the bound,
+/// or why there is none.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BoundReport {
+    pub bound: Option<ErrorBound>,
+    pub not_computed: Option<String>,
+}
+
+impl BoundReport {
+    /// No bound, and why.
+    pub fn skipped(why: impl Into<String>) -> Self {
+        Self {
+            bound: None,
+            not_computed: Some(why.into()),
+        }
+    }
+
+    /// The bound of (v, p, q), with factors allowed at most `room` bytes.
+    pub fn of(
+        problem: &ContactProblem,
+        friction: Friction<'_>,
+        v: &[f64],
+        p: &[f64],
+        q: &[f64],
+        room: f64,
+    ) -> Self {
+        match error_bound(problem, friction, v, p, q, room) {
+            Ok(b) => Self {
+                bound: Some(b),
+                not_computed: None,
+            },
+            Err(e) => Self::skipped(e.to_string()),
+        }
+    }
+
+    /// One line: the bounds in the problem's scales and what they bound.
+    pub fn line(&self) -> String {
+        match (&self.bound, &self.not_computed) {
+            (Some(b), _) => format!(
+                "‖v − v*‖_A ≤ {:.2e} (= {:.2e} √K·U), max|p − p*| ≤ {:.2e} P; {}",
+                b.energy,
+                b.displacement,
+                b.pressure,
+                b.kind.as_str()
+            ),
+            (None, Some(why)) => format!("not computed: {why}"),
+            (None, None) => "not computed".to_string(),
+        }
+    }
+}
+
+/// Half the memory free now: the room the bound's factors may take.
+pub fn bound_room() -> f64 {
+    crate::memory::room().map_or(f64::INFINITY, |r| 0.5 * r.bytes)
+}

@@ -1,0 +1,318 @@
+//! The error bound (issue 51) is an upper bound: for answers of every kind
+//! (solvers' answers at loose and tight targets, answers perturbed by
+//! scaling, a shift, one node moved, the contact zone moved), the bound is
+//! never below the true error against a reference answer.
+//!
+//! The given-friction subproblem (paper (10)) at g = 0.5·𝓕·P is solved by
+//! `newton` to its default 1e-12; the reference's own bound is taken off
+//! the true error (‖v − v*‖_A ≥ ‖v − v_ref‖_A − ‖v_ref − v*‖_A), so that
+//! the test claims no more than the bound does.
+
+use contactlab::certificate::{BoundKind, ErrorBound, ErrorBounder};
+use contactlab::mechanics::discretization::Discretization;
+use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
+use contactlab::settings::Settings;
+use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solvers::{ContactProblem, Friction, Silent};
+
+struct Answer {
+    v: Vec<f64>,
+    p: Vec<f64>,
+    q: Vec<f64>,
+}
+
+struct Case {
+    d: Discretization,
+    g: Vec<f64>,
+    reference: Answer,
+}
+
+fn given_friction(h: u32, problem: u32) -> Scene {
+    Scene::paper_problem_to(problem, MeshSize::from_level(h).unwrap()).unwrap()
+}
+
+/// The given-friction problem of `scene` at g = 0.5·𝓕·P, solved by
+/// `solver` with `settings`.
+fn solve_given(
+    scene: &Scene,
+    solver: &str,
+    settings: &Settings,
+) -> (Discretization, Vec<f64>, Answer) {
+    // The bound g from the problem's pressure scale, as the tnnmg goal does.
+    let probe = solve_scene(
+        scene,
+        Friction::Coulomb,
+        solver_entry("newton-coulomb").unwrap(),
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap();
+    let problem = &probe.finest.problem;
+    let g: Vec<f64> = problem
+        .contacts()
+        .iter()
+        .map(|c| 0.5 * c.coefficient * problem.scales().pressure)
+        .collect();
+    let run = solve_scene(
+        scene,
+        Friction::Given(&g),
+        solver_entry(solver).unwrap(),
+        settings,
+        &mut Silent,
+    )
+    .unwrap();
+    let s = run.outcome.solution;
+    (
+        run.finest,
+        g,
+        Answer {
+            v: s.v,
+            p: s.pressure,
+            q: s.friction_traction,
+        },
+    )
+}
+
+fn case(h: u32, problem: u32) -> Case {
+    let (d, g, reference) =
+        solve_given(&given_friction(h, problem), "newton", &Settings::default());
+    Case { d, g, reference }
+}
+
+/// A lower bound on ‖x − y‖_A in the seminorm the bound is about: e = x − y
+/// taken modulo the rigid mode z (min over α of ‖e − α z‖_A; in exact
+/// arithmetic A z = 0 and this is ‖e‖_A, but the stored A carries z at the
+/// rounding level, and an answer that floats along z would show that
+/// rounding as error), its long sums' rounding (32 ε |e|ᵀ|A| |e|) taken off,
+/// so that the test claims no more than the arithmetic gives.
+fn energy_distance(problem: &ContactProblem, x: &[f64], y: &[f64]) -> f64 {
+    let e: Vec<f64> = x.iter().zip(y).map(|(a, b)| a - b).collect();
+    let a = problem.a();
+    let product = |u: &[f64]| -> Vec<f64> {
+        (0..u.len())
+            .map(|i| {
+                let (cols, vals) = a.row(i);
+                cols.iter()
+                    .zip(vals)
+                    .map(|(&c, v)| v * u[c as usize])
+                    .sum::<f64>()
+            })
+            .collect()
+    };
+    let dot = |u: &[f64], w: &[f64]| u.iter().zip(w).map(|(p, q)| p * q).sum::<f64>();
+    let ae = product(&e);
+    let mut value = dot(&e, &ae);
+    if let Some(z) = problem.rigid_modes().first() {
+        let az = product(z);
+        let (zaz, zae) = (dot(z, &az), dot(z, &ae));
+        if zaz > 0.0 {
+            value -= zae * zae / zaz;
+        }
+    }
+    let mut size = 0.0;
+    for i in 0..e.len() {
+        let (cols, vals) = a.row(i);
+        for (&c, v) in cols.iter().zip(vals) {
+            size += (e[i] * v * e[c as usize]).abs();
+        }
+    }
+    (value - 32.0 * f64::EPSILON * size).max(0.0).sqrt()
+}
+
+fn bound_of(b: &ErrorBounder<'_>, g: &[f64], a: &Answer) -> ErrorBound {
+    b.bound(Friction::Given(g), &a.v, &a.p, &a.q).unwrap()
+}
+
+/// Answers near the reference, each perturbed in one way.
+fn perturbed(case: &Case) -> Vec<(&'static str, Answer)> {
+    let problem = &case.d.problem;
+    let u = problem.scales().displacement;
+    let r = &case.reference;
+    let copy = || Answer {
+        v: r.v.clone(),
+        p: r.p.clone(),
+        q: r.q.clone(),
+    };
+    let mut out = Vec::new();
+    for eps in [1e-2, 1e-4, 1e-6] {
+        let mut a = copy();
+        a.v.iter_mut().for_each(|x| *x *= 1.0 + eps);
+        a.p.iter_mut().for_each(|x| *x *= 1.0 + eps);
+        out.push(("scaled", a));
+        let mut a = copy();
+        let z = &problem.rigid_modes()[0];
+        a.v.iter_mut().zip(z).for_each(|(x, zk)| *x += eps * u * zk);
+        out.push(("shifted along the rigid mode", a));
+        let mut a = copy();
+        let k = problem.n() / 3;
+        a.v[k] += eps * u;
+        out.push(("one node moved", a));
+        let mut a = copy();
+        a.p.iter_mut()
+            .for_each(|x| *x += eps * problem.scales().pressure);
+        out.push(("pressures shifted", a));
+        let mut a = copy();
+        for (i, x) in a.v.iter_mut().enumerate() {
+            *x += eps * u * (i as f64 * 0.37).sin();
+        }
+        out.push(("rough field added", a));
+    }
+    // The contact zone moved: the first separated nodes closed, the
+    // first nodes in contact opened by a little.
+    let mut a = copy();
+    let contacts = problem.contacts();
+    if let Some(i) = (0..contacts.len()).find(|&i| r.v[contacts[i].t] < 0.0) {
+        a.v[contacts[i].t] = 0.0;
+    }
+    if let Some(i) = (0..contacts.len()).find(|&i| r.p[i] > 0.0) {
+        a.v[contacts[i].t] = -1e-3 * u;
+        a.p[i] = 0.0;
+    }
+    out.push(("zone moved", a));
+    out
+}
+
+/// Every answer's bound is at least its true error (less the reference's
+/// own bound); returns the ratios bound / true error.
+fn check(case: &Case, answers: &[(&str, Answer)]) -> Vec<f64> {
+    let problem = &case.d.problem;
+    let bounder = ErrorBounder::new(problem, 1e10).unwrap();
+    let own = bound_of(&bounder, &case.g, &case.reference);
+    assert_eq!(own.kind, BoundKind::Rigorous);
+    let mut ratios = Vec::new();
+    for (what, a) in answers {
+        let b = bound_of(&bounder, &case.g, a);
+        let truth = energy_distance(problem, &a.v, &case.reference.v);
+        assert!(
+            b.energy >= truth - own.energy,
+            "{what}: bound {:.3e} below the true error {truth:.3e} (reference's own bound {:.1e})",
+            b.energy,
+            own.energy
+        );
+        let pressure =
+            a.p.iter()
+                .zip(&case.reference.p)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max)
+                / problem.scales().pressure;
+        assert!(
+            b.pressure >= pressure - own.pressure,
+            "{what}: pressure bound {:.3e} below the true error {pressure:.3e}",
+            b.pressure
+        );
+        eprintln!("   pressure: bound {:.3e} true {pressure:.3e}", b.pressure);
+        if truth > 100.0 * own.energy {
+            ratios.push(b.energy / truth);
+        }
+        eprintln!(
+            "{what}: bound {:.3e} true {truth:.3e} ratio {:.2}",
+            b.energy,
+            b.energy / truth
+        );
+    }
+    ratios
+}
+
+#[test]
+fn the_bound_is_never_below_the_true_error_of_perturbed_answers() {
+    for (h, p) in [(4, 1), (5, 3)] {
+        let c = case(h, p);
+        let answers = perturbed(&c);
+        let ratios = check(&c, &answers);
+        assert!(
+            ratios.len() >= answers.len() / 2,
+            "most answers are far enough from the reference to count"
+        );
+    }
+}
+
+#[test]
+fn the_bound_of_the_reference_is_at_the_noise_of_its_solve() {
+    let c = case(5, 1);
+    let bounder = ErrorBounder::new(&c.d.problem, 1e10).unwrap();
+    let own = bound_of(&bounder, &c.g, &c.reference);
+    eprintln!("{own:?}");
+    // The floor of a bound computed in floating point: √(8 ε) ≈ 4e-8 of
+    // the energy of a displacement of size U.
+    assert!(own.displacement < 1e-7, "{own:?}");
+}
+
+/// Every solver's answers on the benchmark's small collection (problems 1
+/// and 3 with 𝓕 = 0.5 and 2, a sideways load, a nearly lifted body; h =
+/// 1/8) at targets 1e-4, 1e-6 and 1e-8: the Coulomb answer's bound (of the
+/// given-friction problem at its own g = 𝓕 max(p, 0)) is never below its
+/// distance from that problem's solution, solved by `newton`. Returns the
+/// ratios for the sharpness check.
+#[test]
+fn every_solvers_answers_are_bounded_at_every_target() {
+    use contactlab::study::benchmark::{collection::collection, target_settings};
+    let mut ratios = Vec::new();
+    let mut answers = 0;
+    for instance in collection(true).unwrap() {
+        for entry in contactlab::solvers::registry::solvers() {
+            for target in [1e-4, 1e-6, 1e-8] {
+                let settings = target_settings(entry, &Settings::default(), target).unwrap();
+                let Ok(run) = solve_scene(
+                    &instance.scene,
+                    Friction::Coulomb,
+                    entry,
+                    &settings,
+                    &mut Silent,
+                ) else {
+                    continue;
+                };
+                let problem = &run.finest.problem;
+                let s = &run.outcome.solution;
+                let g: Vec<f64> = problem
+                    .contacts()
+                    .iter()
+                    .zip(&s.pressure)
+                    .map(|(c, p)| c.coefficient * p.max(0.0))
+                    .collect();
+                let reference = solve_scene(
+                    &instance.scene,
+                    Friction::Given(&g),
+                    solver_entry("newton").unwrap(),
+                    &Settings::default(),
+                    &mut Silent,
+                )
+                .unwrap();
+                let r = &reference.outcome.solution;
+                let bounder = ErrorBounder::new(problem, 1e10).unwrap();
+                let b = bounder
+                    .bound(Friction::Coulomb, &s.v, &s.pressure, &s.friction_traction)
+                    .unwrap();
+                assert_eq!(b.kind, BoundKind::AtOwnBound);
+                let own = bounder
+                    .bound(Friction::Given(&g), &r.v, &r.pressure, &r.friction_traction)
+                    .unwrap();
+                let truth = energy_distance(problem, &s.v, &r.v);
+                assert!(
+                    b.energy >= truth - own.energy,
+                    "{} by {} at {target:e}: bound {:.9e} below the true error {truth:.9e} (own {:.1e})",
+                    instance.id,
+                    entry.name,
+                    b.energy,
+                    own.energy
+                );
+                answers += 1;
+                if truth > 100.0 * own.energy {
+                    ratios.push(b.energy / truth);
+                }
+            }
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    eprintln!(
+        "{answers} answers, {} far enough from the reference to compare; bound / true error: median {:.2}, 90th percentile {:.2}, worst {:.2}",
+        ratios.len(),
+        ratios[ratios.len() / 2],
+        ratios[ratios.len() * 9 / 10],
+        ratios[ratios.len() - 1]
+    );
+    assert!(
+        answers >= 150,
+        "most solvers ran on every instance: {answers}"
+    );
+}
