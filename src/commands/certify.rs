@@ -8,7 +8,7 @@
 use anyhow::{Result, bail};
 use contactlab_solvers::Friction;
 
-use crate::certificate::certify;
+use crate::certificate::{BoundReport, bound_room, certify};
 use crate::cli::CertifyArgs;
 use crate::formats::instance::{complete_answer, import, read_forces, read_vector};
 use crate::io::output::print;
@@ -61,6 +61,8 @@ pub fn run(args: &CertifyArgs) -> Result<()> {
         text += &format!("  {:<16} {x:.3e}  {mark}\n", cond.as_str());
     }
     text += &format!("certificate: {}\n", c.summary());
+    let bound = BoundReport::of(problem, friction, &v, &p, &q, bound_room());
+    text += &format!("error bound: {}\n", bound.line());
     print(&text)?;
     if !c.passed() {
         bail!("the answer is not certified: {}", c.summary());

@@ -109,6 +109,7 @@ fn summary_text(s: &Summary) -> String {
         "{}, h = {}, solver {}, plane {}, friction coefficient {}\n\
          status              {} (solver's claim: {}; {})\n\
          certificate         {}\n\
+         error bound         {}\n\
          friction iterations {}\n\
          separated           {} = {:.2}% of Γ_K (jump < -{:.1e})\n\
          max pressure        {:.6}\n\
@@ -125,6 +126,7 @@ fn summary_text(s: &Summary) -> String {
         s.solver_status,
         s.detail,
         s.certificate_summary,
+        s.error_bound.line(),
         s.friction_iterations,
         if intervals.is_empty() {
             "none".to_string()

@@ -4,7 +4,7 @@
 use contactlab_solvers::Status;
 use serde::Serialize;
 
-use crate::certificate::Certificate;
+use crate::certificate::{BoundReport, Certificate, SOLVE_BOUND_MAX_UNKNOWNS, bound_room};
 use crate::coulomb::continuation::LevelCount;
 use crate::coulomb::fixed_point::{Ending, FrictionIteration};
 use crate::mechanics::scene::Scene;
@@ -37,6 +37,9 @@ pub struct Summary {
     pub certificate: Certificate,
     /// Which condition fails or is worst, in words.
     pub certificate_summary: String,
+    /// An upper bound on the answer's error from the duality gap
+    /// ([`crate::certificate::error_bound`]), or why there is none.
+    pub error_bound: BoundReport,
     pub separated_intervals: Vec<[f64; 2]>,
     pub separated_fraction: f64,
     pub separation_tolerance: f64,
@@ -83,6 +86,7 @@ impl Summary {
             detail: o.detail.clone(),
             certificate: o.certificate,
             certificate_summary: o.certificate.summary(),
+            error_bound: answer_bound(solved),
             separated_intervals: separation.intervals,
             separated_fraction: separation.fraction,
             separation_tolerance: separation.tolerance,
@@ -104,4 +108,26 @@ impl Summary {
             settings: settings.resolved(),
         }
     }
+}
+
+/// The error bound of the answer (issue 51), on meshes where it costs
+/// about what the solve does ([`SOLVE_BOUND_MAX_UNKNOWNS`]) and its
+/// factors fit in half the memory that is free.
+fn answer_bound(solved: &Solved) -> BoundReport {
+    let problem = &solved.finest.problem;
+    if problem.n() > SOLVE_BOUND_MAX_UNKNOWNS {
+        return BoundReport::skipped(format!(
+            "{} unknowns, more than the {SOLVE_BOUND_MAX_UNKNOWNS} `solve` bounds (h = 1/128); `certify` bounds an answer written by `solve --out` at any h that fits in memory",
+            problem.n()
+        ));
+    }
+    let s = &solved.outcome.solution;
+    BoundReport::of(
+        problem,
+        contactlab_solvers::Friction::Coulomb,
+        &s.v,
+        &s.pressure,
+        &s.friction_traction,
+        bound_room(),
+    )
 }
