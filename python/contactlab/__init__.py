@@ -428,6 +428,11 @@ class Certificate:
     summary: str
     violations: Dict[str, float]
     law: str = "coulomb"
+    #: An upper bound on the answer's error (``certify`` only): ``energy``
+    #: (‖v − v*‖_A), ``displacement`` (the same over √K·U), ``pressure``
+    #: (max|p − p*| over P), ``kind`` and ``summary``; or ``not_computed``
+    #: saying why. See the README's "The error bound".
+    error_bound: Optional[Dict] = None
 
     @classmethod
     def _of(cls, d: Mapping) -> "Certificate":
@@ -438,6 +443,7 @@ class Certificate:
             summary=str(d["summary"]),
             violations=dict(d["violations"]),
             law=str(d.get("law", "coulomb")),
+            error_bound=dict(d["error_bound"]) if "error_bound" in d else None,
         )
 
 

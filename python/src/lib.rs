@@ -408,6 +408,7 @@ fn certify<'py>(
     let p = slice("pressure", &pressure, m)?;
     let q = slice("friction_traction", &friction_traction, m)?;
     let g = slice("bound", &bound, m)?;
+    let g_given = g.is_some();
     if let Some(g) = &g {
         problem.bound_checked(g)?;
     }
@@ -432,20 +433,42 @@ fn certify<'py>(
             Some(g) => Friction::Given(g),
             None => Friction::Coulomb,
         };
+        let bound = contactlab::certificate::BoundReport::of(
+            &cp,
+            friction,
+            &v,
+            &p,
+            &q,
+            contactlab::certificate::bound_room(),
+        );
         Ok((
-            certify_answer(&cp, friction, &v, &p, &q, tolerance),
+            (certify_answer(&cp, friction, &v, &p, &q, tolerance), bound),
             v,
             p,
             q,
         ))
     })?;
-    let friction_law = if bound.is_some() {
+    let (c, bound) = c;
+    let friction_law = if g_given {
         contactlab::solvers::Law::GivenFriction
     } else {
         contactlab::solvers::Law::Coulomb
     };
     let d = certificate_dict(py, &c)?;
     d.set_item("law", friction_law.as_str())?;
+    // The bound on the answer's error (issue 51), or why there is none.
+    let b = PyDict::new(py);
+    match &bound.bound {
+        Some(e) => {
+            b.set_item("energy", e.energy)?;
+            b.set_item("displacement", e.displacement)?;
+            b.set_item("pressure", e.pressure)?;
+            b.set_item("kind", e.kind.as_str())?;
+        }
+        None => b.set_item("not_computed", bound.not_computed.as_deref().unwrap_or(""))?,
+    }
+    b.set_item("summary", bound.line())?;
+    d.set_item("error_bound", b)?;
     // The answer the certificate judged, completed (forces from the
     // displacements by stationarity, or displacements from the forces).
     d.set_item("displacements", v.into_pyarray(py))?;

@@ -126,6 +126,28 @@ def test_certify_accepts_the_true_answer_and_refuses_a_wrong_one(p32):
     assert not cl.certify(p32, forces=(p, r.friction_traction)).passed
 
 
+def test_certify_bounds_the_error_and_the_bound_grows_with_it(p32):
+    # The bound of issue 51, beside the verdict: tiny for the true answer
+    # of its own given-friction problem, at least the true error of a
+    # perturbed one (one node moved by 1e-3 U: error √A_kk · 1e-3 U).
+    g = np.full(len(p32.contact), 5.0)
+    r = cl.solve(p32, solver="newton", bound=g)
+    c = cl.certify(p32, displacements=r.displacements, forces=(r.pressure, r.friction_traction), bound=g)
+    b = c.error_bound
+    assert b["kind"] == "rigorous", b
+    u = r.displacements.copy()
+    k = u.size // 3
+    size = 1e-3 * np.abs(u).max()
+    u[k] += size
+    moved = cl.certify(p32, displacements=u, forces=(r.pressure, r.friction_traction), bound=g)
+    a_kk = p32.A[k, k]
+    assert moved.error_bound["energy"] >= np.sqrt(a_kk) * size - b["energy"]
+    assert moved.error_bound["energy"] > 100 * b["energy"]
+    # A Coulomb answer is bounded at its own g = 𝓕p, and says so.
+    coulomb = cl.certify(p32, displacements=r.displacements)
+    assert "fixed-point part not included" in coulomb.error_bound["kind"]
+
+
 def test_errors_are_the_command_lines_one_line_messages(p32):
     with pytest.raises(cl.Error, match="unknown solver 'nope': the registered solvers are"):
         cl.solve(p32, solver="nope")
