@@ -11,7 +11,7 @@ mod common;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solve::summary::Summary;
+use contactlab::solve::summary::{Summary, answer_bound};
 use contactlab::solve::{solve_scene, solver_entry};
 use contactlab::solvers::{Friction, Law, Silent};
 use contactlab::study::runner::trial_row;
@@ -30,7 +30,8 @@ fn the_summary_and_the_trial_of_one_solve_agree() {
         let solved = solve_scene(&scene, Friction::Coulomb, entry, &settings, &mut Silent).unwrap();
         let o = &solved.outcome;
         assert!(o.status.is_converged(), "{name}: {}", o.detail);
-        let summary = Summary::of(&solved, &scene, &settings, "test".into());
+        let bound = answer_bound(&solved);
+        let summary = Summary::of(&solved, &scene, &settings, bound, "test".into());
         let spec = TrialSpec::new("test", "test", &scene, entry, Law::Coulomb, &settings);
         let trial = trial_row(&spec, None, &solved.finest, o);
         assert_eq!(summary.iterations_outer, trial.outer_iterations, "{name}");

@@ -26,14 +26,20 @@
 //!
 //! which needs one solve with A ([`EnergySolve`], the certificate's own).
 //! An answer is first repaired into that setting, each step keeping the
-//! bound valid:
-//! - v with some t_i > 0 is replaced by v_c with those jumps set to 0, and
-//!   ‖v − v*‖_A ≤ ‖v − v_c‖_A + ‖v_c − v*‖_A (the first term computed);
-//! - p is clipped to p ≥ 0 and q to |q| ≤ g, then the pressures are scaled
-//!   (or, failing that, shifted) so that the load along z is balanced
-//!   exactly;
+//! bound valid (`ErrorBounder::energy`):
+//! - p is clipped to p ≥ 0 and q to |q| ≤ g; where a local estimate says it
+//!   is cheaper than closing the gap, a pressure against an open jump is
+//!   dropped and a traction at a slipping node turned to its bound;
+//! - the pressures are scaled (or, failing that, shifted) so that the load
+//!   along z is balanced exactly;
+//! - v is shifted along z, to which the energy norm is blind;
+//! - every jump and slip still at odds with (p, q) (a penetration, an open
+//!   jump under pressure, a slip against or beside its traction) is closed,
+//!   so that C = 0 for the repaired v_c; the change at Γ_K is extended into
+//!   the bodies with least energy, and ‖v − v*‖_A ≤ ‖v − v_c‖_A +
+//!   ‖v_c − v*‖_A (the first term computed);
 //! - both the forces given and those the displacements imply are tried,
-//!   and the smaller bound kept (each is an upper bound).
+//!   shifted and not, and the smallest bound kept (each is an upper bound).
 //!
 //! The pressure follows by Cauchy–Schwarz in the A inner product: at the
 //! exact solution w_i p*_i = −(A v* − f)_{t_i}, so for the pressure the
@@ -61,6 +67,7 @@ use contactlab_solvers::{ContactProblem, Friction, Law};
 use serde::{Deserialize, Serialize};
 
 use super::energy_solve::{EnergySolve, EnergySolveError};
+use super::{elastic_residual, fits, implied_forces, row_product};
 
 /// What a bound is a bound on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -183,14 +190,7 @@ impl<'a> ErrorBounder<'a> {
         q: &[f64],
     ) -> Result<ErrorBound, BoundError> {
         let problem = self.problem;
-        let (n, m) = (problem.n(), problem.contacts().len());
-        let finite = |x: &[f64]| x.iter().all(|y| y.is_finite());
-        if v.len() != n
-            || p.len() != m
-            || q.len() != m
-            || friction.check(problem).is_err()
-            || !(finite(v) && finite(p) && finite(q))
-        {
+        if !fits(problem, friction, v, p, q) {
             return Err(BoundError::Malformed);
         }
         let contacts = problem.contacts();
@@ -201,13 +201,8 @@ impl<'a> ErrorBounder<'a> {
             .enumerate()
             .map(|(i, c)| friction.bound(i, c.coefficient, p[i]))
             .collect();
-        let elastic: Vec<f64> = (0..n)
-            .map(|i| self.row_product(i, v) - problem.f()[i])
-            .collect();
-        let implied: (Vec<f64>, Vec<f64>) = contacts
-            .iter()
-            .map(|c| (-elastic[c.t] / c.weight, elastic[c.s] / c.weight))
-            .unzip();
+        let elastic = elastic_residual(problem, v);
+        let implied = implied_forces(problem, &elastic);
         let rounding = self.rounding_allowance(v);
         let mut best: Option<f64> = None;
         for (pr, qr) in [(p, q), (&implied.0[..], &implied.1[..])] {
@@ -341,13 +336,8 @@ impl<'a> ErrorBounder<'a> {
             rho[c.s] -= c.weight * qh[i];
         }
         if let Some(z) = z {
-            // Balanced exactly above, up to rounding: take ρ's part
-            // orthogonal to z, the part A⁺ is defined on.
-            let zz: f64 = z.iter().map(|x| x * x).sum();
-            let zr: f64 = z.iter().zip(&rho).map(|(a, b)| a * b).sum();
-            for (r, zk) in rho.iter_mut().zip(z) {
-                *r -= zr / zz * zk;
-            }
+            // Balanced exactly above, up to rounding.
+            orthogonal_to(z, &mut rho);
         }
         let y = self.solve.solve(&rho);
         // One refinement: the residual ρ − A y solved again; its change
@@ -435,11 +425,7 @@ impl<'a> ErrorBounder<'a> {
             })
             .collect();
         if let Some(z) = problem.rigid_modes().first() {
-            let zz: f64 = z.iter().map(|x| x * x).sum();
-            let zb: f64 = z.iter().zip(&b).map(|(a, c)| a * c).sum();
-            for (x, zk) in b.iter_mut().zip(z) {
-                *x -= zb / zz * zk;
-            }
+            orthogonal_to(z, &mut b);
         }
         let y = self.solve.solve(&b);
         b.iter()
@@ -450,10 +436,9 @@ impl<'a> ErrorBounder<'a> {
             .sqrt()
     }
 
-    /// Row i of A times x, summed by the certificate's own loop.
+    /// Row i of A times x, by the certificate's own product.
     fn row_product(&self, i: usize, x: &[f64]) -> f64 {
-        let (cols, vals) = self.problem.a().row(i);
-        cols.iter().zip(vals).map(|(&c, a)| a * x[c as usize]).sum()
+        row_product(self.problem, x, i)
     }
 
     /// A x for an x that is zero outside `support` (a few entries).
@@ -475,6 +460,16 @@ impl<'a> ErrorBounder<'a> {
             .zip(vals)
             .find(|&(&c, _)| c as usize == j)
             .map_or(0.0, |(_, &a)| a)
+    }
+}
+
+/// Takes off x's part along z: the part A⁺ is not defined on (A z = 0),
+/// which a balanced residual has only up to rounding.
+fn orthogonal_to(z: &[f64], x: &mut [f64]) {
+    let zz: f64 = z.iter().map(|a| a * a).sum();
+    let zx: f64 = z.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
+    for (xk, zk) in x.iter_mut().zip(z) {
+        *xk -= zx / zz * zk;
     }
 }
 

@@ -267,12 +267,32 @@ pub fn certify_solution(
 /// stored row in order by the certificate's own loop (no solver's
 /// product).
 fn stationarity_residual(problem: &ContactProblem, v: &[f64], i: usize) -> f64 {
+    row_product(problem, v, i) - problem.f()[i]
+}
+
+/// Row i of A times x, (A x)_i, summed over A's stored row in order: the
+/// certificate's own product, shared by the residual and the error bound.
+fn row_product(problem: &ContactProblem, x: &[f64], i: usize) -> f64 {
     let (cols, vals) = problem.a().row(i);
     cols.iter()
         .zip(vals)
-        .map(|(&c, a_ic)| a_ic * v[c as usize])
+        .map(|(&c, a_ic)| a_ic * x[c as usize])
         .sum::<f64>()
-        - problem.f()[i]
+}
+
+/// Whether an answer (v, p, q) and the law `friction` fit `problem`: its
+/// sizes, the law's bound, and every value finite. An answer that does
+/// not fit gets infinite violations ([`certify`]) and no error bound.
+fn fits(problem: &ContactProblem, friction: Friction<'_>, v: &[f64], p: &[f64], q: &[f64]) -> bool {
+    let m = problem.contacts().len();
+    let finite = |x: &[f64]| x.iter().all(|y| y.is_finite());
+    v.len() == problem.n()
+        && p.len() == m
+        && q.len() == m
+        && friction.check(problem).is_ok()
+        && finite(v)
+        && finite(p)
+        && finite(q)
 }
 
 /// The contact forces that displacements `v` imply: stationarity at the
@@ -322,15 +342,8 @@ pub fn certify(
     q: &[f64],
     tolerance: f64,
 ) -> Certificate {
-    let m = problem.contacts().len();
     let mut out = Certificate::not_run(friction.law(), tolerance);
-    let finite = |x: &[f64]| x.iter().all(|y| y.is_finite());
-    if v.len() != problem.n()
-        || p.len() != m
-        || q.len() != m
-        || friction.check(problem).is_err()
-        || !(finite(v) && finite(p) && finite(q))
-    {
+    if !fits(problem, friction, v, p, q) {
         return out;
     }
     for c in Condition::ALL {

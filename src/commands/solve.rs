@@ -13,7 +13,7 @@ use crate::io::manifest::git_commit;
 use crate::io::output::{json_bytes, log, print, write_atomic};
 use crate::io::run_folder::RunFolder;
 use crate::mechanics::contact_zone::PROFILE_COLUMNS;
-use crate::solve::summary::Summary;
+use crate::solve::summary::{Summary, answer_bound};
 use crate::solve::{solve_scene, solver_entry};
 
 pub fn run(args: &SolveArgs) -> Result<()> {
@@ -42,7 +42,8 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         &settings,
         &mut LogObserver,
     )?;
-    let summary = Summary::of(&solved, &scene, &settings, git_commit());
+    let bound = answer_bound(&solved);
+    let summary = Summary::of(&solved, &scene, &settings, bound, git_commit());
     let mut report = summary_text(&summary);
     if let Some(folder) = folder {
         let dir = folder.path().to_path_buf();

@@ -65,7 +65,15 @@ pub struct Summary {
 impl Summary {
     /// The summary of `solved` on `scene` at `settings`; `git_commit` is
     /// the provenance the command attaches.
-    pub fn of(solved: &Solved, scene: &Scene, settings: &Settings, git_commit: String) -> Self {
+    /// `error_bound` is the answer's ([`answer_bound`]), computed by the
+    /// caller: a summary is a view, and the bound takes factorizations.
+    pub fn of(
+        solved: &Solved,
+        scene: &Scene,
+        settings: &Settings,
+        error_bound: BoundReport,
+        git_commit: String,
+    ) -> Self {
         let o: &Outcome = &solved.outcome;
         let s = &o.solution;
         let d = &solved.finest;
@@ -86,7 +94,7 @@ impl Summary {
             detail: o.detail.clone(),
             certificate: o.certificate,
             certificate_summary: o.certificate.summary(),
-            error_bound: answer_bound(solved),
+            error_bound,
             separated_intervals: separation.intervals,
             separated_fraction: separation.fraction,
             separation_tolerance: separation.tolerance,
@@ -113,7 +121,7 @@ impl Summary {
 /// The error bound of the answer (issue 51), on meshes where it costs
 /// about what the solve does ([`SOLVE_BOUND_MAX_UNKNOWNS`]) and its
 /// factors fit in half the memory that is free.
-fn answer_bound(solved: &Solved) -> BoundReport {
+pub fn answer_bound(solved: &Solved) -> BoundReport {
     let problem = &solved.finest.problem;
     if problem.n() > SOLVE_BOUND_MAX_UNKNOWNS {
         return BoundReport::skipped(format!(
