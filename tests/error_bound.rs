@@ -316,3 +316,23 @@ fn every_solvers_answers_are_bounded_at_every_target() {
         "most solvers ran on every instance: {answers}"
     );
 }
+
+/// An answer whose values are finite but whose products overflow (A v =
+/// ±inf, inf − inf = NaN in the residual) gets no bound, or an infinite
+/// one, never a NaN that a reader could take for a number.
+#[test]
+fn an_overflowing_answer_gets_no_nan_bound() {
+    let c = case(4, 1);
+    let bounder = ErrorBounder::new(&c.d.problem, 1e10).unwrap();
+    let mut v = c.reference.v.clone();
+    for (i, x) in v.iter_mut().enumerate() {
+        *x = if i % 2 == 0 { 1e308 } else { -1e308 };
+    }
+    match bounder.bound(Friction::Given(&c.g), &v, &c.reference.p, &c.reference.q) {
+        Ok(b) => assert!(
+            !b.energy.is_nan() && !b.pressure.is_nan() && b.energy > 1.0,
+            "{b:?}"
+        ),
+        Err(e) => assert_eq!(e, contactlab::certificate::BoundError::Overflow),
+    }
+}

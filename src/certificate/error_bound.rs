@@ -115,6 +115,10 @@ pub enum BoundError {
         "no reading of the answer could be repaired: its pressures cannot balance the load along the rigid mode, or the extension of its change at Γ_K failed"
     )]
     Unbalanced,
+    #[error(
+        "the bound's sums overflow for this answer (A v or its rounding is not finite): no bound"
+    )]
+    Overflow,
     #[error("the solve with A: {0}")]
     Solve(#[from] EnergySolveError),
 }
@@ -205,6 +209,7 @@ impl<'a> ErrorBounder<'a> {
         let implied = implied_forces(problem, &elastic);
         let rounding = self.rounding_allowance(v);
         let mut best: Option<f64> = None;
+        let mut overflow = false;
         for (pr, qr) in [(p, q), (&implied.0[..], &implied.1[..])] {
             for shift in [false, true] {
                 let reading = Reading {
@@ -212,14 +217,18 @@ impl<'a> ErrorBounder<'a> {
                     q: qr,
                     shift,
                 };
-                if let Some(e) = self.energy(v, &elastic, &g, &reading)
-                    && best.is_none_or(|b| e < b)
-                {
-                    best = Some(e);
+                match self.energy(v, &elastic, &g, &reading) {
+                    Some(e) if e.is_nan() => overflow = true,
+                    Some(e) if best.is_none_or(|b| e < b) => best = Some(e),
+                    _ => {}
                 }
             }
         }
-        let energy = best.ok_or(BoundError::Unbalanced)? + rounding;
+        let energy = best.ok_or(if overflow {
+            BoundError::Overflow
+        } else {
+            BoundError::Unbalanced
+        })? + rounding;
         let s = problem.scales();
         let pressure = contacts
             .iter()
@@ -229,6 +238,9 @@ impl<'a> ErrorBounder<'a> {
                 ((p[i] - implied.0[i]).abs() + diagonal.sqrt() * energy / c.weight) / s.pressure
             })
             .fold(0.0, f64::max);
+        if energy.is_nan() || pressure.is_nan() {
+            return Err(BoundError::Overflow);
+        }
         Ok(ErrorBound {
             energy,
             displacement: energy / (s.stiffness.sqrt() * s.displacement),
