@@ -336,3 +336,17 @@ fn an_overflowing_answer_gets_no_nan_bound() {
         Err(e) => assert_eq!(e, contactlab::certificate::BoundError::Overflow),
     }
 }
+
+/// Too little room: the bound is refused, saying how much it would need
+/// (at 1 kB either the copy of A or the factor is refused).
+#[test]
+fn the_bound_is_refused_when_its_factors_do_not_fit() {
+    let c = case(4, 1);
+    match ErrorBounder::new(&c.d.problem, 1e3) {
+        Err(contactlab::certificate::BoundError::Solve(e)) => {
+            assert!(e.to_string().contains("GB"), "{e}")
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("a bound with 1 kB of room"),
+    }
+}

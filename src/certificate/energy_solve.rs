@@ -50,6 +50,16 @@ impl EnergySolve {
     ) -> Result<Self, EnergySolveError> {
         let a = problem.a();
         let n = problem.n();
+        // The lower triangle's copy (a row index and a value, 16 bytes, per
+        // entry) and faer's ordering of it (a few times that) come before
+        // the factor: refused here too, before they are allocated.
+        let copy = 16.0 * (a.nnz() / 2 + n) as f64 + 8.0 * n as f64;
+        if 4.0 * copy > room {
+            return Err(EnergySolveError::TooLarge {
+                need: 4.0 * copy / 1e9,
+                room: room / 1e9,
+            });
+        }
         let mut map = vec![0usize; n];
         for &k in pinned {
             map[k] = usize::MAX;
