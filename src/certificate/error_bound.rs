@@ -66,6 +66,7 @@
 use contactlab_solvers::{ContactProblem, Friction, Law};
 use serde::{Deserialize, Serialize};
 
+use super::accurate_sum::Dot2;
 use super::energy_solve::{EnergySolve, EnergySolveError};
 use super::{elastic_residual, fits, implied_forces, row_product};
 
@@ -87,6 +88,14 @@ impl BoundKind {
         match self {
             BoundKind::Rigorous => "rigorous",
             BoundKind::AtOwnBound => "rigorous at g = 𝓕p (fixed-point part not included)",
+        }
+    }
+
+    /// Its name in tables: `rigorous` or `at-own-bound`.
+    pub fn tag(self) -> &'static str {
+        match self {
+            BoundKind::Rigorous => "rigorous",
+            BoundKind::AtOwnBound => "at-own-bound",
         }
     }
 }
@@ -139,6 +148,10 @@ pub struct ErrorBounder<'a> {
     /// adds |τ|·‖z‖_A to the bound, so that the bound holds for the
     /// matrix as it is, not only for the exact one.
     rigid_energy: f64,
+    /// For each unknown, the contact node whose force acts on it in ρ:
+    /// 2i + 1 for the normal jump of node i, 2i + 2 for its slip, 0 for
+    /// none.
+    contact_of: Vec<u32>,
 }
 
 /// One way of reading an answer: its forces as given or as its
@@ -168,12 +181,18 @@ impl<'a> ErrorBounder<'a> {
             })
             .collect();
         let solve = EnergySolve::new(problem, &pinned, room)?;
+        let mut contact_of = vec![0u32; problem.n()];
+        for (i, c) in problem.contacts().iter().enumerate() {
+            contact_of[c.t] = 2 * i as u32 + 1;
+            contact_of[c.s] = 2 * i as u32 + 2;
+        }
         let mut out = Self {
             problem,
             solve,
             interior: std::cell::OnceCell::new(),
             room,
             rigid_energy: 0.0,
+            contact_of,
         };
         if let Some(z) = modes.first() {
             out.rigid_energy = (0..z.len())
@@ -207,7 +226,6 @@ impl<'a> ErrorBounder<'a> {
             .collect();
         let elastic = elastic_residual(problem, v);
         let implied = implied_forces(problem, &elastic);
-        let rounding = self.rounding_allowance(v);
         let mut best: Option<f64> = None;
         let mut overflow = false;
         for (pr, qr) in [(p, q), (&implied.0[..], &implied.1[..])] {
@@ -217,7 +235,7 @@ impl<'a> ErrorBounder<'a> {
                     q: qr,
                     shift,
                 };
-                match self.energy(v, &elastic, &g, &reading) {
+                match self.energy(v, &g, &reading) {
                     Some(e) if e.is_nan() => overflow = true,
                     Some(e) if best.is_none_or(|b| e < b) => best = Some(e),
                     _ => {}
@@ -228,7 +246,7 @@ impl<'a> ErrorBounder<'a> {
             BoundError::Overflow
         } else {
             BoundError::Unbalanced
-        })? + rounding;
+        })?;
         let s = problem.scales();
         let pressure = contacts
             .iter()
@@ -263,7 +281,7 @@ impl<'a> ErrorBounder<'a> {
     /// ½ (w p̂)²/A_tt if the pressure is dropped (in ρ); likewise a traction
     /// short of its bound at a slipping node. The cheapest is taken. The
     /// choice only sharpens the bound: any choice gives an upper bound.
-    fn energy(&self, v: &[f64], elastic: &[f64], g: &[f64], reading: &Reading<'_>) -> Option<f64> {
+    fn energy(&self, v: &[f64], g: &[f64], reading: &Reading<'_>) -> Option<f64> {
         let problem = self.problem;
         let contacts = problem.contacts();
         let z = problem.rigid_modes().first();
@@ -273,20 +291,47 @@ impl<'a> ErrorBounder<'a> {
             && let Some(z) = z
         {
             // Along z the energy norm is blind: shift v so that the jumps
-            // at nodes that carry pressure are closed on average.
-            let (mut num, mut den) = (0.0, 0.0);
+            // at nodes that carry pressure are closed on average, weighed
+            // by the force each carries (an interior-point answer carries
+            // a little pressure everywhere, on open nodes too: weighed
+            // alike, they would pull the body into penetration).
+            let mut force: Vec<f64> = contacts
+                .iter()
+                .enumerate()
+                .map(|(i, c)| c.weight * reading.p[i].max(0.0))
+                .collect();
+            let mean_shift = |force: &[f64]| {
+                let (mut num, mut den) = (0.0, 0.0);
+                for (c, f) in contacts.iter().zip(force) {
+                    num -= f * v[c.t] * z[c.t];
+                    den += f * z[c.t] * z[c.t];
+                }
+                num / den
+            };
+            // Once more without the pressures that the repair below would
+            // drop after that shift (small ones on clearly open jumps).
+            let first = mean_shift(&force);
             for (i, c) in contacts.iter().enumerate() {
-                if reading.p[i] > 0.0 {
-                    num -= c.weight * v[c.t] * z[c.t];
-                    den += c.weight * z[c.t] * z[c.t];
+                let t = v[c.t] + first * z[c.t];
+                if t < 0.0 && drops(self.entry(c.t, c.t), c.weight * reading.p[i], t) {
+                    force[i] = 0.0;
                 }
             }
-            let tau = num / den;
+            let second = mean_shift(&force);
+            let tau = if second.is_finite() { second } else { first };
             if !(tau.is_finite()) {
                 return None;
             }
             vs.iter_mut().zip(z).for_each(|(x, zk)| *x += tau * zk);
-            shifted = tau.abs() * self.rigid_energy;
+            // ‖v − v_s‖_A ≤ |τ| ‖z‖_A + ‖e‖_A, e the rounding of v + τ z
+            // (|e| ≤ 2u (|v| + |τ z|), ‖e‖²_A ≤ |e|ᵀ|A| |e|).
+            let size: Vec<f64> = v
+                .iter()
+                .zip(z)
+                .map(|(a, zk)| a.abs() + (tau * zk).abs())
+                .collect();
+            shifted = tau.abs() * self.rigid_energy
+                + f64::EPSILON * (1.0 + f64::EPSILON) * self.absolute_energy(&size);
         }
         let mut ph: Vec<f64> = reading.p.iter().map(|x| x.max(0.0)).collect();
         let mut qh: Vec<f64> = reading
@@ -300,13 +345,8 @@ impl<'a> ErrorBounder<'a> {
         for (i, c) in contacts.iter().enumerate() {
             let (att, ass) = (self.entry(c.t, c.t), self.entry(c.s, c.s));
             let t = vs[c.t];
-            if t < 0.0 && ph[i] > 0.0 {
-                let keep = c.weight * ph[i] * -t;
-                let close = 0.5 * att * t * t;
-                let drop = 0.5 * (c.weight * ph[i]).powi(2) / att;
-                if drop < keep.min(close) {
-                    ph[i] = 0.0;
-                }
+            if t < 0.0 && ph[i] > 0.0 && drops(att, c.weight * ph[i], t) {
+                ph[i] = 0.0;
             }
             let s = vs[c.s];
             let slack = g[i] * s.abs() + qh[i] * s;
@@ -341,21 +381,27 @@ impl<'a> ErrorBounder<'a> {
         }
         let ad = self.extend(&mut d).ok()?;
         let correction = self.energy_norm(&d, &ad);
-        // ρ = A v_c − f + Σ w p̂ e_t − Σ w q̂ e_s (A z = 0: the shift adds nothing).
-        let mut rho: Vec<f64> = elastic.iter().zip(&ad).map(|(a, b)| a + b).collect();
-        for (i, c) in contacts.iter().enumerate() {
-            rho[c.t] += c.weight * ph[i];
-            rho[c.s] -= c.weight * qh[i];
-        }
+        // ρ = A (v_s + d) − f + Σ w p̂ e_t − Σ w q̂ e_s, each row by Dot2 with
+        // a bound on its rounding.
+        let (mut rho, mut rounding) = self.residual(&vs, &d, &ph, &qh);
         if let Some(z) = z {
             // Balanced exactly above, up to rounding.
             orthogonal_to(z, &mut rho);
+            orthogonal_to(z, &mut rounding);
         }
         let y = self.solve.solve(&rho);
-        // One refinement: the residual ρ − A y solved again; its change
-        // to ρᵀy is counted as rounding allowance.
+        // One refinement: the residual ρ − A y (by Dot2) solved again; its
+        // change to ρᵀy is counted as rounding allowance.
         let residual: Vec<f64> = (0..rho.len())
-            .map(|i| rho[i] - self.row_product(i, &y))
+            .map(|i| {
+                let mut acc = Dot2::default();
+                acc.add(1.0, rho[i]);
+                let (cols, vals) = problem.a().row(i);
+                for (&c, a) in cols.iter().zip(vals) {
+                    acc.add(-a, y[c as usize]);
+                }
+                acc.value().0
+            })
             .collect();
         let dy = self.solve.solve(&residual);
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
@@ -363,7 +409,12 @@ impl<'a> ErrorBounder<'a> {
         let change = dot(&rho, &dy);
         let quadratic = (first + change).max(0.0) + change.abs();
         let quadratic = quadratic * (1.0 + 4.0 * f64::EPSILON);
-        Some(quadratic.sqrt() + correction + shifted)
+        // ρ's rounding, measured as ρ is: ‖b‖_{A⁺} for the rows' error
+        // bounds b (an estimate of ‖δρ‖_{A⁺} over |δρ| ≤ b: its signs taken
+        // alike, which A⁺ damps least).
+        let by = self.solve.solve(&rounding);
+        let allowance = dot(&rounding, &by).max(0.0).sqrt();
+        Some(quadratic.sqrt() + allowance + correction + shifted)
     }
 
     /// Extends `d`, given at the contact unknowns (zero elsewhere on
@@ -418,34 +469,56 @@ impl<'a> ErrorBounder<'a> {
         (value.max(0.0) + 32.0 * f64::EPSILON * size).sqrt()
     }
 
-    /// ‖b‖_{A⁺} for b_i = γ (Σ_j |A_ij v_j| + |f_i|), γ = 32 ε: the size of
-    /// the rounding in the stationarity residual ρ, a difference of terms
-    /// of the size of b/γ, measured as ρ's bound measures it. An estimate
-    /// of that rounding, not a bound on it: its signs are taken alike,
-    /// which A⁺ (smoothing) damps least.
-    fn rounding_allowance(&self, v: &[f64]) -> f64 {
+    /// ρ = A (v + d) − f + Σ w p̂ e_t − Σ w q̂ e_s, row by row by Dot2 (the
+    /// terms of A v and A d kept apart, never v + d rounded), and each
+    /// row's error bound.
+    fn residual(&self, v: &[f64], d: &[f64], p: &[f64], q: &[f64]) -> (Vec<f64>, Vec<f64>) {
         let problem = self.problem;
-        let mut b: Vec<f64> = (0..v.len())
+        let (f, contacts) = (problem.f(), problem.contacts());
+        let mut rho = vec![0.0; v.len()];
+        let mut error = vec![0.0; v.len()];
+        for i in 0..v.len() {
+            let mut acc = Dot2::default();
+            let (cols, vals) = problem.a().row(i);
+            for (&c, &a) in cols.iter().zip(vals) {
+                let c = c as usize;
+                acc.add(a, v[c]);
+                if d[c] != 0.0 {
+                    acc.add(a, d[c]);
+                }
+            }
+            acc.add(-1.0, f[i]);
+            match self.contact_of[i] {
+                0 => {}
+                k if k % 2 == 1 => {
+                    let j = (k as usize - 1) / 2;
+                    acc.add(contacts[j].weight, p[j]);
+                }
+                k => {
+                    let j = (k as usize - 2) / 2;
+                    acc.add(-contacts[j].weight, q[j]);
+                }
+            }
+            (rho[i], error[i]) = acc.value();
+        }
+        (rho, error)
+    }
+
+    /// √(xᵀ|A| x) for x ≥ 0 (plain sums, with a factor for their rounding):
+    /// a bound on ‖e‖_A for every |e| ≤ x.
+    fn absolute_energy(&self, x: &[f64]) -> f64 {
+        let a = self.problem.a();
+        let sum: f64 = (0..x.len())
             .map(|i| {
-                let (cols, vals) = problem.a().row(i);
-                let size: f64 = cols
+                let (cols, vals) = a.row(i);
+                x[i] * cols
                     .iter()
                     .zip(vals)
-                    .map(|(&c, a)| (a * v[c as usize]).abs())
-                    .sum();
-                32.0 * f64::EPSILON * (size + problem.f()[i].abs())
+                    .map(|(&c, v)| (v * x[c as usize]).abs())
+                    .sum::<f64>()
             })
-            .collect();
-        if let Some(z) = problem.rigid_modes().first() {
-            orthogonal_to(z, &mut b);
-        }
-        let y = self.solve.solve(&b);
-        b.iter()
-            .zip(&y)
-            .map(|(a, c)| a * c)
-            .sum::<f64>()
-            .max(0.0)
-            .sqrt()
+            .sum();
+        (sum * (1.0 + 64.0 * f64::EPSILON)).sqrt()
     }
 
     /// Row i of A times x, by the certificate's own product.
@@ -473,6 +546,16 @@ impl<'a> ErrorBounder<'a> {
             .find(|&(&c, _)| c as usize == j)
             .map_or(0.0, |(_, &a)| a)
     }
+}
+
+/// Whether a force w p > 0 against an open jump t < 0 costs least dropped:
+/// it costs w p |t| kept (in the gap C), ½ A_tt t² with the jump closed,
+/// about ½ (w p)²/A_tt dropped (in ρ).
+fn drops(att: f64, force: f64, t: f64) -> bool {
+    let keep = force * -t;
+    let close = 0.5 * att * t * t;
+    let drop = 0.5 * force * force / att;
+    drop < keep.min(close)
 }
 
 /// Takes off x's part along z: the part A⁺ is not defined on (A z = 0),

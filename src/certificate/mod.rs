@@ -40,6 +40,7 @@
 //! A value that is not finite, or a residual that overflows (inf − inf),
 //! is an infinite violation: every maximum here counts a NaN as infinite.
 
+pub mod accurate_sum;
 pub mod energy_solve;
 pub mod error_bound;
 
