@@ -30,7 +30,7 @@ fn the_summary_and_the_trial_of_one_solve_agree() {
         let solved = solve_scene(&scene, Friction::Coulomb, entry, &settings, &mut Silent).unwrap();
         let o = &solved.outcome;
         assert!(o.status.is_converged(), "{name}: {}", o.detail);
-        let bound = answer_bound(&solved);
+        let bound = answer_bound(&solved, &settings.certificate);
         let summary = Summary::of(&solved, &scene, &settings, bound, "test".into());
         let spec = TrialSpec::new("test", "test", &scene, entry, Law::Coulomb, &settings);
         let trial = trial_row(&spec, None, &solved.finest, o);
@@ -48,6 +48,9 @@ fn the_summary_and_the_trial_of_one_solve_agree() {
             "{name}"
         );
         assert_eq!(summary.separated_intervals, trial.separated, "{name}");
+        // The error bound: one computation, the same in both views.
+        assert!(summary.error_bound.bound.is_some(), "{name}");
+        assert_eq!(Some(&summary.error_bound), trial.bound.as_ref(), "{name}");
         // Times: one record, the set-up apart and inside the whole.
         assert_eq!(summary.seconds, o.timing.total(), "{name}");
         assert_eq!(summary.seconds_setup, o.timing.setup, "{name}");

@@ -13,6 +13,11 @@ use crate::io::output::print;
 pub fn run(args: &SettingsListArgs) -> Result<()> {
     let mut text = String::new();
     if args.solver.is_none() {
+        text += &format!(
+            "certificate (the check of every answer, and its error bound)\n  --certify-tol TOL  (--set certificate.tolerance=TOL)\n      the largest violation of any condition, in the problem's scales, that certifies an answer [default {:e}]\n  --set certificate.bound_max_unknowns\n      bound the error of answers of problems up to this many unknowns, in `solve` and in every study's trials (the bound's factorizations cost more than the fast solvers at finer h); 0: never [default {} (h = 1/128)]\n\n",
+            crate::certificate::DEFAULT_TOLERANCE,
+            crate::certificate::SOLVE_BOUND_MAX_UNKNOWNS
+        );
         text += "coulomb (the friction fixed point of paper (9), every solver that is not a Coulomb solver)\n";
         for k in fixed_point::KNOBS {
             text += &format!(

@@ -42,7 +42,7 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         &settings,
         &mut LogObserver,
     )?;
-    let bound = answer_bound(&solved);
+    let bound = answer_bound(&solved, &settings.certificate);
     let summary = Summary::of(&solved, &scene, &settings, bound, git_commit());
     let mut report = summary_text(&summary);
     if let Some(folder) = folder {

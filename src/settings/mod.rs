@@ -16,6 +16,7 @@ use contactlab_solvers::settings::{Knob, Stopping, from_tree, to_tree};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
+use crate::certificate::error_bound::SOLVE_BOUND_MAX_UNKNOWNS;
 use crate::certificate::{DEFAULT_TOLERANCE, check_tolerance};
 use crate::coulomb::continuation::Schedule;
 use crate::coulomb::fixed_point::{self, CoulombSettings};
@@ -29,13 +30,26 @@ pub struct CertificateSettings {
     /// Largest violation of any condition (dimensionless, in the problem's
     /// scales) that still certifies a solution.
     pub tolerance: f64,
+    /// The largest problem (in unknowns) whose answers get an error bound
+    /// beside their certificate in `solve` and in every trial: the bound
+    /// takes sparse factorizations of its own, which at fine h cost more
+    /// than the fast solvers (0: never).
+    pub bound_max_unknowns: usize,
 }
 
 impl Default for CertificateSettings {
     fn default() -> Self {
         Self {
             tolerance: DEFAULT_TOLERANCE,
+            bound_max_unknowns: SOLVE_BOUND_MAX_UNKNOWNS,
         }
+    }
+}
+
+impl CertificateSettings {
+    /// Whether an answer of a problem of `n` unknowns gets an error bound.
+    pub fn bounds(&self, n: usize) -> bool {
+        n <= self.bound_max_unknowns
     }
 }
 
@@ -148,6 +162,14 @@ impl Settings {
                 })?;
                 self.certificate.tolerance =
                     check_tolerance(t).map_err(|m| format!("certificate.tolerance = {m}"))?;
+                return Ok(());
+            }
+            "certificate.bound_max_unknowns" => {
+                self.certificate.bound_max_unknowns = text.trim().parse::<usize>().map_err(|_| {
+                    format!(
+                        "certificate.bound_max_unknowns = '{text}' is invalid: give a whole number of unknowns (0: no error bounds; default {SOLVE_BOUND_MAX_UNKNOWNS})"
+                    )
+                })?;
                 return Ok(());
             }
             _ => {}

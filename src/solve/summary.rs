@@ -8,6 +8,7 @@ use crate::certificate::{BoundReport, Certificate, SOLVE_BOUND_MAX_UNKNOWNS, bou
 use crate::coulomb::continuation::LevelCount;
 use crate::coulomb::fixed_point::{Ending, FrictionIteration};
 use crate::mechanics::scene::Scene;
+use crate::settings::CertificateSettings;
 use crate::settings::Settings;
 use crate::solve::{Outcome, Solved};
 
@@ -119,15 +120,13 @@ impl Summary {
 }
 
 /// The error bound of the answer (issue 51), on meshes where it costs
-/// about what the solve does ([`SOLVE_BOUND_MAX_UNKNOWNS`]) and its
-/// factors fit in half the memory that is free.
-pub fn answer_bound(solved: &Solved) -> BoundReport {
+/// about what the solve does (up to `certificate.bound_max_unknowns`,
+/// by default [`SOLVE_BOUND_MAX_UNKNOWNS`]) and its factors fit in half
+/// the memory that is free.
+pub fn answer_bound(solved: &Solved, settings: &CertificateSettings) -> BoundReport {
     let problem = &solved.finest.problem;
-    if problem.n() > SOLVE_BOUND_MAX_UNKNOWNS {
-        return BoundReport::skipped(format!(
-            "{} unknowns, more than the {SOLVE_BOUND_MAX_UNKNOWNS} `solve` bounds (h = 1/128); `certify` bounds an answer written by `solve --out` at any h that fits in memory",
-            problem.n()
-        ));
+    if !settings.bounds(problem.n()) {
+        return BoundReport::skipped(too_large_to_bound(problem.n(), settings));
     }
     let s = &solved.outcome.solution;
     BoundReport::of(
@@ -137,5 +136,13 @@ pub fn answer_bound(solved: &Solved) -> BoundReport {
         &s.pressure,
         &s.friction_traction,
         bound_room(),
+    )
+}
+
+/// Why an answer of `n` unknowns gets no bound, and the way to one.
+pub fn too_large_to_bound(n: usize, settings: &CertificateSettings) -> String {
+    format!(
+        "{n} unknowns, more than certificate.bound_max_unknowns = {} (default {SOLVE_BOUND_MAX_UNKNOWNS}, h = 1/128); raise it with --set certificate.bound_max_unknowns=N, or `certify` an answer written by `solve --out`",
+        settings.bound_max_unknowns
     )
 }

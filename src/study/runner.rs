@@ -5,10 +5,12 @@
 use anyhow::{Result, bail};
 use contactlab_solvers::{Control, Friction, Law, Observer, Progress, Silent, Solution, Status};
 
+use crate::certificate::{BoundReport, bound_room};
 use crate::coulomb::continuation::LevelCount;
 use crate::coulomb::fixed_point::{FrictionIteration, STAGE};
 use crate::mechanics::contact_zone::separation_of;
 use crate::mechanics::discretization::Discretization;
+use crate::solve::summary::too_large_to_bound;
 use crate::solve::{Assembled, Caps, Outcome, solve};
 use crate::study::agreement::{Agreement, agreement};
 use crate::study::reference::{Reference, References};
@@ -212,7 +214,45 @@ pub fn trial_row(
         trial.detail = format!("{} ({})", trial.detail, o.certificate.summary());
     }
     trial.certificate = Some(o.certificate);
+    trial.bound = trial_bound(spec, reference, finest, s);
     trial
+}
+
+/// The trial's error bound (issue 51), under the law it solved: none for
+/// a trial that skips the check of condition (13) (its problem may have
+/// no solution to be near), or a given-friction trial without the
+/// reference's g; `none:` and why for a problem larger than
+/// `certificate.bound_max_unknowns`.
+fn trial_bound(
+    spec: &TrialSpec,
+    reference: Option<&Reference>,
+    finest: &Discretization,
+    s: &Solution,
+) -> Option<BoundReport> {
+    if !spec.check_solvable {
+        return None;
+    }
+    let friction = match (spec.law, reference) {
+        (Law::Coulomb, _) => Friction::Coulomb,
+        (Law::GivenFriction, Some(r)) => Friction::Given(&r.g),
+        (Law::GivenFriction, None) => return None,
+    };
+    let problem = &finest.problem;
+    let settings = &spec.settings.certificate;
+    if !settings.bounds(problem.n()) {
+        return Some(BoundReport::skipped(too_large_to_bound(
+            problem.n(),
+            settings,
+        )));
+    }
+    Some(BoundReport::of(
+        problem,
+        friction,
+        &s.v,
+        &s.pressure,
+        &s.friction_traction,
+        bound_room(),
+    ))
 }
 
 /// The median of a non-empty list (NaN for an empty one).

@@ -11,7 +11,7 @@ use contactlab_solvers::registry::Entry;
 use contactlab_solvers::{Law, Status, Stopping};
 use serde::{Deserialize, Serialize};
 
-use crate::certificate::{Certificate, Condition};
+use crate::certificate::{BoundReport, Certificate, Condition, ErrorBound};
 use crate::coulomb::fixed_point::Ending;
 use crate::io::csv::{fixed, fixed_opt};
 use crate::mechanics::mesh_size::MeshSize;
@@ -199,6 +199,9 @@ pub struct Trial {
     /// The solver whose answer is the reference, and the differences from it.
     pub reference: Option<&'static str>,
     pub agreement: Option<Agreement>,
+    /// The certificate's error bound (issue 51) and what it bounds, or why
+    /// there is none (none at all: not asked, e.g. a trial not run).
+    pub bound: Option<BoundReport>,
     /// Separated intervals of Γ_K and their fraction.
     pub separated: Vec<[f64; 2]>,
     pub separated_fraction: f64,
@@ -241,6 +244,11 @@ impl Trial {
         self.agreement.map(|a| a.displacement_max)
     }
 
+    /// The error bound, if one was computed.
+    pub fn error_bound(&self) -> Option<ErrorBound> {
+        self.bound.as_ref().and_then(|b| b.bound)
+    }
+
     /// The varied setting's path and value (`"", ""` when none).
     pub fn knob(&self) -> (&str, &str) {
         self.setting
@@ -272,6 +280,7 @@ impl Trial {
             tolerance: spec.settings.certificate.tolerance,
             reference: None,
             agreement: None,
+            bound: None,
             separated: Vec::new(),
             separated_fraction: 0.0,
             total_load: spec.scene.total_vertical_load(),
@@ -328,6 +337,17 @@ impl Trial {
             pressure_error: a.map(|a| a.pressure_max),
             traction_error: a.map(|a| a.traction_max),
             objective_gap: a.map(|a| a.objective_gap),
+            energy_error: a.map(|a| a.energy),
+            bound_displacement: self.error_bound().map(|b| b.displacement),
+            bound_pressure: self.error_bound().map(|b| b.pressure),
+            bound_kind: match &self.bound {
+                Some(BoundReport { bound: Some(b), .. }) => b.kind.tag().into(),
+                Some(BoundReport {
+                    not_computed: Some(why),
+                    ..
+                }) => format!("none: {why}"),
+                _ => String::new(),
+            },
             separated: intervals_text(&self.separated),
             separated_fraction: self.separated_fraction,
             detail: self.detail.clone(),
@@ -412,6 +432,18 @@ pub struct TrialRow {
     /// (J − J_ref)/|J_ref| for the objective of paper (10).
     #[serde(serialize_with = "fixed_opt")]
     pub objective_gap: Option<f64>,
+    /// ‖v − v_ref‖_A over √K·U (the energy seminorm the bound bounds).
+    #[serde(serialize_with = "fixed_opt")]
+    pub energy_error: Option<f64>,
+    /// The error bound (issue 51): ‖v − v*‖_A over √K·U, and max|p − p*|
+    /// over P; what it bounds (`rigorous`, `at-own-bound` for a Coulomb
+    /// answer: the given-friction solution at its own g = 𝓕p), or `none:`
+    /// and why not.
+    #[serde(serialize_with = "fixed_opt")]
+    pub bound_displacement: Option<f64>,
+    #[serde(serialize_with = "fixed_opt")]
+    pub bound_pressure: Option<f64>,
+    pub bound_kind: String,
     /// Separated intervals of Γ_K (`[a;b] [c;d]`) and their fraction.
     pub separated: String,
     #[serde(serialize_with = "fixed")]
