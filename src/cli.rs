@@ -121,6 +121,13 @@ pub enum Command {
     /// displacements, contact forces per node, or both. Prints every
     /// condition's violation; an answer that fails is a non-zero exit.
     Certify(CertifyArgs),
+    /// Does the error bound hold, and how sharp is it? Every solver's answers
+    /// on the benchmark's core collection (given friction, targets 1e-4,
+    /// 1e-6, 1e-8) and on problem 1 from h = 1/16 to 1/1024 (both laws),
+    /// each bound beside its measured distance from a reference. Writes
+    /// error_bound.csv, error_bound_sharpness.csv, error_bound_trials.csv
+    /// and charts into --out (about 10 min; --quick: seconds).
+    ErrorBound(ErrorBoundArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
     BenchOne(BenchOneArgs),
@@ -293,6 +300,19 @@ impl MapLaw {
 #[derive(Debug, Args)]
 pub struct StabilityArgs {
     /// A small map for tests (h = 1/8, few values).
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder (replaced whole).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct ErrorBoundArgs {
+    /// A small run for tests (the quick collection at h = 1/8, the ladder
+    /// to 1/16).
     #[arg(long)]
     pub quick: bool,
     /// Output folder (replaced whole).
@@ -541,6 +561,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::BenchmarkMerge(a) => c::benchmark::merge(&a),
         Command::Export(a) => c::export::run(&a),
         Command::Certify(a) => c::certify::run(&a),
+        Command::ErrorBound(a) => c::error_bound::run(&a),
         Command::BenchOne(a) => c::bench::run_one(&a),
     }
 }

@@ -350,3 +350,57 @@ fn the_bound_is_refused_when_its_factors_do_not_fit() {
         Ok(_) => panic!("a bound with 1 kB of room"),
     }
 }
+
+/// The test on the core collection: every instance up to h =
+/// 1/32, every solver of the given-friction subproblem, targets 1e-4,
+/// 1e-6 and 1e-8, each answer against the reference earned among the
+/// exact solvers, as the `error_bound` study of `reproduce` measures them.
+/// No bound is below its answer's error (less the reference's own bound),
+/// and the bound is within 30× of the error on at least 90 % of the
+/// answers far enough from the reference to compare (the goal).
+#[test]
+fn the_bound_holds_on_every_core_instance_for_every_solver_and_target() {
+    use contactlab::study::error_bound::views::{SHARPNESS_GOAL, sharpness};
+    use contactlab::study::error_bound::{BoundSpec, ErrorBoundStudy};
+    use contactlab::study::lab::{Lab, Quiet};
+    let spec = BoundSpec {
+        ladder_meshes: Vec::new(),
+        ..BoundSpec::standard()
+    };
+    let log = |_: &str| {};
+    let mut lab = Lab::new(Settings::default(), &log, &Quiet);
+    let points = lab.run(&ErrorBoundStudy { spec }).unwrap().findings;
+    for p in &points {
+        assert!(
+            !p.below(),
+            "{} by {} at {:e}: bound {:?} below the error {:?} (reference's bound {:?})",
+            p.scene,
+            p.solver,
+            p.target,
+            p.bound,
+            p.energy_error,
+            p.reference_bound
+        );
+    }
+    let rows = sharpness(&points);
+    let all = rows
+        .iter()
+        .find(|r| r.part == "core" && r.h == "all")
+        .expect("the core part spans two meshes");
+    eprintln!("{all:?}");
+    // Every answer that is a number gets a bound; the reference of every
+    // instance is certified, so the answers compare.
+    assert!(all.answers >= 1000, "{} answers", all.answers);
+    assert!(
+        all.bounded as f64 >= 0.95 * all.answers as f64,
+        "{} of {} answers bounded",
+        all.bounded,
+        all.answers
+    );
+    assert!(all.compared as f64 >= 0.5 * all.answers as f64);
+    assert!(
+        all.within_goal >= 0.9,
+        "within {SHARPNESS_GOAL}× on {:.0} % only",
+        100.0 * all.within_goal
+    );
+}

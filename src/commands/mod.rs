@@ -5,6 +5,7 @@ pub mod bench;
 pub mod benchmark;
 pub mod certify;
 pub mod compare;
+pub mod error_bound;
 pub mod export;
 pub mod info;
 pub mod reproduce;

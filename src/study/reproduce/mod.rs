@@ -29,6 +29,7 @@ use crate::study::bench::goals::Bench;
 use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::discretization_error::{ErrorSpec, Errors};
+use crate::study::error_bound::{BoundSpec, ErrorBoundStudy};
 use crate::study::lab::{Lab, Planned, RunLength, Section, write_artifacts};
 use crate::study::oracle::Oracle;
 use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
@@ -63,6 +64,8 @@ pub struct ReproduceSpec {
     pub errors: ErrorSpec,
     /// The oracle family on meshes finer than the comparison's.
     pub oracle: Oracle,
+    /// The error bound's sharpness and validity (issue 51).
+    pub error_bound: BoundSpec,
     /// The mesh of the side-by-side of the paper's method against the
     /// oracle and against the reference (problem 1).
     pub side_by_side_h: MeshSize,
@@ -116,6 +119,7 @@ impl ReproduceSpec {
             benchmark: BenchmarkSpec::new(false, registry::solvers()),
             errors: ErrorSpec::standard(),
             oracle: Oracle::standard(),
+            error_bound: BoundSpec::standard(),
             side_by_side_h: MeshSize::from_level(7).expect("in range"),
             // The paper's own form (sweeps) at 1/64, where a point takes
             // about a second; multigrid inside at 1/256 (tuning_map).
@@ -153,6 +157,7 @@ impl ReproduceSpec {
             benchmark: BenchmarkSpec::new(true, registry::solvers()),
             errors: ErrorSpec::quick(),
             oracle: Oracle::quick(),
+            error_bound: BoundSpec::quick(),
             side_by_side_h: h,
             maps: vec![
                 (h, Law::GivenFriction),
@@ -212,6 +217,9 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
             spec: spec.errors.clone(),
         }),
         Box::new(spec.oracle.clone()),
+        Box::new(ErrorBoundStudy {
+            spec: spec.error_bound.clone(),
+        }),
         Box::new(side_by_side(spec)),
         Box::new(tuning_maps(spec)),
     ]

@@ -1,0 +1,347 @@
+//! Views of the error-bound study's points: the sharpness table (per part,
+//! law and mesh), the charts of bound against measured error, and the
+//! README section. Every number is computed from the points.
+
+use contactlab_solvers::Law;
+use serde::Serialize;
+
+use super::{BoundPoint, BoundSpec, LADDER_REFERENCE};
+use crate::io::charts::{Chart, Series};
+use crate::io::csv::fixed;
+use crate::study::lab::{Artifact, chart_markdown};
+use crate::study::trial::Trial;
+
+/// The issue's goal: the bound within this factor of the error on 90 % of
+/// the answers.
+pub const SHARPNESS_GOAL: f64 = 30.0;
+
+/// One line of the sharpness table.
+#[derive(Clone, Debug, Serialize)]
+pub struct SharpnessRow {
+    pub part: String,
+    pub law: Law,
+    pub h: String,
+    /// Answers, those with a bound, and those whose error is far enough
+    /// above the reference's own bound to compare.
+    pub answers: usize,
+    pub bounded: usize,
+    pub compared: usize,
+    /// Answers whose bound is below their error by more than the
+    /// reference's bound.
+    pub below: usize,
+    #[serde(serialize_with = "fixed")]
+    pub ratio_median: f64,
+    #[serde(serialize_with = "fixed")]
+    pub ratio_p90: f64,
+    #[serde(serialize_with = "fixed")]
+    pub ratio_max: f64,
+    /// The fraction of compared answers with bound/error ≤ [`SHARPNESS_GOAL`].
+    #[serde(serialize_with = "fixed")]
+    pub within_goal: f64,
+    /// The same ratios for the pressure (max|p − p*| bound over max|p −
+    /// p_ref|), median and 90th percentile.
+    #[serde(serialize_with = "fixed")]
+    pub pressure_ratio_median: f64,
+    #[serde(serialize_with = "fixed")]
+    pub pressure_ratio_p90: f64,
+}
+
+/// The q-quantile (nearest rank) of sorted values (NaN when empty).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let k = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[k - 1]
+}
+
+fn row(part: &str, law: Law, h: &str, points: &[&BoundPoint]) -> SharpnessRow {
+    let mut ratios: Vec<f64> = points.iter().filter_map(|p| p.ratio()).collect();
+    ratios.sort_by(f64::total_cmp);
+    let mut pressure: Vec<f64> = points
+        .iter()
+        .filter(|p| p.comparable())
+        .filter_map(|p| match (p.pressure_bound, p.pressure_error) {
+            (Some(b), Some(e)) if e > 0.0 && b.is_finite() => Some(b / e),
+            _ => None,
+        })
+        .collect();
+    pressure.sort_by(f64::total_cmp);
+    SharpnessRow {
+        part: part.to_string(),
+        law,
+        h: h.to_string(),
+        answers: points.len(),
+        bounded: points.iter().filter(|p| p.bound.is_some()).count(),
+        compared: ratios.len(),
+        below: points.iter().filter(|p| p.below()).count(),
+        ratio_median: quantile(&ratios, 0.5),
+        ratio_p90: quantile(&ratios, 0.9),
+        ratio_max: ratios.last().copied().unwrap_or(f64::NAN),
+        within_goal: if ratios.is_empty() {
+            f64::NAN
+        } else {
+            ratios.iter().filter(|r| **r <= SHARPNESS_GOAL).count() as f64 / ratios.len() as f64
+        },
+        pressure_ratio_median: quantile(&pressure, 0.5),
+        pressure_ratio_p90: quantile(&pressure, 0.9),
+    }
+}
+
+/// The sharpness table: per part and law, one row per mesh and one for
+/// all meshes together.
+pub fn sharpness(points: &[BoundPoint]) -> Vec<SharpnessRow> {
+    let mut out = Vec::new();
+    for part in ["core", "ladder"] {
+        for law in [Law::GivenFriction, Law::Coulomb] {
+            let of: Vec<&BoundPoint> = points
+                .iter()
+                .filter(|p| p.part == part && p.law == law)
+                .collect();
+            if of.is_empty() {
+                continue;
+            }
+            let mut levels: Vec<(u32, String)> =
+                of.iter().map(|p| (p.level, p.h.clone())).collect();
+            levels.sort();
+            levels.dedup();
+            for (level, h) in &levels {
+                let at: Vec<&BoundPoint> =
+                    of.iter().copied().filter(|p| p.level == *level).collect();
+                out.push(row(part, law, h, &at));
+            }
+            if levels.len() > 1 {
+                out.push(row(part, law, "all", &of));
+            }
+        }
+    }
+    out
+}
+
+/// Bound against measured error, per solver, for answers of `law`, with
+/// the line bound = error: a point below it would be a bound that fails.
+fn against_error(title: &str, points: &[BoundPoint], law: Law) -> Option<Chart> {
+    let pts: Vec<(String, f64, f64)> = points
+        .iter()
+        .filter(|p| p.law == law && p.comparable())
+        .map(|p| {
+            (
+                p.solver.clone(),
+                p.energy_error.unwrap_or(f64::NAN),
+                p.bound.unwrap_or(f64::NAN),
+            )
+        })
+        .collect();
+    bound_against_error_chart(title, &pts)
+}
+
+/// A chart of error bounds against measured errors (both over √K·U), one
+/// scatter series per solver (solver, error, bound), with the lines bound
+/// = error and bound = 30 × error (None: no point with both positive).
+pub fn bound_against_error_chart(title: &str, points: &[(String, f64, f64)]) -> Option<Chart> {
+    let of: Vec<&(String, f64, f64)> = points
+        .iter()
+        .filter(|(_, e, b)| e.is_finite() && b.is_finite() && *e > 0.0 && *b > 0.0)
+        .collect();
+    if of.is_empty() {
+        return None;
+    }
+    let mut names: Vec<&str> = of.iter().map(|p| p.0.as_str()).collect();
+    names.sort();
+    names.dedup();
+    let mut series: Vec<Series> = names
+        .iter()
+        .map(|name| {
+            let pts = of
+                .iter()
+                .filter(|p| p.0 == *name)
+                .map(|p| (p.1, p.2))
+                .collect();
+            Series::line(*name, pts).scatter().of_solver(name)
+        })
+        .collect();
+    let (lo, hi) = of.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), p| {
+        (lo.min(p.1), hi.max(p.1))
+    });
+    series.push(
+        Series::line("bound = error", vec![(lo, lo), (hi, hi)])
+            .dashed()
+            .black(),
+    );
+    series.push(
+        Series::line(
+            format!("bound = {SHARPNESS_GOAL}× error"),
+            vec![(lo, SHARPNESS_GOAL * lo), (hi, SHARPNESS_GOAL * hi)],
+        )
+        .dashed()
+        .black(),
+    );
+    Some(Chart::new(
+        title,
+        "measured error ‖v − v_ref‖_A / (√K·U)",
+        "error bound / (√K·U)",
+        true,
+        true,
+        series,
+    ))
+}
+
+/// The measured trials' (solver, error, bound) where both exist: the
+/// points of [`bound_against_error_chart`].
+pub fn trial_points<'a>(trials: impl IntoIterator<Item = &'a Trial>) -> Vec<(String, f64, f64)> {
+    trials
+        .into_iter()
+        .filter_map(|t| {
+            Some((
+                t.solver.name.to_string(),
+                t.agreement?.energy,
+                t.error_bound()?.displacement,
+            ))
+        })
+        .collect()
+}
+
+/// The ratio bound/error of each solver's answer against the mesh (the
+/// ladder: one answer per solver and mesh).
+fn ratio_against_h(points: &[BoundPoint], law: Law) -> Option<Chart> {
+    let of: Vec<&BoundPoint> = points
+        .iter()
+        .filter(|p| p.part == "ladder" && p.law == law)
+        .collect();
+    let mut names: Vec<&str> = of.iter().map(|p| p.solver.as_str()).collect();
+    names.sort();
+    names.dedup();
+    let mut series = Vec::new();
+    let mut ticks: Vec<(f64, String)> = Vec::new();
+    for name in names {
+        let pts: Vec<(f64, f64)> = of
+            .iter()
+            .filter(|p| p.solver == name)
+            .filter_map(|p| {
+                let x = 2f64.powi(p.level as i32);
+                if !ticks.iter().any(|(t, _)| *t == x) {
+                    ticks.push((x, p.h.clone()));
+                }
+                p.ratio().map(|r| (x, r))
+            })
+            .collect();
+        if !pts.is_empty() {
+            series.push(Series::line(name, pts).with_markers().of_solver(name));
+        }
+    }
+    if series.is_empty() {
+        return None;
+    }
+    ticks.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(
+        Chart::new(
+            format!(
+                "Error bound over measured error against h, problem 1 ({})",
+                law.as_str()
+            ),
+            "mesh size h",
+            "bound / error",
+            true,
+            true,
+            series,
+        )
+        .with_x_ticks(ticks),
+    )
+}
+
+/// The study's charts.
+pub fn charts(points: &[BoundPoint]) -> Vec<Artifact> {
+    let mut out = Vec::new();
+    if let Some(c) = against_error(
+        "Error bound against measured error, given friction (rigorous)",
+        points,
+        Law::GivenFriction,
+    ) {
+        out.push(Artifact::chart("error_bound_given_friction", c));
+    }
+    if let Some(c) = against_error(
+        "Error bound at g = 𝓕p against error from the Coulomb reference",
+        points,
+        Law::Coulomb,
+    ) {
+        out.push(Artifact::chart("error_bound_coulomb", c));
+    }
+    for law in [Law::GivenFriction, Law::Coulomb] {
+        if let Some(c) = ratio_against_h(points, law) {
+            out.push(Artifact::chart(
+                &format!("error_bound_ratio_{}", law.as_str()),
+                c,
+            ));
+        }
+    }
+    out
+}
+
+fn number(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.3}")
+    } else {
+        "–".into()
+    }
+}
+
+/// The README section: what was measured, the table, the charts.
+pub fn section(spec: &BoundSpec, points: &[BoundPoint], charts: &[String]) -> String {
+    let rows = sharpness(points);
+    let mut md = String::from("## The error bound: does it hold, and how sharp is it?\n\n");
+    md += &format!(
+        "Each answer's bound on ‖v − v*‖_A (over √K·U; `certify`'s, issue 51) beside its measured distance from a reference answer. **Core**: the given-friction subproblem of every instance of the benchmark's {} collection, every solver of it at targets {}, against the reference earned among the exact solvers. **Ladder**: problem {} at h = {} to {}, both laws, target {:e}, against `{LADDER_REFERENCE}` at its reference accuracy; each solver goes to finer meshes while its last two predict a run within {} s. A bound is *below* when it is smaller than the error less the reference's own bound; for a given-friction answer this would be a failure of the bound. A Coulomb answer's bound is at its own g = 𝓕p: the fixed point's part is not included, and *below* counts where that part shows. Ratios are over answers whose error exceeds ten times the reference's bound.\n\n",
+        if spec.quick { "quick" } else { "core" },
+        spec.targets
+            .iter()
+            .map(|t| format!("{t:e}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        spec.ladder_problem,
+        spec.ladder_meshes
+            .first()
+            .map(|h| h.to_string())
+            .unwrap_or_default(),
+        spec.ladder_meshes
+            .last()
+            .map(|h| h.to_string())
+            .unwrap_or_default(),
+        spec.ladder_target,
+        spec.budget,
+    );
+    md += "| part | law | h | answers | bounded | compared | below | median bound/error | 90th pct | max | within 30× | pressure: median | 90th pct |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for r in &rows {
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r.part,
+            r.law.as_str(),
+            r.h,
+            r.answers,
+            r.bounded,
+            r.compared,
+            r.below,
+            number(r.ratio_median),
+            number(r.ratio_p90),
+            number(r.ratio_max),
+            if r.within_goal.is_finite() {
+                format!("{:.0} %", 100.0 * r.within_goal)
+            } else {
+                "–".into()
+            },
+            number(r.pressure_ratio_median),
+            number(r.pressure_ratio_p90),
+        );
+    }
+    md += "\n";
+    for c in charts {
+        let intent = if c.contains("ratio") {
+            "Bound/error of each solver's answer as the mesh is refined: whether the bound stays as sharp at fine h."
+        } else if c.ends_with("given_friction") {
+            "Bound against measured error for every given-friction answer; no point may lie below the line bound = error."
+        } else {
+            "Coulomb answers: the bound at the answer's own g = 𝓕p against the distance from the Coulomb reference; points below the line show the fixed point's part, which the bound does not include."
+        };
+        md += &chart_markdown(c, intent);
+    }
+    md
+}
