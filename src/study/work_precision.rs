@@ -4,7 +4,9 @@
 //! target), timed, certified, and measured against the earned reference.
 //! The study behind Python's `cl.work_precision`; its chart is the
 //! certificate's largest violation against seconds, certified points
-//! joined and failed ones as crosses.
+//! joined and failed ones as crosses; beside it the same against the
+//! error bound (an accuracy that needs no reference, issue 51) and the
+//! bound against the measured error.
 
 use anyhow::Result;
 use contactlab_solvers::Law;
@@ -13,6 +15,7 @@ use contactlab_solvers::registry::Entry;
 use crate::io::charts::{Chart, Series};
 use crate::mechanics::scene::Scene;
 use crate::study::benchmark::target_settings;
+use crate::study::error_bound::views::{bound_against_error_chart, trial_points};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::TrialSpec;
@@ -50,9 +53,40 @@ impl WorkPrecision {
     }
 }
 
+/// What a work-precision chart puts on its x axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Precision {
+    /// The certificate's largest violation (every answer has one).
+    Violation,
+    /// The error bound on ‖v − v*‖_A over √K·U (issue 51): an accuracy
+    /// that needs no reference.
+    Bound,
+}
+
+impl Precision {
+    fn of(self, t: &crate::study::trial::Trial) -> Option<f64> {
+        match self {
+            Precision::Violation => Some(t.residual()),
+            Precision::Bound => t.error_bound().map(|b| b.displacement),
+        }
+    }
+
+    fn label(self) -> &'static str {
+        match self {
+            Precision::Violation => "largest violation in the certificate (relative)",
+            Precision::Bound => "error bound on ‖v − v*‖_A / (√K·U)",
+        }
+    }
+}
+
 /// The chart: per solver, the certificate's largest violation against the
 /// fastest of its timed runs.
 pub fn chart(title: &str, measured: &[Measured]) -> Chart {
+    chart_of(title, measured, Precision::Violation)
+}
+
+/// The chart with `precision` on the x axis (answers without it left out).
+pub fn chart_of(title: &str, measured: &[Measured], precision: Precision) -> Chart {
     let mut names: Vec<&str> = Vec::new();
     for m in measured {
         if !names.contains(&m.trial.solver.name) {
@@ -66,11 +100,11 @@ pub fn chart(title: &str, measured: &[Measured]) -> Chart {
             let mut p: Vec<((f64, f64), String)> = measured
                 .iter()
                 .filter(|m| m.trial.solver.name == name && m.trial.certified() == ok)
-                .map(|m| {
-                    (
-                        (m.trial.residual(), m.timing.seconds_min),
+                .filter_map(|m| {
+                    Some((
+                        (precision.of(&m.trial)?, m.timing.seconds_min),
                         m.trial.knob().1.to_string(),
-                    )
+                    ))
                 })
                 .filter(|((x, y), _)| *x > 0.0 && x.is_finite() && *y > 0.0)
                 .collect();
@@ -83,14 +117,7 @@ pub fn chart(title: &str, measured: &[Measured]) -> Chart {
             points(false),
         ));
     }
-    Chart::new(
-        title,
-        "largest violation in the certificate (relative)",
-        "seconds",
-        true,
-        true,
-        series,
-    )
+    Chart::new(title, precision.label(), "seconds", true, true, series)
 }
 
 impl Study for WorkPrecision {
@@ -125,6 +152,21 @@ impl Study for WorkPrecision {
                 &measured,
             ),
         ));
+        let title = format!("{}, h = {}", self.scene.name, self.scene.finest());
+        let bounded = chart_of(
+            &format!("Work against the error bound: {title}"),
+            &measured,
+            Precision::Bound,
+        );
+        if !bounded.series.is_empty() {
+            artifacts.push(Artifact::chart(&format!("{STUDY}_bound"), bounded));
+        }
+        if let Some(c) = bound_against_error_chart(
+            &format!("Error bound against measured error: {title}"),
+            &trial_points(measured.iter().map(|m| &m.trial)),
+        ) {
+            artifacts.push(Artifact::chart(&format!("{STUDY}_bound_vs_error"), c));
+        }
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
         Ok(Ran {
             findings: measured,
@@ -141,10 +183,14 @@ impl Study for WorkPrecision {
             measured.len()
         );
         for c in charts {
-            markdown += &chart_markdown(
-                c,
-                "Time against the certificate's largest violation for each solver at each target accuracy.",
-            );
+            let intent = if c.ends_with("_bound_vs_error") {
+                "The error bound of each answer against its measured distance from the reference: no point may lie below the line bound = error (for a Coulomb answer the bound is at its own g = 𝓕p)."
+            } else if c.ends_with("_bound") {
+                "Time against the error bound on ‖v − v*‖_A: an accuracy that needs no reference."
+            } else {
+                "Time against the certificate's largest violation for each solver at each target accuracy."
+            };
+            markdown += &chart_markdown(c, intent);
         }
         Ok(Section { markdown })
     }

@@ -6,6 +6,7 @@ use anyhow::Result;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::Entry;
 
+use crate::certificate::BoundKind;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
@@ -85,6 +86,15 @@ pub fn markdown_of(measured: &[Measured]) -> String {
     markdown(&trials, &seconds)
 }
 
+/// The error bound's cell: its value, † when at the answer's own g.
+fn bound_cell(t: &Trial) -> String {
+    match t.error_bound() {
+        Some(b) if b.kind == BoundKind::AtOwnBound => format!("{:.1e}†", b.displacement),
+        Some(b) => format!("{:.1e}", b.displacement),
+        None => "–".into(),
+    }
+}
+
 /// The trials: per solver, the subproblem (if it solves it) and the Coulomb
 /// problem, each run `1 + repeats` times for its time.
 pub fn plan(
@@ -111,8 +121,8 @@ pub fn plan(
 /// A Markdown table of comparison trials.
 pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
     let mut out = String::from(
-        "| problem | h | law | solver | status | claim | Δu | Δp | Δq | separated | certificate | iterations | time (s) |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| problem | h | law | solver | status | claim | Δu | Δp | Δq | ‖Δv‖_A | error bound | separated | certificate | iterations | time (s) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let e = |x: Option<f64>| x.map(|v| format!("{v:.1e}")).unwrap_or_else(|| "–".into());
     for (r, t) in trials.iter().zip(seconds) {
@@ -135,7 +145,7 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
             format!("**{:.1e}** ({})", r.residual(), names.join(", "))
         };
         out += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({:.1}%) | {} | {} | {:.3} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({:.1}%) | {} | {} | {:.3} |\n",
             r.scene,
             r.h,
             r.law.as_str(),
@@ -149,6 +159,8 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
             e(r.displacement_error()),
             e(r.pressure_error()),
             e(r.agreement.map(|a| a.traction_max)),
+            e(r.agreement.map(|a| a.energy)),
+            bound_cell(r),
             sep,
             100.0 * r.separated_fraction,
             certificate,
@@ -172,7 +184,8 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
     out + &format!(
         "\nStatus: certified (a claim of convergence that fails the certificate is `inaccurate`); claim: the solver's own. \
-         Δ: max difference from the reference, relative to its largest value; the reference: {} (unless named \
+         Δ: max difference from the reference, relative to its largest value; ‖Δv‖_A: the difference in the energy seminorm over √K·U; \
+         error bound: the certificate's bound on ‖v − v*‖_A over √K·U (issue 51; † for a Coulomb answer: at its own g = 𝓕p, the fixed point's part not included; – where not computed); the reference: {} (unless named \
          with --reference, the most accurate certified answer among the exact solvers at their tightest settings). Certificate: the largest violation of any condition \
          of the law, in the problem's scales (tolerance {tol:e}; failing conditions named). Iterations: [friction \
          iterations:] outer [/ inner]. Time: minimum over the runs.\n",

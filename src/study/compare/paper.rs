@@ -19,6 +19,7 @@ use crate::study::compare::charts::{
     ProfilePair, convergence_charts, inner_convergence_panels, profile_charts,
 };
 use crate::study::compare::{STUDY, plan};
+use crate::study::error_bound::views::{bound_against_error_chart, trial_points};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::{TrialSpec, intervals_text};
@@ -130,6 +131,12 @@ impl Study for PaperCompare {
                 .collect();
             let h = self.h.to_string();
             artifacts.extend(Artifact::charts(convergence_charts(problem, &h, &ours)));
+            if let Some(c) = bound_against_error_chart(
+                &format!("Error bound against measured error, problem {problem}, h = {h}"),
+                &trial_points(ours.iter().map(|m| &m.trial)),
+            ) {
+                artifacts.push(Artifact::chart(&format!("bound_vs_error_p{problem}"), c));
+            }
             artifacts.push(Artifact::panels(
                 &format!("convergence_inner_p{problem}"),
                 inner_convergence_panels(problem, &h, &ours),

@@ -217,6 +217,15 @@ pub fn section(
     for c in charts.iter().filter(|c| c.starts_with("profile_")) {
         s += &chart_markdown(c, profile_intent(c));
     }
+    if charts.iter().any(|c| c.starts_with("bound_vs_error")) {
+        s += "## The error bound against the measured error\n\n";
+    }
+    for c in charts.iter().filter(|c| c.starts_with("bound_vs_error")) {
+        s += &chart_markdown(
+            c,
+            "Each answer's error bound (issue 51) against its measured distance from the reference, both in the energy seminorm over √K·U: no given-friction point may lie below the line bound = error; a Coulomb answer's bound is at its own g = 𝓕p.",
+        );
+    }
     s += "## Convergence histories\n\n";
     for c in charts.iter().filter(|c| c.starts_with("convergence")) {
         s += &chart_markdown(
