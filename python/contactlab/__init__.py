@@ -54,6 +54,7 @@ __all__ = [
     "compare",
     "benchmark",
     "work_precision",
+    "error_bound",
     "sweep",
     "side_by_side",
     "tuning_map",
@@ -874,6 +875,7 @@ def work_precision(
     repeats: int = 0,
     chart: Optional[PathLike] = None,
     out: Optional[PathLike] = None,
+    x: str = "violation",
 ) -> StudyResult:
     """Work against precision: each solver at each target accuracy (the
     benchmark's rule), certified at the target, timed, and measured against
@@ -882,8 +884,16 @@ def work_precision(
     Parameters
     ----------
     chart : path ending in .svg, optional
-        Writes the chart: the certificate's largest violation against
-        seconds, certified points joined, failed ones as crosses.
+        Writes the chart: accuracy (``x``) against seconds, certified points
+        joined, failed ones as crosses.
+    x : str
+        The chart's accuracy: ``"violation"``, the certificate's largest
+        violation; ``"bound"``, the error bound on ‖v − v*‖_A over √K·U
+        (issue 51: it needs no reference; computed up to
+        ``certificate.bound_max_unknowns`` unknowns, h = 1/128 by default);
+        or ``"bound-vs-error"``, the bound against the measured distance
+        from the reference (no time axis). Every chart is also in
+        ``charts`` of the result.
 
     Returns
     -------
@@ -897,6 +907,9 @@ def work_precision(
             raise InputError(f"chart = {chart!r}: charts are SVG; give a path ending in .svg")
     if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
         raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
+    charts_of_x = {"violation": "work_precision", "bound": "work_precision_bound", "bound-vs-error": "work_precision_bound_vs_error"}
+    if x not in charts_of_x:
+        raise InputError(f"x = {x!r}: give one of {', '.join(repr(k) for k in charts_of_x)}")
     d = _contactlab._work_precision(
         problem._p,
         _solver_names(solvers),
@@ -908,12 +921,46 @@ def work_precision(
     files = dict(d["files"])
     charts = dict(d["charts"])
     if chart is not None:
+        name = charts_of_x[x]
+        if name not in charts:
+            raise InputError(
+                f"x = {x!r}: no answer has an error bound{' and a reference' if x == 'bound-vs-error' else ''} to draw "
+                "(the bound is computed up to certificate.bound_max_unknowns unknowns; raise it in settings)"
+            )
         try:
             with open(chart, "wb") as fh:
-                fh.write(charts["work_precision"])
+                fh.write(charts[name])
         except OSError as e:
             raise FileError(f"cannot write {chart}: {e.strerror}") from None
     return StudyResult(rows=_rows(files["work_precision.csv"]), files=files, charts=charts, report=d["report"])
+
+
+def error_bound(
+    quick: bool = False,
+    settings: Optional[Mapping[str, object]] = None,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """Does the certificate's error bound hold, and how sharp is it?
+    ``contactlab error-bound``.
+
+    Every solver's answers on the benchmark's core collection (given
+    friction, targets 1e-4, 1e-6, 1e-8) and on problem 1 from h = 1/16 to
+    1/1024 (both laws), each answer's bound on ‖v − v*‖_A beside its
+    measured distance from a reference (about 10 minutes; ``quick``: the
+    quick collection and h to 1/16, seconds).
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: ``error_bound.csv`` (one answer per row: its bound, its
+        measured error, the reference's own bound); ``files`` also holds
+        ``error_bound_sharpness.csv``.
+    """
+    if not isinstance(quick, bool):
+        raise InputError(f"quick = {quick!r}: give True or False")
+    d = _contactlab._error_bound(bool(quick), _settings(settings), _out(out))
+    files = dict(d["files"])
+    return StudyResult(rows=_rows(files["error_bound.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
 
 
 def sweep(

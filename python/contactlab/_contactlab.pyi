@@ -125,6 +125,11 @@ def _work_precision(
     repeats: int = ...,
     out: Optional[str] = ...,
 ) -> Dict[str, Any]: ...
+def _error_bound(
+    quick: bool = ...,
+    settings: Sequence[Tuple[str, str]] = ...,
+    out: Optional[str] = ...,
+) -> Dict[str, Any]: ...
 def _sweep(
     problem: Problem,
     solvers: List[str],

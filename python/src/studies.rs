@@ -18,6 +18,7 @@ use contactlab::study::lab::{Content, Lab, Quiet, Study, write_artifacts};
 use contactlab::study::side_by_side::{SideBySide, parse_side, solvers_of};
 use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::tuning_map::{Axis, TuningMap};
+use contactlab::study::error_bound::{BoundSpec, ErrorBoundStudy};
 use contactlab::study::work_precision::WorkPrecision;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -297,6 +298,26 @@ pub fn _work_precision<'py>(
         repeats,
     };
     run(py, study, settings, out)
+}
+
+/// `contactlab error-bound`: the certificate's error bound beside the
+/// measured error of every solver's answers (issue 51).
+#[pyfunction]
+#[pyo3(signature = (quick=false, settings=Vec::new(), out=None))]
+pub fn _error_bound(
+    py: Python<'_>,
+    quick: bool,
+    settings: Vec<(String, String)>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'_, PyDict>> {
+    let solvers = contactlab::solvers::registry::solvers();
+    let settings = resolved(&Settings::default(), settings, &solvers)?;
+    let spec = if quick {
+        BoundSpec::quick()
+    } else {
+        BoundSpec::standard()
+    };
+    run(py, ErrorBoundStudy { spec }, settings, out)
 }
 
 /// `contactlab sweep` on the problem's scene and mesh: each solver's

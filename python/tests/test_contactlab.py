@@ -480,3 +480,37 @@ def test_the_package_is_typed_and_holds_no_study_logic():
     for node in ast.walk(tree):
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
             assert node.func.attr not in {"max", "min", "mean", "abs", "log", "exp", "sqrt", "geomspace"}, ast.dump(node)
+
+
+def test_work_precision_can_use_the_error_bound_as_its_accuracy(tmp_path):
+    # Issue 51: every trial row carries the bound; the work-precision chart
+    # can put it on its x axis (no reference needed) and draws it against
+    # the measured error. A row without the bound, a chart still drawn on
+    # the violation, or a silent empty chart when no bound exists fails.
+    p = cl.Problem.paper(1, h="1/16")
+    chart = tmp_path / "bound.svg"
+    r = cl.work_precision(p, ["newton-coulomb", "nsgs"], targets=[1e-4, 1e-8], chart=chart, x="bound")
+    for t in r.rows:
+        assert t["bound_kind"] == "at-own-bound"
+        assert 0 < t["bound_displacement"] < 1
+        assert t["energy_error"] >= 0
+    assert "error bound" in chart.read_text()
+    assert "work_precision_bound_vs_error" in r.charts
+    with pytest.raises(cl.InputError, match="bound_max_unknowns"):
+        cl.work_precision(p, ["nsgs"], targets=[1e-4], chart=chart, x="bound", settings={"certificate.bound_max_unknowns": 0})
+    with pytest.raises(cl.InputError, match="x = 'time'"):
+        cl.work_precision(p, ["nsgs"], targets=[1e-4], x="time")
+
+
+def test_the_error_bound_study_finds_no_given_friction_bound_below_its_error():
+    # The study behind `contactlab error-bound`, run from Python: every
+    # given-friction answer's bound at least its measured error less the
+    # reference's own bound (the triangle inequality). A bound that fails,
+    # or a study that drops the bounds from its rows, fails here.
+    r = cl.error_bound(quick=True)
+    given = [t for t in r.rows if t["law"] == "given_friction"]
+    assert len(given) >= 100
+    for t in given:
+        assert t["kind"] == "rigorous"
+        assert t["bound"] >= t["energy_error"] - t["reference_bound"], t
+    assert "error_bound_sharpness.csv" in r.files
