@@ -614,12 +614,37 @@ pub fn error_bound(
 /// bounds an answer at any h whose factors fit in memory.
 pub const SOLVE_BOUND_MAX_UNKNOWNS: usize = 40_000;
 
+/// The fixed point's part of a Coulomb answer's error, estimated from the
+/// fixed point's observed contraction factor k (paper (9): g ↦ 𝓕 p(S(g)),
+/// S the given-friction solution). The bound at the answer's own g bounds
+/// ‖v − Φ(v)‖_A for the fixed point's map Φ(v) = S(𝓕 p(v)); if Φ
+/// contracts with factor k, ‖v − v*‖ ≤ ‖v − Φ(v)‖ + ‖Φ(v) − Φ(v*)‖ gives
+/// ‖v − v*‖_A ≤ E/(1 − k). For the pressure, |g − g*| ≤ |g − T(g)|/(1 −
+/// k) in max norm for T(g) = 𝓕 p(S(g)), and |g − T(g)| ≤ 𝓕 P_b, so
+/// |p − p*| ≤ P_b + k 𝓕 P_b/((1 − k) 𝓕) = P_b/(1 − k) (one coefficient
+/// 𝓕). An estimate, not a bound: k is observed on max|Δg| over the last
+/// friction iterations, not proved, and the energy's contraction is taken
+/// to be the same.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FixedPointEstimate {
+    /// The contraction factor the estimate assumes.
+    pub contraction: f64,
+    /// ‖v − v*‖_A, the same over √K·U, and max|p − p*| over P (the
+    /// Coulomb solution v*, p*), estimated.
+    pub energy: f64,
+    pub displacement: f64,
+    pub pressure: f64,
+}
+
 /// The bound of an answer as reported beside its certificate: the bound,
-/// or why there is none.
+/// or why there is none, and for a Coulomb answer of a fixed point the
+/// estimate of the whole error.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BoundReport {
     pub bound: Option<ErrorBound>,
     pub not_computed: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed_point: Option<FixedPointEstimate>,
 }
 
 impl BoundReport {
@@ -628,7 +653,27 @@ impl BoundReport {
         Self {
             bound: None,
             not_computed: Some(why.into()),
+            fixed_point: None,
         }
+    }
+
+    /// With the fixed point's part estimated ([`FixedPointEstimate`]) for
+    /// a bound at the answer's own g and a contraction factor k in [0, 1)
+    /// (none otherwise: a direct Coulomb solver observes no k).
+    pub fn with_contraction(mut self, k: Option<f64>) -> Self {
+        self.fixed_point = match (self.bound, k) {
+            (Some(b), Some(k)) if b.kind == BoundKind::AtOwnBound && (0.0..1.0).contains(&k) => {
+                let factor = 1.0 / (1.0 - k);
+                Some(FixedPointEstimate {
+                    contraction: k,
+                    energy: b.energy * factor,
+                    displacement: b.displacement * factor,
+                    pressure: b.pressure * factor,
+                })
+            }
+            _ => None,
+        };
+        self
     }
 
     /// The bound of (v, p, q), with factors allowed at most `room` bytes.
@@ -644,6 +689,7 @@ impl BoundReport {
             Ok(b) => Self {
                 bound: Some(b),
                 not_computed: None,
+                fixed_point: None,
             },
             Err(e) => Self::skipped(e.to_string()),
         }
@@ -652,13 +698,22 @@ impl BoundReport {
     /// One line: the bounds in the problem's scales and what they bound.
     pub fn line(&self) -> String {
         match (&self.bound, &self.not_computed) {
-            (Some(b), _) => format!(
-                "‖v − v*‖_A ≤ {:.2e} (= {:.2e} √K·U), max|p − p*| ≤ {:.2e} P; {}",
-                b.energy,
-                b.displacement,
-                b.pressure,
-                b.kind.as_str()
-            ),
+            (Some(b), _) => {
+                let mut line = format!(
+                    "‖v − v*‖_A ≤ {:.2e} (= {:.2e} √K·U), max|p − p*| ≤ {:.2e} P; {}",
+                    b.energy,
+                    b.displacement,
+                    b.pressure,
+                    b.kind.as_str()
+                );
+                if let Some(e) = self.fixed_point {
+                    line += &format!(
+                        "; with the fixed point's part, estimated from its contraction factor k = {:.2}: ‖v − v*‖_A ≲ {:.2e} √K·U, max|p − p*| ≲ {:.2e} P",
+                        e.contraction, e.displacement, e.pressure
+                    );
+                }
+                line
+            }
             (None, Some(why)) => format!("not computed: {why}"),
             (None, None) => "not computed".to_string(),
         }

@@ -45,8 +45,8 @@ pub mod energy_solve;
 pub mod error_bound;
 
 pub use error_bound::{
-    BoundError, BoundKind, BoundReport, ErrorBound, ErrorBounder, SOLVE_BOUND_MAX_UNKNOWNS,
-    bound_room, error_bound,
+    BoundError, BoundKind, BoundReport, ErrorBound, ErrorBounder, FixedPointEstimate,
+    SOLVE_BOUND_MAX_UNKNOWNS, bound_room, error_bound,
 };
 
 use contactlab_solvers::{ContactProblem, Friction, Law, Solution, Status};

@@ -123,4 +123,18 @@ impl Outcome {
             .and_then(|fp| fp.history.last())
             .and_then(|f| f.contraction)
     }
+
+    /// The contraction factor an estimate of the fixed point's part of the
+    /// error assumes: the largest observed over the last three friction
+    /// iterations (one ratio alone can be low by chance); None without a
+    /// fixed point or with fewer than two iterations.
+    pub fn contraction_for_estimate(&self) -> Option<f64> {
+        let history = &self.fixed_point.as_ref()?.history;
+        history
+            .iter()
+            .rev()
+            .take(3)
+            .filter_map(|f| f.contraction)
+            .reduce(f64::max)
+    }
 }

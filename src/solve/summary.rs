@@ -137,6 +137,7 @@ pub fn answer_bound(solved: &Solved, settings: &CertificateSettings) -> BoundRep
         &s.friction_traction,
         bound_room(),
     )
+    .with_contraction(solved.outcome.contraction_for_estimate())
 }
 
 /// Why an answer of `n` unknowns gets no bound, and the way to one.

@@ -214,7 +214,8 @@ pub fn trial_row(
         trial.detail = format!("{} ({})", trial.detail, o.certificate.summary());
     }
     trial.certificate = Some(o.certificate);
-    trial.bound = trial_bound(spec, reference, finest, s);
+    trial.bound = trial_bound(spec, reference, finest, s)
+        .map(|b| b.with_contraction(o.contraction_for_estimate()));
     trial
 }
 

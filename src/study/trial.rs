@@ -340,6 +340,16 @@ impl Trial {
             energy_error: a.map(|a| a.energy),
             bound_displacement: self.error_bound().map(|b| b.displacement),
             bound_pressure: self.error_bound().map(|b| b.pressure),
+            estimate_displacement: self
+                .bound
+                .as_ref()
+                .and_then(|b| b.fixed_point)
+                .map(|e| e.displacement),
+            estimate_pressure: self
+                .bound
+                .as_ref()
+                .and_then(|b| b.fixed_point)
+                .map(|e| e.pressure),
             bound_kind: match &self.bound {
                 Some(BoundReport { bound: Some(b), .. }) => b.kind.tag().into(),
                 Some(BoundReport {
@@ -443,6 +453,13 @@ pub struct TrialRow {
     pub bound_displacement: Option<f64>,
     #[serde(serialize_with = "fixed_opt")]
     pub bound_pressure: Option<f64>,
+    /// A Coulomb answer of a fixed point: the whole error, the bound at
+    /// its own g over (1 − k) for the observed contraction factor k (an
+    /// estimate; `FixedPointEstimate`).
+    #[serde(serialize_with = "fixed_opt")]
+    pub estimate_displacement: Option<f64>,
+    #[serde(serialize_with = "fixed_opt")]
+    pub estimate_pressure: Option<f64>,
     pub bound_kind: String,
     /// Separated intervals of Γ_K (`[a;b] [c;d]`) and their fraction.
     pub separated: String,

@@ -122,6 +122,10 @@ pub struct BoundPoint {
     /// The reference's own bound (over √K·U): the measurement's slack.
     #[serde(serialize_with = "fixed_opt")]
     pub reference_bound: Option<f64>,
+    /// A Coulomb answer of a fixed point: the whole error estimated, the
+    /// bound over (1 − k) for its observed contraction factor k.
+    #[serde(serialize_with = "fixed_opt")]
+    pub estimate: Option<f64>,
     /// `rigorous`, `at-own-bound`, or `none: why`.
     pub kind: String,
 }
@@ -145,7 +149,16 @@ impl BoundPoint {
     /// Whether the bound is below the error by more than the reference's
     /// own bound (for a given-friction answer: a failure of the bound).
     pub fn below(&self) -> bool {
-        match (self.energy_error, self.bound, self.reference_bound) {
+        Self::under(self.bound, self.energy_error, self.reference_bound)
+    }
+
+    /// The same for the estimate of a Coulomb answer's whole error.
+    pub fn estimate_below(&self) -> bool {
+        Self::under(self.estimate, self.energy_error, self.reference_bound)
+    }
+
+    fn under(bound: Option<f64>, error: Option<f64>, reference: Option<f64>) -> bool {
+        match (error, bound, reference) {
             (Some(e), Some(b), Some(r)) => b < e - r,
             _ => false,
         }
@@ -222,6 +235,7 @@ fn point(part: &'static str, m: &Measured, target: f64, reference: Option<f64>) 
         pressure_error: t.pressure_error(),
         pressure_bound: row.bound_pressure,
         reference_bound: reference,
+        estimate: row.estimate_displacement,
         kind: row.bound_kind,
     }
 }

@@ -44,6 +44,10 @@ pub struct SharpnessRow {
     pub pressure_ratio_median: f64,
     #[serde(serialize_with = "fixed")]
     pub pressure_ratio_p90: f64,
+    /// Coulomb answers of a fixed point: those with an estimate of the
+    /// whole error, and those whose estimate is below their error.
+    pub estimated: usize,
+    pub estimate_below: usize,
 }
 
 /// The q-quantile (nearest rank) of sorted values (NaN when empty).
@@ -85,6 +89,8 @@ fn row(part: &str, law: Law, h: &str, points: &[&BoundPoint]) -> SharpnessRow {
         },
         pressure_ratio_median: quantile(&pressure, 0.5),
         pressure_ratio_p90: quantile(&pressure, 0.9),
+        estimated: points.iter().filter(|p| p.estimate.is_some()).count(),
+        estimate_below: points.iter().filter(|p| p.estimate_below()).count(),
     }
 }
 
@@ -309,10 +315,10 @@ pub fn section(spec: &BoundSpec, points: &[BoundPoint], charts: &[String]) -> St
         spec.ladder_target,
         spec.budget,
     );
-    md += "| part | law | h | answers | bounded | compared | below | median bound/error | 90th pct | max | within 30× | pressure: median | 90th pct |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    md += "| part | law | h | answers | bounded | compared | below | median bound/error | 90th pct | max | within 30× | pressure: median | 90th pct | estimated (below) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in &rows {
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r.part,
             r.law.as_str(),
             r.h,
@@ -330,6 +336,11 @@ pub fn section(spec: &BoundSpec, points: &[BoundPoint], charts: &[String]) -> St
             },
             number(r.pressure_ratio_median),
             number(r.pressure_ratio_p90),
+            if r.law == Law::Coulomb {
+                format!("{} ({})", r.estimated, r.estimate_below)
+            } else {
+                "–".into()
+            },
         );
     }
     md += "\n";
