@@ -55,13 +55,19 @@
 //! The energy seminorm does not see the rigid translation z: a bound on
 //! ‖v − v*‖_A says nothing about how far the upper body sits along z.
 //!
-//! Rounding: the solve is refined once and the refinement's change added;
-//! the long sums of ‖d‖_A carry an allowance of 32 ε |d|ᵀ|A| |d|, and the
-//! stationarity residual one of ‖b‖_{A⁺} with b = 32 ε (|A| |v| + |f|), the
-//! size of its rounding (an estimate: see [`ErrorBounder::rounding_allowance`]).
-//! The bound is rigorous up to these allowances for floating point, which
-//! are its floor: about 1e-10 of the energy of a displacement of size U
-//! (measured on problem 1 at h = 1/32, `tests/error_bound.rs`).
+//! Rounding: ρ is a difference of terms far larger than itself, so each of
+//! its rows (and the refinement's residual ρ − A y) is summed by Dot2
+//! ([`super::accurate_sum`]: as if in twice the working precision), and the
+//! rows' error bounds b enter as an allowance ‖b‖_{A⁺} (an estimate of the
+//! largest ‖δρ‖_{A⁺} over |δρ| ≤ b: b's signs taken alike). The solve is
+//! refined once and the refinement's change added; the long sums of ‖d‖_A
+//! carry an allowance of 32 ε |d|ᵀ|A| |d|, and the shift along z one for
+//! the rounding of v + τ z. Summed plainly, ρ's rounding grew with A's
+//! condition number and was the bound's floor (1.4e-9 √K·U at h = 1/128);
+//! by Dot2 the reference's own bound there is 3.4e-12 (`tests/error_bound.rs`).
+//!
+//! A Coulomb answer of a fixed point also gets the fixed point's part
+//! estimated from its contraction factor ([`FixedPointEstimate`]).
 
 use contactlab_solvers::{ContactProblem, Friction, Law};
 use serde::{Deserialize, Serialize};
