@@ -14,12 +14,13 @@ use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
 use contactlab::solvers::{Law, Status, registry};
 use contactlab::study::reference::References;
+use contactlab::study::reproduce::{ReproduceSpec, studies};
 use contactlab::study::runner::{Keep, measure_all};
 use contactlab::study::trial::{Trial, TrialSpec};
 
 /// Files a reproduce run must write (besides profiles and charts): one or
 /// more per study, the manifest and the README.
-const FILES: [&str; 35] = [
+const FILES: [&str; 38] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -50,6 +51,9 @@ const FILES: [&str; 35] = [
     "discretization_error.csv",
     "oracle.csv",
     "oracle_timing.csv",
+    "error_bound.csv",
+    "error_bound_sharpness.csv",
+    "error_bound_trials.csv",
     "side_by_side.csv",
     "side_by_side_relaxation_clarabel.csv",
     "side_by_side_relaxation_reference.csv",
@@ -208,6 +212,7 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         "sweep.csv",
         "stability.csv",
         "table1_trials.csv",
+        "error_bound_trials.csv",
     ] {
         assert_eq!(read_csv(&out.join(f)).0, trial_header(), "{f}");
     }
@@ -216,7 +221,8 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     let study_seconds = manifest["run"]["study_seconds"]
         .as_object()
         .expect("the manifest records each study's seconds");
-    assert_eq!(study_seconds.len(), 10, "{study_seconds:?}");
+    let planned = studies(&ReproduceSpec::quick(), &Settings::default()).len();
+    assert_eq!(study_seconds.len(), planned, "{study_seconds:?}");
     for key in [
         "git_commit",
         "git_dirty",
@@ -391,6 +397,15 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
                 "fraction of instances solved",
                 true,
             )
+        } else if name.starts_with("error_bound_ratio") {
+            (
+                "Error bound over measured error against h",
+                "mesh size h",
+                "bound / error",
+                false,
+            )
+        } else if name.starts_with("error_bound_") || name.starts_with("bound_vs_error_p") {
+            ("Error bound", "measured error", "error bound", false)
         } else if name.starts_with("discretization_error") {
             ("Discretization error", "h", "relative error", false)
         } else if name.starts_with("stability_friction") {
