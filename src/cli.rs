@@ -63,9 +63,10 @@ pub enum Command {
     /// The main job: Table 1, the comparison of every solver on the paper's
     /// three problems, profiles, a sweep, the stability map, the speed
     /// measurements of `bench`, the benchmark, the discretization error, the
-    /// oracle at 1/128 and 1/256, a side-by-side at 1/128, r × ε maps,
-    /// charts, a manifest and a README, all into --out (default results/).
-    /// About 45 min on 2 cores; --long adds the studies that take hours (the
+    /// oracle at 1/128 and 1/256, the error bound's validity and sharpness, a
+    /// side-by-side at 1/128, r × ε maps, charts, a manifest and a README,
+    /// all into --out (default results/).
+    /// About an hour on 2 cores; --long adds the studies that take hours (the
     /// paper's method by sweeps at equal accuracy on 1/128 and 1/256, the
     /// whole benchmark collection): about 2.5 h. It states its estimate as it
     /// starts; the manifest records each study's time (--quick: a minute).
@@ -126,7 +127,7 @@ pub enum Command {
     /// 1e-6, 1e-8) and on problem 1 from h = 1/16 to 1/1024 (both laws),
     /// each bound beside its measured distance from a reference. Writes
     /// error_bound.csv, error_bound_sharpness.csv, error_bound_trials.csv
-    /// and charts into --out (about 10 min; --quick: seconds).
+    /// and charts into --out (about 20 min; --quick: seconds).
     ErrorBound(ErrorBoundArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
@@ -357,7 +358,7 @@ pub struct ReproduceArgs {
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
     /// bench's solvers with three timed runs each and 15 s per run, and the whole
     /// benchmark collection (73 instances, not its core 42 up to h = 1/32).
-    /// Without it the run takes about 45 minutes.
+    /// Without it the run takes about an hour.
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:

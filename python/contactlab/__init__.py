@@ -946,7 +946,7 @@ def error_bound(
     Every solver's answers on the benchmark's core collection (given
     friction, targets 1e-4, 1e-6, 1e-8) and on problem 1 from h = 1/16 to
     1/1024 (both laws), each answer's bound on ‖v − v*‖_A beside its
-    measured distance from a reference (about 10 minutes; ``quick``: the
+    measured distance from a reference (about 20 minutes; ``quick``: the
     quick collection and h to 1/16, seconds).
 
     Returns
