@@ -69,7 +69,7 @@
 //! A Coulomb answer of a fixed point also gets the fixed point's part
 //! estimated from its contraction factor ([`FixedPointEstimate`]).
 
-use contactlab_solvers::{ContactProblem, Friction, Law};
+use contactlab_solvers::{ContactProblem, Friction, Law, Solution};
 use serde::{Deserialize, Serialize};
 
 use super::accurate_sum::Dot2;
@@ -699,6 +699,23 @@ impl BoundReport {
             },
             Err(e) => Self::skipped(e.to_string()),
         }
+    }
+
+    /// The bound of a solver's answer (its v, pressures and tractions).
+    pub fn of_solution(
+        problem: &ContactProblem,
+        friction: Friction<'_>,
+        s: &Solution,
+        room: f64,
+    ) -> Self {
+        Self::of(
+            problem,
+            friction,
+            &s.v,
+            &s.pressure,
+            &s.friction_traction,
+            room,
+        )
     }
 
     /// One line: the bounds in the problem's scales and what they bound.

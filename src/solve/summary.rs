@@ -1,7 +1,7 @@
 //! `summary.json` of `contactlab solve`: a view of one [`Outcome`] with
 //! the scene, the settings and the contact zone.
 
-use contactlab_solvers::Status;
+use contactlab_solvers::{ContactProblem, Friction, Solution, Status};
 use serde::Serialize;
 
 use crate::certificate::{BoundReport, Certificate, SOLVE_BOUND_MAX_UNKNOWNS, bound_room};
@@ -124,20 +124,28 @@ impl Summary {
 /// by default [`SOLVE_BOUND_MAX_UNKNOWNS`]) and its factors fit in half
 /// the memory that is free.
 pub fn answer_bound(solved: &Solved, settings: &CertificateSettings) -> BoundReport {
-    let problem = &solved.finest.problem;
+    bound_within_limit(
+        &solved.finest.problem,
+        Friction::Coulomb,
+        &solved.outcome.solution,
+        settings,
+    )
+    .with_contraction(solved.outcome.contraction_for_estimate())
+}
+
+/// The bound of `s` under `friction` if the problem has at most
+/// `certificate.bound_max_unknowns` unknowns (else why not): the one gate
+/// of `solve` and of every trial.
+pub fn bound_within_limit(
+    problem: &ContactProblem,
+    friction: Friction<'_>,
+    s: &Solution,
+    settings: &CertificateSettings,
+) -> BoundReport {
     if !settings.bounds(problem.n()) {
         return BoundReport::skipped(too_large_to_bound(problem.n(), settings));
     }
-    let s = &solved.outcome.solution;
-    BoundReport::of(
-        problem,
-        contactlab_solvers::Friction::Coulomb,
-        &s.v,
-        &s.pressure,
-        &s.friction_traction,
-        bound_room(),
-    )
-    .with_contraction(solved.outcome.contraction_for_estimate())
+    BoundReport::of_solution(problem, friction, s, bound_room())
 }
 
 /// Why an answer of `n` unknowns gets no bound, and the way to one.

@@ -5,12 +5,12 @@
 use anyhow::{Result, bail};
 use contactlab_solvers::{Control, Friction, Law, Observer, Progress, Silent, Solution, Status};
 
-use crate::certificate::{BoundReport, bound_room};
+use crate::certificate::BoundReport;
 use crate::coulomb::continuation::LevelCount;
 use crate::coulomb::fixed_point::{FrictionIteration, STAGE};
 use crate::mechanics::contact_zone::separation_of;
 use crate::mechanics::discretization::Discretization;
-use crate::solve::summary::too_large_to_bound;
+use crate::solve::summary::bound_within_limit;
 use crate::solve::{Assembled, Caps, Outcome, solve};
 use crate::study::agreement::{Agreement, agreement};
 use crate::study::reference::{Reference, References};
@@ -238,21 +238,11 @@ fn trial_bound(
         (Law::GivenFriction, Some(r)) => Friction::Given(&r.g),
         (Law::GivenFriction, None) => return None,
     };
-    let problem = &finest.problem;
-    let settings = &spec.settings.certificate;
-    if !settings.bounds(problem.n()) {
-        return Some(BoundReport::skipped(too_large_to_bound(
-            problem.n(),
-            settings,
-        )));
-    }
-    Some(BoundReport::of(
-        problem,
+    Some(bound_within_limit(
+        &finest.problem,
         friction,
-        &s.v,
-        &s.pressure,
-        &s.friction_traction,
-        bound_room(),
+        s,
+        &spec.settings.certificate,
     ))
 }
 

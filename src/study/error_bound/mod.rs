@@ -207,16 +207,9 @@ fn reference_bound(r: &Reference, law: Law) -> Option<f64> {
             &r.given_friction.as_ref()?.outcome.solution,
         ),
     };
-    BoundReport::of(
-        problem,
-        friction,
-        &s.v,
-        &s.pressure,
-        &s.friction_traction,
-        bound_room(),
-    )
-    .bound
-    .map(|b| b.displacement)
+    BoundReport::of_solution(problem, friction, s, bound_room())
+        .bound
+        .map(|b| b.displacement)
 }
 
 /// The point of one measured trial.
