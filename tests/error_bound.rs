@@ -93,10 +93,7 @@ fn energy_distance(problem: &ContactProblem, x: &[f64], y: &[f64]) -> f64 {
         (0..u.len())
             .map(|i| {
                 let (cols, vals) = a.row(i);
-                cols.iter()
-                    .zip(vals)
-                    .map(|(&c, v)| v * u[c as usize])
-                    .sum::<f64>()
+                cols.iter().zip(vals).map(|(c, v)| v * u[c]).sum::<f64>()
             })
             .collect()
     };
@@ -113,8 +110,8 @@ fn energy_distance(problem: &ContactProblem, x: &[f64], y: &[f64]) -> f64 {
     let mut size = 0.0;
     for i in 0..e.len() {
         let (cols, vals) = a.row(i);
-        for (&c, v) in cols.iter().zip(vals) {
-            size += (e[i] * v * e[c as usize]).abs();
+        for (c, v) in cols.iter().zip(vals) {
+            size += (e[i] * v * e[c]).abs();
         }
     }
     (value - 32.0 * f64::EPSILON * size).max(0.0).sqrt()

@@ -72,7 +72,7 @@ impl Solver for Toy {
                     let (cols, vals) = a.row(i);
                     cols.iter()
                         .zip(vals)
-                        .map(|(&j, a_ij)| a_ij * v[j as usize])
+                        .map(|(j, a_ij)| a_ij * v[j])
                         .sum::<f64>()
                         - p.f()[i]
                 })

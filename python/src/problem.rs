@@ -10,7 +10,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Overrides, Scene};
 use contactlab::settings::Settings;
-use contactlab::solvers::numerics::linalg::{ColumnIndex, SparseRows};
+use contactlab::solvers::numerics::linalg::SparseRows;
 use contactlab::solvers::{ContactNode, ContactProblem, Friction};
 use nalgebra_sparse::CsrMatrix;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
@@ -144,7 +144,10 @@ type Csr<'py> = (
 );
 
 fn csr<'py, A: SparseRows>(py: Python<'py>, a: &A) -> Csr<'py> {
-    let cols: Vec<usize> = a.col_indices().iter().map(|&c| c.at()).collect();
+    let offsets = a.row_offsets();
+    let cols: Vec<usize> = (0..a.nrows())
+        .flat_map(|i| a.row_columns(i, offsets[i], offsets[i + 1]).iter())
+        .collect();
     (
         a.row_offsets().to_vec().into_pyarray(py),
         cols.into_pyarray(py),

@@ -82,8 +82,8 @@ impl EnergySolve {
                 continue;
             }
             let (cols, row) = a.row(j);
-            for (&c, &v) in cols.iter().zip(row) {
-                let i = c as usize;
+            for (c, &v) in cols.iter().zip(row) {
+                let i = c;
                 if i >= j && map[i] != usize::MAX {
                     rows.push(map[i]);
                     vals.push(v);

@@ -403,8 +403,8 @@ impl<'a> ErrorBounder<'a> {
                 let mut acc = Dot2::default();
                 acc.add(1.0, rho[i]);
                 let (cols, vals) = problem.a().row(i);
-                for (&c, a) in cols.iter().zip(vals) {
-                    acc.add(-a, y[c as usize]);
+                for (c, a) in cols.iter().zip(vals) {
+                    acc.add(-a, y[c]);
                 }
                 acc.value().0
             })
@@ -468,7 +468,7 @@ impl<'a> ErrorBounder<'a> {
                     * cols
                         .iter()
                         .zip(vals)
-                        .map(|(&c, a)| (a * d[c as usize]).abs())
+                        .map(|(c, a)| (a * d[c]).abs())
                         .sum::<f64>()
             })
             .sum();
@@ -486,8 +486,7 @@ impl<'a> ErrorBounder<'a> {
         for i in 0..v.len() {
             let mut acc = Dot2::default();
             let (cols, vals) = problem.a().row(i);
-            for (&c, &a) in cols.iter().zip(vals) {
-                let c = c as usize;
+            for (c, &a) in cols.iter().zip(vals) {
                 acc.add(a, v[c]);
                 if d[c] != 0.0 {
                     acc.add(a, d[c]);
@@ -520,7 +519,7 @@ impl<'a> ErrorBounder<'a> {
                 x[i] * cols
                     .iter()
                     .zip(vals)
-                    .map(|(&c, v)| (v * x[c as usize]).abs())
+                    .map(|(c, v)| (v * x[c]).abs())
                     .sum::<f64>()
             })
             .sum();
@@ -538,8 +537,8 @@ impl<'a> ErrorBounder<'a> {
         for &j in support {
             // A is symmetric: column j is row j.
             let (cols, vals) = self.problem.a().row(j);
-            for (&c, a) in cols.iter().zip(vals) {
-                out[c as usize] += a * x[j];
+            for (c, a) in cols.iter().zip(vals) {
+                out[c] += a * x[j];
             }
         }
         out
@@ -549,7 +548,7 @@ impl<'a> ErrorBounder<'a> {
         let (cols, vals) = self.problem.a().row(i);
         cols.iter()
             .zip(vals)
-            .find(|&(&c, _)| c as usize == j)
+            .find(|&(c, _)| c == j)
             .map_or(0.0, |(_, &a)| a)
     }
 }

@@ -277,7 +277,7 @@ fn row_product(problem: &ContactProblem, x: &[f64], i: usize) -> f64 {
     let (cols, vals) = problem.a().row(i);
     cols.iter()
         .zip(vals)
-        .map(|(&c, a_ic)| a_ic * x[c as usize])
+        .map(|(c, a_ic)| a_ic * x[c])
         .sum::<f64>()
 }
 

@@ -57,7 +57,7 @@ pub fn energy_distance(problem: &ContactProblem, x: &[f64], y: &[f64]) -> f64 {
         let row: f64 = cols
             .iter()
             .zip(vals)
-            .map(|(&c, a_ic)| a_ic * (x[c as usize] - y[c as usize]))
+            .map(|(c, a_ic)| a_ic * (x[c] - y[c]))
             .sum();
         value += e_i * row;
     }

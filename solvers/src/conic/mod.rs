@@ -400,6 +400,7 @@ impl Solver for ConicSolver {
         }
         let contacts = problem.contacts();
         let (offsets, cols, vals) = problem.a().csr_data();
+        let cols = &*cols;
         let program = Program {
             unknowns: n,
             upper: (0..n)

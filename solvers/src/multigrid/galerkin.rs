@@ -59,8 +59,8 @@ fn rows_of_product_with<'v>(
     rows: std::ops::Range<usize>,
     out: &mut Rows,
 ) {
-    let (ao, ac) = (a.row_offsets(), a.col_indices());
-    let (po, pc) = (p.row_offsets(), p.col_indices());
+    let (ao, ac) = (a.row_offsets(), a.columns());
+    let (po, pc) = (p.row_offsets(), p.columns());
     let Rows {
         offsets,
         cols,
@@ -72,14 +72,12 @@ fn rows_of_product_with<'v>(
     offsets.push(0);
     for row in rows {
         let (r_cols, r_vals) = r.row(row);
-        for (&i, &r_i) in r_cols.iter().zip(r_vals) {
-            let i = i as usize;
+        for (i, &r_i) in r_cols.iter().zip(r_vals) {
             let (alo, ahi) = (ao[i], ao[i + 1]);
-            for (&j, &a_ij) in ac[alo..ahi].iter().zip(av.row(i, alo, ahi)) {
-                let (j, ra) = (j as usize, r_i * a_ij);
+            for (j, &a_ij) in ac.row(i, alo, ahi).iter().zip(av.row(i, alo, ahi)) {
+                let ra = r_i * a_ij;
                 let (plo, phi) = (po[j], po[j + 1]);
-                for (&col, &p_jc) in pc[plo..phi].iter().zip(pv.row(j, plo, phi)) {
-                    let col = col as usize;
+                for (col, &p_jc) in pc.row(j, plo, phi).iter().zip(pv.row(j, plo, phi)) {
                     if !seen[col] {
                         seen[col] = true;
                         touched.push(col);

@@ -315,8 +315,8 @@ pub(crate) fn iterate(
             if moved != 0.0 {
                 c[k] = projected;
                 let row = a.row(k);
-                for (&j, &akj) in row.0.iter().zip(row.1) {
-                    w[j as usize] += akj * moved;
+                for (j, &akj) in row.0.iter().zip(row.1) {
+                    w[j] += akj * moved;
                 }
             }
         }
@@ -349,8 +349,8 @@ pub(crate) fn iterate(
                     .0
                     .iter()
                     .zip(row.1)
-                    .filter(|&(&j, _)| truncated[j as usize])
-                    .map(|(&j, &akj)| akj * z[j as usize])
+                    .filter(|&(j, _)| truncated[j])
+                    .map(|(j, &akj)| akj * z[j])
                     .sum();
                 z[k] * ae_k
             })

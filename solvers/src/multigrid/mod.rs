@@ -58,7 +58,7 @@ use crate::entry::{Accuracy, Entry, Knob, Memory, Role, StageInfo};
 
 use crate::numerics::linalg::Csr;
 
-use crate::numerics::linalg::row_dot;
+use crate::numerics::linalg::row_dot_at;
 use crate::numerics::resolution::Resolution;
 use crate::numerics::threads::Threads;
 use crate::observer::{Control, Observer, Progress};
@@ -357,7 +357,7 @@ pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
 fn residual_at(a: &Csr, f: &[f64], v: &[f64], i: usize) -> f64 {
     let row = a.row(i);
     // SAFETY: a Csr keeps its column indices below ncols = v.len().
-    f[i] - unsafe { row_dot(row.0, row.1, v) }
+    f[i] - unsafe { row_dot_at(row.0, row.1, v) }
 }
 
 /// The contact pressure λ_i of every contact node into `out`.

@@ -22,7 +22,7 @@
 //! and a backward sweep make a symmetric Gauss-Seidel as before. How many
 //! parts: [`crate::numerics::threads`].
 
-use crate::numerics::linalg::{Csr, PARALLEL_NNZ, row_dot_by};
+use crate::numerics::linalg::{Csr, PARALLEL_NNZ, RowColumns, row_dot_by};
 
 /// Above this share of the stored entries in the separator the split is
 /// not worth the threads (a matrix numbered without locality, or too many
@@ -83,12 +83,13 @@ impl Shared {
     /// [`crate::numerics::linalg::row_dot`].
     ///
     /// # Safety
-    /// Every entry of `cols` is below the vector's length, `vals` is at
+    /// Every column of `cols` is below the vector's length, `vals` is at
     /// least as long as `cols`, and no other thread writes x at `cols`.
     #[inline]
-    pub(crate) unsafe fn row_dot(self, cols: &[u32], vals: &[f64]) -> f64 {
+    pub(crate) unsafe fn row_dot(self, cols: RowColumns<'_>, vals: &[f64]) -> f64 {
+        let base = cols.base;
         // SAFETY: by the contract.
-        unsafe { row_dot_by(cols, vals, |c| self.get(c)) }
+        unsafe { row_dot_by(cols.rel, vals, |c| self.get(base + c)) }
     }
 }
 
@@ -102,14 +103,17 @@ impl Parts {
         if threads < 2 || a.nnz() < PARALLEL_NNZ || n != a.ncols() || n < threads {
             return None;
         }
-        let (offsets, cols) = (a.row_offsets(), a.col_indices());
-        let cuts = cuts(offsets, cols, threads);
+        let offsets = a.row_offsets();
+        let cuts = cuts(a, threads);
         let mut in_separator = vec![false; n];
         for part in cuts.windows(2).skip(1) {
-            for k in part[0]..part[1] {
-                in_separator[k] = cols[offsets[k]..offsets[k + 1]]
-                    .first()
-                    .is_some_and(|&j| (j as usize) < part[0]);
+            for (k, sep) in in_separator
+                .iter_mut()
+                .enumerate()
+                .take(part[1])
+                .skip(part[0])
+            {
+                *sep = a.row_columns(k).first().is_some_and(|j| j < part[0]);
             }
         }
         let separator: Vec<usize> = (0..n).filter(|&k| in_separator[k]).collect();
@@ -127,12 +131,8 @@ impl Parts {
         let sep = &split.in_separator;
         let sound = split.cuts.windows(2).all(|part| {
             let own = part[0]..part[1];
-            own.clone().all(|k| {
-                sep[k]
-                    || cols[offsets[k]..offsets[k + 1]]
-                        .iter()
-                        .all(|&j| sep[j as usize] || own.contains(&(j as usize)))
-            })
+            own.clone()
+                .all(|k| sep[k] || a.row_columns(k).iter().all(|j| sep[j] || own.contains(&j)))
         });
         sound.then_some(split)
     }
@@ -205,15 +205,16 @@ impl Parts {
 /// over every m, the rule of the two-core sweep it generalizes. S(m) of
 /// every m at once by difference arrays: row k is in S(m) for m in (its
 /// first column, k].
-fn cuts(offsets: &[usize], cols: &[u32], threads: usize) -> Vec<usize> {
+fn cuts(a: &Csr, threads: usize) -> Vec<usize> {
+    let offsets = a.row_offsets();
     let n = offsets.len() - 1;
     let work = |k: usize| (offsets[k + 1] - offsets[k]) as i64;
     let mut entering = vec![0i64; n + 2];
     for k in 0..n {
-        if let Some(&first) = cols[offsets[k]..offsets[k + 1]].first()
-            && (first as usize) < k
+        if let Some(first) = a.row_columns(k).first()
+            && first < k
         {
-            entering[first as usize + 1] += work(k);
+            entering[first + 1] += work(k);
             entering[k + 1] -= work(k);
         }
     }
@@ -332,19 +333,19 @@ pub(crate) mod tests {
         }
         let long = Csr::try_from(CsrMatrix::from(&coo)).unwrap();
         for a in [grid(q), long] {
-            let (offsets, cols) = (a.row_offsets(), a.col_indices());
+            let offsets = a.row_offsets();
             let n = a.nrows();
             let work = |k: usize| (offsets[k + 1] - offsets[k]) as i64;
             let cost = |m: usize| {
                 let s: i64 = (m..n)
-                    .filter(|&k| (cols[offsets[k]] as usize) < m)
+                    .filter(|&k| a.row_columns(k).first().is_some_and(|j| j < m))
                     .map(work)
                     .sum();
                 let before = offsets[m] as i64;
                 before.max(offsets[n] as i64 - before - s) + s
             };
             let best = (1..n).map(cost).min().unwrap();
-            let c = cuts(offsets, cols, 2);
+            let c = cuts(&a, 2);
             assert_eq!(c.len(), 3);
             assert_eq!(cost(c[1]), best, "cut {} of {n}", c[1]);
         }

@@ -14,7 +14,7 @@
 //! or the Huber smoothing of w_i g_i |s_i|; their minimizers are the
 //! relaxation's own ([`crate::relaxation::pointwise`]).
 
-use crate::numerics::linalg::{Csr, RowValues};
+use crate::numerics::linalg::{Csr, RowColumns, RowValues};
 use crate::with_values;
 
 use super::laws::Laws;
@@ -79,10 +79,7 @@ impl Local {
 /// The position of row k's diagonal entry among A's stored entries, if it
 /// is stored and above `floor`.
 pub(crate) fn diagonal_position(a: &Csr, k: usize, floor: f64) -> Option<usize> {
-    let offsets = a.row_offsets();
-    (offsets[k]..offsets[k + 1])
-        .find(|&p| a.col_indices()[p] as usize == k)
-        .filter(|&p| a.value_at(k, p) > floor)
+    a.position(k, k).filter(|&p| a.value_at(k, p) > floor)
 }
 
 /// A stored entry's position, in 32 bits: half the memory of a usize per
@@ -111,7 +108,7 @@ pub(crate) fn diagonal_positions(a: &Csr) -> Result<Vec<Position>, String> {
 #[derive(Clone, Copy)]
 pub(crate) struct Row<'a> {
     k: usize,
-    cols: &'a [u32],
+    cols: RowColumns<'a>,
     vals: &'a [f64],
     diag: usize,
 }
@@ -124,7 +121,7 @@ impl<'a> Row<'a> {
         let (lo, hi) = (a.row_offsets()[k], a.row_offsets()[k + 1]);
         Row {
             k,
-            cols: &a.col_indices()[lo..hi],
+            cols: a.columns().row(k, lo, hi),
             vals: vals.row(k, lo, hi),
             // A position outside row k (before it wraps around, after it
             // lies past its end) makes `diagonal` panic rather than read
@@ -190,7 +187,7 @@ fn separator_residuals(a: &Csr, parts: &Parts, shift: &[f64], b: &[f64], x: &[f6
         let row = a.row(j);
         // SAFETY: a Csr keeps its column indices below ncols =
         // x.len() (checked by the sweep).
-        let ax = unsafe { crate::numerics::linalg::row_dot(row.0, row.1, x) };
+        let ax = unsafe { crate::numerics::linalg::row_dot_at(row.0, row.1, x) };
         r[j] = b[j] - ax - shift_at(shift, j) * x[j];
     }
 }
@@ -228,7 +225,7 @@ unsafe fn scatter_to_swept(
     let (below, above) = (0..diag, diag + 1..cols.len());
     // SAFETY: by the contract.
     let update = |q: usize| {
-        let j = cols[q] as usize;
+        let j = cols.get(q);
         unsafe { r.set(j, r.get(j) - vals[q] * delta) }
     };
     match separator {
@@ -241,7 +238,7 @@ unsafe fn scatter_to_swept(
             if forward {
                 below
                     .chain(above)
-                    .filter(|&q| !sep[cols[q] as usize] || (cols[q] as usize) < k)
+                    .filter(|&q| !sep[cols.get(q)] || cols.get(q) < k)
                     .for_each(update);
             }
         }
@@ -252,8 +249,8 @@ unsafe fn scatter_to_swept(
         // race on their residuals (lost updates: the residuals, and the
         // runs, differed from one run to the next). The sweep recomputes
         // them once all parts are done ([`separator_residuals`]).
-        Some(sep) if forward => below.filter(|&q| !sep[cols[q] as usize]).for_each(update),
-        Some(sep) => above.filter(|&q| !sep[cols[q] as usize]).for_each(update),
+        Some(sep) if forward => below.filter(|&q| !sep[cols.get(q)]).for_each(update),
+        Some(sep) => above.filter(|&q| !sep[cols.get(q)]).for_each(update),
     }
 }
 

@@ -119,8 +119,7 @@ fn a_part_row_scatters_into_its_own_part_only() {
                 )
             };
             // A row scatters into the rows of its pattern alone.
-            for &j in a.row(k).0 {
-                let j = j as usize;
+            for j in a.row(k).0.iter() {
                 if std::mem::take(&mut r[j]) == 0.0 {
                     continue;
                 }

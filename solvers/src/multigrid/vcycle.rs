@@ -216,7 +216,7 @@ fn merge(mut t: Vec<(usize, usize, f64)>) -> Vec<(usize, usize, f64)> {
 fn galerkin_triplets(p: &Csr, c: &[(usize, usize, f64)]) -> Vec<(usize, usize, f64)> {
     let row = |k: usize| {
         let (cols, vals) = p.row(k);
-        cols.iter().map(|&c| c as usize).zip(vals)
+        cols.iter().zip(vals)
     };
     let cp = merge(
         c.iter()
@@ -327,8 +327,7 @@ impl Hierarchy {
         let mut e = Vec::new();
         for (j, _) in truncated.iter().enumerate().filter(|(_, cut)| **cut) {
             let (cols, vals) = a.row(j);
-            for (&i, &v) in cols.iter().zip(vals) {
-                let i = i as usize;
+            for (i, &v) in cols.iter().zip(vals) {
                 e.push((j, i, v));
                 if !truncated[i] {
                     e.push((i, j, v));

@@ -102,10 +102,13 @@ fn on_pattern_of(m: &CsrMatrix<f64>, a: &Csr) -> bool {
     m.nrows() == a.nrows()
         && m.ncols() == a.ncols()
         && m.row_offsets() == a.row_offsets()
-        && m.col_indices()
-            .iter()
-            .zip(a.col_indices())
-            .all(|(&x, &y)| x == y as usize)
+        && (0..a.nrows()).all(|i| {
+            let (lo, hi) = (a.row_offsets()[i], a.row_offsets()[i + 1]);
+            m.col_indices()[lo..hi]
+                .iter()
+                .copied()
+                .eq(a.row_columns(i).iter())
+        })
 }
 
 /// The mass matrix M as a problem is given it.

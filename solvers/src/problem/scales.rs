@@ -74,7 +74,7 @@ impl Scales {
             (0..a.nrows())
                 .filter_map(|i| {
                     let (cols, vals) = a.row(i);
-                    let k = cols.binary_search(&(i as u32)).ok()?;
+                    let k = cols.find(i)?;
                     Some(vals[k].abs())
                 })
                 .fold(0.0, f64::max),

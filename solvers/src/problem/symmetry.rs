@@ -71,7 +71,7 @@ pub(super) fn check_square_symmetric<'v, const K: usize, V: RowValues<'v>>(
             });
         }
     }
-    let (offsets, indices) = (pattern.row_offsets(), pattern.col_indices());
+    let offsets = pattern.row_offsets();
     let values = named.map(|(_, v)| v);
     let mut scale = [0.0f64; K];
     for m in 0..K {
@@ -81,20 +81,20 @@ pub(super) fn check_square_symmetric<'v, const K: usize, V: RowValues<'v>>(
     }
     let below: usize = (0..n)
         .map(|row| {
-            let cols = &indices[offsets[row]..offsets[row + 1]];
-            cols.partition_point(|&col| col.at() < row)
+            let cols = pattern.row_columns(row, offsets[row], offsets[row + 1]);
+            cols.rel.partition_point(|&col| cols.base + col.at() < row)
         })
         .sum();
     let tol = scale.map(|s| 1e-12 * s);
-    let (mut asymmetry, mirrored) = asymmetry(offsets, indices, &values, Triangle::Upper);
+    let (mut asymmetry, mirrored) = asymmetry(pattern, &values, Triangle::Upper);
     if mirrored < below {
-        asymmetry = self::asymmetry(offsets, indices, &values, Triangle::Both).0;
+        asymmetry = self::asymmetry(pattern, &values, Triangle::Both).0;
     }
     if (0..K).all(|m| asymmetry[m] <= tol[m]) {
         return Ok(());
     }
     let mut offending = None;
-    walk_mirrors(offsets, indices, Triangle::Both, |row, col, k, mirror| {
+    walk_mirrors(pattern, Triangle::Both, |row, col, k, mirror| {
         for m in 0..K {
             let across = mirror.map_or(0.0, |c| values[m].at(offsets, col, c));
             if (across - values[m].at(offsets, row, k)).abs() > tol[m] {
@@ -113,14 +113,14 @@ pub(super) fn check_square_symmetric<'v, const K: usize, V: RowValues<'v>>(
 
 /// Each matrix's largest |x_ij − x_ji| over the entries of `which` (a
 /// missing mirror counts as 0), and how many of them had a stored mirror.
-fn asymmetry<'v, const K: usize, I: ColumnIndex, V: RowValues<'v>>(
-    offsets: &[usize],
-    indices: &[I],
+fn asymmetry<'v, const K: usize, V: RowValues<'v>>(
+    pattern: &impl SparseRows,
     values: &[V; K],
     which: Triangle,
 ) -> ([f64; K], usize) {
+    let offsets = pattern.row_offsets();
     let (mut asymmetry, mut mirrored) = ([0.0f64; K], 0);
-    walk_mirrors(offsets, indices, which, |row, col, k, mirror| {
+    walk_mirrors(pattern, which, |row, col, k, mirror| {
         mirrored += usize::from(mirror.is_some());
         for m in 0..K {
             let across = mirror.map_or(0.0, |c| values[m].at(offsets, col, c));
@@ -149,27 +149,31 @@ enum Triangle {
 /// that what `visit` accumulates stays in registers (a store and a load per
 /// entry otherwise).
 #[inline(always)]
-fn walk_mirrors<I: ColumnIndex>(
-    offsets: &[usize],
-    indices: &[I],
+fn walk_mirrors(
+    pattern: &impl SparseRows,
     which: Triangle,
     mut visit: impl FnMut(usize, usize, usize, Option<usize>) -> bool,
 ) {
+    let offsets = pattern.row_offsets();
     let n = offsets.len() - 1;
     let mut cursor = offsets[..n].to_vec();
     for row in 0..n {
-        for k in offsets[row]..offsets[row + 1] {
-            let col = indices[k].at();
+        let (lo, hi) = (offsets[row], offsets[row + 1]);
+        let cols = pattern.row_columns(row, lo, hi);
+        for k in lo..hi {
+            let col = cols.get(k - lo);
             if which == Triangle::Upper && col <= row {
                 continue;
             }
-            let end = offsets[col + 1];
+            let (start, end) = (offsets[col], offsets[col + 1]);
+            let mirror_cols = pattern.row_columns(col, start, end);
+            let at = |c: usize| mirror_cols.get(c - start);
             let mut c = cursor[col];
-            while c < end && indices[c].at() < row {
+            while c < end && at(c) < row {
                 c += 1;
             }
             cursor[col] = c;
-            let mirror = (c < end && indices[c].at() == row).then_some(c);
+            let mirror = (c < end && at(c) == row).then_some(c);
             if !visit(row, col, k, mirror) {
                 return;
             }

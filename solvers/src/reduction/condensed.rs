@@ -88,7 +88,7 @@ impl Condensed {
         }
         // A_II's lower triangle straight from A's rows (A_IC = A_CIᵀ).
         let interior_map: Vec<usize> = position.iter().map(|p| p.unwrap_or(usize::MAX)).collect();
-        let a_ii = crate::numerics::linalg::lower_part(ni, offsets, cols, vals, &interior_map);
+        let a_ii = crate::numerics::linalg::lower_part(ni, offsets, &cols, vals, &interior_map);
         drop(interior_map);
         // B: the interior unknowns coupled to the contact unknowns. Ordered
         // last, A_IC is zero outside them, so the forward solve of A_II⁻¹A_IC

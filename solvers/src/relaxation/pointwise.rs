@@ -296,11 +296,7 @@ impl RelaxationOperator {
     /// (H v − b)_j: the gradient of the quadratic part at coordinate j.
     pub(crate) fn gradient_at(&self, v: &[f64], b: &[f64], j: usize) -> f64 {
         let (cols, vals) = self.h.row(j);
-        cols.iter()
-            .zip(vals)
-            .map(|(&c, a)| a * v[c as usize])
-            .sum::<f64>()
-            - b[j]
+        cols.iter().zip(vals).map(|(c, a)| a * v[c]).sum::<f64>() - b[j]
     }
 }
 

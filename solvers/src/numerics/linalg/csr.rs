@@ -13,6 +13,7 @@
 use nalgebra_sparse::CsrMatrix;
 use thiserror::Error;
 
+use super::columns::{Columns, RowColumns, StoredColumns};
 use super::values::{RowValues, Stored, Values};
 
 /// A matrix that cannot be held as a [`Csr`].
@@ -57,11 +58,13 @@ pub trait SparseRows: Sync {
     fn ncols(&self) -> usize;
     /// nrows + 1 offsets into the stored entries, from 0.
     fn row_offsets(&self) -> &[usize];
-    fn col_indices(&self) -> &[Self::Index];
+    /// Row i's columns; `lo..hi` are its stored positions (the offsets i
+    /// and i + 1).
+    fn row_columns(&self, i: usize, lo: usize, hi: usize) -> RowColumns<'_, Self::Index>;
     fn values(&self) -> Values<'_>;
     /// Number of stored entries.
     fn nnz(&self) -> usize {
-        self.col_indices().len()
+        self.row_offsets()[self.nrows()]
     }
 }
 
@@ -76,8 +79,12 @@ impl SparseRows for CsrMatrix<f64> {
     fn row_offsets(&self) -> &[usize] {
         CsrMatrix::row_offsets(self)
     }
-    fn col_indices(&self) -> &[usize] {
-        CsrMatrix::col_indices(self)
+    #[inline(always)]
+    fn row_columns(&self, _: usize, lo: usize, hi: usize) -> RowColumns<'_, usize> {
+        RowColumns {
+            base: 0,
+            rel: &CsrMatrix::col_indices(self)[lo..hi],
+        }
     }
     fn values(&self) -> Values<'_> {
         Values::Plain(CsrMatrix::values(self))
@@ -86,13 +93,14 @@ impl SparseRows for CsrMatrix<f64> {
 
 /// A sparse matrix in compressed rows, 32-bit column indices, sorted and
 /// without duplicates within each row (checked on construction); its
-/// values stored row by row or, after [`Csr::shared`], each distinct row
-/// once (see [`super::values`]).
+/// columns and values stored row by row or, after [`Csr::shared`], each
+/// distinct stencil and row of values once (see [`super::columns`] and
+/// [`super::values`]).
 #[derive(Clone, Debug)]
 pub struct Csr {
     ncols: usize,
     offsets: Vec<usize>,
-    cols: Vec<u32>,
+    cols: StoredColumns,
     values: Stored,
 }
 
@@ -146,23 +154,76 @@ impl Csr {
         Ok(Self {
             ncols,
             offsets,
-            cols,
+            cols: StoredColumns::Plain(cols),
             values: Stored::Plain(values),
+        })
+    }
+
+    /// From stored parts, checked as [`Csr::try_from_csr_data`] checks its
+    /// arrays (the columns row by row, however they are stored).
+    pub(super) fn from_parts(
+        ncols: usize,
+        offsets: Vec<usize>,
+        cols: StoredColumns,
+        values: Stored,
+    ) -> Result<Self, CsrError> {
+        if ncols > u32::MAX as usize {
+            return Err(CsrError::TooManyColumns(ncols));
+        }
+        let entries = cols.entries();
+        if offsets.is_empty() || offsets[0] != 0 || offsets[offsets.len() - 1] != entries {
+            return Err(CsrError::Malformed(
+                "the row offsets must run from 0 to the number of entries, one per row and one more",
+            ));
+        }
+        if values.view().len() != entries {
+            return Err(CsrError::Malformed("one value per stored column index"));
+        }
+        let view = cols.view();
+        for (i, w) in offsets.windows(2).enumerate() {
+            let (lo, hi) = (w[0], w[1]);
+            if lo > hi || hi > entries {
+                return Err(CsrError::Malformed("the row offsets must not decrease"));
+            }
+            let row = view.row(i, lo, hi);
+            if row.rel.windows(2).any(|w| w[0] >= w[1]) || row.last().is_some_and(|c| c >= ncols) {
+                return Err(CsrError::Malformed(
+                    "the columns of a row must increase strictly and stay below the column count",
+                ));
+            }
+        }
+        Ok(Self {
+            ncols,
+            offsets,
+            cols,
+            values,
         })
     }
 
     /// The same matrix with each distinct row of values stored once, if
     /// they are few (a stiffness on a uniform mesh: 45 rows, whatever h;
-    /// at most 2¹⁶ values in all); as it is otherwise. Every row reads back
-    /// to the bit, so every product and sweep gives the same numbers,
-    /// without the 8 bytes per entry of its values.
+    /// at most 2¹⁶ values in all), and likewise each distinct stencil of
+    /// columns ([`super::columns`]); each as it is otherwise. Every row
+    /// reads back to the bit, so every product and sweep gives the same
+    /// numbers, without the 8 bytes per entry of its values and the 4 of
+    /// its columns.
     pub fn shared(mut self) -> Csr {
         if let Stored::Plain(v) = &self.values
             && let Some(shared) = Stored::share(&self.offsets, v)
         {
             self.values = shared;
         }
+        if let StoredColumns::Plain(c) = &self.cols
+            && let Some(shared) = StoredColumns::share(&self.offsets, c)
+        {
+            self.cols = shared;
+        }
         self
+    }
+
+    /// Whether the columns are kept as stencils ([`Csr::shared`]).
+    pub fn has_shared_columns(&self) -> bool {
+        matches!(self.cols, StoredColumns::Shared { .. })
     }
 
     /// Row i's values, to change in place without giving up the sharing of
@@ -229,7 +290,9 @@ impl Csr {
     /// If `values` does not have one entry per stored entry.
     pub fn nalgebra_with_values(&self, values: Vec<f64>) -> CsrMatrix<f64> {
         assert_eq!(values.len(), self.nnz(), "one value per stored entry");
-        let cols = self.cols.iter().map(|&c| c.at()).collect();
+        let cols = (0..self.nrows())
+            .flat_map(|i| self.row_columns(i).iter())
+            .collect();
         CsrMatrix::try_from_csr_data(self.nrows(), self.ncols, self.offsets.clone(), cols, values)
             .expect("checked on construction: sorted rows, columns in range")
     }
@@ -244,15 +307,32 @@ impl Csr {
 
     /// Number of stored entries.
     pub fn nnz(&self) -> usize {
-        self.cols.len()
+        self.cols.entries()
     }
 
     pub fn row_offsets(&self) -> &[usize] {
         &self.offsets
     }
 
-    pub fn col_indices(&self) -> &[u32] {
-        &self.cols
+    /// The stored columns: read a row's with [`Columns::row`] or
+    /// [`Csr::row_columns`].
+    pub fn columns(&self) -> Columns<'_> {
+        self.cols.view()
+    }
+
+    /// Row i's columns.
+    #[inline(always)]
+    pub fn row_columns(&self, i: usize) -> RowColumns<'_> {
+        self.columns().row(i, self.offsets[i], self.offsets[i + 1])
+    }
+
+    /// Every column index whole, in stored order (a copy when the columns
+    /// are shared), for a solver that hands the matrix to another library.
+    pub fn col_indices(&self) -> std::borrow::Cow<'_, [u32]> {
+        match &self.cols {
+            StoredColumns::Plain(c) => std::borrow::Cow::Borrowed(c),
+            shared => std::borrow::Cow::Owned(shared.to_vec(&self.offsets)),
+        }
     }
 
     /// The stored values: read a row's with [`RowValues::row`].
@@ -274,43 +354,47 @@ impl Csr {
         self.values().at(&self.offsets, i, p)
     }
 
-    /// Offsets, column indices and values.
-    pub fn csr_data(&self) -> (&[usize], &[u32], Values<'_>) {
-        (&self.offsets, &self.cols, self.values())
+    /// Offsets, column indices (whole: a copy when shared) and values.
+    pub fn csr_data(&self) -> (&[usize], std::borrow::Cow<'_, [u32]>, Values<'_>) {
+        (&self.offsets, self.col_indices(), self.values())
     }
 
-    /// Row i's column indices and values.
-    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+    /// Row i's columns and values.
+    #[inline(always)]
+    pub fn row(&self, i: usize) -> (RowColumns<'_>, &[f64]) {
         let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
-        (&self.cols[lo..hi], self.values().row(i, lo, hi))
+        (self.columns().row(i, lo, hi), self.values().row(i, lo, hi))
     }
 
     /// The position of entry (i, j) among the stored entries, if stored.
     pub fn position(&self, i: usize, j: usize) -> Option<usize> {
-        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
-        let j = u32::try_from(j).ok()?;
-        self.cols[lo..hi].binary_search(&j).ok().map(|q| lo + q)
+        self.row_columns(i).find(j).map(|q| self.offsets[i] + q)
     }
 
     /// Whether both have the same rows, columns and stored positions.
     pub fn same_pattern(&self, other: &Csr) -> bool {
-        self.ncols == other.ncols && self.offsets == other.offsets && self.cols == other.cols
+        self.ncols == other.ncols
+            && self.offsets == other.offsets
+            && (0..self.nrows()).all(|i| self.row_columns(i).iter().eq(other.row_columns(i).iter()))
     }
 
     /// The stored entries as (row, column, value), row by row.
     pub fn triplet_iter(&self) -> impl Iterator<Item = (usize, usize, &f64)> {
         (0..self.nrows()).flat_map(move |i| {
             let (cols, vals) = self.row(i);
-            cols.iter().zip(vals).map(move |(&c, v)| (i, c.at(), v))
+            cols.iter().zip(vals).map(move |(c, v)| (i, c, v))
         })
     }
 
-    /// The transpose (a new matrix, its values stored like these).
+    /// The transpose (a new matrix, its values and columns stored like
+    /// these).
     pub fn transpose(&self) -> Csr {
         let (m, n) = (self.nrows(), self.ncols);
         let mut offsets = vec![0usize; n + 1];
-        for &c in &self.cols {
-            offsets[c.at() + 1] += 1;
+        for i in 0..m {
+            for c in self.row_columns(i).iter() {
+                offsets[c + 1] += 1;
+            }
         }
         for j in 0..n {
             offsets[j + 1] += offsets[j];
@@ -319,8 +403,7 @@ impl Csr {
         let (mut cols, mut values) = (vec![0u32; self.nnz()], vec![0.0; self.nnz()]);
         for i in 0..m {
             let (row_cols, row_vals) = self.row(i);
-            for (&j, &v) in row_cols.iter().zip(row_vals) {
-                let j = j.at();
+            for (j, &v) in row_cols.iter().zip(row_vals) {
                 cols[next[j]] = i as u32;
                 values[next[j]] = v;
                 next[j] += 1;
@@ -329,10 +412,14 @@ impl Csr {
         let t = Csr {
             ncols: m,
             offsets,
-            cols,
+            cols: StoredColumns::Plain(cols),
             values: Stored::Plain(values),
         };
-        if self.is_shared() { t.shared() } else { t }
+        if self.is_shared() || self.has_shared_columns() {
+            t.shared()
+        } else {
+            t
+        }
     }
 }
 
@@ -370,7 +457,7 @@ impl TryFrom<CsrMatrix<f64>> for Csr {
         Ok(Self {
             ncols,
             offsets,
-            cols,
+            cols: StoredColumns::Plain(cols),
             values: Stored::Plain(values),
         })
     }
@@ -395,8 +482,12 @@ impl SparseRows for Csr {
     fn row_offsets(&self) -> &[usize] {
         &self.offsets
     }
-    fn col_indices(&self) -> &[u32] {
-        &self.cols
+    #[inline(always)]
+    fn row_columns(&self, i: usize, lo: usize, hi: usize) -> RowColumns<'_, u32> {
+        self.columns().row(i, lo, hi)
+    }
+    fn nnz(&self) -> usize {
+        self.cols.entries()
     }
     fn values(&self) -> Values<'_> {
         Csr::values(self)
@@ -427,9 +518,11 @@ mod tests {
         let triplets: Vec<_> = c.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
         let expected: Vec<_> = m.triplet_iter().map(|(i, j, &v)| (i, j, v)).collect();
         assert_eq!(triplets, expected);
-        assert_eq!(c.row(2), (&[1u32, 2][..], &[3.0, 0.5][..]));
+        assert_eq!(c.row(2).0.iter().collect::<Vec<_>>(), [1, 2]);
+        assert_eq!(c.row(2).1, &[3.0, 0.5][..]);
         let shared = c.clone().shared();
         assert!(shared.is_shared());
+        assert!(shared.has_shared_columns());
         assert_eq!(shared, c);
         assert_eq!(shared.to_nalgebra(), m);
         assert_eq!(shared.row(2), c.row(2));

@@ -1,12 +1,16 @@
 //! Sparse linear algebra shared by the solvers: products (here), and sparse
 //! Cholesky through faer ([`cholesky`]).
 
+mod builder;
 mod cholesky;
+mod columns;
 mod csr;
 pub mod values;
 
+pub use builder::CsrBuilder;
 pub(crate) use cholesky::lower_part;
 pub use cholesky::{CholeskyAnalysis, SparseCholesky, kernel_dimension};
+pub use columns::{Columns, RowColumns};
 pub use csr::{ColumnIndex, Csr, CsrError, IntoCsr, SparseRows};
 pub use values::{RowValues, SharedRows, Values};
 
@@ -74,13 +78,13 @@ pub(crate) fn spmv_values_into<'v>(
         pattern.nnz(),
         "spmv: one value per stored entry"
     );
-    let (offsets, cols) = (pattern.row_offsets(), pattern.col_indices());
+    let offsets = pattern.row_offsets();
     let rows = |first: usize, y: &mut [f64]| {
         for (i, yi) in (first..).zip(y.iter_mut()) {
             let (lo, hi) = (offsets[i], offsets[i + 1]);
             // SAFETY: a SparseRows keeps its column indices below ncols =
             // x.len(), and values has one entry per stored index.
-            *yi = unsafe { row_dot(&cols[lo..hi], values.row(i, lo, hi), x) };
+            *yi = unsafe { row_dot_at(pattern.row_columns(i, lo, hi), values.row(i, lo, hi), x) };
         }
     };
     let threads = threads();
@@ -130,14 +134,14 @@ fn transpose_product<'v>(
     y: &mut [f64],
     scratch: &mut [f64],
 ) {
-    let (offsets, cols) = (p.row_offsets(), p.col_indices());
+    let offsets = p.row_offsets();
     let scatter = |rows: std::ops::Range<usize>, y: &mut [f64]| {
         y.fill(0.0);
         for i in rows {
             let xi = x[i];
             let (lo, hi) = (offsets[i], offsets[i + 1]);
-            for (c, v) in cols[lo..hi].iter().zip(vals.row(i, lo, hi)) {
-                y[c.at()] += v * xi;
+            for (c, v) in p.row_columns(i, lo, hi).iter().zip(vals.row(i, lo, hi)) {
+                y[c] += v * xi;
             }
         }
     };
@@ -212,6 +216,18 @@ pub(crate) unsafe fn row_dot_by<I: ColumnIndex>(
         }
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// [`row_dot`] of a row read as a base and offsets ([`RowColumns`]):
+/// Σ_q vals[q]·x[base + rel[q]], the same sums.
+///
+/// # Safety
+/// Every column of the row is below x.len(), and vals at least as long.
+#[inline(always)]
+pub unsafe fn row_dot_at<I: ColumnIndex>(cols: RowColumns<'_, I>, vals: &[f64], x: &[f64]) -> f64 {
+    debug_assert!(cols.last().is_none_or(|c| c < x.len()));
+    // SAFETY: base + rel[q] < x.len() by the contract.
+    unsafe { row_dot_by(cols.rel, vals, |c| *x.get_unchecked(cols.base + c)) }
 }
 
 /// Maximum norm of a vector (0 for an empty one).

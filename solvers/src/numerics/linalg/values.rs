@@ -200,7 +200,7 @@ const RECENT: usize = 4;
 
 /// The rows' own hash (below) is the map's key: no second hashing.
 #[derive(Default)]
-struct Prehashed(u64);
+pub(super) struct Prehashed(u64);
 
 impl Hasher for Prehashed {
     fn finish(&self) -> u64 {
@@ -263,44 +263,13 @@ impl Stored {
     /// The rows of `values` (`offsets`: the row offsets) kept once each, if
     /// the distinct ones fit [`MAX_TABLE`] values; None otherwise.
     pub(super) fn share(offsets: &[usize], values: &[f64]) -> Option<Stored> {
-        let n = offsets.len() - 1;
-        let mut seen: HashMap<u64, Vec<u32>, BuildHasherDefault<Prehashed>> = HashMap::default();
-        let (mut table, mut start) = (Vec::new(), Vec::with_capacity(n));
-        // The starts of the last rows met: on a mesh a row's stencil is
-        // mostly that of a row shortly before it, found without hashing.
-        let mut recent = [u32::MAX; RECENT];
-        for (i, w) in offsets.windows(2).enumerate() {
-            let row = &values[w[0]..w[1]];
-            // Row i − 2 first: the same kind of node's other component
-            // comes two rows on.
-            let mut order = (0..RECENT).map(|back| recent[(i + RECENT - 2 + back) % RECENT]);
-            if let Some(s) = order.find(|&s| holds(&table, s, row)) {
-                start.push(s);
-                continue;
+        let mut sharer = RowSharer::with_rows(offsets.len() - 1);
+        for w in offsets.windows(2) {
+            if !sharer.push(&values[w[0]..w[1]]) {
+                return None;
             }
-            let candidates = seen.entry(row_hash(row)).or_default();
-            let found = candidates.iter().copied().find(|&s| holds(&table, s, row));
-            let s = match found {
-                Some(s) => s,
-                None => {
-                    if table.len() + row.len() > MAX_TABLE {
-                        return None;
-                    }
-                    let s = table.len() as u32;
-                    table.extend_from_slice(row);
-                    candidates.push(s);
-                    s
-                }
-            };
-            start.push(s);
-            recent[i % RECENT] = s;
         }
-        table.shrink_to_fit();
-        Some(Stored::Shared {
-            table,
-            start,
-            entries: values.len(),
-        })
+        Some(sharer.finish())
     }
 
     /// The values row by row (copied out, if they were shared).
@@ -311,6 +280,88 @@ impl Stored {
         match self {
             Stored::Plain(v) => v,
             Stored::Shared { .. } => unreachable!("copied out just above"),
+        }
+    }
+}
+
+/// Builds shared values row by row, so that an assembly never holds its
+/// values whole ([`Stored::share`] for values already whole).
+pub(super) struct RowSharer {
+    table: Vec<f64>,
+    start: Vec<u32>,
+    entries: usize,
+    seen: HashMap<u64, Vec<u32>, BuildHasherDefault<Prehashed>>,
+    /// The starts of the last rows met: on a mesh a row's stencil is
+    /// mostly that of a row shortly before it, found without hashing.
+    recent: [u32; RECENT],
+}
+
+impl RowSharer {
+    pub(super) fn with_rows(rows: usize) -> Self {
+        Self {
+            table: Vec::new(),
+            start: Vec::with_capacity(rows),
+            entries: 0,
+            seen: HashMap::default(),
+            recent: [u32::MAX; RECENT],
+        }
+    }
+
+    /// Takes the next row; false if the distinct rows would exceed
+    /// [`MAX_TABLE`] values.
+    pub(super) fn push(&mut self, row: &[f64]) -> bool {
+        let i = self.start.len();
+        // Row i − 2 first: the same kind of node's other component comes
+        // two rows on.
+        let mut order = (0..RECENT).map(|back| self.recent[(i + RECENT - 2 + back) % RECENT]);
+        if let Some(s) = order.find(|&s| holds(&self.table, s, row)) {
+            self.start.push(s);
+            self.entries += row.len();
+            return true;
+        }
+        let candidates = self.seen.entry(row_hash(row)).or_default();
+        let found = candidates
+            .iter()
+            .copied()
+            .find(|&s| holds(&self.table, s, row));
+        let s = match found {
+            Some(s) => s,
+            None => {
+                if self.table.len() + row.len() > MAX_TABLE {
+                    return false;
+                }
+                let s = self.table.len() as u32;
+                self.table.extend_from_slice(row);
+                candidates.push(s);
+                s
+            }
+        };
+        self.start.push(s);
+        self.entries += row.len();
+        self.recent[i % RECENT] = s;
+        true
+    }
+
+    /// The rows taken so far, each whole, in order (`offsets`: their row
+    /// offsets), for a matrix that turned out to have too many.
+    pub(super) fn to_plain(&self, offsets: &[usize]) -> Vec<f64> {
+        self.view().to_vec(offsets)
+    }
+
+    fn view(&self) -> Values<'_> {
+        Values::Shared(SharedRows {
+            table: &self.table,
+            start: &self.start,
+            entries: self.entries,
+        })
+    }
+
+    pub(super) fn finish(mut self) -> Stored {
+        self.table.shrink_to_fit();
+        Stored::Shared {
+            table: self.table,
+            start: self.start,
+            entries: self.entries,
         }
     }
 }
