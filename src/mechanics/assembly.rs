@@ -15,26 +15,28 @@ use crate::mechanics::scene::Traction;
 
 mod pattern;
 use crate::solvers::Csr;
-pub use pattern::Pattern;
+use crate::solvers::numerics::linalg::CsrBuilder;
 use pattern::append;
 
 /// The triangles of the mesh (optionally one body's), as node triples.
 /// Pushed from `for_each`, which drives the mesh's nested iterator from the
 /// inside: collecting it item by item was a tenth of a 1/64 assembly.
-fn triangles(mesh: &Mesh, only: Option<Body>) -> Vec<[usize; 3]> {
+fn triangles(mesh: &Mesh, only: Option<Body>) -> Vec<[u32; 3]> {
     let mut tris = Vec::new();
     mesh.triangles().for_each(|(body, tri)| {
         if only.is_none_or(|b| b == body) {
-            tris.push(tri);
+            tris.push(tri.map(|node| node as u32));
         }
     });
     tris
 }
 
-/// `rows[i]` as a compressed list: offsets and the flattened items.
+/// `rows[i]` as a compressed list: offsets and the flattened items, in 32
+/// bits (a mesh's nodes, triangles and unknowns stay below 2³²: checked by
+/// [`assemble_rows`]), half the memory of the assembly's largest temporaries.
 struct Lists {
-    offsets: Vec<usize>,
-    items: Vec<usize>,
+    offsets: Vec<u32>,
+    items: Vec<u32>,
 }
 
 impl Lists {
@@ -42,22 +44,22 @@ impl Lists {
     /// by row with a counting sort, keeping their order within a row:
     /// O(rows + pairs).
     fn group(rows: usize, pairs: impl Fn(&mut dyn FnMut(usize, usize))) -> Self {
-        let mut offsets = vec![0; rows + 1];
+        let mut offsets = vec![0u32; rows + 1];
         pairs(&mut |r, _| offsets[r + 1] += 1);
         for r in 0..rows {
             offsets[r + 1] += offsets[r];
         }
         let mut next = offsets.clone();
-        let mut items = vec![0; offsets[rows]];
+        let mut items = vec![0u32; offsets[rows] as usize];
         pairs(&mut |r, item| {
-            items[next[r]] = item;
+            items[next[r] as usize] = item as u32;
             next[r] += 1;
         });
         Self { offsets, items }
     }
 
-    fn of(&self, row: usize) -> &[usize] {
-        &self.items[self.offsets[row]..self.offsets[row + 1]]
+    fn of(&self, row: usize) -> &[u32] {
+        &self.items[self.offsets[row] as usize..self.offsets[row + 1] as usize]
     }
 }
 
@@ -79,7 +81,7 @@ struct ElementTable<const K: usize> {
 }
 
 impl<const K: usize> ElementTable<K> {
-    fn new(mesh: &Mesh, tris: &[[usize; 3]], elements: [&ElementMatrix<'_>; K]) -> Self {
+    fn new(mesh: &Mesh, tris: &[[u32; 3]], elements: [&ElementMatrix<'_>; K]) -> Self {
         // Each node's coordinates once: a triangle's corners are then three
         // loads, not three divisions to locate each node.
         let coords: Vec<[f64; 2]> = (0..mesh.num_nodes()).map(|v| mesh.coords(v)).collect();
@@ -91,7 +93,7 @@ impl<const K: usize> ElementTable<K> {
         let shape = tris
             .iter()
             .map(|tri| {
-                let p = tri.map(|node| coords[node]);
+                let p = tri.map(|node| coords[node as usize]);
                 let key = [
                     p[1][0] - p[0][0],
                     p[1][1] - p[0][1],
@@ -135,13 +137,13 @@ struct BlockRows {
 /// block reads, and the scratch it reuses.
 struct BlockSums<'a, D, const K: usize> {
     dofs: &'a D,
-    tris: &'a [[usize; 3]],
+    tris: &'a [[u32; 3]],
     table: &'a ElementTable<K>,
     node_triangles: &'a Lists,
     /// marker[j] = (stamp, slot), for the sums by unknowns: column j was
     /// met in the block with this stamp (the block's first unknown), and its
     /// sums are found[slot].
-    marker: Vec<(usize, u32)>,
+    marker: Vec<(u32, u32)>,
     /// The block's columns, sorted, and per column both rows' sums (a single
     /// row leaves the second at zero). A short list, so it stays in cache.
     found: Vec<(usize, [[f64; K]; 2])>,
@@ -156,11 +158,12 @@ impl<'a, D: DofExpansion, const K: usize> BlockSums<'a, D, K> {
     fn around(
         &self,
         node: usize,
-    ) -> impl Iterator<Item = (&'a [usize; 3], usize, &'a [[[f64; 6]; 6]; K])> + use<'a, D, K> {
+    ) -> impl Iterator<Item = ([usize; 3], usize, &'a [[[f64; 6]; 6]; K])> + use<'a, D, K> {
         let (tris, table, lists) = (self.tris, self.table, self.node_triangles);
         lists.of(node).iter().map(move |&around| {
-            let (e, corner) = (around / 3, around % 3);
-            (&tris[e], corner, &table.matrices[table.shape[e] as usize])
+            let (e, corner) = (around as usize / 3, around as usize % 3);
+            let tri = tris[e].map(|node| node as usize);
+            (tri, corner, &table.matrices[table.shape[e] as usize])
         })
     }
 
@@ -224,8 +227,8 @@ impl<'a, D: DofExpansion, const K: usize> BlockSums<'a, D, K> {
                 for b in 0..6 {
                     for &(j, cj) in self.dofs.terms(tri[b / 2], b % 2).as_slice() {
                         let (seen, slot) = &mut self.marker[j];
-                        if *seen != stamp {
-                            *seen = stamp;
+                        if *seen != stamp as u32 {
+                            *seen = stamp as u32;
                             *slot = self.found.len() as u32;
                             self.found.push((j, [[0.0; K]; 2]));
                         }
@@ -269,7 +272,7 @@ pub fn assemble_all<const K: usize>(
     dofs: &impl DofExpansion,
     only: Option<Body>,
     elements: [&ElementMatrix<'_>; K],
-) -> (Pattern, [Vec<f64>; K]) {
+) -> [Csr; K] {
     assemble_rows(mesh, dofs, only, elements, Sum::ByNodesWherePossible)
 }
 
@@ -290,11 +293,11 @@ fn assemble_rows<const K: usize>(
     only: Option<Body>,
     elements: [&ElementMatrix<'_>; K],
     sum: Sum,
-) -> (Pattern, [Vec<f64>; K]) {
+) -> [Csr; K] {
     let n = dofs.n();
     assert!(
-        u32::try_from(n).is_ok(),
-        "{n} unknowns: more than 32-bit column indices hold (the mesh sizes stop far below)"
+        n < u32::MAX as usize && 6 * mesh.num_nodes() < u32::MAX as usize,
+        "{n} unknowns: more than 32-bit indices hold (the mesh sizes stop far below)"
     );
     let tris = triangles(mesh, only);
     let table = ElementTable::new(mesh, &tris, elements);
@@ -302,7 +305,7 @@ fn assemble_rows<const K: usize>(
     let node_triangles = Lists::group(mesh.num_nodes(), |emit| {
         for (e, tri) in tris.iter().enumerate() {
             for (corner, &node) in tri.iter().enumerate() {
-                emit(node, 3 * e + corner);
+                emit(node as usize, 3 * e + corner);
             }
         }
     });
@@ -322,19 +325,18 @@ fn assemble_rows<const K: usize>(
             .find(|(unknown, _)| *unknown == i)
             .map_or(0.0, |(_, coefficient)| *coefficient)
     };
-    // A P1 row of this mesh has at most 14 entries (18 with the contact
-    // expansion): one allocation in the usual case.
-    let capacity = 16 * n;
-    let mut offsets = Vec::with_capacity(n + 1);
-    offsets.push(0);
-    let mut columns: Vec<u32> = Vec::with_capacity(capacity);
-    let mut values: [Vec<f64>; K] = [(); K].map(|_| Vec::with_capacity(capacity));
+    // Each row goes to the matrices as it is summed, its stencil and values
+    // kept once each (a uniform mesh has a few dozen): the whole arrays,
+    // 16 bytes per entry, are never held.
+    let mut out = CsrBuilder::<K>::new(n, n);
+    let mut columns: Vec<u32> = Vec::with_capacity(32);
+    let mut values: [Vec<f64>; K] = [(); K].map(|_| Vec::with_capacity(32));
     let mut block = BlockSums {
         dofs,
         tris: &tris,
         table: &table,
         node_triangles: &node_triangles,
-        marker: vec![(usize::MAX, 0); n],
+        marker: vec![(u32::MAX, 0); n],
         found: Vec::with_capacity(32),
         near: Vec::with_capacity(16),
     };
@@ -348,8 +350,9 @@ fn assemble_rows<const K: usize>(
         };
         parts.clear();
         parts.extend(first.iter().enumerate().map(|(p, &c)| {
+            let c = c as usize;
             let rows = if paired {
-                let d = components.of(i + 1)[p];
+                let d = components.of(i + 1)[p] as usize;
                 BlockRows {
                     k: [c % 2, d % 2],
                     ci: [coefficient(i, c), coefficient(i + 1, d)],
@@ -370,19 +373,21 @@ fn assemble_rows<const K: usize>(
         // Each output array written in a loop of its own: one reservation
         // per row, not a capacity check and a length store per entry.
         for r in 0..1 + usize::from(paired) {
+            columns.clear();
             append(&mut columns, &block.found, |(j, _)| *j as u32);
             for (m, v) in values.iter_mut().enumerate() {
+                v.clear();
                 append(v, &block.found, |(_, sums)| sums[r][m]);
             }
-            offsets.push(columns.len());
+            out.push_row(&columns, std::array::from_fn(|m| &values[m][..]));
         }
         i += 1 + usize::from(paired);
     }
-    // Offsets grow from 0 to columns.len(), one per row; each row's columns
-    // are unknowns (< n), sorted and distinct (by the marker, or checked
-    // after the sums by nodes): [`Pattern::with_values`] checks them again
-    // in one pass.
-    (Pattern { offsets, columns }, values)
+    // Each row's columns are unknowns (< n), sorted and distinct (by the
+    // marker, or checked after the sums by nodes): `finish` checks them
+    // again in one pass.
+    out.finish()
+        .expect("an assembly's rows are sorted, distinct, in range, one value each")
 }
 
 /// Assembles one element matrix over every triangle (optionally one body);
@@ -393,8 +398,8 @@ pub fn assemble(
     only: Option<Body>,
     element: impl Fn([[f64; 2]; 3]) -> [[f64; 6]; 6],
 ) -> CsrMatrix<f64> {
-    let (pattern, [values]) = assemble_all(mesh, dofs, only, [&element]);
-    pattern.with_values(values).to_nalgebra()
+    let [a] = assemble_all(mesh, dofs, only, [&element]);
+    a.to_nalgebra()
 }
 
 /// Stiffness matrix of both bodies, with 32-bit column indices (the
@@ -402,8 +407,8 @@ pub fn assemble(
 pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, material: &Material) -> Csr {
     let d = material.elasticity_matrix();
     let element = |p| element_stiffness(p, &d);
-    let (pattern, [values]) = assemble_all(mesh, dofs, None, [&element]);
-    pattern.with_values(values)
+    let [a] = assemble_all(mesh, dofs, None, [&element]);
+    a
 }
 
 /// Mass matrix of both bodies (L2 product of displacement fields).
@@ -435,13 +440,14 @@ pub fn stiffness_and_mass(
     material: &Material,
 ) -> (Csr, Vec<f64>) {
     let d = material.elasticity_matrix();
-    let (pattern, [a, m]) = assemble_all(
+    let [a, m] = assemble_all(
         mesh,
         dofs,
         None,
         [&|p| element_stiffness(p, &d), &element_mass],
     );
-    (pattern.with_values(a), m)
+    let m = m.values().to_vec(m.row_offsets());
+    (a, m)
 }
 
 /// Physical nodal forces (per node, x and y) of tractions (P''_1, P''_2) on

@@ -87,7 +87,9 @@ impl Discretization {
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
         let problem = ContactProblem::new(a, f, mass, contacts, vec![rigid_mode])
-            .and_then(|p| p.with_hierarchy(crate::mechanics::hierarchy::prolongations(h)))
+            .and_then(|p| {
+                p.with_hierarchy(crate::mechanics::hierarchy::prolongations((&mesh, &dofs)))
+            })
             .map_err(|e| match e {
                 ProblemError::Scale { .. } => BuildError::Scales(e),
                 ProblemError::NonFinite { what: "A" } => BuildError::Overflow {

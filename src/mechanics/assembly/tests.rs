@@ -1,4 +1,7 @@
 use super::*;
+
+/// Row offsets and column indices.
+type Pattern = (Vec<usize>, Vec<u32>);
 use crate::mechanics::dofs::{DofMap, PhysicalDofs, Terms};
 use crate::mechanics::mesh_size::MeshSize;
 
@@ -11,10 +14,17 @@ fn both_sums(
     let d = Material::default().elasticity_matrix();
     let elements: [&ElementMatrix<'_>; 2] = [&|p| element_stiffness(p, &d), &element_mass];
     [Sum::ByNodesWherePossible, Sum::ByUnknowns].map(|sum| {
-        let (pattern, values) = assemble_rows(mesh, dofs, only, elements, sum);
-        let bits = values
-            .iter()
-            .map(|v| v.iter().map(|x| x.to_bits()).collect());
+        let matrices = assemble_rows(mesh, dofs, only, elements, sum);
+        let pattern = (
+            matrices[0].row_offsets().to_vec(),
+            matrices[0].col_indices().into_owned(),
+        );
+        let bits = matrices.iter().map(|m| {
+            m.values()
+                .iter(m.row_offsets())
+                .map(|x| x.to_bits())
+                .collect()
+        });
         (pattern, bits.collect())
     })
 }
