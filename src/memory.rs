@@ -33,15 +33,15 @@ pub const BASE_BYTES: f64 = 96.0 * MIB;
 /// exceeds its peak resident memory by 200-400 MiB.
 pub const RESERVED_ADDRESS_SPACE: f64 = 512.0 * MIB;
 
-/// The assembled problem with its temporaries, per unknown: A (its rows of
-/// values shared, 32-bit column indices), f, the mesh, the unknowns' map
-/// and the prolongations of every level; measured at its peak (`info`)
-/// 315, 320 and 290 B per unknown at h = 1/512, 1/1024 and 1/2048 (2.3
-/// GB). The mass matrix M (for a solver that reads it) adds its values,
-/// 8 bytes for each of A's 14 entries per row: 415, 420 and 400 B per
-/// unknown in all.
+/// The assembled problem with its temporaries, per unknown: A (its
+/// stencils and rows of values kept once, built row by row), f, the mesh,
+/// the unknowns' map and the prolongations of every level; measured at its
+/// peak (`info`, which also measures the kernel at 1/128) 110 B per unknown
+/// at h = 1/1024 (232 MB) and 91 at 1/4096 (3.1 GB, `bench-one`). The mass
+/// matrix M (for a solver that reads it) adds its values, 8 bytes for each
+/// of A's 14 entries per row.
 const ASSEMBLY: Memory = Memory {
-    per_unknown: 350.0,
+    per_unknown: 140.0,
     per_unknown_log2: 0.0,
 };
 const MASS: Memory = Memory {
@@ -404,10 +404,11 @@ mod tests {
             assert!(assembly(h(k), true) > assembly(h(k), false));
         }
         // At 1/4096 tnnmg is estimated above what it was measured to take
-        // (9.0 GiB) and below the machine's 24 GiB.
+        // (5.8 GiB, `bench-one --problem 1 --h 1/4096 --solver tnnmg`) and
+        // below the machine's 24 GiB.
         let at_4096 = solve(h(12), tnnmg);
         assert!(
-            at_4096 > 9.0 * 1024.0 * MIB && at_4096 < 20e9,
+            at_4096 > 5.8 * 1024.0 * MIB && at_4096 < 20e9,
             "{}",
             Bytes(at_4096)
         );

@@ -352,9 +352,10 @@ pub fn certify(
     }
     let r = elastic_residual(problem, v);
     let (p_implied, q_implied) = implied_forces(problem, &r);
-    // One vector of nodal contact forces, filled for each reading in turn
-    // (at h = 1/4096 each such vector is 270 MB).
-    let mut force = vec![0.0; problem.n()];
+    // The nodal contact forces, filled for each reading in turn: only the
+    // contact rows, not a vector of n (at h = 1/4096 such a vector was 270
+    // MB, beside the solver's at the peak of a solve).
+    let mut force = Vec::with_capacity(2 * problem.contacts().len());
     contact_forces(problem, p, q, &mut force);
     stationarity(&mut out, problem, &r, &force);
     for (pr, qr) in [(p, q), (&p_implied[..], &q_implied[..])] {
@@ -401,13 +402,29 @@ fn contact_law(
     }
 }
 
-/// The nodal contact forces of (p, q) into `force`, which is zero away
-/// from the contact rows: w_i p_i at t_i, −w_i q_i at s_i.
-fn contact_forces(problem: &ContactProblem, p: &[f64], q: &[f64], force: &mut [f64]) {
+/// The nodal contact forces of (p, q) into `force` as (row, force),
+/// ascending by row: w_i p_i at t_i, −w_i q_i at s_i (zero at every other
+/// row, [`each_row`]).
+fn contact_forces(problem: &ContactProblem, p: &[f64], q: &[f64], force: &mut Vec<(usize, f64)>) {
+    force.clear();
     for (i, c) in problem.contacts().iter().enumerate() {
-        force[c.t] = 0.0 + c.weight * p[i];
-        force[c.s] = 0.0 - c.weight * q[i];
+        force.push((c.t, 0.0 + c.weight * p[i]));
+        force.push((c.s, 0.0 - c.weight * q[i]));
     }
+    force.sort_unstable_by_key(|&(row, _)| row);
+}
+
+/// The nodal forces `force` (row, force, ascending) at each of n rows in
+/// turn, zero where none: the vector they stand for, without storing it.
+fn each_row(force: &[(usize, f64)], n: usize) -> impl Iterator<Item = f64> + '_ {
+    let mut next = force.iter().peekable();
+    (0..n).map(move |k| match next.peek() {
+        Some(&&(row, f)) if row == k => {
+            next.next();
+            f
+        }
+        _ => 0.0,
+    })
 }
 
 /// |A v − f + contact forces| row by row, from the residual `r` and the
@@ -415,20 +432,23 @@ fn contact_forces(problem: &ContactProblem, p: &[f64], q: &[f64], force: &mut [f
 /// error of that node), elsewhere over P·w_max. Every row is first taken
 /// over P·w_max, then the contact rows over their own, smaller scale, so
 /// the largest is the same and no vector of scales is needed.
-fn stationarity(out: &mut Certificate, problem: &ContactProblem, r: &[f64], force: &[f64]) {
+fn stationarity(
+    out: &mut Certificate,
+    problem: &ContactProblem,
+    r: &[f64],
+    force: &[(usize, f64)],
+) {
     let contacts = problem.contacts();
     let pr = problem.scales().pressure;
     let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
     let node_force = pr * w_max.max(f64::MIN_POSITIVE);
-    for (ri, ci) in r.iter().zip(force) {
+    for (ri, ci) in r.iter().zip(each_row(force, r.len())) {
         raise(&mut out.stationarity, (ri + ci).abs() / node_force);
     }
     for c in contacts {
         for k in [c.t, c.s] {
-            raise(
-                &mut out.stationarity,
-                (r[k] + force[k]).abs() / (pr * c.weight),
-            );
+            let fk = force[force.partition_point(|&(row, _)| row < k)].1;
+            raise(&mut out.stationarity, (r[k] + fk).abs() / (pr * c.weight));
         }
     }
 }
@@ -436,14 +456,14 @@ fn stationarity(out: &mut Certificate, problem: &ContactProblem, r: &[f64], forc
 /// zᵀ(f − contact forces) for every rigid mode z: the load the contact
 /// forces `force` leave unbalanced, over the load zᵀf they must carry (F
 /// times max|z| where that is zero).
-fn force_balance(out: &mut Certificate, problem: &ContactProblem, force: &[f64]) {
+fn force_balance(out: &mut Certificate, problem: &ContactProblem, force: &[(usize, f64)]) {
     let gross = problem.scales().force;
     for z in problem.rigid_modes() {
         let load: f64 = z.iter().zip(problem.f()).map(|(zk, fk)| zk * fk).sum();
         let unbalanced: f64 = z
             .iter()
             .zip(problem.f())
-            .zip(force)
+            .zip(each_row(force, z.len()))
             .map(|((zk, fk), ck)| zk * (fk - ck))
             .sum();
         let scale = if load != 0.0 {

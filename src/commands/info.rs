@@ -28,7 +28,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
     let d = Discretization::new_without_mass(&scene, h).context("building the discretization")?;
     let p = &d.problem;
     let kernel = kernel_line(&scene, &d)?;
-    let applied: f64 = d.forces.iter().map(|f| f[1]).sum();
+    let applied: f64 = d.forces().iter().map(|f| f[1]).sum();
     let sc = p.scales();
     let m = &scene.material;
     let room = memory::room();

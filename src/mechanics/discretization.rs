@@ -8,7 +8,7 @@ use crate::mechanics::assembly;
 use crate::mechanics::dofs::{ContactDofs, DofMap};
 use crate::mechanics::mesh::{Body, Mesh};
 use crate::mechanics::mesh_size::MeshSize;
-use crate::mechanics::scene::{Scene, SceneError};
+use crate::mechanics::scene::{Scene, SceneError, Traction};
 
 /// Building a discretization failed.
 #[derive(Debug, Error)]
@@ -37,8 +37,9 @@ pub struct Discretization {
     pub dofs: DofMap,
     /// The contact problem (coefficient 𝓕 of the scene, bound g = 0).
     pub problem: ContactProblem,
-    /// Applied nodal forces (per node, x and y), before the change of variables.
-    pub forces: Vec<[f64; 2]>,
+    /// The scene's tractions on the top side ([`Discretization::forces`]
+    /// gives their nodal forces: not kept, 16 bytes per node).
+    pub loads: Vec<Traction>,
     /// Σ p2 · (to − from) of the scene's loads (condition (13): negative).
     pub total_load: f64,
 }
@@ -101,9 +102,15 @@ impl Discretization {
             mesh,
             dofs,
             problem,
-            forces,
+            loads: scene.loads.clone(),
             total_load: scene.total_vertical_load(),
         })
+    }
+
+    /// Applied nodal forces (per node, x and y), before the change of
+    /// variables.
+    pub fn forces(&self) -> Vec<[f64; 2]> {
+        assembly::top_traction_forces(&self.mesh, &self.loads)
     }
 
     pub fn h(&self) -> MeshSize {

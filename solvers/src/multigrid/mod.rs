@@ -148,9 +148,11 @@ pub(crate) const ENTRY: Entry = Entry {
     max_unknowns: None,
     uses_mass: false,
     memory: Memory {
-        // Measured 370 B per unknown at 1/1024 (0.76 GB) and 360 at
-        // 1/2048 (2.9 GB), revisit schedule; nested: 290 at 1/2048.
-        per_unknown: 400.0,
+        // Measured (nested schedule, the stencils and rows of A and of the
+        // Galerkin levels kept once, the assembly row by row): 200 B per
+        // unknown at 1/1024 (0.42 GB), 188 at 1/2048 (1.6 GB), 181 at
+        // 1/4096 (6.1 GB).
+        per_unknown: 230.0,
         per_unknown_log2: 0.0,
     },
 };

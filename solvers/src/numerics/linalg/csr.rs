@@ -272,6 +272,15 @@ impl Csr {
         }
     }
 
+    /// How many numbers the column indices take: one per stored entry, or
+    /// the distinct stencils' when they are shared.
+    pub fn stored_columns(&self) -> usize {
+        match &self.cols {
+            StoredColumns::Plain(c) => c.len(),
+            StoredColumns::Shared { table, .. } => table.len(),
+        }
+    }
+
     /// Whether the distinct rows are stored once ([`Csr::shared`]).
     pub fn is_shared(&self) -> bool {
         matches!(self.values, Stored::Shared { .. })
