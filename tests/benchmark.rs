@@ -256,6 +256,7 @@ static LIAR: Entry = Entry {
     laws: &[Law::Coulomb],
     warm_starts: false,
     schedule: contactlab_solvers::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: "lie",
         about: "never reported",

@@ -160,6 +160,7 @@ static TOY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     schedule: contactlab_solvers::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: "gradient",
         about: "one proximal gradient step; residual max|Δv|",

@@ -90,6 +90,7 @@ pub fn register(name: &str, f: Py<PyAny>) -> Result<&'static Entry, String> {
         laws: &[Law::Coulomb],
         warm_starts: false,
         schedule: contactlab::solvers::schedule::Schedule::Revisit,
+        schedule_when: None,
         stages: &[StageInfo {
             name: "python",
             about: "the Python function's one call",

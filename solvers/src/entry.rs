@@ -103,6 +103,11 @@ pub struct Entry {
     /// fastest certified schedule, measured (for a solver that does not
     /// warm-start it is never used).
     pub schedule: crate::schedule::Schedule,
+    /// Another default schedule when one of its settings (a path in its
+    /// settings tree) holds a given value: (path, value, schedule). The
+    /// paper's method runs the paper's continuation with its own sweeps
+    /// inside, and the nested one with multigrid inside, its fastest.
+    pub schedule_when: Option<(&'static str, &'static str, crate::schedule::Schedule)>,
     pub stages: &'static [StageInfo],
     /// The stage whose events count as its work (for budgets and "slow").
     pub work_stage: &'static str,
@@ -175,6 +180,20 @@ pub const CONDENSED_MEMORY: Memory = Memory {
 pub const FACTORED_MAX_UNKNOWNS: usize = 1 << 22;
 
 impl Entry {
+    /// The schedule it runs unless the user names one, for its settings
+    /// tree `tree` ([`Entry::schedule`], or [`Entry::schedule_when`]'s).
+    pub fn default_schedule(&self, tree: &serde_json::Value) -> crate::schedule::Schedule {
+        match self.schedule_when {
+            Some((path, value, schedule))
+                if tree.pointer(&format!("/{}", path.replace('.', "/")))
+                    == Some(&serde_json::Value::from(value)) =>
+            {
+                schedule
+            }
+            _ => self.schedule,
+        }
+    }
+
     /// Whether it solves `law` directly.
     pub fn solves(&self, law: Law) -> bool {
         self.laws.contains(&law)

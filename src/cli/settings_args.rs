@@ -151,7 +151,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .long(SCHEDULE)
                     .value_name("SCHEDULE")
                     .value_parser(Schedule::ALL.map(Schedule::name))
-                    .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first, or nested: the whole Coulomb problem on each level in turn, each started from the level below and the coarse ones solved to coulomb.coarse_epsilon [default: each solver's fastest, nested for tnnmg, revisit (the paper's) for relaxation]"),
+                    .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first, or nested: the whole Coulomb problem on each level in turn, each started from the level below and the coarse ones solved to coulomb.coarse_epsilon [default: each solver's fastest, nested for tnnmg, revisit (the paper's) for relaxation with its sweeps, nested for relaxation.inner = multigrid]"),
             );
         }
         for e in S::solvers() {

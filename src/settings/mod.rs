@@ -265,7 +265,8 @@ impl Settings {
 
     /// The mesh continuation `entry` runs: the one chosen, else its own.
     pub fn schedule_of(&self, entry: &Entry) -> Schedule {
-        self.schedule.unwrap_or(entry.schedule)
+        self.schedule
+            .unwrap_or_else(|| entry.default_schedule(&self.solver_tree(entry)))
     }
 
     /// Every setting, resolved, as one tree (for summaries and manifests).

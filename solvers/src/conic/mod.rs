@@ -54,6 +54,7 @@ pub(crate) const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: INTERIOR_POINT,
         about: "one interior-point iteration; residual max(primal, dual residual, gap)",

@@ -86,6 +86,7 @@ pub(crate) const ENTRY: Entry = Entry {
     // iterations), nested 0.21 s (44); 1/1024 revisit 32 s, nested 5.5 s.
     // The same answer: each schedule runs the fixed point to its ε.
     schedule: crate::schedule::Schedule::Nested,
+    schedule_when: None,
     stages: &[StageInfo {
         name: ITERATION,
         about: "one TNNMG iteration (nonlinear presmoothing, truncated V-cycle, line search, rigid-mode translation); residual: the largest change of an unknown over U",

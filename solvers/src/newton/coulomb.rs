@@ -59,6 +59,7 @@ pub(crate) const ENTRY: Entry = Entry {
     laws: &[Law::Coulomb],
     warm_starts: false,
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: NEWTON_STEP,
         about: "one Newton step on the Coulomb system; residual max|Φ| / ‖b̂‖∞",

@@ -46,6 +46,7 @@ pub(crate) const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: NEWTON_STEP,
         about: "one Newton step; residual max|Φ| / ‖b̂‖∞ (condensed KKT system)",

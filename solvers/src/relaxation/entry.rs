@@ -37,6 +37,7 @@ pub(crate) const ENTRY: Entry = Entry {
     // The paper's method keeps the paper's reading of Algorithm 1 (every
     // level in every friction iteration), as its Table 1 is reproduced.
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: Some(("inner", "multigrid", crate::schedule::Schedule::Nested)),
     stages: &[
         StageInfo {
             name: UZAWA,

@@ -54,6 +54,7 @@ pub(crate) const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: STEP,
         about: "one ADMM step; residual max(primal ‖y − z‖∞/U, dual ρ‖Δz‖∞/(P·w))",

@@ -48,6 +48,7 @@ pub(crate) const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction],
     warm_starts: false,
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: STEP,
         about: "one accelerated projected gradient step; residual: the natural map of the contact law in the problem's scales (every tenth step)",

@@ -49,6 +49,7 @@ pub(crate) const ENTRY: Entry = Entry {
     laws: &[Law::GivenFriction, Law::Coulomb],
     warm_starts: false,
     schedule: crate::schedule::Schedule::Revisit,
+    schedule_when: None,
     stages: &[StageInfo {
         name: SWEEP,
         about: "one sweep over the contact nodes; residual max|Δr| over the nodal force scale",

@@ -179,7 +179,12 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
     let entry = solver_entry("relaxation")?;
     let solved = solve_scene(&scene, Friction::Coulomb, entry, &settings, &mut Silent)?;
     let o = &solved.outcome;
-    out.paper = Some((paper, o.timing.total(), o.status.to_string()));
+    let schedule = settings.schedule_of(entry);
+    out.paper = Some((
+        paper,
+        o.timing.total(),
+        format!("{}, {schedule} schedule", o.status),
+    ));
     for h in agreement {
         log(&format!("{SOLVER} against newton-coulomb at h = {h}"));
         out.agreement.push((h, agreement_at(spec.problem, h)?));
@@ -482,7 +487,7 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
                 "the paper's method with relaxation.inner = multigrid and target = 1e-6 at h = {h}: at most {PAPER_GOAL_SECONDS} s, certified"
             ),
             measured: format!("{seconds:.2} s, {status}"),
-            pass: Some(status == "converged" && *seconds <= PAPER_GOAL_SECONDS),
+            pass: Some(status.starts_with("converged,") && *seconds <= PAPER_GOAL_SECONDS),
         });
     }
     if !m.agreement.is_empty() {
