@@ -243,13 +243,13 @@ impl RelaxationOperator {
         v: &mut [f64],
         data: &SweepData<'_>,
     ) -> f64 {
-        let (offsets, cols) = (self.h.row_offsets(), self.h.col_indices());
+        let (offsets, cols) = (self.h.row_offsets(), self.h.columns());
         let mut max_change = 0.0f64;
         for j in 0..v.len() {
             let (lo, hi) = (offsets[j], offsets[j + 1]);
             // SAFETY: a Csr keeps its column indices below ncols = v.len().
             let row = vals.row(j, lo, hi);
-            let sum = unsafe { crate::numerics::linalg::row_dot(&cols[lo..hi], row, v) };
+            let sum = unsafe { crate::numerics::linalg::row_dot_at(cols.row(j, lo, hi), row, v) };
             let a = self.diag[j];
             let old = v[j];
             // Gradient of the quadratic part without the diagonal term.
