@@ -149,16 +149,18 @@ impl StoredColumns {
     pub(super) fn to_vec(&self, offsets: &[usize]) -> Vec<u32> {
         match self {
             StoredColumns::Plain(c) => c.clone(),
-            StoredColumns::Shared { .. } => {
-                let view = self.view();
-                let mut out = Vec::with_capacity(self.entries());
-                for (i, w) in offsets.windows(2).enumerate() {
-                    out.extend(view.row(i, w[0], w[1]).iter().map(|c| c as u32));
-                }
-                out
-            }
+            StoredColumns::Shared { .. } => whole(self.view(), offsets, self.entries()),
         }
     }
+}
+
+/// The columns of the rows of `offsets` read through `view`, whole.
+fn whole(view: Columns<'_>, offsets: &[usize], entries: usize) -> Vec<u32> {
+    let mut out = Vec::with_capacity(entries);
+    for (i, w) in offsets.windows(2).enumerate() {
+        out.extend(view.row(i, w[0], w[1]).iter().map(|c| c as u32));
+    }
+    out
 }
 
 /// Stencils are kept once only while they take at most this many numbers
@@ -245,11 +247,7 @@ impl StencilSharer {
             table: &self.table,
             start: &self.start,
         };
-        let mut out = Vec::with_capacity(self.entries);
-        for (i, w) in offsets.windows(2).enumerate() {
-            out.extend(view.row(i, w[0], w[1]).iter().map(|c| c as u32));
-        }
-        out
+        whole(view, offsets, self.entries)
     }
 
     pub(super) fn finish(mut self) -> StoredColumns {

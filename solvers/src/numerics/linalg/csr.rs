@@ -127,36 +127,17 @@ impl Csr {
         cols: Vec<u32>,
         values: Vec<f64>,
     ) -> Result<Self, CsrError> {
-        if ncols > u32::MAX as usize {
-            return Err(CsrError::TooManyColumns(ncols));
-        }
-        if offsets.len() != nrows + 1 || offsets[0] != 0 || offsets[nrows] != cols.len() {
+        if offsets.len() != nrows + 1 {
             return Err(CsrError::Malformed(
                 "the row offsets must run from 0 to the number of entries, one per row and one more",
             ));
         }
-        if values.len() != cols.len() {
-            return Err(CsrError::Malformed("one value per stored column index"));
-        }
-        for row in offsets.windows(2) {
-            let (lo, hi) = (row[0], row[1]);
-            if lo > hi || hi > cols.len() {
-                return Err(CsrError::Malformed("the row offsets must not decrease"));
-            }
-            let row = &cols[lo..hi];
-            if row.windows(2).any(|w| w[0] >= w[1]) || row.last().is_some_and(|&c| c.at() >= ncols)
-            {
-                return Err(CsrError::Malformed(
-                    "the columns of a row must increase strictly and stay below the column count",
-                ));
-            }
-        }
-        Ok(Self {
+        Self::from_parts(
             ncols,
             offsets,
-            cols: StoredColumns::Plain(cols),
-            values: Stored::Plain(values),
-        })
+            StoredColumns::Plain(cols),
+            Stored::Plain(values),
+        )
     }
 
     /// From stored parts, checked as [`Csr::try_from_csr_data`] checks its
