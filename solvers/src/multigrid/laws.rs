@@ -1,34 +1,36 @@
 //! The contact law φ_k of every unknown, stored for the contact unknowns
 //! alone: a [`Local`] is 32 bytes, and all but O(h⁻¹) of the O(h⁻²)
 //! unknowns are free (at h = 1/1024 a law per unknown was 67 MB of a solve's
-//! peak; a slot index per unknown is 8 MB).
+//! peak). Which unknowns have a law is one bit each (a 32-bit slot per
+//! unknown was 4 bytes of a solve's 185 per unknown at h = 1/4096); the
+//! slot of one that has is looked up in a map of the O(h⁻¹) contact
+//! unknowns.
 
+use std::collections::HashMap;
 use std::ops::Index;
 
 use super::smoother::Local;
 
-/// No slot: the unknown's law is `Free`.
-const FREE_SLOT: u32 = u32::MAX;
 static FREE: Local = Local::Free;
 
 /// φ_k for k = 0 … n−1, indexed like a slice of laws.
 #[derive(Clone, Debug)]
 pub(crate) struct Laws {
-    /// Each unknown's slot in `local`, or [`FREE_SLOT`].
-    slot: Vec<u32>,
+    /// Bit k % 64 of word k / 64: whether unknown k has a slot.
+    has_slot: Vec<u64>,
+    /// The slot in `local` of each unknown that has one.
+    slot: HashMap<usize, u32>,
     /// The laws of the unknowns that have a slot.
     local: Vec<Local>,
-    /// Those unknowns, in the order their slots were given.
-    at: Vec<usize>,
 }
 
 impl Laws {
     /// n unknowns, every one free.
     pub(crate) fn free(n: usize) -> Self {
         Self {
-            slot: vec![FREE_SLOT; n],
+            has_slot: vec![0; n.div_ceil(64)],
+            slot: HashMap::new(),
             local: Vec::new(),
-            at: Vec::new(),
         }
     }
 
@@ -46,24 +48,23 @@ impl Laws {
 
     /// φ_k = `law`.
     pub(crate) fn set(&mut self, k: usize, law: Local) {
-        match self.slot[k] {
-            FREE_SLOT => {
-                self.slot[k] =
-                    u32::try_from(self.local.len()).expect("fewer than 2³² contact unknowns");
-                self.local.push(law);
-                self.at.push(k);
-            }
-            s => self.local[s as usize] = law,
+        let next = u32::try_from(self.local.len()).expect("fewer than 2³² contact unknowns");
+        let s = *self.slot.entry(k).or_insert(next);
+        if s == next {
+            self.has_slot[k / 64] |= 1 << (k % 64);
+            self.local.push(law);
+        } else {
+            self.local[s as usize] = law;
         }
     }
 
     /// Every unknown free again, in O(contact unknowns).
     pub(crate) fn clear(&mut self) {
-        for &k in &self.at {
-            self.slot[k] = FREE_SLOT;
+        for &k in self.slot.keys() {
+            self.has_slot[k / 64] &= !(1 << (k % 64));
         }
+        self.slot.clear();
         self.local.clear();
-        self.at.clear();
     }
 }
 
@@ -72,9 +73,10 @@ impl Index<usize> for Laws {
 
     #[inline]
     fn index(&self, k: usize) -> &Local {
-        match self.slot[k] {
-            FREE_SLOT => &FREE,
-            s => &self.local[s as usize],
+        if self.has_slot[k / 64] & (1 << (k % 64)) == 0 {
+            &FREE
+        } else {
+            &self.local[self.slot[&k] as usize]
         }
     }
 }
