@@ -172,7 +172,7 @@ fn a_loose_accuracy_is_one_of_the_pressure() {
             .call(&(entry.defaults)(Default::default()))
             .unwrap();
         let start = contactlab::solvers::Start {
-            v: &zero.0,
+            v: std::borrow::Cow::Borrowed(&zero.0),
             pressure: &zero.1,
             accuracy,
         };

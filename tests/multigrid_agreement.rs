@@ -123,7 +123,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
         tree["tolerance"] = json!(1e-12);
         let mut solver = entry.build.call(&tree).unwrap();
         let start = Start {
-            v: &lift,
+            v: std::borrow::Cow::Borrowed(&lift),
             pressure: &pressure,
             accuracy: None,
         };
@@ -145,7 +145,7 @@ fn tnnmg_energy_never_increases_from_an_open_start() {
         .call(&(entry.defaults)(Default::default()))
         .unwrap();
     let start = Start {
-        v: &lift,
+        v: std::borrow::Cow::Borrowed(&lift),
         pressure: &pressure,
         accuracy: None,
     };

@@ -19,6 +19,8 @@
 //! (with tnnmg at 1/1024 the second and third friction steps from g⁰ = 0
 //! took 33 of 48 s).
 
+use std::borrow::Cow;
+
 use contactlab_solvers::{
     ContactProblem, Friction, Iterations, Observer, Solution, Solver, Start, Timing,
 };
@@ -164,8 +166,10 @@ impl GivenFrictionStep for Continuation<'_> {
             let mut s = self.solver.solve(
                 &level.problem,
                 Friction::Given(&g_level),
+                // Handed over: v is the transfer's (or the last answer's)
+                // and is replaced below before it is read again.
                 Some(Start {
-                    v: &v,
+                    v: Cow::Owned(std::mem::take(&mut v)),
                     pressure: &l,
                     accuracy,
                 }),

@@ -1,6 +1,8 @@
 //! The given-friction step on one mesh: one solver, warm-started from the
 //! previous step's answer, which the fixed point hands back.
 
+use std::borrow::Cow;
+
 use contactlab_solvers::{ContactProblem, Friction, Observer, Solution, Solver, Start};
 
 use super::fixed_point::GivenFrictionStep;
@@ -46,22 +48,23 @@ impl GivenFrictionStep for SingleLevel<'_> {
         accuracy: Option<f64>,
         observer: &mut dyn Observer,
     ) -> Solution {
-        let start = match (&self.last, &self.first) {
-            (Some(s), _) => Some((&s.v[..], &s.pressure[..])),
-            (None, Some((v, p))) => Some((&v[..], &p[..])),
-            (None, None) => None,
-        }
-        .map(|(v, pressure)| Start {
-            v,
-            pressure,
+        // The start is handed over, not lent: the fixed point hands the new
+        // answer back ([`keep`]) before the next step, so the solver may
+        // iterate on these unknowns themselves.
+        let (v, pressure) = match self.last.take() {
+            Some(s) => (Some(s.v), s.pressure),
+            None => match self.first.take() {
+                Some((v, p)) => (Some(v), p),
+                None => (None, Vec::new()),
+            },
+        };
+        let start = v.map(|v| Start {
+            v: Cow::Owned(v),
+            pressure: &pressure,
             accuracy,
         });
-        let solution = self
-            .solver
-            .solve(self.problem, Friction::Given(g), start, observer);
-        // Used: the fixed point hands the new one back ([`keep`]).
-        self.last = None;
-        solution
+        self.solver
+            .solve(self.problem, Friction::Given(g), start, observer)
     }
 
     fn keep(&mut self, solution: Solution) {

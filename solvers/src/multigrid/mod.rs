@@ -445,9 +445,10 @@ impl Solver for Tnnmg {
         // 2.7e-2·P at 1/512, and the fixed point with the forcing 0.1
         // diverged at 1/512.
         let pressure_tol = start
+            .as_ref()
             .and_then(|s| s.accuracy)
             .filter(|&a| a > tol && scales.pressure > 0.0);
-        let mut v = start.map_or_else(|| vec![0.0; n], |s| s.v.to_vec());
+        let mut v = start.map_or_else(|| vec![0.0; n], |s| s.v.into_owned());
         if v.len() != n {
             v = vec![0.0; n];
         }

@@ -351,7 +351,7 @@ impl Solver for NewtonCoulomb {
             coefficient: &coefficient,
             kappa: units.kappa,
         };
-        let mut x = match start {
+        let mut x = match &start {
             Some(st) if st.v.len() == n && st.pressure.len() == m => {
                 let mut x = closed_start(&condensed.b, m);
                 for (i, c) in contacts.iter().enumerate() {

@@ -165,7 +165,7 @@ impl Solver for CondensedNewton {
             .collect();
         // Start: the given iterate, or all contacts closed and sticking (y = 0)
         // with the forces that hold that state.
-        let y0: Vec<f64> = match start {
+        let y0: Vec<f64> = match &start {
             Some(s) if s.v.len() == n => {
                 contacts.iter().flat_map(|c| [s.v[c.t], s.v[c.s]]).collect()
             }
@@ -174,7 +174,7 @@ impl Solver for CondensedNewton {
         let force = |k: usize| -> f64 {
             (0..2 * m).map(|l| condensed.s[(k, l)] * y0[l]).sum::<f64>() - condensed.b[k]
         };
-        let lam0: Vec<f64> = match start {
+        let lam0: Vec<f64> = match &start {
             Some(s) if s.pressure.len() == m => contacts
                 .iter()
                 .zip(s.pressure)

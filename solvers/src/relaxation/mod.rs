@@ -94,13 +94,13 @@ pub(crate) fn prox_uzawa(
     let n = problem.n();
     let contacts = problem.contacts();
     let m = contacts.len();
-    let mut v = match start {
-        Some(s) if s.v.len() == n => s.v.to_vec(),
-        _ => vec![0.0; n],
-    };
-    let mut l = match start {
+    let mut l = match &start {
         Some(s) if s.pressure.len() == m => s.pressure.iter().map(|p| p.max(0.0)).collect(),
         _ => vec![0.0; m],
+    };
+    let mut v = match start {
+        Some(s) if s.v.len() == n => s.v.into_owned(),
+        _ => vec![0.0; n],
     };
     let wg: Vec<f64> = contacts.iter().zip(g).map(|(c, g)| c.weight * g).collect();
     let rho = resolved.proximal;
