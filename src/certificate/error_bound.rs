@@ -74,7 +74,7 @@ use serde::{Deserialize, Serialize};
 
 use super::accurate_sum::Dot2;
 use super::energy_solve::{EnergySolve, EnergySolveError};
-use super::{elastic_residual, fits, implied_forces, row_product};
+use super::{fits, implied_forces, row_product};
 
 /// What a bound is a bound on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -230,8 +230,7 @@ impl<'a> ErrorBounder<'a> {
             .enumerate()
             .map(|(i, c)| friction.bound(i, c.coefficient, p[i]))
             .collect();
-        let elastic = elastic_residual(problem, v);
-        let implied = implied_forces(problem, &elastic);
+        let implied = implied_forces(problem, v);
         let mut best: Option<f64> = None;
         let mut overflow = false;
         for (pr, qr) in [(p, q), (&implied.0[..], &implied.1[..])] {

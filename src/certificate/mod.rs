@@ -298,24 +298,17 @@ fn fits(problem: &ContactProblem, friction: Friction<'_>, v: &[f64], p: &[f64], 
 
 /// The contact forces that displacements `v` imply: stationarity at the
 /// contact rows read as forces, p_i = −(A v − f)_{t_i} / w_i and
-/// q_i = (A v − f)_{s_i} / w_i, from the residual `r` = A v − f. An answer
-/// given as displacements alone is completed with them
+/// q_i = (A v − f)_{s_i} / w_i ([`stationarity_residual`] at those rows
+/// alone). An answer given as displacements alone is completed with them
 /// ([`crate::formats::instance::complete_answer`]), and every answer is
 /// also judged with them ([`certify`]).
-pub fn implied_forces(problem: &ContactProblem, r: &[f64]) -> (Vec<f64>, Vec<f64>) {
+pub fn implied_forces(problem: &ContactProblem, v: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let r = |i| stationarity_residual(problem, v, i);
     problem
         .contacts()
         .iter()
-        .map(|c| (-r[c.t] / c.weight, r[c.s] / c.weight))
+        .map(|c| (-r(c.t) / c.weight, r(c.s) / c.weight))
         .unzip()
-}
-
-/// The residual of stationarity without the contact forces, A v − f, row
-/// by row ([`stationarity_residual`]).
-pub fn elastic_residual(problem: &ContactProblem, v: &[f64]) -> Vec<f64> {
-    (0..problem.n())
-        .map(|i| stationarity_residual(problem, v, i))
-        .collect()
 }
 
 /// Checks (v, p, q) against `problem` under `friction` (the given-friction
@@ -350,14 +343,15 @@ pub fn certify(
     for c in Condition::ALL {
         out.set(c, 0.0);
     }
-    let r = elastic_residual(problem, v);
-    let (p_implied, q_implied) = implied_forces(problem, &r);
-    // The nodal contact forces, filled for each reading in turn: only the
-    // contact rows, not a vector of n (at h = 1/4096 such a vector was 270
-    // MB, beside the solver's at the peak of a solve).
+    // The residual A v − f is read row by row as it is summed, and the
+    // nodal contact forces, filled for each reading in turn, are kept at
+    // the contact rows alone: neither is a vector of n (at h = 1/4096 such
+    // a vector is 270 MB, beside the solver's at the peak of a solve that
+    // certifies its answer before it goes on).
+    let (p_implied, q_implied) = implied_forces(problem, v);
     let mut force = Vec::with_capacity(2 * problem.contacts().len());
     contact_forces(problem, p, q, &mut force);
-    stationarity(&mut out, problem, &r, &force);
+    stationarity(&mut out, problem, v, &force);
     for (pr, qr) in [(p, q), (&p_implied[..], &q_implied[..])] {
         contact_forces(problem, pr, qr, &mut force);
         contact_law(&mut out, problem, friction, v, pr, qr);
@@ -427,28 +421,30 @@ fn each_row(force: &[(usize, f64)], n: usize) -> impl Iterator<Item = f64> + '_ 
     })
 }
 
-/// |A v − f + contact forces| row by row, from the residual `r` and the
-/// nodal contact forces `force`: at a contact row over P·w_i (the pressure
-/// error of that node), elsewhere over P·w_max. Every row is first taken
-/// over P·w_max, then the contact rows over their own, smaller scale, so
-/// the largest is the same and no vector of scales is needed.
+/// |A v − f + contact forces| row by row, from the displacements `v`
+/// ([`stationarity_residual`]) and the nodal contact forces `force`: at a
+/// contact row over P·w_i (the pressure error of that node), elsewhere over
+/// P·w_max. Every row is first taken over P·w_max, then the contact rows
+/// over their own, smaller scale, so the largest is the same and no vector
+/// of scales is needed.
 fn stationarity(
     out: &mut Certificate,
     problem: &ContactProblem,
-    r: &[f64],
+    v: &[f64],
     force: &[(usize, f64)],
 ) {
     let contacts = problem.contacts();
     let pr = problem.scales().pressure;
     let w_max = contacts.iter().fold(0.0f64, |a, c| a.max(c.weight));
     let node_force = pr * w_max.max(f64::MIN_POSITIVE);
-    for (ri, ci) in r.iter().zip(each_row(force, r.len())) {
-        raise(&mut out.stationarity, (ri + ci).abs() / node_force);
+    let r = |i| stationarity_residual(problem, v, i);
+    for (i, ci) in each_row(force, problem.n()).enumerate() {
+        raise(&mut out.stationarity, (r(i) + ci).abs() / node_force);
     }
     for c in contacts {
         for k in [c.t, c.s] {
             let fk = force[force.partition_point(|&(row, _)| row < k)].1;
-            raise(&mut out.stationarity, (r[k] + fk).abs() / (pr * c.weight));
+            raise(&mut out.stationarity, (r(k) + fk).abs() / (pr * c.weight));
         }
     }
 }

@@ -352,8 +352,7 @@ pub fn complete_answer(
     Ok(match (v, forces) {
         (Some(v), Some((p, q))) => (v, p, q),
         (Some(v), None) => {
-            let r = crate::certificate::elastic_residual(problem, &v);
-            let (p, q) = crate::certificate::implied_forces(problem, &r);
+            let (p, q) = crate::certificate::implied_forces(problem, &v);
             (v, p, q)
         }
         (None, Some((p, q))) => {
