@@ -118,14 +118,16 @@ pub(crate) struct Workspace {
     /// b − A v after the presmoothing.
     pub r: Vec<f64>,
     c: Vec<f64>,
-    /// A c, kept along the conjugate gradients (no product of its own).
-    w: Vec<f64>,
     ac: Vec<f64>,
     lin_r: Vec<f64>,
     lin_z: Vec<f64>,
     /// A_T z of the V-cycle's z (its last sweep leaves it).
     lin_az: Vec<f64>,
     lin_p: Vec<f64>,
+    /// The conjugate gradients' right-hand side d at the contact unknowns,
+    /// before the rigid mode is taken out of it (elsewhere d is r): with
+    /// it, A_T c = d − (their residual) needs no vector of its own.
+    d_contact: Vec<(usize, f64)>,
     truncated: Vec<bool>,
     /// D's diagonal; empty while every curvature is zero (the
     /// given-friction laws), so that no vector of n is spent on it.
@@ -139,12 +141,12 @@ impl Workspace {
             phases: Phases::default(),
             r: zeros(),
             c: zeros(),
-            w: zeros(),
             ac: zeros(),
             lin_r: zeros(),
             lin_z: zeros(),
             lin_az: zeros(),
             lin_p: zeros(),
+            d_contact: Vec::new(),
             truncated: vec![false; n],
             shift: Vec::new(),
         }
@@ -198,6 +200,7 @@ pub(crate) fn iterate(
     // conjugate gradients' first residual, kept in their vector).
     copy(&mut ws.lin_r, &ws.r);
     let mut kernel_free = energy.kernel.is_some();
+    ws.d_contact.clear();
     for &k in contact {
         let law = laws[k];
         let cut = law.at_kink(v[k]);
@@ -215,10 +218,13 @@ pub(crate) fn iterate(
         } else {
             ws.r[k] - law.slope(v[k], 1.0)
         };
+        ws.d_contact.push((k, ws.lin_r[k]));
     }
+    let mut along = None;
     if let (true, Some((z, zz))) = (kernel_free, energy.kernel) {
-        let along = dot(&ws.lin_r, z) / zz;
-        axpy(&mut ws.lin_r, -along, z);
+        let a = dot(&ws.lin_r, z) / zz;
+        axpy(&mut ws.lin_r, -a, z);
+        along = Some((a, z));
     }
     hierarchy.truncate(a, p, &ws.truncated, &ws.shift);
     ws.phases.coarse += lap();
@@ -227,19 +233,18 @@ pub(crate) fn iterate(
     // the free unknowns).
     let Workspace {
         c,
-        w,
         ac,
         lin_r,
         lin_z,
         lin_az,
         lin_p,
+        d_contact,
         truncated,
         shift: _,
         r,
         phases,
     } = ws;
     fill(c, 0.0);
-    fill(w, 0.0);
     // Each V-cycle also returns A_T z (its last sweep leaves it), and the
     // search directions' products follow: A_T p = A_T z + β A_T p.
     hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);
@@ -252,25 +257,17 @@ pub(crate) fn iterate(
             break;
         }
         let step_length = rz / pq;
-        let (dc, dw, dr) = (Disjoint::of(c), Disjoint::of(w), Disjoint::of(lin_r));
+        let (dc, dr) = (Disjoint::of(c), Disjoint::of(lin_r));
         let (ps, qs) = (&*lin_p, &*ac);
         for_each_chunk(n, |k| {
             // SAFETY: each chunk once.
-            let (c, w, r) = unsafe {
-                (
-                    dc.slice(k.clone()),
-                    dw.slice(k.clone()),
-                    dr.slice(k.clone()),
-                )
-            };
-            for (((ck, wk), rk), (pk, qk)) in c
+            let (c, r) = unsafe { (dc.slice(k.clone()), dr.slice(k.clone())) };
+            for ((ck, rk), (pk, qk)) in c
                 .iter_mut()
-                .zip(w.iter_mut())
                 .zip(r.iter_mut())
                 .zip(ps[k.clone()].iter().zip(&qs[k]))
             {
                 *ck += step_length * pk;
-                *wk += step_length * qk;
                 *rk -= step_length * qk;
             }
         });
@@ -304,6 +301,21 @@ pub(crate) fn iterate(
     phases.smoothing += finest;
     phases.coarse += cycles - finest;
     phases.krylov += cg - cycles;
+    // w = A_T c, in a vector the conjugate gradients are done with: their
+    // residual is d − A_T c, and d is r with the contact unknowns' values
+    // kept aside and the rigid mode taken out as above (the same
+    // operations, so d is the same to the bit). Tracked along the
+    // conjugate gradients instead, it was a vector of n of its own.
+    let w = lin_az;
+    copy(w, r);
+    for &(k, dk) in d_contact.iter() {
+        w[k] = dk;
+    }
+    if let Some((a, z)) = along {
+        axpy(w, -a, z);
+    }
+    axpy(w, -1.0, lin_r);
+    phases.line_search += lap();
     // The projection onto the admissible set: v + c keeps t ≤ 0, so that a
     // full step is admissible (Gräser & Sander 2019, Algorithm 1, step 4).
     // A c follows the few entries the projection moved: A is symmetric, so
