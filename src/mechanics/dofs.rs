@@ -22,43 +22,6 @@ pub enum Dof {
     Relative { base: usize, own: usize },
 }
 
-/// A [`Dof`] as the map keeps it: two 32-bit unknowns, [`Packed::NONE`]
-/// where there is none (8 bytes, not the enum's 24: at h = 1/4096 the map
-/// took 0.8 GB beside the problem).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Packed([u32; 2]);
-
-impl Packed {
-    const NONE: u32 = u32::MAX;
-    const FIXED: Packed = Packed([Self::NONE; 2]);
-
-    fn of(dof: Dof) -> Self {
-        let index = |i: usize| {
-            u32::try_from(i)
-                .ok()
-                .filter(|&i| i != Self::NONE)
-                .expect("unknowns are numbered below 2³² − 1")
-        };
-        match dof {
-            Dof::Fixed => Self::FIXED,
-            Dof::Slot(s) => Packed([index(s), Self::NONE]),
-            Dof::Relative { base, own } => Packed([index(base), index(own)]),
-        }
-    }
-
-    #[inline(always)]
-    fn dof(self) -> Dof {
-        match self.0 {
-            [Self::NONE, _] => Dof::Fixed,
-            [s, Self::NONE] => Dof::Slot(s as usize),
-            [base, own] => Dof::Relative {
-                base: base as usize,
-                own: own as usize,
-            },
-        }
-    }
-}
-
 /// Up to two (unknown, coefficient) pairs expressing one physical component.
 #[derive(Clone, Copy, Debug)]
 pub struct Terms {
@@ -83,9 +46,18 @@ pub trait DofExpansion {
 
 /// The unknowns of the algebraic problem: boundary conditions eliminated,
 /// (t, s) at the contact nodes.
+///
+/// The numbering follows the mesh's nodes (row by row, the lower body
+/// first), two unknowns per free node, one on the roller x = 1, and the
+/// contact nodes' (s, t) last; so each node's unknowns follow from its row
+/// and column ([`DofMap::dofs`]) and only the contact nodes are stored (a
+/// table of every node's unknowns was 8 bytes per unknown, 270 MB at
+/// h = 1/4096, beside the solver's at the peak of a solve).
 #[derive(Clone, Debug)]
 pub struct DofMap {
-    map: Vec<[Packed; 2]>,
+    /// The mesh's nodes per row and node rows per body.
+    per_row: usize,
+    rows: usize,
     n: usize,
     contacts: Vec<ContactDofs>,
 }
@@ -106,61 +78,74 @@ impl DofMap {
     /// Lower body clamped on y = 0; upper body on a roller (u''_1 = 0) on
     /// x = 1, ½ < y ≤ 1; the upper contact node at (1, ½) is free.
     pub fn new(mesh: &Mesh) -> Self {
-        let num_nodes = mesh.num_nodes();
-        let mut map = vec![[Packed::FIXED; 2]; num_nodes];
-        let mut n = 0;
-        let mut next = || {
-            n += 1;
-            n - 1
+        let (per_row, rows) = (mesh.n(), mesh.rows());
+        let mut map = Self {
+            per_row,
+            rows,
+            n: mesh.unknowns(),
+            contacts: Vec::with_capacity(per_row),
         };
-        let last = mesh.n() - 1;
-        for (node, dofs) in map.iter_mut().enumerate() {
-            let (body, i, j) = mesh.locate(node);
-            let these = match body {
-                Body::Lower if j == 0 => [Dof::Fixed, Dof::Fixed],
-                Body::Lower => [Dof::Slot(next()), Dof::Slot(next())],
-                Body::Upper if j == 0 => [Dof::Fixed, Dof::Fixed], // filled below
-                Body::Upper if i == last => [Dof::Fixed, Dof::Slot(next())],
-                Body::Upper => [Dof::Slot(next()), Dof::Slot(next())],
-            };
-            *dofs = these.map(Packed::of);
-        }
-        // Contact nodes: the lower partner's unknowns exist, add (s, t) as the
-        // upper node's own unknowns.
-        let mut contacts = Vec::with_capacity(mesh.n());
-        for i in 0..mesh.n() {
+        // Contact node i: (s, t) follow every other unknown, in increasing x.
+        let first = map.n - 2 * per_row;
+        for i in 0..per_row {
             let lower_node = mesh.node(Body::Lower, i, mesh.contact_row(Body::Lower));
             let upper_node = mesh.node(Body::Upper, i, mesh.contact_row(Body::Upper));
-            let slot = |d: Dof| match d {
-                Dof::Slot(s) => s,
-                _ => unreachable!("lower contact nodes are free"),
-            };
-            let s = next();
-            let t = next();
-            map[upper_node] = [
-                Dof::Relative {
-                    base: slot(map[lower_node][0].dof()),
-                    own: s,
-                },
-                Dof::Relative {
-                    base: slot(map[lower_node][1].dof()),
-                    own: t,
-                },
-            ]
-            .map(Packed::of);
-            contacts.push(ContactDofs {
+            map.contacts.push(ContactDofs {
                 x: mesh.coords(lower_node)[0],
                 lower_node,
                 upper_node,
-                t,
-                s,
+                s: first + 2 * i,
+                t: first + 2 * i + 1,
             });
         }
-        Self { map, n, contacts }
+        map
+    }
+
+    /// Both components of `node` as unknowns: numbered in node order, the
+    /// lower body's rows above y = 0 two per node, then the upper body's
+    /// rows above Γ_K two per node but one (v''_2) on the roller, then
+    /// (s, t) of each contact node; an upper contact node is its lower
+    /// partner less (s, t).
+    #[inline]
+    fn dofs(&self, node: usize) -> [Dof; 2] {
+        let (per_row, per_body) = (self.per_row, self.per_row * self.rows);
+        let lower = 2 * per_row * (self.rows - 1);
+        if node < per_body {
+            let (i, j) = (node % per_row, node / per_row);
+            if j == 0 {
+                return [Dof::Fixed, Dof::Fixed];
+            }
+            let s = 2 * ((j - 1) * per_row + i);
+            return [Dof::Slot(s), Dof::Slot(s + 1)];
+        }
+        let local = node - per_body;
+        let (i, j) = (local % per_row, local / per_row);
+        if j == 0 {
+            let c = &self.contacts[i];
+            let base = 2 * ((self.rows - 2) * per_row + i);
+            return [
+                Dof::Relative { base, own: c.s },
+                Dof::Relative {
+                    base: base + 1,
+                    own: c.t,
+                },
+            ];
+        }
+        let s = lower + (j - 1) * (2 * per_row - 1) + 2 * i;
+        if i == per_row - 1 {
+            [Dof::Fixed, Dof::Slot(s)]
+        } else {
+            [Dof::Slot(s), Dof::Slot(s + 1)]
+        }
+    }
+
+    /// The mesh's nodes.
+    fn num_nodes(&self) -> usize {
+        2 * self.per_row * self.rows
     }
 
     pub fn dof(&self, node: usize, k: usize) -> Dof {
-        self.map[node][k].dof()
+        self.dofs(node)[k]
     }
 
     /// Contact nodes of Γ_K in increasing x.
@@ -170,10 +155,9 @@ impl DofMap {
 
     /// Physical nodal displacements (per node, x and y) from the unknowns.
     pub fn to_physical(&self, v: &[f64]) -> Vec<[f64; 2]> {
-        self.map
-            .iter()
-            .map(|dofs| {
-                dofs.map(|d| match d.dof() {
+        (0..self.num_nodes())
+            .map(|node| {
+                self.dofs(node).map(|d| match d {
                     Dof::Fixed => 0.0,
                     Dof::Slot(s) => v[s],
                     Dof::Relative { base, own } => v[base] - v[own],
@@ -186,10 +170,11 @@ impl DofMap {
     /// fixed boundaries are ignored (the field is assumed to satisfy them).
     pub fn from_physical(&self, u: &[[f64; 2]]) -> Vec<f64> {
         let mut v = vec![0.0; self.n];
-        for (node, dofs) in self.map.iter().enumerate() {
+        for (node, un) in u.iter().enumerate().take(self.num_nodes()) {
+            let dofs = self.dofs(node);
             for k in 0..2 {
-                if let Dof::Slot(s) = dofs[k].dof() {
-                    v[s] = u[node][k];
+                if let Dof::Slot(s) = dofs[k] {
+                    v[s] = un[k];
                 }
             }
         }
@@ -209,7 +194,7 @@ impl DofExpansion for DofMap {
 
     #[inline]
     fn terms(&self, node: usize, k: usize) -> Terms {
-        match self.map[node][k].dof() {
+        match self.dofs(node)[k] {
             Dof::Fixed => Terms {
                 items: [(0, 0.0); 2],
                 len: 0,
@@ -240,6 +225,94 @@ impl DofExpansion for PhysicalDofs {
         Terms {
             items: [(2 * node + k, 1.0), (0, 0.0)],
             len: 1,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanics::mesh_size::MeshSize;
+
+    /// The numbering by enumeration, as it was built before the map became
+    /// a formula: every node in order, a new unknown for each free
+    /// component, then (s, t) of each contact node in increasing x.
+    fn enumerated(mesh: &Mesh) -> (Vec<[Dof; 2]>, usize) {
+        let mut map = vec![[Dof::Fixed; 2]; mesh.num_nodes()];
+        let mut n = 0;
+        let mut next = || {
+            n += 1;
+            n - 1
+        };
+        let last = mesh.n() - 1;
+        for (node, dofs) in map.iter_mut().enumerate() {
+            let (body, i, j) = mesh.locate(node);
+            *dofs = match body {
+                Body::Lower if j == 0 => [Dof::Fixed, Dof::Fixed],
+                Body::Lower => [Dof::Slot(next()), Dof::Slot(next())],
+                Body::Upper if j == 0 => [Dof::Fixed, Dof::Fixed],
+                Body::Upper if i == last => [Dof::Fixed, Dof::Slot(next())],
+                Body::Upper => [Dof::Slot(next()), Dof::Slot(next())],
+            };
+        }
+        for i in 0..mesh.n() {
+            let lower = mesh.node(Body::Lower, i, mesh.contact_row(Body::Lower));
+            let upper = mesh.node(Body::Upper, i, mesh.contact_row(Body::Upper));
+            let slot = |d: Dof| match d {
+                Dof::Slot(s) => s,
+                _ => unreachable!("lower contact nodes are free"),
+            };
+            let (s, t) = (next(), next());
+            map[upper] = [
+                Dof::Relative {
+                    base: slot(map[lower][0]),
+                    own: s,
+                },
+                Dof::Relative {
+                    base: slot(map[lower][1]),
+                    own: t,
+                },
+            ];
+        }
+        (map, n)
+    }
+
+    /// The formula gives every node the unknowns the enumeration gives it,
+    /// the same count, and each unknown once: a wrong row length, body
+    /// offset or roller column would move some node's unknowns.
+    #[test]
+    fn the_numbering_is_the_enumeration() {
+        for level in 1..=6 {
+            let mesh = Mesh::new(MeshSize::from_level(level).unwrap());
+            let map = DofMap::new(&mesh);
+            let (table, n) = enumerated(&mesh);
+            assert_eq!(map.n(), n, "level {level}");
+            for (node, dofs) in table.iter().enumerate() {
+                assert_eq!(map.dofs(node), *dofs, "level {level}, node {node}");
+            }
+            for c in map.contacts() {
+                assert_eq!(
+                    map.dof(c.upper_node, 1),
+                    Dof::Relative {
+                        base: match map.dof(c.lower_node, 1) {
+                            Dof::Slot(s) => s,
+                            other => panic!("lower contact node {other:?}"),
+                        },
+                        own: c.t
+                    }
+                );
+            }
+            let mut seen = vec![0; n];
+            for node in 0..mesh.num_nodes() {
+                for d in map.dofs(node) {
+                    match d {
+                        Dof::Slot(s) => seen[s] += 1,
+                        Dof::Relative { own, .. } => seen[own] += 1,
+                        Dof::Fixed => {}
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&k| k == 1), "level {level}");
         }
     }
 }
