@@ -10,7 +10,7 @@ use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::{Overrides, Scene};
 use contactlab::settings::Settings;
-use contactlab::solvers::numerics::linalg::SparseRows;
+use contactlab::solvers::numerics::linalg::{ColumnIndex, SparseRows};
 use contactlab::solvers::{ContactNode, ContactProblem, Friction};
 use nalgebra_sparse::CsrMatrix;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
@@ -144,12 +144,15 @@ type Csr<'py> = (
 );
 
 fn csr<'py, A: SparseRows>(py: Python<'py>, a: &A) -> Csr<'py> {
-    let offsets = a.row_offsets();
     let cols: Vec<usize> = (0..a.nrows())
-        .flat_map(|i| a.row_columns(i, offsets[i], offsets[i + 1]).iter())
+        .flat_map(|i| {
+            let (lo, hi) = a.row_range(i);
+            a.row_columns(i, lo, hi).iter()
+        })
         .collect();
+    let offsets: Vec<usize> = a.row_offsets().iter().map(|o| o.at()).collect();
     (
-        a.row_offsets().to_vec().into_pyarray(py),
+        offsets.into_pyarray(py),
         cols.into_pyarray(py),
         a.values().to_vec(a.row_offsets()).into_pyarray(py),
     )

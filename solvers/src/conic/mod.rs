@@ -400,13 +400,15 @@ impl Solver for ConicSolver {
             return out;
         }
         let contacts = problem.contacts();
-        let (offsets, cols, vals) = problem.a().csr_data();
+        let a = problem.a();
+        let (offsets, cols, vals) = a.csr_data();
         let cols = &*cols;
         let program = Program {
             unknowns: n,
             upper: (0..n)
                 .flat_map(|j| {
-                    (offsets[j]..offsets[j + 1])
+                    let (lo, hi) = a.row_range(j);
+                    (lo..hi)
                         .filter(move |&k| cols[k] as usize <= j)
                         .map(move |k| (cols[k] as usize, j, vals.at(offsets, j, k)))
                 })

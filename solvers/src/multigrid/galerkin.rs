@@ -59,8 +59,7 @@ fn rows_of_product_with<'v>(
     rows: std::ops::Range<usize>,
     out: &mut Rows,
 ) {
-    let (ao, ac) = (a.row_offsets(), a.columns());
-    let (po, pc) = (p.row_offsets(), p.columns());
+    let (ac, pc) = (a.columns(), p.columns());
     let Rows {
         offsets,
         cols,
@@ -73,10 +72,10 @@ fn rows_of_product_with<'v>(
     for row in rows {
         let (r_cols, r_vals) = r.row(row);
         for (i, &r_i) in r_cols.iter().zip(r_vals) {
-            let (alo, ahi) = (ao[i], ao[i + 1]);
+            let (alo, ahi) = a.row_range(i);
             for (j, &a_ij) in ac.row(i, alo, ahi).iter().zip(av.row(i, alo, ahi)) {
                 let ra = r_i * a_ij;
-                let (plo, phi) = (po[j], po[j + 1]);
+                let (plo, phi) = p.row_range(j);
                 for (col, &p_jc) in pc.row(j, plo, phi).iter().zip(pv.row(j, plo, phi)) {
                     if !seen[col] {
                         seen[col] = true;

@@ -103,7 +103,6 @@ impl Parts {
         if threads < 2 || a.nnz() < PARALLEL_NNZ || n != a.ncols() || n < threads {
             return None;
         }
-        let offsets = a.row_offsets();
         let cuts = cuts(a, threads);
         let mut in_separator = vec![false; n];
         for part in cuts.windows(2).skip(1) {
@@ -117,7 +116,13 @@ impl Parts {
             }
         }
         let separator: Vec<usize> = (0..n).filter(|&k| in_separator[k]).collect();
-        let separator_work: usize = separator.iter().map(|&k| offsets[k + 1] - offsets[k]).sum();
+        let separator_work: usize = separator
+            .iter()
+            .map(|&k| {
+                let (lo, hi) = a.row_range(k);
+                hi - lo
+            })
+            .sum();
         if separator_work as f64 > LARGEST_SEPARATOR_SHARE * a.nnz() as f64 {
             return None;
         }

@@ -121,7 +121,7 @@ impl<'a> Row<'a> {
     /// are a's values (matched once per sweep: [`with_values`]).
     #[inline(always)]
     pub(crate) fn of(a: &'a Csr, vals: impl RowValues<'a>, k: usize, diag: usize) -> Self {
-        let (lo, hi) = (a.row_offsets()[k], a.row_offsets()[k + 1]);
+        let (lo, hi) = a.row_range(k);
         Row {
             k,
             cols: a.columns().row(k, lo, hi),

@@ -180,7 +180,7 @@ impl Level {
                 .a
                 .position(i, j)
                 .expect("a Galerkin correction lies on the Galerkin pattern");
-            let q = p - self.a.row_offsets()[i];
+            let q = p - self.a.row_range(i).0;
             let (row, moved) = self.a.row_values_mut(i, self.shared_len);
             if let Some(before) = moved {
                 self.moved.push((i, before));

@@ -101,9 +101,12 @@ static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
 fn on_pattern_of(m: &CsrMatrix<f64>, a: &Csr) -> bool {
     m.nrows() == a.nrows()
         && m.ncols() == a.ncols()
-        && m.row_offsets() == a.row_offsets()
+        && m.row_offsets()
+            .iter()
+            .copied()
+            .eq(a.row_offsets().iter().map(|&o| o as usize))
         && (0..a.nrows()).all(|i| {
-            let (lo, hi) = (a.row_offsets()[i], a.row_offsets()[i + 1]);
+            let (lo, hi) = a.row_range(i);
             m.col_indices()[lo..hi]
                 .iter()
                 .copied()

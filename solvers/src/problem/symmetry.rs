@@ -81,7 +81,8 @@ pub(super) fn check_square_symmetric<'v, const K: usize, V: RowValues<'v>>(
     }
     let below: usize = (0..n)
         .map(|row| {
-            let cols = pattern.row_columns(row, offsets[row], offsets[row + 1]);
+            let (lo, hi) = pattern.row_range(row);
+            let cols = pattern.row_columns(row, lo, hi);
             cols.rel.partition_point(|&col| cols.base + col.at() < row)
         })
         .sum();
@@ -154,18 +155,17 @@ fn walk_mirrors(
     which: Triangle,
     mut visit: impl FnMut(usize, usize, usize, Option<usize>) -> bool,
 ) {
-    let offsets = pattern.row_offsets();
-    let n = offsets.len() - 1;
-    let mut cursor = offsets[..n].to_vec();
+    let n = pattern.nrows();
+    let mut cursor: Vec<usize> = (0..n).map(|row| pattern.row_range(row).0).collect();
     for row in 0..n {
-        let (lo, hi) = (offsets[row], offsets[row + 1]);
+        let (lo, hi) = pattern.row_range(row);
         let cols = pattern.row_columns(row, lo, hi);
         for k in lo..hi {
             let col = cols.get(k - lo);
             if which == Triangle::Upper && col <= row {
                 continue;
             }
-            let (start, end) = (offsets[col], offsets[col + 1]);
+            let (start, end) = pattern.row_range(col);
             let mirror_cols = pattern.row_columns(col, start, end);
             let at = |c: usize| mirror_cols.get(c - start);
             let mut c = cursor[col];

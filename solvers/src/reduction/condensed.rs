@@ -77,7 +77,7 @@ impl Condensed {
         let (offsets, cols, vals) = problem.a().csr_data();
         for (i, c) in contacts.iter().enumerate() {
             for (k, r) in [(2 * i, c.t), (2 * i + 1, c.s)] {
-                let (lo, hi) = (offsets[r], offsets[r + 1]);
+                let (lo, hi) = (offsets[r] as usize, offsets[r + 1] as usize);
                 for (&col, &v) in cols[lo..hi].iter().zip(vals.row(r, lo, hi)) {
                     match position[col as usize] {
                         Ok(j) => a_ci[k].push((j, v)),

@@ -243,10 +243,10 @@ impl RelaxationOperator {
         v: &mut [f64],
         data: &SweepData<'_>,
     ) -> f64 {
-        let (offsets, cols) = (self.h.row_offsets(), self.h.columns());
+        let cols = self.h.columns();
         let mut max_change = 0.0f64;
         for j in 0..v.len() {
-            let (lo, hi) = (offsets[j], offsets[j + 1]);
+            let (lo, hi) = self.h.row_range(j);
             // SAFETY: a Csr keeps its column indices below ncols = v.len().
             let row = vals.row(j, lo, hi);
             let sum = unsafe { crate::numerics::linalg::row_dot_at(cols.row(j, lo, hi), row, v) };

@@ -1,7 +1,7 @@
 use super::*;
 
 /// Row offsets and column indices.
-type Pattern = (Vec<usize>, Vec<u32>);
+type Pattern = (Vec<u32>, Vec<u32>);
 use crate::mechanics::dofs::{DofMap, PhysicalDofs, Terms};
 use crate::mechanics::mesh_size::MeshSize;
 

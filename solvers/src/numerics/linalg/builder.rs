@@ -4,7 +4,7 @@
 //! 7.5 GB, for a matrix that keeps 0.3 GB.
 
 use super::columns::{StencilSharer, StoredColumns};
-use super::csr::{Csr, CsrError};
+use super::csr::{Csr, CsrError, Offset};
 use super::values::{RowSharer, Stored};
 
 /// Where the columns go: shared while they can be, whole after.
@@ -22,7 +22,10 @@ enum ValueSink {
 /// K matrices on one pattern, built row by row ([`CsrBuilder::push_row`]).
 pub struct CsrBuilder<const K: usize> {
     ncols: usize,
-    offsets: Vec<usize>,
+    offsets: Vec<Offset>,
+    /// The entries outgrew 32-bit offsets: the rows that follow are
+    /// dropped and [`CsrBuilder::finish`] refuses the matrix.
+    entries_beyond: Option<usize>,
     columns: ColumnSink,
     values: [ValueSink; K],
 }
@@ -35,6 +38,7 @@ impl<const K: usize> CsrBuilder<K> {
         Self {
             ncols,
             offsets,
+            entries_beyond: None,
             columns: ColumnSink::Sharing(StencilSharer::with_rows(nrows)),
             values: std::array::from_fn(|_| ValueSink::Sharing(RowSharer::with_rows(nrows))),
         }
@@ -45,6 +49,15 @@ impl<const K: usize> CsrBuilder<K> {
     /// values at them.
     pub fn push_row(&mut self, cols: &[u32], values: [&[f64]; K]) {
         let i = self.offsets.len() - 1;
+        let end = self.offsets[i] as usize + cols.len();
+        if let Some(beyond) = &mut self.entries_beyond {
+            *beyond += cols.len();
+            return;
+        }
+        let Ok(end_offset) = Offset::try_from(end) else {
+            self.entries_beyond = Some(end);
+            return;
+        };
         let done = &self.offsets;
         if let ColumnSink::Sharing(sharer) = &mut self.columns
             && !sharer.push(i, cols)
@@ -69,8 +82,7 @@ impl<const K: usize> CsrBuilder<K> {
                 v.extend_from_slice(row);
             }
         }
-        let end = self.offsets[i] + cols.len();
-        self.offsets.push(end);
+        self.offsets.push(end_offset);
     }
 
     /// The K matrices, each with its own copy of the pattern (a few
@@ -80,9 +92,13 @@ impl<const K: usize> CsrBuilder<K> {
         let Self {
             ncols,
             offsets,
+            entries_beyond,
             columns,
             values,
         } = self;
+        if let Some(entries) = entries_beyond {
+            return Err(CsrError::TooManyEntries(entries));
+        }
         let columns = match columns {
             ColumnSink::Sharing(s) => s.finish(),
             ColumnSink::Plain(c) => StoredColumns::Plain(c),

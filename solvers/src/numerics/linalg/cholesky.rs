@@ -48,9 +48,9 @@ fn lower_of(a: &CsrMatrix<f64>) -> CscMatrix<f64> {
 /// for a symmetric matrix, line j's entries at or beyond j are column j of
 /// the lower triangle, either way. One pass, no intermediate copy: at
 /// h = 1/1024 the triplet route held two more copies of A at once.
-pub(crate) fn lower_part<'v, I: super::ColumnIndex>(
+pub(crate) fn lower_part<'v, I: super::ColumnIndex, O: super::ColumnIndex>(
     k: usize,
-    offsets: &[usize],
+    offsets: &[O],
     indices: &[I],
     values: impl super::RowValues<'v>,
     map: &[usize],
@@ -63,7 +63,7 @@ pub(crate) fn lower_part<'v, I: super::ColumnIndex>(
         if nj == usize::MAX {
             continue;
         }
-        let (lo, hi) = (offsets[j], offsets[j + 1]);
+        let (lo, hi) = (offsets[j].at(), offsets[j + 1].at());
         for (index, &v) in indices[lo..hi].iter().zip(values.row(j, lo, hi)) {
             let i = index.at();
             if i >= j && map[i] != usize::MAX {

@@ -135,10 +135,10 @@ impl StoredColumns {
     /// The columns of `cols` (`offsets`: the row offsets) as stencils kept
     /// once, if the distinct ones fit [`MAX_STENCILS`] numbers and every
     /// row's first column is at most its own index; None otherwise.
-    pub(super) fn share(offsets: &[usize], cols: &[u32]) -> Option<StoredColumns> {
+    pub(super) fn share<O: ColumnIndex>(offsets: &[O], cols: &[u32]) -> Option<StoredColumns> {
         let mut sharer = StencilSharer::with_rows(offsets.len() - 1);
         for (i, w) in offsets.windows(2).enumerate() {
-            if !sharer.push(i, &cols[w[0]..w[1]]) {
+            if !sharer.push(i, &cols[w[0].at()..w[1].at()]) {
                 return None;
             }
         }
@@ -146,7 +146,7 @@ impl StoredColumns {
     }
 
     /// Every row's columns whole, in stored order.
-    pub(super) fn to_vec(&self, offsets: &[usize]) -> Vec<u32> {
+    pub(super) fn to_vec<O: ColumnIndex>(&self, offsets: &[O]) -> Vec<u32> {
         match self {
             StoredColumns::Plain(c) => c.clone(),
             StoredColumns::Shared { .. } => whole(self.view(), offsets, self.entries()),
@@ -155,10 +155,10 @@ impl StoredColumns {
 }
 
 /// The columns of the rows of `offsets` read through `view`, whole.
-fn whole(view: Columns<'_>, offsets: &[usize], entries: usize) -> Vec<u32> {
+fn whole<O: ColumnIndex>(view: Columns<'_>, offsets: &[O], entries: usize) -> Vec<u32> {
     let mut out = Vec::with_capacity(entries);
     for (i, w) in offsets.windows(2).enumerate() {
-        out.extend(view.row(i, w[0], w[1]).iter().map(|c| c as u32));
+        out.extend(view.row(i, w[0].at(), w[1].at()).iter().map(|c| c as u32));
     }
     out
 }
@@ -242,7 +242,7 @@ impl StencilSharer {
 
     /// The rows taken so far, each whole, in order (`offsets`: their row
     /// offsets), for a matrix that turned out to have too many stencils.
-    pub(super) fn to_plain(&self, offsets: &[usize]) -> Vec<u32> {
+    pub(super) fn to_plain<O: ColumnIndex>(&self, offsets: &[O]) -> Vec<u32> {
         let view = Columns::Shared {
             table: &self.table,
             start: &self.start,
@@ -270,7 +270,7 @@ mod tests {
     #[test]
     fn stencils_read_back_every_row() {
         let n: usize = 50;
-        let (mut offsets, mut cols) = (vec![0], Vec::new());
+        let (mut offsets, mut cols) = (vec![0usize], Vec::new());
         for i in 0..n {
             for j in [i.wrapping_sub(7), i.wrapping_sub(1), i, i + 1, i + 7] {
                 if j < n {
@@ -297,6 +297,6 @@ mod tests {
             assert_eq!(row.find(n + 3), None);
         }
         // Row 0 holds column 1 only: its first column is beyond it.
-        assert!(StoredColumns::share(&[0, 1], &[1]).is_none());
+        assert!(StoredColumns::share(&[0usize, 1], &[1]).is_none());
     }
 }

@@ -5,8 +5,13 @@
 //! bytes beside each 8-byte value. At h = 1/1024 A has 33.6 million stored
 //! entries, so its indices were 269 MB of a 1.2 GiB solve, and every
 //! Gauss–Seidel sweep and product streams them. 32 bits hold any column of
-//! a mesh up to 2³² − 1 unknowns (h = 1/4096 has 3.4·10⁷); row offsets stay
-//! `usize`, since the entries can outnumber 2³². Solvers that factorize or
+//! a mesh up to 2³² − 1 unknowns (h = 1/4096 has 3.4·10⁷), and the row
+//! offsets are 32-bit too ([`Offset`]): h = 1/8192 has 1.9·10⁹ entries,
+//! below 2³², and a larger matrix would not fit this machine's memory
+//! anyway; one that outgrows them is refused ([`CsrError::TooManyEntries`]).
+//! Offsets of `usize` were 8 bytes per row of every matrix, A's and the
+//! prolongations' alike (about 10 of a solve's 157 bytes per unknown at
+//! h = 1/4096). Solvers that factorize or
 //! hand the matrix to another library convert it ([`Csr::to_nalgebra`]):
 //! they need many times its memory anyway.
 
@@ -24,12 +29,20 @@ pub enum CsrError {
         max = u32::MAX
     )]
     TooManyColumns(usize),
+    #[error(
+        "a sparse matrix with {0} stored entries: row offsets are 32-bit, at most {max} entries",
+        max = u32::MAX
+    )]
+    TooManyEntries(usize),
     #[error("sparse matrix: {0}")]
     Malformed(&'static str),
 }
 
-/// A column index as stored: `usize` (nalgebra's matrices) or `u32`
-/// ([`Csr`]), so that one product kernel serves both.
+/// A row offset as a [`Csr`] stores it.
+pub type Offset = u32;
+
+/// A column index or row offset as stored: `usize` (nalgebra's matrices)
+/// or `u32` ([`Csr`]), so that one product kernel serves both.
 pub trait ColumnIndex: Copy + Send + Sync + 'static {
     /// The index as a `usize`.
     fn at(self) -> usize;
@@ -54,22 +67,31 @@ impl ColumnIndex for u32 {
 pub trait SparseRows: Sync {
     /// The stored column index type.
     type Index: ColumnIndex;
+    /// The stored row offset type.
+    type Offset: ColumnIndex;
     fn nrows(&self) -> usize;
     fn ncols(&self) -> usize;
     /// nrows + 1 offsets into the stored entries, from 0.
-    fn row_offsets(&self) -> &[usize];
+    fn row_offsets(&self) -> &[Self::Offset];
+    /// Row i's stored positions, lo..hi.
+    #[inline(always)]
+    fn row_range(&self, i: usize) -> (usize, usize) {
+        let o = self.row_offsets();
+        (o[i].at(), o[i + 1].at())
+    }
     /// Row i's columns; `lo..hi` are its stored positions (the offsets i
     /// and i + 1).
     fn row_columns(&self, i: usize, lo: usize, hi: usize) -> RowColumns<'_, Self::Index>;
     fn values(&self) -> Values<'_>;
     /// Number of stored entries.
     fn nnz(&self) -> usize {
-        self.row_offsets()[self.nrows()]
+        self.row_offsets()[self.nrows()].at()
     }
 }
 
 impl SparseRows for CsrMatrix<f64> {
     type Index = usize;
+    type Offset = usize;
     fn nrows(&self) -> usize {
         CsrMatrix::nrows(self)
     }
@@ -99,7 +121,7 @@ impl SparseRows for CsrMatrix<f64> {
 #[derive(Clone, Debug)]
 pub struct Csr {
     ncols: usize,
-    offsets: Vec<usize>,
+    offsets: Vec<Offset>,
     cols: StoredColumns,
     values: Stored,
 }
@@ -119,7 +141,8 @@ impl PartialEq for Csr {
 impl Csr {
     /// From its three arrays, checked: nrows + 1 nondecreasing offsets from
     /// 0 to the number of entries, one value per column index, and the
-    /// columns of each row strictly increasing and below `ncols`.
+    /// columns of each row strictly increasing and below `ncols`; at most
+    /// 2³² − 1 entries ([`Offset`]).
     pub fn try_from_csr_data(
         nrows: usize,
         ncols: usize,
@@ -132,6 +155,7 @@ impl Csr {
                 "the row offsets must run from 0 to the number of entries, one per row and one more",
             ));
         }
+        let offsets = narrow(&offsets)?;
         Self::from_parts(
             ncols,
             offsets,
@@ -144,7 +168,7 @@ impl Csr {
     /// arrays (the columns row by row, however they are stored).
     pub(super) fn from_parts(
         ncols: usize,
-        offsets: Vec<usize>,
+        offsets: Vec<Offset>,
         cols: StoredColumns,
         values: Stored,
     ) -> Result<Self, CsrError> {
@@ -152,7 +176,7 @@ impl Csr {
             return Err(CsrError::TooManyColumns(ncols));
         }
         let entries = cols.entries();
-        if offsets.is_empty() || offsets[0] != 0 || offsets[offsets.len() - 1] != entries {
+        if offsets.is_empty() || offsets[0] != 0 || offsets[offsets.len() - 1] as usize != entries {
             return Err(CsrError::Malformed(
                 "the row offsets must run from 0 to the number of entries, one per row and one more",
             ));
@@ -162,7 +186,7 @@ impl Csr {
         }
         let view = cols.view();
         for (i, w) in offsets.windows(2).enumerate() {
-            let (lo, hi) = (w[0], w[1]);
+            let (lo, hi) = (w[0] as usize, w[1] as usize);
             if lo > hi || hi > entries {
                 return Err(CsrError::Malformed("the row offsets must not decrease"));
             }
@@ -214,7 +238,7 @@ impl Csr {
     /// copy was made, the start the row had ([`Csr::unshare_undo`] puts it
     /// back). Plain values: the row's own, and None.
     pub fn row_values_mut(&mut self, i: usize, own_from: usize) -> (&mut [f64], Option<u32>) {
-        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        let (lo, hi) = self.row_range(i);
         match &mut self.values {
             Stored::Plain(v) => (&mut v[lo..hi], None),
             Stored::Shared { table, start, .. } => {
@@ -283,7 +307,8 @@ impl Csr {
         let cols = (0..self.nrows())
             .flat_map(|i| self.row_columns(i).iter())
             .collect();
-        CsrMatrix::try_from_csr_data(self.nrows(), self.ncols, self.offsets.clone(), cols, values)
+        let offsets = self.offsets.iter().map(|&o| o as usize).collect();
+        CsrMatrix::try_from_csr_data(self.nrows(), self.ncols, offsets, cols, values)
             .expect("checked on construction: sorted rows, columns in range")
     }
 
@@ -300,8 +325,14 @@ impl Csr {
         self.cols.entries()
     }
 
-    pub fn row_offsets(&self) -> &[usize] {
+    pub fn row_offsets(&self) -> &[Offset] {
         &self.offsets
+    }
+
+    /// Row i's stored positions, lo..hi.
+    #[inline(always)]
+    pub fn row_range(&self, i: usize) -> (usize, usize) {
+        (self.offsets[i] as usize, self.offsets[i + 1] as usize)
     }
 
     /// The stored columns: read a row's with [`Columns::row`] or
@@ -313,7 +344,8 @@ impl Csr {
     /// Row i's columns.
     #[inline(always)]
     pub fn row_columns(&self, i: usize) -> RowColumns<'_> {
-        self.columns().row(i, self.offsets[i], self.offsets[i + 1])
+        let (lo, hi) = self.row_range(i);
+        self.columns().row(i, lo, hi)
     }
 
     /// Every column index whole, in stored order (a copy when the columns
@@ -345,20 +377,22 @@ impl Csr {
     }
 
     /// Offsets, column indices (whole: a copy when shared) and values.
-    pub fn csr_data(&self) -> (&[usize], std::borrow::Cow<'_, [u32]>, Values<'_>) {
+    pub fn csr_data(&self) -> (&[Offset], std::borrow::Cow<'_, [u32]>, Values<'_>) {
         (&self.offsets, self.col_indices(), self.values())
     }
 
     /// Row i's columns and values.
     #[inline(always)]
     pub fn row(&self, i: usize) -> (RowColumns<'_>, &[f64]) {
-        let (lo, hi) = (self.offsets[i], self.offsets[i + 1]);
+        let (lo, hi) = self.row_range(i);
         (self.columns().row(i, lo, hi), self.values().row(i, lo, hi))
     }
 
     /// The position of entry (i, j) among the stored entries, if stored.
     pub fn position(&self, i: usize, j: usize) -> Option<usize> {
-        self.row_columns(i).find(j).map(|q| self.offsets[i] + q)
+        self.row_columns(i)
+            .find(j)
+            .map(|q| self.offsets[i] as usize + q)
     }
 
     /// Whether both have the same rows, columns and stored positions.
@@ -380,7 +414,7 @@ impl Csr {
     /// these).
     pub fn transpose(&self) -> Csr {
         let (m, n) = (self.nrows(), self.ncols);
-        let mut offsets = vec![0usize; n + 1];
+        let mut offsets: Vec<Offset> = vec![0; n + 1];
         for i in 0..m {
             for c in self.row_columns(i).iter() {
                 offsets[c + 1] += 1;
@@ -389,7 +423,7 @@ impl Csr {
         for j in 0..n {
             offsets[j + 1] += offsets[j];
         }
-        let mut next = offsets[..n].to_vec();
+        let mut next: Vec<usize> = offsets[..n].iter().map(|&o| o as usize).collect();
         let (mut cols, mut values) = (vec![0u32; self.nnz()], vec![0.0; self.nnz()]);
         for i in 0..m {
             let (row_cols, row_vals) = self.row(i);
@@ -443,6 +477,7 @@ impl TryFrom<CsrMatrix<f64>> for Csr {
             return Err(CsrError::TooManyColumns(ncols.max(nrows)));
         }
         let (offsets, cols, values) = m.disassemble();
+        let offsets = narrow(&offsets)?;
         let cols = cols.into_iter().map(|c| c as u32).collect();
         Ok(Self {
             ncols,
@@ -463,13 +498,14 @@ impl TryFrom<&CsrMatrix<f64>> for Csr {
 
 impl SparseRows for Csr {
     type Index = u32;
+    type Offset = Offset;
     fn nrows(&self) -> usize {
         Csr::nrows(self)
     }
     fn ncols(&self) -> usize {
         self.ncols
     }
-    fn row_offsets(&self) -> &[usize] {
+    fn row_offsets(&self) -> &[Offset] {
         &self.offsets
     }
     #[inline(always)]
@@ -482,6 +518,14 @@ impl SparseRows for Csr {
     fn values(&self) -> Values<'_> {
         Csr::values(self)
     }
+}
+
+/// Row offsets in 32 bits, or the first offset that does not fit.
+fn narrow(offsets: &[usize]) -> Result<Vec<Offset>, CsrError> {
+    offsets
+        .iter()
+        .map(|&o| Offset::try_from(o).map_err(|_| CsrError::TooManyEntries(o)))
+        .collect()
 }
 
 #[cfg(test)]
@@ -546,5 +590,11 @@ mod tests {
             Csr::try_from_csr_data(0, 1 << 33, vec![0], vec![], vec![]),
             Err(CsrError::TooManyColumns(_))
         ));
+        // Offsets past 2³² − 1 are refused before anything is checked or
+        // allocated for the entries.
+        assert_eq!(
+            Csr::try_from_csr_data(1, 1, vec![0, 1 << 32], vec![0], vec![1.0]),
+            Err(CsrError::TooManyEntries(1 << 32))
+        );
     }
 }

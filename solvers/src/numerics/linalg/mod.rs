@@ -78,10 +78,9 @@ pub(crate) fn spmv_values_into<'v>(
         pattern.nnz(),
         "spmv: one value per stored entry"
     );
-    let offsets = pattern.row_offsets();
     let rows = |first: usize, y: &mut [f64]| {
         for (i, yi) in (first..).zip(y.iter_mut()) {
-            let (lo, hi) = (offsets[i], offsets[i + 1]);
+            let (lo, hi) = pattern.row_range(i);
             // SAFETY: a SparseRows keeps its column indices below ncols =
             // x.len(), and values has one entry per stored index.
             *yi = unsafe { row_dot_at(pattern.row_columns(i, lo, hi), values.row(i, lo, hi), x) };
@@ -134,12 +133,11 @@ fn transpose_product<'v>(
     y: &mut [f64],
     scratch: &mut [f64],
 ) {
-    let offsets = p.row_offsets();
     let scatter = |rows: std::ops::Range<usize>, y: &mut [f64]| {
         y.fill(0.0);
         for i in rows {
             let xi = x[i];
-            let (lo, hi) = (offsets[i], offsets[i + 1]);
+            let (lo, hi) = p.row_range(i);
             for (c, v) in p.row_columns(i, lo, hi).iter().zip(vals.row(i, lo, hi)) {
                 y[c] += v * xi;
             }

@@ -15,6 +15,8 @@
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
+use super::csr::ColumnIndex;
+
 /// Row i's values (at stored positions lo..hi), whichever way they are
 /// stored. The kernels that stream a matrix are generic over it, so that
 /// each kind is compiled into its own loop ([`crate::with_values`]).
@@ -38,8 +40,8 @@ pub trait RowValues<'a>: Copy + Send + Sync {
     /// If `p` is not among row i's positions (plain values are read at `p`
     /// directly, without looking at the row).
     #[inline(always)]
-    fn at(self, offsets: &[usize], i: usize, p: usize) -> f64 {
-        let (lo, hi) = (offsets[i], offsets[i + 1]);
+    fn at<O: ColumnIndex>(self, offsets: &[O], i: usize, p: usize) -> f64 {
+        let (lo, hi) = (offsets[i].at(), offsets[i + 1].at());
         assert!(
             (lo..hi).contains(&p),
             "stored position {p} is not in row {i}"
@@ -61,7 +63,7 @@ impl<'a> RowValues<'a> for &'a [f64] {
         <[f64]>::len(self)
     }
     #[inline(always)]
-    fn at(self, _: &[usize], _: usize, p: usize) -> f64 {
+    fn at<O: ColumnIndex>(self, _: &[O], _: usize, p: usize) -> f64 {
         self[p]
     }
     fn max_abs_if_finite(self) -> Option<f64> {
@@ -115,7 +117,7 @@ impl<'a> RowValues<'a> for Values<'a> {
         }
     }
     #[inline(always)]
-    fn at(self, offsets: &[usize], i: usize, p: usize) -> f64 {
+    fn at<O: ColumnIndex>(self, offsets: &[O], i: usize, p: usize) -> f64 {
         match self {
             Values::Plain(v) => v.at(offsets, i, p),
             Values::Shared(s) => s.at(offsets, i, p),
@@ -137,21 +139,21 @@ impl<'a> Values<'a> {
     }
 
     /// The values in stored order (`offsets`: the matrix's row offsets).
-    pub fn iter(self, offsets: &'a [usize]) -> impl Iterator<Item = &'a f64> + 'a {
+    pub fn iter<O: ColumnIndex>(self, offsets: &'a [O]) -> impl Iterator<Item = &'a f64> + 'a {
         offsets
             .windows(2)
             .enumerate()
-            .flat_map(move |(i, w)| self.row(i, w[0], w[1]).iter())
+            .flat_map(move |(i, w)| self.row(i, w[0].at(), w[1].at()).iter())
     }
 
     /// The values in stored order, as a vector of their own.
-    pub fn to_vec(self, offsets: &[usize]) -> Vec<f64> {
+    pub fn to_vec<O: ColumnIndex>(self, offsets: &[O]) -> Vec<f64> {
         match self {
             Values::Plain(v) => v.to_vec(),
             Values::Shared(_) => {
-                let mut out = Vec::with_capacity(offsets[offsets.len() - 1]);
+                let mut out = Vec::with_capacity(offsets[offsets.len() - 1].at());
                 for (i, w) in offsets.windows(2).enumerate() {
-                    out.extend_from_slice(self.row(i, w[0], w[1]));
+                    out.extend_from_slice(self.row(i, w[0].at(), w[1].at()));
                 }
                 out
             }
@@ -262,10 +264,10 @@ impl Stored {
 
     /// The rows of `values` (`offsets`: the row offsets) kept once each, if
     /// the distinct ones fit [`MAX_TABLE`] values; None otherwise.
-    pub(super) fn share(offsets: &[usize], values: &[f64]) -> Option<Stored> {
+    pub(super) fn share<O: ColumnIndex>(offsets: &[O], values: &[f64]) -> Option<Stored> {
         let mut sharer = RowSharer::with_rows(offsets.len() - 1);
         for w in offsets.windows(2) {
-            if !sharer.push(&values[w[0]..w[1]]) {
+            if !sharer.push(&values[w[0].at()..w[1].at()]) {
                 return None;
             }
         }
@@ -273,7 +275,7 @@ impl Stored {
     }
 
     /// The values row by row (copied out, if they were shared).
-    pub(super) fn make_plain(&mut self, offsets: &[usize]) -> &mut Vec<f64> {
+    pub(super) fn make_plain<O: ColumnIndex>(&mut self, offsets: &[O]) -> &mut Vec<f64> {
         if let Stored::Shared { .. } = self {
             *self = Stored::Plain(self.view().to_vec(offsets));
         }
@@ -344,7 +346,7 @@ impl RowSharer {
 
     /// The rows taken so far, each whole, in order (`offsets`: their row
     /// offsets), for a matrix that turned out to have too many.
-    pub(super) fn to_plain(&self, offsets: &[usize]) -> Vec<f64> {
+    pub(super) fn to_plain<O: ColumnIndex>(&self, offsets: &[O]) -> Vec<f64> {
         self.view().to_vec(offsets)
     }
 
@@ -383,7 +385,7 @@ mod tests {
             &[1.0, -0.0],
             &[],
         ];
-        let (mut offsets, mut values) = (vec![0], Vec::new());
+        let (mut offsets, mut values) = (vec![0usize], Vec::new());
         for k in 0..100 {
             values.extend_from_slice(stencils[(k * 7) % 5]);
             offsets.push(values.len());
