@@ -150,10 +150,11 @@ pub(crate) const ENTRY: Entry = Entry {
     uses_mass: false,
     memory: Memory {
         // Measured (nested schedule, the stencils and rows of A and of the
-        // Galerkin levels kept once, the assembly row by row): 200 B per
-        // unknown at 1/1024 (0.42 GB), 188 at 1/2048 (1.6 GB), 181 at
-        // 1/4096 (6.1 GB).
-        per_unknown: 230.0,
+        // Galerkin levels kept once, 32-bit row offsets, the unknowns'
+        // map by formula, the start handed over), beyond the 96 MiB every
+        // run holds: 124 B per unknown at 1/1024 (0.34 GiB in all), 150 at
+        // 1/2048 (1.26 GiB), 142 at 1/4096 (4.53 GiB).
+        per_unknown: 170.0,
         per_unknown_log2: 0.0,
     },
 };
