@@ -17,7 +17,7 @@ fn both_sums(
         let matrices = assemble_rows(mesh, dofs, only, elements, sum);
         let pattern = (
             matrices[0].row_offsets().to_vec(),
-            matrices[0].col_indices().into_owned(),
+            matrices[0].whole_col_indices().into_owned(),
         );
         let bits = matrices.iter().map(|m| {
             m.values()

@@ -348,9 +348,12 @@ impl Csr {
         self.columns().row(i, lo, hi)
     }
 
-    /// Every column index whole, in stored order (a copy when the columns
-    /// are shared), for a solver that hands the matrix to another library.
-    pub fn col_indices(&self) -> std::borrow::Cow<'_, [u32]> {
+    /// Every column index whole, in stored order, for a solver that hands
+    /// the matrix to another library: a copy of all of them when the
+    /// columns are shared, so never in a loop (the paper's sweep once took
+    /// it per sweep); a kernel reads a row with [`Csr::row`] or
+    /// [`Csr::columns`].
+    pub fn whole_col_indices(&self) -> std::borrow::Cow<'_, [u32]> {
         match &self.cols {
             StoredColumns::Plain(c) => std::borrow::Cow::Borrowed(c),
             shared => std::borrow::Cow::Owned(shared.to_vec(&self.offsets)),
@@ -378,7 +381,7 @@ impl Csr {
 
     /// Offsets, column indices (whole: a copy when shared) and values.
     pub fn csr_data(&self) -> (&[Offset], std::borrow::Cow<'_, [u32]>, Values<'_>) {
-        (&self.offsets, self.col_indices(), self.values())
+        (&self.offsets, self.whole_col_indices(), self.values())
     }
 
     /// Row i's columns and values.
