@@ -55,9 +55,7 @@ pub trait DofExpansion {
 /// h = 1/4096, beside the solver's at the peak of a solve).
 #[derive(Clone, Debug)]
 pub struct DofMap {
-    /// The mesh's nodes per row and node rows per body.
-    per_row: usize,
-    rows: usize,
+    mesh: Mesh,
     n: usize,
     contacts: Vec<ContactDofs>,
 }
@@ -78,27 +76,27 @@ impl DofMap {
     /// Lower body clamped on y = 0; upper body on a roller (u''_1 = 0) on
     /// x = 1, ½ < y ≤ 1; the upper contact node at (1, ½) is free.
     pub fn new(mesh: &Mesh) -> Self {
-        let (per_row, rows) = (mesh.n(), mesh.rows());
-        let mut map = Self {
-            per_row,
-            rows,
-            n: mesh.unknowns(),
-            contacts: Vec::with_capacity(per_row),
-        };
+        let n = mesh.unknowns();
         // Contact node i: (s, t) follow every other unknown, in increasing x.
-        let first = map.n - 2 * per_row;
-        for i in 0..per_row {
-            let lower_node = mesh.node(Body::Lower, i, mesh.contact_row(Body::Lower));
-            let upper_node = mesh.node(Body::Upper, i, mesh.contact_row(Body::Upper));
-            map.contacts.push(ContactDofs {
-                x: mesh.coords(lower_node)[0],
-                lower_node,
-                upper_node,
-                s: first + 2 * i,
-                t: first + 2 * i + 1,
-            });
+        let first = n - 2 * mesh.n();
+        let contacts = (0..mesh.n())
+            .map(|i| {
+                let lower_node = mesh.node(Body::Lower, i, mesh.contact_row(Body::Lower));
+                let upper_node = mesh.node(Body::Upper, i, mesh.contact_row(Body::Upper));
+                ContactDofs {
+                    x: mesh.coords(lower_node)[0],
+                    lower_node,
+                    upper_node,
+                    s: first + 2 * i,
+                    t: first + 2 * i + 1,
+                }
+            })
+            .collect();
+        Self {
+            mesh: mesh.clone(),
+            n,
+            contacts,
         }
-        map
     }
 
     /// Both components of `node` as unknowns: numbered in node order, the
@@ -108,40 +106,34 @@ impl DofMap {
     /// partner less (s, t).
     #[inline]
     fn dofs(&self, node: usize) -> [Dof; 2] {
-        let (per_row, per_body) = (self.per_row, self.per_row * self.rows);
-        let lower = 2 * per_row * (self.rows - 1);
-        if node < per_body {
-            let (i, j) = (node % per_row, node / per_row);
-            if j == 0 {
-                return [Dof::Fixed, Dof::Fixed];
+        let per_row = self.mesh.n();
+        let (body, i, j) = self.mesh.locate(node);
+        match body {
+            Body::Lower if j == 0 => [Dof::Fixed, Dof::Fixed],
+            Body::Lower => {
+                let s = 2 * ((j - 1) * per_row + i);
+                [Dof::Slot(s), Dof::Slot(s + 1)]
             }
-            let s = 2 * ((j - 1) * per_row + i);
-            return [Dof::Slot(s), Dof::Slot(s + 1)];
+            Body::Upper if j == 0 => {
+                let c = &self.contacts[i];
+                match self.dofs(c.lower_node) {
+                    [Dof::Slot(x), Dof::Slot(y)] => [
+                        Dof::Relative { base: x, own: c.s },
+                        Dof::Relative { base: y, own: c.t },
+                    ],
+                    _ => unreachable!("lower contact nodes are free"),
+                }
+            }
+            Body::Upper => {
+                let lower = 2 * per_row * (self.mesh.rows() - 1);
+                let s = lower + (j - 1) * (2 * per_row - 1) + 2 * i;
+                if i == per_row - 1 {
+                    [Dof::Fixed, Dof::Slot(s)]
+                } else {
+                    [Dof::Slot(s), Dof::Slot(s + 1)]
+                }
+            }
         }
-        let local = node - per_body;
-        let (i, j) = (local % per_row, local / per_row);
-        if j == 0 {
-            let c = &self.contacts[i];
-            let base = 2 * ((self.rows - 2) * per_row + i);
-            return [
-                Dof::Relative { base, own: c.s },
-                Dof::Relative {
-                    base: base + 1,
-                    own: c.t,
-                },
-            ];
-        }
-        let s = lower + (j - 1) * (2 * per_row - 1) + 2 * i;
-        if i == per_row - 1 {
-            [Dof::Fixed, Dof::Slot(s)]
-        } else {
-            [Dof::Slot(s), Dof::Slot(s + 1)]
-        }
-    }
-
-    /// The mesh's nodes.
-    fn num_nodes(&self) -> usize {
-        2 * self.per_row * self.rows
     }
 
     pub fn dof(&self, node: usize, k: usize) -> Dof {
@@ -155,7 +147,7 @@ impl DofMap {
 
     /// Physical nodal displacements (per node, x and y) from the unknowns.
     pub fn to_physical(&self, v: &[f64]) -> Vec<[f64; 2]> {
-        (0..self.num_nodes())
+        (0..self.mesh.num_nodes())
             .map(|node| {
                 self.dofs(node).map(|d| match d {
                     Dof::Fixed => 0.0,
@@ -170,7 +162,7 @@ impl DofMap {
     /// fixed boundaries are ignored (the field is assumed to satisfy them).
     pub fn from_physical(&self, u: &[[f64; 2]]) -> Vec<f64> {
         let mut v = vec![0.0; self.n];
-        for (node, un) in u.iter().enumerate().take(self.num_nodes()) {
+        for (node, un) in u.iter().enumerate().take(self.mesh.num_nodes()) {
             let dofs = self.dofs(node);
             for k in 0..2 {
                 if let Dof::Slot(s) = dofs[k] {
