@@ -74,10 +74,11 @@ impl Condensed {
         let ni = interior.len();
         let mut a_ci: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m2];
         let mut s = Mat::<f64>::zeros(m2, m2);
-        let (offsets, cols, vals) = problem.a().csr_data();
+        let a = problem.a();
+        let (offsets, cols, vals) = a.csr_data();
         for (i, c) in contacts.iter().enumerate() {
             for (k, r) in [(2 * i, c.t), (2 * i + 1, c.s)] {
-                let (lo, hi) = (offsets[r] as usize, offsets[r + 1] as usize);
+                let (lo, hi) = a.row_range(r);
                 for (&col, &v) in cols[lo..hi].iter().zip(vals.row(r, lo, hi)) {
                     match position[col as usize] {
                         Ok(j) => a_ci[k].push((j, v)),

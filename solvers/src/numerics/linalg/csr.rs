@@ -393,9 +393,7 @@ impl Csr {
 
     /// The position of entry (i, j) among the stored entries, if stored.
     pub fn position(&self, i: usize, j: usize) -> Option<usize> {
-        self.row_columns(i)
-            .find(j)
-            .map(|q| self.offsets[i] as usize + q)
+        self.row_columns(i).find(j).map(|q| self.row_range(i).0 + q)
     }
 
     /// Whether both have the same rows, columns and stored positions.
@@ -523,12 +521,15 @@ impl SparseRows for Csr {
     }
 }
 
-/// Row offsets in 32 bits, or the first offset that does not fit.
+/// Row offsets in 32 bits, or the first offset that does not fit. Filled
+/// into a vector of its final size (collected from `Result`s, it would
+/// grow by doubling, as the diagonal positions once did).
 fn narrow(offsets: &[usize]) -> Result<Vec<Offset>, CsrError> {
-    offsets
-        .iter()
-        .map(|&o| Offset::try_from(o).map_err(|_| CsrError::TooManyEntries(o)))
-        .collect()
+    let mut out = Vec::with_capacity(offsets.len());
+    for &o in offsets {
+        out.push(Offset::try_from(o).map_err(|_| CsrError::TooManyEntries(o))?);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
