@@ -121,7 +121,8 @@ pub(crate) struct Workspace {
     ac: Vec<f64>,
     lin_r: Vec<f64>,
     lin_z: Vec<f64>,
-    /// A_T z of the V-cycle's z (its last sweep leaves it).
+    /// A_T z of the V-cycle's z (its last sweep leaves it); after the
+    /// conjugate gradients, A_T c rebuilt in it for the line search.
     lin_az: Vec<f64>,
     lin_p: Vec<f64>,
     /// The conjugate gradients' right-hand side d at the contact unknowns,
