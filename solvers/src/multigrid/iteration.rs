@@ -248,7 +248,7 @@ pub(crate) fn iterate(
     fill(c, 0.0);
     // Each V-cycle also returns A_T z (its last sweep leaves it), and the
     // search directions' products follow: A_T p = A_T z + β A_T p.
-    hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);
+    hierarchy.v_cycle(a, p, truncated, lin_r, cycle.sweeps(), lin_z, lin_az);
     copy(lin_p, lin_z);
     copy(ac, lin_az);
     let mut rz = dot(lin_r, lin_z);
@@ -275,7 +275,7 @@ pub(crate) fn iterate(
         if step + 1 == cycle.linear_steps {
             break;
         }
-        hierarchy.v_cycle(a, p, lin_r, cycle.sweeps(), lin_z, lin_az);
+        hierarchy.v_cycle(a, p, truncated, lin_r, cycle.sweeps(), lin_z, lin_az);
         let rz_next = dot(lin_r, lin_z);
         let beta = rz_next / rz;
         rz = rz_next;

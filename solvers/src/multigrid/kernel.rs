@@ -15,7 +15,7 @@ use std::hint::black_box;
 
 use super::iteration::{Energy, Workspace, iterate};
 use super::laws::Laws;
-use super::smoother::diagonal_positions;
+use super::smoother::diagonal_places;
 use super::vcycle::Hierarchy;
 use super::{TnnmgSettings, dot, given_friction_laws};
 use crate::entry::InnerKernel;
@@ -35,9 +35,10 @@ pub(crate) fn iteration_kernel(problem: &ContactProblem) -> Option<InnerKernel> 
     let n = problem.n();
     let mut hierarchy = Hierarchy::new(
         problem.a(),
-        diagonal_positions(problem.a()).ok()?,
+        diagonal_places(problem.a()).ok()?,
         problem.prolongations(),
-    );
+    )
+    .ok()?;
     let pressure = problem.scales().pressure;
     let bound: Vec<f64> = problem
         .contacts()

@@ -69,7 +69,7 @@ use crate::solver::{Friction, Law, Solver, Start};
 use iteration::{Cycle, Energy, Phases, Workspace, iterate};
 use laws::Laws;
 use line_search::closing_translation;
-use smoother::{Local, diagonal_positions};
+use smoother::{Local, diagonal_places};
 use vcycle::Hierarchy;
 
 /// The progress stage of one TNNMG iteration (its unit of work).
@@ -347,7 +347,7 @@ pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
             if kept.len() >= KEPT_HIERARCHIES {
                 kept.remove(0);
             }
-            kept.push((id, Hierarchy::new(a, diagonal_positions(a)?, p)));
+            kept.push((id, Hierarchy::new(a, diagonal_places(a)?, p)?));
             kept.len() - 1
         }
     };

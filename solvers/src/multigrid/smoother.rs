@@ -82,28 +82,36 @@ pub(crate) fn diagonal_position(a: &Csr, k: usize, floor: f64) -> Option<usize> 
     a.position(k, k).filter(|&p| a.value_at(k, p) > floor)
 }
 
-/// A stored entry's position, in 32 bits: half the memory of a usize per
-/// row (17 MB at h = 1/1024), for matrices of fewer than 2³² entries
-/// ([`diagonal_positions`] refuses larger ones).
-pub(crate) type Position = u32;
+/// The place of a row's diagonal entry within the row (its k-th stored
+/// entry), in 16 bits. A sweep reads row k from its offset anyway, so the
+/// absolute position (32 bits) was 2 bytes per unknown more than the place
+/// (67 MB at h = 1/4096). A row whose diagonal lies past its 65 536th entry
+/// is refused ([`diagonal_places`]); a mesh's rows hold a few dozen.
+pub(crate) type Place = u16;
 
-/// The position of each row's diagonal entry among A's stored entries.
+/// The place within row k of its diagonal entry at position `p`, if it fits
+/// a [`Place`].
+pub(crate) fn place_in_row(a: &Csr, k: usize, p: usize) -> Result<Place, String> {
+    Place::try_from(p - a.row_range(k).0).map_err(|_| {
+        format!(
+            "row {k} has its diagonal past its {}th stored entry, more than a sweep indexes",
+            u32::from(Place::MAX) + 1
+        )
+    })
+}
+
+/// The place of each row's diagonal entry within its row.
 ///
 /// Filled into a vector of its final size: collected from an iterator of
 /// `Result`s it grew by doubling, to twice its size at h = 1/2048.
-pub(crate) fn diagonal_positions(a: &Csr) -> Result<Vec<Position>, String> {
-    let mut positions = Vec::with_capacity(a.nrows());
+pub(crate) fn diagonal_places(a: &Csr) -> Result<Vec<Place>, String> {
+    let mut places = Vec::with_capacity(a.nrows());
     for k in 0..a.nrows() {
         let p = diagonal_position(a, k, 0.0)
             .ok_or_else(|| format!("row {k} has no positive diagonal entry"))?;
-        positions.push(Position::try_from(p).map_err(|_| {
-            format!(
-                "A has {} stored entries, more than the 2³² a sweep indexes",
-                a.nnz()
-            )
-        })?);
+        places.push(place_in_row(a, k, p)?);
     }
-    Ok(positions)
+    Ok(places)
 }
 
 /// Row k of A as a sweep reads it: its columns and values, and the place
@@ -117,7 +125,7 @@ pub(crate) struct Row<'a> {
 }
 
 impl<'a> Row<'a> {
-    /// Row k, whose diagonal is stored at position `diag` of `a`; `vals`
+    /// Row k, whose diagonal is its entry `diag` (its [`Place`]); `vals`
     /// are a's values (matched once per sweep: [`with_values`]).
     #[inline(always)]
     pub(crate) fn of(a: &'a Csr, vals: impl RowValues<'a>, k: usize, diag: usize) -> Self {
@@ -126,10 +134,9 @@ impl<'a> Row<'a> {
             k,
             cols: a.columns().row(k, lo, hi),
             vals: vals.row(k, lo, hi),
-            // A position outside row k (before it wraps around, after it
-            // lies past its end) makes `diagonal` panic rather than read
-            // another row's value.
-            diag: diag.wrapping_sub(lo),
+            // A place past row k's end makes `diagonal` panic rather than
+            // read another row's value.
+            diag,
         }
     }
 
@@ -174,7 +181,7 @@ pub(crate) fn local_minimizer(law: Local, a: f64, c: f64) -> f64 {
 
 /// A's row count against the vectors of a sweep: the sweeps read x at A's
 /// column indices without bounds checks.
-fn check_sizes(a: &Csr, diag: &[Position], b: &[f64], x: &[f64]) {
+fn check_sizes(a: &Csr, diag: &[Place], b: &[f64], x: &[f64]) {
     assert!(
         a.nrows() == x.len() && a.ncols() == x.len() && diag.len() == x.len() && b.len() == x.len(),
         "a sweep: A, its diagonal, b and x of one size"
@@ -265,7 +272,7 @@ unsafe fn scatter_to_swept(
 /// the product that followed the presmoothing.
 pub(crate) fn nonlinear_sweep(
     a: &Csr,
-    diag: &[Position],
+    diag: &[Place],
     parts: Option<&Parts>,
     f: &[f64],
     laws: &Laws,
@@ -307,7 +314,7 @@ pub(crate) fn nonlinear_sweep(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn linear_sweep(
     a: &Csr,
-    diag: &[Position],
+    diag: &[Place],
     parts: Option<&Parts>,
     shift: &[f64],
     b: &[f64],

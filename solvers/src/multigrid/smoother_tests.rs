@@ -34,7 +34,7 @@ fn largest_gap(p: &[f64], q: &[f64]) -> f64 {
 fn fused_sweeps_leave_the_residual_of_a_product() {
     let a = grid(300);
     let n = a.nrows();
-    let diag = diagonal_positions(&a).expect("a grid has its diagonal");
+    let diag = diagonal_places(&a).expect("a grid has its diagonal");
     let b: Vec<f64> = (0..n).map(|k| ((k * 37) % 11) as f64 - 5.0).collect();
     let start: Vec<f64> = (0..n).map(|k| ((k * 13) % 7) as f64 * 0.1).collect();
     let fixed: Vec<bool> = (0..n).map(|k| k % 97 == 0).collect();
@@ -101,7 +101,7 @@ fn fused_sweeps_leave_the_residual_of_a_product() {
 #[test]
 fn a_part_row_scatters_into_its_own_part_only() {
     let a = grid(300);
-    let diag = diagonal_positions(&a).expect("a grid has its diagonal");
+    let diag = diagonal_places(&a).expect("a grid has its diagonal");
     // Three parts: the middle one has a neighbour on either side.
     let parts = Parts::new(&a, 3).expect("a grid splits");
     let sep = parts.in_separator();

@@ -24,7 +24,7 @@ use crate::numerics::linalg::Csr;
 
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::parts::Parts;
-use crate::multigrid::smoother::{Position, diagonal_position, linear_sweep, shift_at};
+use crate::multigrid::smoother::{Place, diagonal_position, linear_sweep, place_in_row, shift_at};
 use crate::numerics::linalg::{spmv_into, spmv_transpose_into};
 use crate::numerics::threads::threads;
 
@@ -103,7 +103,7 @@ impl CoarsestSolve {
 struct Level {
     a: Csr,
     untruncated_diagonal: Vec<f64>,
-    diag: Vec<Position>,
+    diag: Vec<Place>,
     /// The several-core Gauss-Seidel ordering of `a`'s rows, if it has one.
     parts: Option<Parts>,
     fixed: Vec<bool>,
@@ -125,7 +125,7 @@ impl Level {
     /// sweep over the level below the finest then reads 4 bytes of values
     /// per row instead of 8 per entry (it was a quarter of a V-cycle's time
     /// at h = 1/1024). Every value reads back to the bit.
-    fn new(a: Csr) -> Self {
+    fn new(a: Csr) -> Result<Self, String> {
         let a = a.shared();
         let found: Vec<Option<usize>> = (0..a.nrows())
             .map(|k| diagonal_position(&a, k, 0.0))
@@ -138,15 +138,11 @@ impl Level {
             .enumerate()
             .map(|(k, p)| p.map_or(0.0, |p| a.value_at(k, p)))
             .collect();
-        let diag: Vec<Position> = found
-            .into_iter()
-            .map(|p| {
-                p.map_or(0, |p| {
-                    Position::try_from(p).expect("a coarse level's entries fit 32 bits")
-                })
-            })
-            .collect();
-        Self {
+        let mut diag = Vec::with_capacity(a.nrows());
+        for (k, p) in found.into_iter().enumerate() {
+            diag.push(p.map_or(Ok(0), |p| place_in_row(&a, k, p))?);
+        }
+        Ok(Self {
             untruncated_diagonal,
             parts: Parts::new(&a, threads()),
             shared_len: if a.is_shared() { a.stored_values() } else { 0 },
@@ -155,7 +151,7 @@ impl Level {
             fixed,
             moved: Vec::new(),
             touched: Vec::new(),
-        }
+        })
     }
 
     /// Back to the untruncated matrix (latest change first, so that an
@@ -192,8 +188,8 @@ impl Level {
         }
         for (k, fixed) in self.fixed.iter_mut().enumerate() {
             let full = self.untruncated_diagonal[k];
-            *fixed =
-                !(full > 0.0 && self.a.value_at(k, self.diag[k] as usize) > FIXED_FRACTION * full);
+            let p = self.a.row_range(k).0 + usize::from(self.diag[k]);
+            *fixed = !(full > 0.0 && self.a.value_at(k, p) > FIXED_FRACTION * full);
         }
     }
 }
@@ -233,11 +229,14 @@ fn galerkin_triplets(p: &Csr, c: &[(usize, usize, f64)]) -> Vec<(usize, usize, f
 /// The truncated hierarchy of one operator A, with the V-cycle's vectors
 /// (allocated once, not per cycle).
 pub(crate) struct Hierarchy {
-    /// The positions of A's diagonal entries.
-    pub(crate) diag: Vec<Position>,
+    /// The places of A's diagonal entries within their rows.
+    pub(crate) diag: Vec<Place>,
     /// The several-core Gauss-Seidel ordering of A's rows, if it has one.
     pub(crate) parts: Option<Parts>,
-    truncated: Vec<bool>,
+    /// The truncated unknowns the levels are built for, ascending (a few
+    /// contact unknowns: the flags of every unknown are the caller's, and
+    /// a copy of them here was a byte per unknown).
+    truncated: Vec<usize>,
     /// The diagonal D added to A on the finest level.
     shift: Vec<f64>,
     /// Levels 0 … L−1, coarse to fine, below the finest.
@@ -261,7 +260,9 @@ pub(crate) struct Hierarchy {
 impl Hierarchy {
     /// The untruncated Galerkin hierarchy of `a` for the prolongations `p`
     /// (coarse to fine): A⁰_{L−1} = Pᵀ A P, A⁰_l = P_lᵀ A⁰_{l+1} P_l.
-    pub(crate) fn new(a: &Csr, diag: Vec<Position>, p: &[Csr]) -> Self {
+    /// A coarse level whose diagonal lies past a row's 65 536th entry is
+    /// refused (see [`Place`]).
+    pub(crate) fn new(a: &Csr, diag: Vec<Place>, p: &[Csr]) -> Result<Self, String> {
         // Pᵀ only while its product is formed: the V-cycle restricts with P
         // itself (at h = 1/1024 the stored transposes were 150 MB).
         let top = p.len() - 1;
@@ -272,7 +273,10 @@ impl Hierarchy {
             coarse.push(next);
         }
         coarse.reverse();
-        let levels: Vec<Level> = coarse.into_iter().map(Level::new).collect();
+        let levels = coarse
+            .into_iter()
+            .map(Level::new)
+            .collect::<Result<Vec<Level>, String>>()?;
         let zeros = || {
             levels
                 .iter()
@@ -280,10 +284,10 @@ impl Hierarchy {
                 .collect::<Vec<_>>()
         };
         let coarsest = CoarsestSolve::new(&levels[0]);
-        Self {
+        Ok(Self {
             diag,
             parts: Parts::new(a, threads()),
-            truncated: vec![false; a.nrows()],
+            truncated: Vec::new(),
             shift: Vec::new(),
             coarsest,
             x: zeros(),
@@ -292,7 +296,7 @@ impl Hierarchy {
             levels,
             finest_seconds: 0.0,
             cycle_seconds: 0.0,
-        }
+        })
     }
 
     /// The seconds of whole V-cycles since the last call.
@@ -317,15 +321,23 @@ impl Hierarchy {
         } else {
             shift
         };
-        if self.truncated == truncated && self.shift == shift {
+        let set = || {
+            truncated
+                .iter()
+                .enumerate()
+                .filter(|(_, cut)| **cut)
+                .map(|(j, _)| j)
+        };
+        if set().eq(self.truncated.iter().copied()) && self.shift == shift {
             return;
         }
-        self.truncated.copy_from_slice(truncated);
+        self.truncated.clear();
+        self.truncated.extend(set());
         self.shift.clear();
         self.shift.extend_from_slice(shift);
         // E: the entries of A in a truncated row or column (A symmetric).
         let mut e = Vec::new();
-        for (j, _) in truncated.iter().enumerate().filter(|(_, cut)| **cut) {
+        for &j in &self.truncated {
             let (cols, vals) = a.row(j);
             for (i, &v) in cols.iter().zip(vals) {
                 e.push((j, i, v));
@@ -355,12 +367,15 @@ impl Hierarchy {
     /// correction is written to `c` (zero on the truncated set) and A_T c,
     /// A_T = T(A + D)T, to `ac`: the last sweep leaves it, so that the
     /// conjugate gradients need no product of their own. `a` is the finest
-    /// level's matrix, `p` the prolongations. The finest level works in `d`
-    /// and `c` themselves (no copies of the finest size).
+    /// level's matrix, `p` the prolongations, `truncated` the flags of the
+    /// set last given to [`Hierarchy::truncate`]. The finest level works in
+    /// `d` and `c` themselves (no copies of the finest size).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn v_cycle(
         &mut self,
         a: &Csr,
         p: &[Csr],
+        truncated: &[bool],
         d: &[f64],
         (coarse_sweeps, finest_sweeps): (usize, usize),
         c: &mut [f64],
@@ -369,7 +384,7 @@ impl Hierarchy {
         let Self {
             diag,
             parts,
-            truncated,
+            truncated: _,
             shift,
             levels,
             coarsest,
@@ -484,7 +499,7 @@ impl Hierarchy {
 
 #[cfg(test)]
 mod tests {
-    use super::super::smoother::diagonal_positions;
+    use super::super::smoother::diagonal_places;
     use super::*;
     use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
@@ -548,7 +563,7 @@ mod tests {
     fn truncated_levels_are_the_galerkin_products_of_the_truncated_matrix() {
         let a = laplacian(6);
         let p: Vec<Csr> = (2..=6).map(interpolation).collect();
-        let mut h = Hierarchy::new(&a, diagonal_positions(&a).unwrap(), &p);
+        let mut h = Hierarchy::new(&a, diagonal_places(&a).unwrap(), &p).unwrap();
         assert!(h.levels.iter().all(|l| l.a.is_shared()));
         let untruncated: Vec<Csr> = h.levels.iter().map(|l| l.a.clone()).collect();
         let n = a.nrows();
