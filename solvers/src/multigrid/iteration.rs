@@ -28,7 +28,7 @@ use crate::numerics::linalg::Csr;
 use super::laws::Laws;
 use super::line_search::exact_step;
 use super::smoother::{Local, nonlinear_sweep};
-use super::vcycle::Hierarchy;
+use super::vcycle::{Hierarchy, truncated_product};
 use crate::numerics::linalg::spmv_into;
 use crate::numerics::threads::{Disjoint, axpy, copy, dot, fill, for_each_chunk};
 
@@ -72,7 +72,8 @@ pub(crate) struct Phases {
     /// The V-cycles below the finest level, and the truncation's updates
     /// of the coarse matrices.
     pub coarse: f64,
-    /// The conjugate gradients' vector updates and inner products.
+    /// The conjugate gradients' vector updates and inner products, and the
+    /// product A_T c after them.
     pub krylov: f64,
     /// The projection, the exact line searches (the correction's and the
     /// rigid mode's) and the stopping test.
@@ -115,20 +116,22 @@ impl Phases {
 pub(crate) struct Workspace {
     /// The seconds of the iterations run with it, by phase.
     pub phases: Phases,
-    /// b − A v after the presmoothing.
-    pub r: Vec<f64>,
     c: Vec<f64>,
     ac: Vec<f64>,
+    /// The conjugate gradients' residual; before them, the defect
+    /// r = b − A v the presmoothing leaves, and after them r again, rebuilt
+    /// for the line search (see [`iterate`]).
     lin_r: Vec<f64>,
     lin_z: Vec<f64>,
     /// A_T z of the V-cycle's z (its last sweep leaves it); after the
-    /// conjugate gradients, A_T c rebuilt in it for the line search.
+    /// conjugate gradients, A_T c for the line search.
     lin_az: Vec<f64>,
     lin_p: Vec<f64>,
-    /// The conjugate gradients' right-hand side d at the contact unknowns,
-    /// before the rigid mode is taken out of it (elsewhere d is r): with
-    /// it, A_T c = d − (their residual) needs no vector of its own.
-    d_contact: Vec<(usize, f64)>,
+    /// The defect r at the contact unknowns, where the conjugate
+    /// gradients' right-hand side d differs from it by more than the rigid
+    /// mode: with them, r is rebuilt after the conjugate gradients and
+    /// needs no vector of its own.
+    r_contact: Vec<(usize, f64)>,
     truncated: Vec<bool>,
     /// D's diagonal; empty while every curvature is zero (the
     /// given-friction laws), so that no vector of n is spent on it.
@@ -140,14 +143,13 @@ impl Workspace {
         let zeros = || vec![0.0; n];
         Self {
             phases: Phases::default(),
-            r: zeros(),
             c: zeros(),
             ac: zeros(),
             lin_r: zeros(),
             lin_z: zeros(),
             lin_az: zeros(),
             lin_p: zeros(),
-            d_contact: Vec::new(),
+            r_contact: Vec::new(),
             truncated: vec![false; n],
             shift: Vec::new(),
         }
@@ -181,17 +183,19 @@ pub(crate) fn iterate(
 ) {
     let (a, laws, contact) = (energy.a, energy.laws, energy.contact);
     let n = v.len();
-    // The presmoothing; its last sweep leaves the defect b − A v behind
-    // (without one, a product computes it).
+    // The presmoothing; its last sweep leaves the defect r = b − A v
+    // behind (without one, a product computes it), in the conjugate
+    // gradients' residual: their first residual d is r but at the contact
+    // unknowns and along the rigid mode.
     let clock = Instant::now();
     let parts = hierarchy.parts.as_ref();
     for sweep in 1..=cycle.presmoothing {
-        let last = (sweep == cycle.presmoothing).then_some(&mut ws.r[..]);
+        let last = (sweep == cycle.presmoothing).then_some(&mut ws.lin_r[..]);
         nonlinear_sweep(a, &hierarchy.diag, parts, energy.b, laws, v, last);
     }
     if cycle.presmoothing == 0 {
-        spmv_into(a, v, &mut ws.r);
-        for (rk, bk) in ws.r.iter_mut().zip(energy.b) {
+        spmv_into(a, v, &mut ws.lin_r);
+        for (rk, bk) in ws.lin_r.iter_mut().zip(energy.b) {
             *rk = bk - *rk;
         }
     }
@@ -199,9 +203,8 @@ pub(crate) fn iterate(
     ws.phases.smoothing += lap();
     // The truncated set, the Newton step's curvature and its defect d (the
     // conjugate gradients' first residual, kept in their vector).
-    copy(&mut ws.lin_r, &ws.r);
     let mut kernel_free = energy.kernel.is_some();
-    ws.d_contact.clear();
+    ws.r_contact.clear();
     for &k in contact {
         let law = laws[k];
         let cut = law.at_kink(v[k]);
@@ -213,13 +216,14 @@ pub(crate) fn iterate(
         if let Some(d) = ws.shift.get_mut(k) {
             *d = curvature;
         }
+        let rk = ws.lin_r[k];
+        ws.r_contact.push((k, rk));
         ws.lin_r[k] = if cut {
             kernel_free &= law != Local::Jump;
             0.0
         } else {
-            ws.r[k] - law.slope(v[k], 1.0)
+            rk - law.slope(v[k], 1.0)
         };
-        ws.d_contact.push((k, ws.lin_r[k]));
     }
     let mut along = None;
     if let (true, Some((z, zz))) = (kernel_free, energy.kernel) {
@@ -239,10 +243,9 @@ pub(crate) fn iterate(
         lin_z,
         lin_az,
         lin_p,
-        d_contact,
+        r_contact,
         truncated,
-        shift: _,
-        r,
+        shift,
         phases,
     } = ws;
     fill(c, 0.0);
@@ -294,29 +297,37 @@ pub(crate) fn iterate(
             }
         });
     }
+    // w = A_T c by a product, and r rebuilt in the conjugate gradients'
+    // residual, d − A_T c: r = d + (A_T c) + a z but at the contact
+    // unknowns, whose r was kept aside. Rebuilding w instead (from r kept
+    // in a vector of its own, w = d − their residual) cost that vector, a
+    // fifth of TNNMG's vectors of n; the product costs one A·v per
+    // iteration.
+    let w = lin_az;
+    truncated_product(a, truncated, shift, c, w);
+    let r = lin_r;
+    let (dr, ws_) = (Disjoint::of(r), &*w);
+    for_each_chunk(n, |k| {
+        // SAFETY: each chunk once.
+        let r = unsafe { dr.slice(k.clone()) };
+        for (rk, wk) in r.iter_mut().zip(&ws_[k]) {
+            *rk += wk;
+        }
+    });
+    if let Some((a, z)) = along {
+        axpy(r, a, z);
+    }
+    for &(k, rk) in r_contact.iter() {
+        r[k] = rk;
+    }
     // The conjugate gradients' time: the V-cycles' (finest level and
-    // coarse levels) and their own vector work.
+    // coarse levels) and their own vector work, and the product.
     let cg = lap();
     let finest = hierarchy.take_finest_seconds();
     let cycles = hierarchy.take_cycle_seconds();
     phases.smoothing += finest;
     phases.coarse += cycles - finest;
     phases.krylov += cg - cycles;
-    // w = A_T c, in a vector the conjugate gradients are done with: their
-    // residual is d − A_T c, and d is r with the contact unknowns' values
-    // kept aside and the rigid mode taken out as above (the same
-    // operations, so d is the same to the bit). Tracked along the
-    // conjugate gradients instead, it was a vector of n of its own.
-    let w = lin_az;
-    copy(w, r);
-    for &(k, dk) in d_contact.iter() {
-        w[k] = dk;
-    }
-    if let Some((a, z)) = along {
-        axpy(w, -a, z);
-    }
-    axpy(w, -1.0, lin_r);
-    phases.line_search += lap();
     // The projection onto the admissible set: v + c keeps t ≤ 0, so that a
     // full step is admissible (Gräser & Sander 2019, Algorithm 1, step 4).
     // A c follows the few entries the projection moved: A is symmetric, so

@@ -484,16 +484,28 @@ impl Hierarchy {
             }
         }
         if sweeps(top) == 0 {
-            spmv_into(a, c, ac);
-            for (k, q) in ac.iter_mut().enumerate() {
-                *q = if truncated[k] {
-                    0.0
-                } else {
-                    *q + shift_at(shift, k) * c[k]
-                };
-            }
+            truncated_product(a, truncated, shift, c, ac);
         }
         *cycle_seconds += cycle_clock.elapsed().as_secs_f64();
+    }
+}
+
+/// A_T c = T(A + D)T c into `out` for c zero on the truncated set
+/// (`truncated`), D = diag(`shift`) (empty: none): one product.
+pub(crate) fn truncated_product(
+    a: &Csr,
+    truncated: &[bool],
+    shift: &[f64],
+    c: &[f64],
+    out: &mut [f64],
+) {
+    spmv_into(a, c, out);
+    for (k, q) in out.iter_mut().enumerate() {
+        *q = if truncated[k] {
+            0.0
+        } else {
+            *q + shift_at(shift, k) * c[k]
+        };
     }
 }
 
