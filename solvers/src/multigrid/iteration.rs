@@ -30,7 +30,7 @@ use super::line_search::exact_step;
 use super::smoother::{Local, nonlinear_sweep};
 use super::vcycle::{Hierarchy, truncated_product};
 use crate::numerics::linalg::spmv_into;
-use crate::numerics::threads::{Disjoint, axpy, copy, dot, fill, for_each_chunk};
+use crate::numerics::threads::{Disjoint, axpy, copy, dot, fill, for_each_chunk, scale};
 
 /// The energy: its quadratic part, its laws and A's kernel.
 pub(crate) struct Energy<'a> {
@@ -164,6 +164,20 @@ impl Workspace {
     }
 }
 
+impl Workspace {
+    /// The number of unknowns it is for.
+    pub(crate) fn n(&self) -> usize {
+        self.c.len()
+    }
+
+    /// The step v took after the presmoothing of the last iteration: the
+    /// projected correction and the near-kernel step, times their step
+    /// lengths.
+    pub(crate) fn step(&self) -> &[f64] {
+        &self.c
+    }
+}
+
 impl Cycle {
     /// The V-cycle's sweeps: (below the finest level, on it).
     fn sweeps(&self) -> (usize, usize) {
@@ -172,7 +186,9 @@ impl Cycle {
 }
 
 /// One iteration from v (see the module); `p` the hierarchy's
-/// prolongations.
+/// prolongations. Returns a bound on the presmoothing's largest move of an
+/// unknown (the sum of its sweeps' largest); the step after it is left in
+/// [`Workspace::step`]. Their sum bounds max|Δv| without a copy of v.
 pub(crate) fn iterate(
     energy: &Energy<'_>,
     hierarchy: &mut Hierarchy,
@@ -180,7 +196,7 @@ pub(crate) fn iterate(
     cycle: Cycle,
     ws: &mut Workspace,
     v: &mut [f64],
-) {
+) -> f64 {
     let (a, laws, contact) = (energy.a, energy.laws, energy.contact);
     let n = v.len();
     // The presmoothing; its last sweep leaves the defect r = b − A v
@@ -189,9 +205,10 @@ pub(crate) fn iterate(
     // unknowns and along the rigid mode.
     let clock = Instant::now();
     let parts = hierarchy.parts.as_ref();
+    let mut smoothing_moved = 0.0;
     for sweep in 1..=cycle.presmoothing {
         let last = (sweep == cycle.presmoothing).then_some(&mut ws.lin_r[..]);
-        nonlinear_sweep(a, &hierarchy.diag, parts, energy.b, laws, v, last);
+        smoothing_moved += nonlinear_sweep(a, &hierarchy.diag, parts, energy.b, laws, v, last);
     }
     if cycle.presmoothing == 0 {
         spmv_into(a, v, &mut ws.lin_r);
@@ -306,14 +323,7 @@ pub(crate) fn iterate(
     let w = lin_az;
     truncated_product(a, truncated, shift, c, w);
     let r = lin_r;
-    let (dr, ws_) = (Disjoint::of(r), &*w);
-    for_each_chunk(n, |k| {
-        // SAFETY: each chunk once.
-        let r = unsafe { dr.slice(k.clone()) };
-        for (rk, wk) in r.iter_mut().zip(&ws_[k]) {
-            *rk += wk;
-        }
-    });
+    axpy(r, 1.0, w);
     if let Some((a, z)) = along {
         axpy(r, a, z);
     }
@@ -348,6 +358,9 @@ pub(crate) fn iterate(
     let alpha = exact_step(laws, contact, v, c, dot(c, w), dot(c, r));
     axpy(v, alpha, c);
     axpy(r, -alpha, w);
+    // From here on c holds the step this correction took (see
+    // [`Workspace::step`]).
+    scale(c, alpha);
     // The near-kernel step: while a few closed jumps hold the upper body,
     // T z (the rigid mode without the truncated unknowns) is a direction
     // of very low energy that the V-cycle barely sees (a point constraint
@@ -361,8 +374,10 @@ pub(crate) fn iterate(
     // truncated rows, and free of the cancellation of the product's
     // (T z is the low-energy direction).
     if let (false, Some((z, _))) = (kernel_free, energy.kernel) {
-        for ((ck, zk), &cut) in c.iter_mut().zip(z).zip(&*truncated) {
-            *ck = if cut { 0.0 } else { *zk };
+        // Its direction in a vector the conjugate gradients are done with.
+        let tz = lin_p;
+        for ((tk, zk), &cut) in tz.iter_mut().zip(z).zip(&*truncated) {
+            *tk = if cut { 0.0 } else { *zk };
         }
         let cac: f64 = contact
             .iter()
@@ -379,16 +394,18 @@ pub(crate) fn iterate(
                 z[k] * ae_k
             })
             .sum();
-        let cr = dot(c, r);
+        let cr = dot(tz, r);
         if cr < 0.0 {
-            for ck in c.iter_mut() {
-                *ck = -*ck;
+            for tk in tz.iter_mut() {
+                *tk = -*tk;
             }
         }
-        let beta = exact_step(laws, contact, v, c, cac, cr.abs());
-        axpy(v, beta, c);
+        let beta = exact_step(laws, contact, v, tz, cac, cr.abs());
+        axpy(v, beta, tz);
+        axpy(c, beta, tz);
     }
     phases.line_search += lap();
+    smoothing_moved
 }
 
 /// A lap clock from `start`: each call returns the seconds since the last

@@ -165,12 +165,14 @@ impl Parts {
     }
 
     /// One Gauss-Seidel sweep over x in this ordering (see the module),
-    /// `update(k, x)` setting x[k] from the others; the parts on one thread
-    /// each (the first on the calling thread). `update` must read only the
+    /// `update(k, x)` setting x[k] from the others and reporting what the
+    /// sweep joins over its rows ([`Joined`]); the parts on one thread each
+    /// (the first on the calling thread). `update` must read only the
     /// unknowns of row k's pattern.
-    pub(crate) fn sweep<F>(&self, x: &mut [f64], forward: bool, update: F)
+    pub(crate) fn sweep<F, R>(&self, x: &mut [f64], forward: bool, update: F) -> R
     where
-        F: Fn(usize, Shared) + Sync,
+        F: Fn(usize, Shared) -> R + Sync,
+        R: Joined,
     {
         let n = x.len();
         assert_eq!(n, self.in_separator.len(), "a sweep of the split's size");
@@ -180,24 +182,62 @@ impl Parts {
         let part = move |(lo, hi): (usize, usize)| {
             let rows = (lo..hi).filter(|&k| !skip[k]);
             if forward {
-                rows.for_each(|k| update(k, shared));
+                rows.fold(R::NONE, |m, k| m.join(update(k, shared)))
             } else {
-                rows.rev().for_each(|k| update(k, shared));
+                rows.rev().fold(R::NONE, |m, k| m.join(update(k, shared)))
             }
         };
+        let mut joined = R::NONE;
         if !forward {
-            self.separator.iter().rev().for_each(|&k| update(k, shared));
+            joined = (self.separator.iter().rev()).fold(joined, |m, &k| m.join(update(k, shared)));
         }
+        let parts = std::sync::Mutex::new(R::NONE);
         std::thread::scope(|scope| {
+            let parts = &parts;
             for w in self.cuts.windows(2).skip(1) {
                 let (lo, hi) = (w[0], w[1]);
-                scope.spawn(move || part((lo, hi)));
+                scope.spawn(move || {
+                    let r = part((lo, hi));
+                    let mut all = parts.lock().unwrap_or_else(|e| e.into_inner());
+                    *all = all.join(r);
+                });
             }
-            part((self.cuts[0], self.cuts[1]));
+            let r = part((self.cuts[0], self.cuts[1]));
+            let mut all = parts.lock().unwrap_or_else(|e| e.into_inner());
+            *all = all.join(r);
         });
+        joined = joined.join(parts.into_inner().unwrap_or_else(|e| e.into_inner()));
         if forward {
-            self.separator.iter().for_each(|&k| update(k, shared));
+            joined = (self.separator.iter()).fold(joined, |m, &k| m.join(update(k, shared)));
         }
+        joined
+    }
+}
+
+/// What a sweep's row updates report, joined over its rows: nothing
+/// (`()`), or the largest move of an unknown ([`Largest`]), which the
+/// TNNMG stopping test bounds its change by without a copy of the iterate.
+pub(crate) trait Joined: Copy + Send {
+    /// The join of no rows.
+    const NONE: Self;
+    fn join(self, other: Self) -> Self;
+}
+
+impl Joined for () {
+    const NONE: Self = ();
+    #[inline(always)]
+    fn join(self, _: ()) {}
+}
+
+/// The largest of the values joined (non-negative: |x_k − x_k before|).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Largest(pub f64);
+
+impl Joined for Largest {
+    const NONE: Self = Largest(0.0);
+    #[inline(always)]
+    fn join(self, other: Self) -> Self {
+        Largest(self.0.max(other.0))
     }
 }
 
@@ -260,18 +300,20 @@ fn cuts(a: &Csr, threads: usize) -> Vec<usize> {
 
 /// One sweep over x: in the split's ordering on its threads when there is
 /// one, else in the natural order (forward: 0, 1, …; backward: the reverse).
-pub(crate) fn sweep<F>(parts: Option<&Parts>, x: &mut [f64], forward: bool, update: F)
+pub(crate) fn sweep<F, R>(parts: Option<&Parts>, x: &mut [f64], forward: bool, update: F) -> R
 where
-    F: Fn(usize, Shared) + Sync,
+    F: Fn(usize, Shared) -> R + Sync,
+    R: Joined,
 {
     match parts {
         Some(p) => p.sweep(x, forward, update),
         None => {
             let shared = Shared(x.as_mut_ptr());
+            let joined = |m: R, k| m.join(update(k, shared));
             if forward {
-                (0..x.len()).for_each(|k| update(k, shared));
+                (0..x.len()).fold(R::NONE, joined)
             } else {
-                (0..x.len()).rev().for_each(|k| update(k, shared));
+                (0..x.len()).rev().fold(R::NONE, joined)
             }
         }
     }

@@ -18,7 +18,7 @@ use crate::numerics::linalg::{Csr, RowColumns, RowValues};
 use crate::with_values;
 
 use super::laws::Laws;
-use super::parts::{Parts, Shared, sweep};
+use super::parts::{Largest, Parts, Shared, sweep};
 use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 
 /// The contact law along one coordinate.
@@ -269,7 +269,8 @@ unsafe fn scatter_to_swept(
 /// it also leaves f − A v of the swept v there, in the same pass over A:
 /// row k's defect is c − A_kk v_k when it is swept, and each later move of
 /// a neighbour is scattered into it ([`scatter_to_swept`]); this replaced
-/// the product that followed the presmoothing.
+/// the product that followed the presmoothing. Returns the largest move
+/// |v_k − v_k before| of the sweep.
 pub(crate) fn nonlinear_sweep(
     a: &Csr,
     diag: &[Place],
@@ -278,14 +279,14 @@ pub(crate) fn nonlinear_sweep(
     laws: &Laws,
     v: &mut [f64],
     defect: Option<&mut [f64]>,
-) {
+) -> f64 {
     check_sizes(a, diag, f, v);
     if let Some(r) = &defect {
         assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
     }
     let separator = parts.map(Parts::in_separator);
     let rs = defect.map(Shared::of);
-    with_values!(a.values(), vals => sweep(parts, v, true, |k, x| {
+    let Largest(moved) = with_values!(a.values(), vals => sweep(parts, v, true, |k, x| {
         // SAFETY: sizes checked above; the parts' ordering keeps the other
         // thread off row k's pattern and off the defects it writes.
         unsafe {
@@ -299,8 +300,10 @@ pub(crate) fn nonlinear_sweep(
                 rs.set(k, c - akk * new);
                 scatter_to_swept(row, delta, (separator, true), rs);
             }
+            Largest(delta.abs())
         }
     }));
+    moved
 }
 
 /// Forward (`forward`) or backward linear Gauss-Seidel on (A + D) x = b,

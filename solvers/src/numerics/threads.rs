@@ -166,6 +166,18 @@ pub fn axpy(x: &mut [f64], alpha: f64, y: &[f64]) {
     });
 }
 
+/// x = alpha·x, by chunks on [`threads`] threads.
+pub fn scale(x: &mut [f64], alpha: f64) {
+    let n = x.len();
+    let dx = Disjoint::of(x);
+    // SAFETY: each chunk once.
+    for_each_chunk(n, |r| {
+        unsafe { dx.slice(r) }
+            .iter_mut()
+            .for_each(|xk| *xk *= alpha)
+    });
+}
+
 /// aᵀb, by chunks on [`threads`] threads.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len(), "dot: vectors of one length");
