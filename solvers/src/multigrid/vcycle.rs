@@ -94,19 +94,24 @@ impl CoarsestSolve {
     }
 }
 
-/// A coarse level: its Galerkin matrix for the current truncated set, its
-/// untruncated diagonal, the positions of the diagonal entries, the
-/// unknowns left at zero, and the untruncated values of the entries the
-/// current truncation changed (only those: a truncation touches O(h⁻¹)
-/// entries near Γ_K, and a copy of every value was a twelfth of the peak
-/// memory at h = 1/1024).
+/// A coarse level: its Galerkin matrix for the current truncated set, the
+/// places of the diagonal entries, the unknowns left at zero, and the
+/// untruncated values of the entries the current truncation changed (only
+/// those: a truncation touches O(h⁻¹) entries near Γ_K, and a copy of
+/// every value was a twelfth of the peak memory at h = 1/1024; a copy of
+/// the diagonal was 2.7 bytes per finest unknown).
 struct Level {
     a: Csr,
-    untruncated_diagonal: Vec<f64>,
     diag: Vec<Place>,
     /// The several-core Gauss-Seidel ordering of `a`'s rows, if it has one.
     parts: Option<Parts>,
+    /// Left at zero: untruncated, the rows without a positive diagonal;
+    /// truncated, also those whose diagonal the truncation took below
+    /// [`FIXED_FRACTION`] of its untruncated value.
     fixed: Vec<bool>,
+    /// (row, untruncated diagonal) of each row with a positive diagonal
+    /// that the current truncation changed.
+    diagonal_changed: Vec<(usize, f64)>,
     /// The untruncated values' table length, when `a`'s rows are shared: a
     /// truncation gives the few rows it changes copies of their own past
     /// it, and the others stay shared.
@@ -127,23 +132,15 @@ impl Level {
     /// at h = 1/1024). Every value reads back to the bit.
     fn new(a: Csr) -> Result<Self, String> {
         let a = a.shared();
-        let found: Vec<Option<usize>> = (0..a.nrows())
-            .map(|k| diagonal_position(&a, k, 0.0))
-            .collect();
-        let fixed = found.iter().map(Option::is_none).collect();
-        // A row without a positive diagonal stays fixed (its "untruncated
-        // diagonal" 0).
-        let untruncated_diagonal = found
-            .iter()
-            .enumerate()
-            .map(|(k, p)| p.map_or(0.0, |p| a.value_at(k, p)))
-            .collect();
-        let mut diag = Vec::with_capacity(a.nrows());
-        for (k, p) in found.into_iter().enumerate() {
-            diag.push(p.map_or(Ok(0), |p| place_in_row(&a, k, p))?);
+        // A row without a positive diagonal stays fixed.
+        let (mut diag, mut fixed) = (Vec::with_capacity(a.nrows()), Vec::with_capacity(a.nrows()));
+        for k in 0..a.nrows() {
+            let found = diagonal_position(&a, k, 0.0);
+            diag.push(found.map_or(Ok(0), |p| place_in_row(&a, k, p))?);
+            fixed.push(found.is_none());
         }
         Ok(Self {
-            untruncated_diagonal,
+            diagonal_changed: Vec::new(),
             parts: Parts::new(&a, threads()),
             shared_len: if a.is_shared() { a.stored_values() } else { 0 },
             a,
@@ -157,6 +154,10 @@ impl Level {
     /// Back to the untruncated matrix (latest change first, so that an
     /// entry changed twice gets its first saved value).
     fn restore(&mut self) {
+        // The rows a truncation fixed had a positive diagonal: free again.
+        for (k, _) in self.diagonal_changed.drain(..) {
+            self.fixed[k] = false;
+        }
         if self.a.is_shared() {
             self.a.unshare_undo(self.moved.drain(..), self.shared_len);
             return;
@@ -184,12 +185,15 @@ impl Level {
             if !shared {
                 self.touched.push((p, row[q]));
             }
+            // Each entry once (merged), so its value here is untruncated.
+            if i == j && !self.fixed[i] {
+                self.diagonal_changed.push((i, row[q]));
+            }
             row[q] -= value;
         }
-        for (k, fixed) in self.fixed.iter_mut().enumerate() {
-            let full = self.untruncated_diagonal[k];
+        for &(k, full) in &self.diagonal_changed {
             let p = self.a.row_range(k).0 + usize::from(self.diag[k]);
-            *fixed = !(full > 0.0 && self.a.value_at(k, p) > FIXED_FRACTION * full);
+            self.fixed[k] = !(self.a.value_at(k, p) > FIXED_FRACTION * full);
         }
     }
 }
@@ -266,10 +270,10 @@ impl Hierarchy {
         // Pᵀ only while its product is formed: the V-cycle restricts with P
         // itself (at h = 1/1024 the stored transposes were 150 MB).
         let top = p.len() - 1;
-        let mut coarse = vec![galerkin(&p[top].transpose(), a, &p[top])];
+        let mut coarse = vec![galerkin(&p[top].transpose(), a, &p[top])?];
         for l in (0..top).rev() {
             let above = coarse.last().expect("one at least");
-            let next = galerkin(&p[l].transpose(), above, &p[l]);
+            let next = galerkin(&p[l].transpose(), above, &p[l])?;
             coarse.push(next);
         }
         coarse.reverse();
@@ -587,7 +591,7 @@ mod tests {
             h.truncate(&a, &p, &cut, &[]);
             let mut expected = truncated(&a, &cut);
             for l in (0..h.levels.len()).rev() {
-                expected = galerkin(&p[l].transpose(), &expected, &p[l]);
+                expected = galerkin(&p[l].transpose(), &expected, &p[l]).unwrap();
                 let (got, want) = (dense(&h.levels[l].a), dense(&expected));
                 for (g, w) in got.iter().flatten().zip(want.iter().flatten()) {
                     assert!((g - w).abs() <= 1e-12, "level {l}: {g} vs {w}");
