@@ -419,3 +419,134 @@ fn lap_timer(start: Instant) -> impl FnMut() -> f64 {
         lap
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::smoother::diagonal_places;
+    use super::*;
+    use nalgebra_sparse::{CooMatrix, CsrMatrix};
+
+    fn csr(t: &[(usize, usize, f64)], rows: usize, cols: usize) -> Csr {
+        let mut coo = CooMatrix::new(rows, cols);
+        for &(i, j, v) in t {
+            coo.push(i, j, v);
+        }
+        Csr::try_from(&CsrMatrix::from(&coo)).unwrap().shared()
+    }
+
+    /// The 1D Laplacian on 2^k + 1 nodes with free ends: singular, its
+    /// kernel the constants (a rigid translation).
+    fn free_laplacian(k: u32) -> Csr {
+        let n = (1usize << k) + 1;
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push((i, i, if i == 0 || i == n - 1 { 1.0 } else { 2.0 }));
+            if i > 0 {
+                t.push((i, i - 1, -1.0));
+                t.push((i - 1, i, -1.0));
+            }
+        }
+        csr(&t, n, n)
+    }
+
+    /// Linear interpolation from 2^(k−1) + 1 to 2^k + 1 nodes.
+    fn interpolation(k: u32) -> Csr {
+        let nc = (1usize << (k - 1)) + 1;
+        let mut t = vec![(0, 0, 1.0)];
+        for j in 1..nc {
+            t.extend([
+                (2 * j - 1, j - 1, 0.5),
+                (2 * j - 1, j, 0.5),
+                (2 * j, j, 1.0),
+            ]);
+        }
+        csr(&t, 2 * nc - 1, nc)
+    }
+
+    /// The stopping test's bound, the presmoothing's largest move plus the
+    /// largest entry of the step after it, is at least the change of v
+    /// over each iteration: with jumps that close (so that the near-kernel
+    /// step along the translation runs) and slips that stick and slide, up
+    /// to the rounding of v's own additions.
+    /// A step left out of [`Workspace::step`], or a sweep that reports
+    /// less than it moved, makes the change exceed it; a step reported
+    /// longer than taken makes it exceed the change plus the smoothing's.
+    #[test]
+    fn the_change_bound_holds_every_iteration() {
+        let k = 6;
+        let a = free_laplacian(k);
+        let n = a.nrows();
+        let p: Vec<Csr> = (2..=k).map(interpolation).collect();
+        let z = vec![1.0; n];
+        let mut laws = Laws::free(n);
+        // One jump closed at the left end holds the whole bar (its
+        // truncation is a single point, which the coarse spaces barely
+        // see); another, open, in the middle; two slips.
+        let jumps = [0, 32];
+        let mut contact = vec![0, 20, 32, 40];
+        for j in jumps {
+            laws.set(j, Local::Jump);
+        }
+        laws.set(20, Local::Slip(0.02));
+        laws.set(40, Local::Slip(0.5));
+        contact.sort_unstable();
+        // A net load along +z, which the closed jump holds.
+        let b: Vec<f64> = (0..n)
+            .map(|i| 0.02 + 0.1 * (0.37 * i as f64).sin())
+            .collect();
+        let energy = Energy {
+            a: &a,
+            b: &b,
+            laws: &laws,
+            contact: &contact,
+            kernel: Some((&z, n as f64)),
+        };
+        // Without presmoothing the bound is the step alone, and equals the
+        // change: every part of the step is checked.
+        for presmoothing in [1, 0] {
+            let mut hierarchy = Hierarchy::new(&a, diagonal_places(&a).unwrap(), &p).unwrap();
+            let cycle = Cycle {
+                presmoothing,
+                linear_steps: 2,
+                linear_sweeps: 1,
+                finest_sweeps: 1,
+            };
+            let mut ws = Workspace::new(n);
+            let mut v = vec![-1.0; n];
+            v[0] = 0.0;
+            let mut closed = 0;
+            for _ in 0..30 {
+                let before = v.clone();
+                let smoothing = iterate(&energy, &mut hierarchy, &p, cycle, &mut ws, &mut v);
+                let change = v
+                    .iter()
+                    .zip(&before)
+                    .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                let step = ws.step().iter().fold(0.0f64, |m, s| m.max(s.abs()));
+                let bound = smoothing + step;
+                // Up to the rounding of the additions to v (a few ulps of it).
+                let size = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                let ulps = 4.0 * f64::EPSILON * size;
+                assert!(
+                    change <= bound + ulps,
+                    "change {change:e} > bound {bound:e} (smoothing {smoothing:e}, step {step:e})"
+                );
+                // And the step is the one taken: v − v_before − step is the
+                // presmoothing's move.
+                assert!(
+                    step <= change + smoothing + ulps,
+                    "step {step:e} > change {change:e} + smoothing {smoothing:e}"
+                );
+                closed += usize::from(v[0] == 0.0);
+            }
+            assert!(
+                closed > 0,
+                "the jump stayed closed: the near-kernel step ran"
+            );
+            assert!(
+                jumps.iter().all(|&j| v[j] <= 0.0),
+                "the jumps stay admissible"
+            );
+        }
+    }
+}
