@@ -193,7 +193,9 @@ impl Level {
         }
         for &(k, full) in &self.diagonal_changed {
             let p = self.a.row_range(k).0 + usize::from(self.diag[k]);
-            self.fixed[k] = !(self.a.value_at(k, p) > FIXED_FRACTION * full);
+            // Fixed unless above the fraction (a NaN diagonal fixes it).
+            let kept = self.a.value_at(k, p).partial_cmp(&(FIXED_FRACTION * full));
+            self.fixed[k] = kept != Some(std::cmp::Ordering::Greater);
         }
     }
 }
@@ -408,7 +410,7 @@ impl Hierarchy {
                 &[][..],
                 &lv.fixed[..],
             ),
-            None => (a, &diag[..], parts.as_ref(), &shift[..], &truncated[..]),
+            None => (a, &diag[..], parts.as_ref(), &shift[..], truncated),
         };
         let sweeps = |l: usize| {
             if l == top {
