@@ -151,10 +151,12 @@ pub(crate) const ENTRY: Entry = Entry {
     memory: Memory {
         // Measured (nested schedule, the stencils and rows of A and of the
         // Galerkin levels kept once, 32-bit row offsets, the unknowns'
-        // map by formula, the start handed over), beyond the 96 MiB every
-        // run holds: 124 B per unknown at 1/1024 (0.34 GiB in all), 150 at
-        // 1/2048 (1.26 GiB), 142 at 1/4096 (4.53 GiB).
-        per_unknown: 170.0,
+        // map by formula, the start handed over, six vectors of n in the
+        // iteration, the Galerkin levels built into shared storage),
+        // beyond the 96 MiB every run holds: 96 B per unknown at 1/1024
+        // (0.28 GiB in all), 121 at 1/2048 (1.04 GiB) and at 1/4096
+        // (3.87 GiB); a fifth above that.
+        per_unknown: 145.0,
         per_unknown_log2: 0.0,
     },
 };
