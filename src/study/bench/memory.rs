@@ -109,6 +109,8 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
     let unread =
         || anyhow::anyhow!("/proc/self/status is unreadable: memory is measured on Linux only");
     let entry = solver_entry(solver)?;
+    // Refused before anything is assembled, as `solve` is.
+    crate::solve::refuse_too_large(scene, entry)?;
     crate::allocator::return_freed_memory();
     let before = status_kb("VmRSS").ok_or_else(unread)?;
     // Assembled as the solve gets it (with M only for a solver that reads
@@ -125,7 +127,7 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)
     } else {
-        Assembled::with_finest(scene, entry, d)?
+        Assembled::with_finest_checked(scene, entry, d)?
     };
     let solved = solve(
         problem,
