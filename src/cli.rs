@@ -89,12 +89,13 @@ pub enum Command {
     /// at 1/256, once each without the time limit (about 2 h, 1.5 h of it the
     /// paper's method at 1/256; --quick: seconds); and where the fastest
     /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
-    /// --quick), each in a fresh process; the multigrid goals (about 6 min):
+    /// --quick), each in a fresh process; the multigrid goals (about 11 min):
     /// tnnmg's iterations from zero at every mesh, the whole Coulomb problem
     /// by tnnmg at its defaults on the large meshes, the median of 3 runs
     /// each in a fresh process, in work units by phase, and at 1/1024 also
-    /// on one thread (1/2048 and 1/4096: one run each; 1/4096, about 10 GB,
-    /// only where that much memory is available), the paper's method with
+    /// on one thread (1/2048, 1/4096 and 1/8192: one run each, a mesh only
+    /// where four times the peak of the one before is available; 1/8192
+    /// takes about 16 GB and 4-5 min), the paper's method with
     /// relaxation.inner = multigrid at 1/1024, and tnnmg against
     /// newton-coulomb at 1/64 and 1/256. Every time is also in work units
     /// (÷ one product A·v on its mesh). Writes performance.csv,

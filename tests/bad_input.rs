@@ -82,7 +82,7 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             "power-of-two",
         ),
         (
-            Input::Args(&["info", "--problem", "1", "--h", "1/8192"]),
+            Input::Args(&["info", "--problem", "1", "--h", "1/16384"]),
             "out of range",
         ),
         (

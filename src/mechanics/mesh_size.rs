@@ -8,11 +8,13 @@ use thiserror::Error;
 
 /// Smallest and largest exponent k accepted for h = 1/2^k.
 pub const MIN_LEVEL: u32 = 1;
-pub const MAX_LEVEL: u32 = 12;
+pub const MAX_LEVEL: u32 = 13;
 
-/// A mesh size h = 1/2^k with 1/2 ≥ h ≥ 1/4096 (finer than 1/1024 for the
+/// A mesh size h = 1/2^k with 1/2 ≥ h ≥ 1/8192 (finer than 1/1024 for the
 /// solvers without a factorization only: [`Entry::max_unknowns`]; 1/4096
-/// has 33.6 million unknowns and takes `tnnmg` about 14 GB).
+/// has 33.6 million unknowns and takes `tnnmg` 3.9 GiB, 1/8192 134 million
+/// and 15.3 GiB; a run is refused up front where its memory estimate does
+/// not fit, see [`crate::memory`]).
 ///
 /// [`Entry::max_unknowns`]: contactlab_solvers::entry::Entry::max_unknowns
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -159,7 +161,7 @@ mod tests {
     #[test]
     fn refuses_what_is_not_one_over_a_power_of_two() {
         for s in [
-            "1/60", "2/64", "1/0", "0", "1", "64", "abc", "1/8192", "1/-8", "-0.125",
+            "1/60", "2/64", "1/0", "0", "1", "64", "abc", "1/16384", "1/-8", "-0.125",
         ] {
             assert!(s.parse::<MeshSize>().is_err(), "{s} was accepted");
         }

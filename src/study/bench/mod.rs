@@ -82,7 +82,7 @@ impl BenchSpec {
             large: (9..=10)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
-            multigrid_only: (11..=12)
+            multigrid_only: (11..=crate::mechanics::mesh_size::MAX_LEVEL)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
             equal_accuracy: (5..=8)

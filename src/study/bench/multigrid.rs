@@ -195,8 +195,8 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
 /// Why a mesh finer than those measured would not fit here, if it would
 /// not: its estimate, four times the unknowns of the mesh before it at
 /// that mesh's peak per unknown, with a tenth to spare, against the memory
-/// `available_kb` this machine has available now (1/4096 takes about 14
-/// GB).
+/// `available_kb` this machine has available now (1/4096 took 3.9 GiB,
+/// 1/8192 15.3 GiB).
 fn too_large(done: &[MemoryUse], h: MeshSize, available_kb: u64) -> Option<String> {
     let before = done.iter().find(|u| u.h.level() + 1 == h.level())?;
     let need = 4.0 * before.peak_kb as f64 * 1.1;
@@ -476,9 +476,14 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
             ),
         ));
         out.push(finest_goal(m, FINEST_GOAL_LEVEL, |u| {
-            (u.peak_kb as f64 <= FINEST_GOAL_GIB * GIB_KB && u.seconds <= FINEST_GOAL_SECONDS)
-                .then_some(())
-                .ok_or(format!("above {FINEST_GOAL_GIB} GiB or {FINEST_GOAL_SECONDS} s"))
+            let over: Vec<String> = [
+                (u.peak_kb as f64 > FINEST_GOAL_GIB * GIB_KB).then(|| format!("peak above {FINEST_GOAL_GIB} GiB")),
+                (u.seconds > FINEST_GOAL_SECONDS).then(|| format!("above {FINEST_GOAL_SECONDS} s")),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
+            if over.is_empty() { Ok(()) } else { Err(over.join(", ")) }
         }, &format!("h = 1/{} certified by {SOLVER}, peak at most {FINEST_GOAL_GIB} GiB, at most {FINEST_GOAL_SECONDS} s", 1u64 << FINEST_GOAL_LEVEL)));
     }
     if let Some((h, seconds, status)) = &m.paper {
