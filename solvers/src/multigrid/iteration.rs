@@ -162,9 +162,7 @@ impl Workspace {
         self.truncated.fill(false);
         self.shift.clear();
     }
-}
 
-impl Workspace {
     /// The number of unknowns it is for.
     pub(crate) fn n(&self) -> usize {
         self.c.len()
@@ -423,16 +421,8 @@ fn lap_timer(start: Instant) -> impl FnMut() -> f64 {
 #[cfg(test)]
 mod tests {
     use super::super::smoother::diagonal_places;
+    use super::super::vcycle::tests::csr;
     use super::*;
-    use nalgebra_sparse::{CooMatrix, CsrMatrix};
-
-    fn csr(t: &[(usize, usize, f64)], rows: usize, cols: usize) -> Csr {
-        let mut coo = CooMatrix::new(rows, cols);
-        for &(i, j, v) in t {
-            coo.push(i, j, v);
-        }
-        Csr::try_from(&CsrMatrix::from(&coo)).unwrap().shared()
-    }
 
     /// The 1D Laplacian on 2^k + 1 nodes with free ends: singular, its
     /// kernel the constants (a rigid translation).
@@ -446,7 +436,7 @@ mod tests {
                 t.push((i - 1, i, -1.0));
             }
         }
-        csr(&t, n, n)
+        csr(&t, n, n).shared()
     }
 
     /// Linear interpolation from 2^(k−1) + 1 to 2^k + 1 nodes.
@@ -460,7 +450,7 @@ mod tests {
                 (2 * j, j, 1.0),
             ]);
         }
-        csr(&t, 2 * nc - 1, nc)
+        csr(&t, 2 * nc - 1, nc).shared()
     }
 
     /// The stopping test's bound, the presmoothing's largest move plus the

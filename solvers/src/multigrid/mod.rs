@@ -478,8 +478,10 @@ impl Solver for Tnnmg {
             let smoothing_moved = iterate(&energy, hierarchy, p, cycle, &mut ws, &mut v);
             let stop_clock = Instant::now();
             // The exact minimization along the rigid mode.
-            let closing = z.and_then(|z| closing_translation(&laws, &contact, &v, z, fz));
-            if let (Some(z), Some(beta)) = (z, closing) {
+            let translation = z.and_then(|z| {
+                closing_translation(&laws, &contact, &v, z, fz).map(|beta| (beta, z))
+            });
+            if let Some((beta, z)) = translation {
                 for (vk, zk) in v.iter_mut().zip(z) {
                     *vk += beta * zk;
                 }
@@ -489,10 +491,7 @@ impl Solver for Tnnmg {
             // near-kernel step and the translation, taken exactly): a copy
             // of v to subtract was a vector of n, 8 bytes per unknown. The
             // bound is at least the change, so the test is no looser.
-            let (after, size) = match (z, closing) {
-                (Some(z), Some(beta)) => max_step_and_size(ws.step(), Some((beta, z)), &v),
-                _ => max_step_and_size(ws.step(), None, &v),
-            };
+            let (after, size) = max_step_and_size(ws.step(), translation, &v);
             let moved = smoothing_moved + after;
             let change = moved / u;
             let control = observer.observe(&Progress {

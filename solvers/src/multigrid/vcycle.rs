@@ -516,12 +516,13 @@ pub(crate) fn truncated_product(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::super::smoother::diagonal_places;
     use super::*;
     use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
-    fn csr(t: &[(usize, usize, f64)], rows: usize, cols: usize) -> Csr {
+    /// The matrix of triplets `t` (duplicates summed).
+    pub(in crate::multigrid) fn csr(t: &[(usize, usize, f64)], rows: usize, cols: usize) -> Csr {
         let mut coo = CooMatrix::new(rows, cols);
         for &(i, j, v) in t {
             coo.push(i, j, v);
