@@ -296,6 +296,8 @@ fn the_nested_schedule_solves_the_coarse_levels_to_their_own_epsilon() {
 struct Recording {
     inner: contactlab::solvers::multigrid::Tnnmg,
     log: Vec<Option<usize>>,
+    /// (unknowns, the accuracy asked, iterations) of each solve.
+    asked: Vec<(usize, Option<f64>, usize)>,
 }
 
 /// Every level of the continuation of paper problem `k` at h = 1/2^`level`.
@@ -317,7 +319,11 @@ impl contactlab::solvers::Solver for Recording {
         observer: &mut dyn contactlab::solvers::Observer,
     ) -> contactlab::solvers::Solution {
         self.log.push(Some(problem.n()));
-        self.inner.solve(problem, friction, start, observer)
+        let accuracy = start.as_ref().and_then(|s| s.accuracy);
+        let solution = self.inner.solve(problem, friction, start, observer);
+        self.asked
+            .push((problem.n(), accuracy, solution.iterations.outer));
+        solution
     }
 
     fn release(&mut self) {
@@ -356,6 +362,61 @@ fn the_nested_schedule_releases_the_coarse_levels_once_done_with_them() {
     );
     assert!(after[1..].iter().all(|&n| n == Some(finest)), "{after:?}");
     assert!(after.len() > 1, "the finest level is solved after");
+}
+
+/// Without friction the fixed point is one solve per level and asks no
+/// accuracy of its own: the nested schedule asks each coarse level's solve
+/// (but the coarsest's, from zero) for the coarse ε instead (its answer only starts the next level), and
+/// the finest for nothing but the solver's own tolerance. The coarse levels
+/// then take fewer iterations than when asked for ε itself, and the finest
+/// answer is the same. Fails if the coarse ε is not asked (the same
+/// iterations) or reaches the finest level (its answer would move by about
+/// that ε).
+#[test]
+fn a_frictionless_nested_schedule_asks_the_coarse_levels_for_the_coarse_epsilon() {
+    use contactlab::coulomb::continuation::{Continuation, Schedule};
+    use contactlab::coulomb::fixed_point::{CoulombSettings, friction_fixed_point};
+
+    let run = |coarse_epsilon: f64| {
+        let mut levels = continuation_levels(1, 7);
+        let mut scene = problem(1, 7);
+        scene.friction = 0.0;
+        levels = levels
+            .iter()
+            .map(|d| Discretization::new(&scene, d.h()).unwrap())
+            .collect();
+        let finest = levels.last().unwrap().problem.n();
+        let mut solver = Recording::default();
+        let mut step = Continuation::new(levels, &mut solver, Schedule::Nested);
+        let settings = CoulombSettings {
+            coarse_epsilon,
+            ..CoulombSettings::default()
+        };
+        let out = friction_fixed_point(&mut step, &settings, &mut Silent);
+        drop(step);
+        assert!(out.status.is_converged(), "{}", out.detail);
+        let (coarse, fine): (Vec<_>, Vec<_>) =
+            solver.asked.iter().partition(|(n, _, _)| *n < finest);
+        assert!(fine.iter().all(|(_, asked, _)| asked.is_none()), "{fine:?}");
+        // The coarsest level starts from zero, without a start to carry
+        // an accuracy; every other coarse level starts from the one below.
+        let epsilon = settings.epsilon.max(coarse_epsilon);
+        assert!(coarse.len() > 2, "{coarse:?}");
+        assert!(
+            coarse[1..]
+                .iter()
+                .all(|(_, asked, _)| *asked == Some(epsilon)),
+            "{coarse:?}"
+        );
+        let iterations: usize = coarse.iter().map(|(_, _, k)| k).sum();
+        (iterations, out.solution.pressure, scene)
+    };
+    let (loose, p_loose, scene) = run(1e-3);
+    let (tight, p_tight, _) = run(1e-7);
+    let gap = pressure_gap(&scene, &p_loose, &p_tight);
+    eprintln!("coarse iterations: {loose} at 1e-3, {tight} at 1e-7; finest gap {gap:e}·P");
+    assert!(loose < tight, "{loose} vs {tight}");
+    assert!(gap <= 1e-8, "the finest answers differ by {gap:e}·P");
 }
 
 /// A nested continuation stepped by hand, without its answers handed back

@@ -238,9 +238,15 @@ impl GivenFrictionStep for Continuation<'_> {
         for idx in 0..top {
             let level = at(&self.levels, idx);
             let g0 = carry.as_ref().map(|(_, p)| bound_of(&level.problem, p));
+            // Without friction the fixed point is one solve and sets no
+            // accuracy of its own: a coarse level's solve is then asked for
+            // the coarse ε (its answer only starts the next level), not
+            // for the solver's full tolerance.
+            let frictionless = !level.problem.contacts().iter().any(|c| c.coefficient > 0.0);
             let mut single = NestedLevel {
                 inner: SingleLevel::starting(&level.problem, &mut *self.solver, carry.take()),
                 g0,
+                need: frictionless.then_some(coarse.epsilon),
             };
             let c = friction_fixed_point(&mut single, &coarse, observer);
             let done = c.total_iterations();
@@ -279,6 +285,9 @@ impl GivenFrictionStep for Continuation<'_> {
 struct NestedLevel<'a> {
     inner: SingleLevel<'a>,
     g0: Option<Vec<f64>>,
+    /// The accuracy its steps are asked for when the fixed point asks none
+    /// (a frictionless problem: [`Start::accuracy`]).
+    need: Option<f64>,
 }
 
 impl GivenFrictionStep for NestedLevel<'_> {
@@ -292,7 +301,7 @@ impl GivenFrictionStep for NestedLevel<'_> {
         accuracy: Option<f64>,
         observer: &mut dyn Observer,
     ) -> Solution {
-        self.inner.solve_step(g, accuracy, observer)
+        self.inner.solve_step(g, accuracy.or(self.need), observer)
     }
 
     fn keep(&mut self, solution: Solution) {

@@ -52,7 +52,11 @@ pub struct CoulombSettings {
     /// `epsilon` is; the larger of the two is used there. A coarse level's
     /// answer is only the next level's start, and nested iteration (full
     /// multigrid) needs each level solved to about its discretization
-    /// error, not beyond ([`DEFAULT_COARSE_EPSILON`]).
+    /// error, not beyond ([`DEFAULT_COARSE_EPSILON`]). Without friction,
+    /// where the fixed point is one solve and asks no accuracy, it is the
+    /// accuracy those levels' solves are asked for ([`Start::accuracy`]).
+    ///
+    /// [`Start::accuracy`]: contactlab_solvers::Start
     pub coarse_epsilon: f64,
 }
 
@@ -137,7 +141,7 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "coarse_epsilon",
         fields: &["coarse_epsilon"],
-        help: "nested schedule: the friction tolerance on the levels below the finest, read as epsilon is (the larger of the two is used there); their answers only start the next level",
+        help: "nested schedule: the friction tolerance on the levels below the finest, read as epsilon is (the larger of the two is used there); their answers only start the next level; without friction, the accuracy of the pressure their solves are asked for (solvers that read it: tnnmg)",
         kind: Kind::Positive,
     },
     Knob {
