@@ -302,11 +302,15 @@ struct Recording {
 
 /// Every level of the continuation of paper problem `k` at h = 1/2^`level`.
 fn continuation_levels(k: u32, level: u32) -> Vec<Discretization> {
-    let scene = problem(k, level);
+    levels_of(&problem(k, level))
+}
+
+/// Every level of `scene`'s continuation.
+fn levels_of(scene: &Scene) -> Vec<Discretization> {
     scene
         .levels
         .iter()
-        .map(|&h| Discretization::new(&scene, h).unwrap())
+        .map(|&h| Discretization::new(scene, h).unwrap())
         .collect()
 }
 
@@ -366,8 +370,9 @@ fn the_nested_schedule_releases_the_coarse_levels_once_done_with_them() {
 
 /// Without friction the fixed point is one solve per level and asks no
 /// accuracy of its own: the nested schedule asks each coarse level's solve
-/// (but the coarsest's, from zero) for the coarse ε instead (its answer only starts the next level), and
-/// the finest for nothing but the solver's own tolerance. The coarse levels
+/// (but the coarsest's, from zero) for the coarse ε instead (its answer
+/// only starts the next level), and the finest for nothing but the
+/// solver's own tolerance. The coarse levels
 /// then take fewer iterations than when asked for ε itself, and the finest
 /// answer is the same. Fails if the coarse ε is not asked (the same
 /// iterations) or reaches the finest level (its answer would move by about
@@ -378,13 +383,9 @@ fn a_frictionless_nested_schedule_asks_the_coarse_levels_for_the_coarse_epsilon(
     use contactlab::coulomb::fixed_point::{CoulombSettings, friction_fixed_point};
 
     let run = |coarse_epsilon: f64| {
-        let mut levels = continuation_levels(1, 7);
         let mut scene = problem(1, 7);
         scene.friction = 0.0;
-        levels = levels
-            .iter()
-            .map(|d| Discretization::new(&scene, d.h()).unwrap())
-            .collect();
+        let levels = levels_of(&scene);
         let finest = levels.last().unwrap().problem.n();
         let mut solver = Recording::default();
         let mut step = Continuation::new(levels, &mut solver, Schedule::Nested);
