@@ -30,7 +30,7 @@ use proptest::prelude::*;
 /// A true answer of problem `k` at h = 1/8 (newton-coulomb, tight), its
 /// discretization, and its x along Γ_K.
 struct Truth {
-    d: Discretization,
+    d: std::sync::Arc<Discretization>,
     v: Vec<f64>,
     p: Vec<f64>,
     q: Vec<f64>,

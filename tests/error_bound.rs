@@ -23,7 +23,7 @@ struct Answer {
 }
 
 struct Case {
-    d: Discretization,
+    d: std::sync::Arc<Discretization>,
     g: Vec<f64>,
     reference: Answer,
 }
@@ -38,7 +38,7 @@ fn solve_given(
     scene: &Scene,
     solver: &str,
     settings: &Settings,
-) -> (Discretization, Vec<f64>, Answer) {
+) -> (std::sync::Arc<Discretization>, Vec<f64>, Answer) {
     // The bound g from the problem's pressure scale, as the tnnmg goal does.
     let probe = solve_scene(
         scene,

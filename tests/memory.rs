@@ -336,6 +336,38 @@ fn the_estimates_hold_the_measured_peaks() {
     assert!((peak as f64) < need, "certify --forces: {peak}");
 }
 
+/// What a solve needs beside a finest level it is lent (the Python
+/// package's problem) leaves out less than that level holds: the resident
+/// growth across its assembly, as `bench-one` measures it, at 1/256 and
+/// 1/512. A floor set above the level would estimate such a solve short.
+#[test]
+fn a_lent_level_is_left_out_of_the_need_at_most_whole() {
+    use contactlab::mechanics::mesh_size::MeshSize;
+    use contactlab::memory;
+    let tnnmg = contactlab::solvers::registry::by_name("tnnmg").unwrap();
+    for h in ["1/256", "1/512"] {
+        let out = contactlab()
+            .args(["bench-one", "--problem", "1", "--h", h, "--solver", "tnnmg"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let run: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let held = run["problem_kb"].as_f64().unwrap() * 1024.0;
+        let mesh: MeshSize = h.parse().unwrap();
+        let left_out = memory::solve(mesh, tnnmg) - memory::solve_beside_held(mesh, tnnmg);
+        assert!(
+            left_out > 0.0 && left_out < held,
+            "at h = {h}: {} left out, the level holds {}",
+            memory::Bytes(left_out),
+            memory::Bytes(held)
+        );
+    }
+}
+
 /// `info` works at every accepted h in memory of the problem's size: its
 /// kernel measurement no longer factors A at the finest mesh (4 GB at
 /// 1/1024, 16 GB and killed at 1/2048); at 1/1024 it peaks below the

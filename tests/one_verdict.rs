@@ -24,7 +24,7 @@ use proptest::prelude::*;
 
 /// Problem 1 at h = 1/16 and its answer by newton-coulomb.
 struct Truth {
-    d: Discretization,
+    d: std::sync::Arc<Discretization>,
     v: Vec<f64>,
     p: Vec<f64>,
     q: Vec<f64>,

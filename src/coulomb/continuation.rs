@@ -20,6 +20,7 @@
 //! took 33 of 48 s).
 
 use std::borrow::Cow;
+use std::sync::Arc;
 
 use contactlab_solvers::{
     ContactProblem, Friction, Iterations, Observer, Solution, Solver, Start, Timing,
@@ -51,7 +52,7 @@ pub struct LevelCount {
 /// (a third of the finest level's memory).
 pub struct Continuation<'a> {
     /// None: a coarse level dropped.
-    levels: Vec<Option<Discretization>>,
+    levels: Vec<Option<Arc<Discretization>>>,
     solver: &'a mut dyn Solver,
     schedule: Schedule,
     last: Option<Solution>,
@@ -62,11 +63,14 @@ pub struct Continuation<'a> {
 }
 
 impl<'a> Continuation<'a> {
+    /// `levels` owned, or lent (an [`Arc`] the caller keeps: the Python
+    /// package's problem lends its finest level, which a copy would double).
     pub fn new(
-        levels: Vec<Discretization>,
+        levels: impl IntoIterator<Item = impl Into<Arc<Discretization>>>,
         solver: &'a mut dyn Solver,
         schedule: Schedule,
     ) -> Self {
+        let levels: Vec<Arc<Discretization>> = levels.into_iter().map(Into::into).collect();
         let counts = levels
             .iter()
             .map(|d| LevelCount {
@@ -94,15 +98,11 @@ impl<'a> Continuation<'a> {
 
     /// The meshes of the levels it still holds, coarse to fine.
     pub fn kept_levels(&self) -> Vec<MeshSize> {
-        self.levels
-            .iter()
-            .flatten()
-            .map(Discretization::h)
-            .collect()
+        self.levels.iter().flatten().map(|d| d.h()).collect()
     }
 
     /// The finest level, the continuation done.
-    pub fn into_finest(mut self) -> Discretization {
+    pub fn into_finest(mut self) -> Arc<Discretization> {
         self.levels
             .pop()
             .flatten()
@@ -111,9 +111,9 @@ impl<'a> Continuation<'a> {
 }
 
 /// Level `idx`; the schedules visit no level they dropped.
-fn at(levels: &[Option<Discretization>], idx: usize) -> &Discretization {
+fn at(levels: &[Option<Arc<Discretization>>], idx: usize) -> &Discretization {
     levels[idx]
-        .as_ref()
+        .as_deref()
         .expect("a schedule visits only the levels it keeps")
 }
 

@@ -14,6 +14,7 @@
 mod outcome;
 pub mod summary;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -34,9 +35,12 @@ pub use outcome::{FixedPoint, Outcome, Work};
 
 /// A scene assembled for one solver: its finest level, and before it the
 /// coarser levels its mesh continuation visits (only if it warm-starts).
+/// Each is shared ([`Arc`]), so that a caller that keeps the finest level
+/// (the Python package's problem) lends it to the solve instead of copying
+/// it: at h = 1/8192 the copy was 6.7 GB.
 pub struct Assembled {
     /// Coarse to fine; the last is the finest.
-    levels: Vec<Discretization>,
+    levels: Vec<Arc<Discretization>>,
 }
 
 impl Assembled {
@@ -49,22 +53,29 @@ impl Assembled {
     /// ([`Entry::uses_mass`]).
     pub fn for_solver(scene: &Scene, entry: &'static Entry) -> Result<Self> {
         refuse_too_large(scene, entry)?;
-        Self::around(scene, entry, level_for(scene, scene.finest(), entry)?)
+        Self::around(
+            scene,
+            entry,
+            Arc::new(level_for(scene, scene.finest(), entry)?),
+        )
     }
 
     /// As [`Assembled::for_solver`], with the finest level already
-    /// assembled (the Python package's problem holds it: no second
-    /// assembly of the finest mesh per solve).
-    pub fn with_finest(
+    /// assembled and kept by the caller (the Python package's problem: no
+    /// second assembly of the finest mesh per solve): the solve reads it
+    /// where it is, and the memory check counts what the solve needs beside it
+    /// ([`crate::memory::check_solve_beside`]), not the level a second time.
+    pub fn lending(
         scene: &Scene,
         entry: &'static Entry,
-        finest: Discretization,
+        finest: Arc<Discretization>,
     ) -> Result<Self> {
-        refuse_too_large(scene, entry)?;
+        refuse_too_large_beside(scene, entry, true)?;
         Self::around(scene, entry, finest)
     }
 
-    /// As [`Assembled::with_finest`], for a caller that refused a solve too
+    /// As [`Assembled::for_solver`] with the finest level already
+    /// assembled, for a caller that refused a solve too
     /// large ([`refuse_too_large`]) before it assembled `finest`: a second
     /// check now would count the finest level twice, in what the process
     /// holds and in the need (`bench-one` at 1/8192 was refused for 19.6
@@ -75,13 +86,13 @@ impl Assembled {
         entry: &'static Entry,
         finest: Discretization,
     ) -> Result<Self> {
-        Self::around(scene, entry, finest)
+        Self::around(scene, entry, Arc::new(finest))
     }
 
     /// The coarser levels `entry` needs assembled around `finest`, checked
     /// already: a second check after the finest is assembled would count
     /// it twice, in what the process holds and in the need.
-    fn around(scene: &Scene, entry: &'static Entry, finest: Discretization) -> Result<Self> {
+    fn around(scene: &Scene, entry: &'static Entry, finest: Arc<Discretization>) -> Result<Self> {
         anyhow::ensure!(
             finest.h() == scene.finest(),
             "the finest level given is on h = {}, the scene's finest mesh is {}",
@@ -91,7 +102,7 @@ impl Assembled {
         let mut levels = Vec::with_capacity(scene.levels.len());
         if entry.warm_starts && scene.levels.len() > 1 {
             for &h in &scene.levels[..scene.levels.len() - 1] {
-                levels.push(level_for(scene, h, entry)?);
+                levels.push(Arc::new(level_for(scene, h, entry)?));
             }
         }
         levels.push(finest);
@@ -102,7 +113,7 @@ impl Assembled {
     /// scene assembled without the check of condition (13)).
     pub fn one_level(finest: Discretization) -> Self {
         Self {
-            levels: vec![finest],
+            levels: vec![Arc::new(finest)],
         }
     }
 
@@ -111,7 +122,7 @@ impl Assembled {
     }
 
     /// The finest level, the coarser ones dropped.
-    pub fn into_finest(mut self) -> Discretization {
+    pub fn into_finest(mut self) -> Arc<Discretization> {
         self.levels.pop().expect("an assembled scene has a level")
     }
 }
@@ -152,6 +163,16 @@ impl TooLarge {
 /// assembled is copied by the solve, so it counts whole). The unknowns are
 /// counted from h alone.
 pub fn refuse_too_large(scene: &Scene, entry: &'static Entry) -> Result<(), TooLarge> {
+    refuse_too_large_beside(scene, entry, false)
+}
+
+/// As [`refuse_too_large`]; with `held`, for a finest level the process
+/// already holds and lends to the solve: what the solve needs beside it.
+fn refuse_too_large_beside(
+    scene: &Scene,
+    entry: &'static Entry,
+    held: bool,
+) -> Result<(), TooLarge> {
     let h = scene.finest();
     let n = crate::memory::unknowns(h);
     if let Some(cap) = entry.max_unknowns.filter(|&cap| n > cap) {
@@ -162,11 +183,12 @@ pub fn refuse_too_large(scene: &Scene, entry: &'static Entry) -> Result<(), TooL
             solver: entry.name,
         });
     }
-    crate::memory::check_solve(
+    crate::memory::check_solve_beside(
         &scene.name,
         h,
         entry,
         &contactlab_solvers::registry::solvers(),
+        held,
     )?;
     Ok(())
 }
@@ -515,7 +537,8 @@ pub fn solve_scene(
 
 /// A solve with the finest level it was certified on: what reports need.
 pub struct Solved {
-    pub finest: Discretization,
+    /// The finest level: the solve's own, or the one lent to it.
+    pub finest: Arc<Discretization>,
     pub outcome: Outcome,
 }
 

@@ -36,7 +36,7 @@ pub struct Measured {
     /// The convergence history (kept only when asked).
     pub history: Vec<Progress>,
     /// The finest level it was certified on (kept only when asked).
-    pub finest: Option<Discretization>,
+    pub finest: Option<std::sync::Arc<Discretization>>,
 }
 
 impl Measured {
@@ -64,7 +64,7 @@ impl Measured {
     /// The finest level, the answer and its bound, if kept.
     pub fn solution(&self) -> Option<(&Discretization, &Solution, &[f64])> {
         self.finest
-            .as_ref()
+            .as_deref()
             .map(|d| (d, &self.outcome.solution, self.outcome.bound.as_slice()))
     }
 }
@@ -93,7 +93,7 @@ fn solve_once(
     spec: &TrialSpec,
     reference: Option<&Reference>,
     observer: &mut dyn Observer,
-) -> Result<(Discretization, Outcome)> {
+) -> Result<(std::sync::Arc<Discretization>, Outcome)> {
     let caps = Caps {
         work: spec.work,
         seconds: spec.seconds,
