@@ -12,11 +12,8 @@
 //! row as a base and offsets from it ([`RowColumns`]): the same entries in
 //! the same order, so the same sums to the bit.
 
-use std::collections::HashMap;
-use std::hash::BuildHasherDefault;
-
 use super::csr::ColumnIndex;
-use super::values::Prehashed;
+use super::sharer::Sharer;
 
 /// One row's columns: `base + rel[k]` for the stored offsets `rel`,
 /// increasing (base 0 for indices stored whole). Equal when they name the
@@ -167,28 +164,23 @@ fn whole<O: ColumnIndex>(view: Columns<'_>, offsets: &[O], entries: usize) -> Ve
 /// (256 KB): a matrix with more distinct stencils keeps its columns whole.
 pub(super) const MAX_STENCILS: usize = 1 << 16;
 
-/// How many of the last rows' stencils [`StencilSharer::push`] tries
-/// before it hashes a row.
-const RECENT: usize = 4;
-
 /// Builds shared columns row by row, so that an assembly never holds its
-/// columns whole ([`StoredColumns::share`] for columns already whole).
+/// columns whole ([`StoredColumns::share`] for columns already whole). A
+/// row's stencil is the word d (its distance to its first column)
+/// followed by its columns' offsets from that first column.
 pub(super) struct StencilSharer {
-    table: Vec<u32>,
-    start: Vec<u32>,
+    rows: Sharer<u32>,
+    /// The stencil of the row being taken (scratch: no allocation a row).
+    stencil: Vec<u32>,
     entries: usize,
-    seen: HashMap<u64, Vec<u32>, BuildHasherDefault<Prehashed>>,
-    recent: [u32; RECENT],
 }
 
 impl StencilSharer {
     pub(super) fn with_rows(rows: usize) -> Self {
         Self {
-            table: Vec::new(),
-            start: Vec::with_capacity(rows),
+            rows: Sharer::with_rows(rows, MAX_STENCILS),
+            stencil: Vec::new(),
             entries: 0,
-            seen: HashMap::default(),
-            recent: [u32::MAX; RECENT],
         }
     }
 
@@ -196,47 +188,18 @@ impl StencilSharer {
     /// increasing. False if it cannot be shared: its first column is
     /// beyond i, or the stencils would exceed [`MAX_STENCILS`].
     pub(super) fn push(&mut self, i: usize, cols: &[u32]) -> bool {
-        debug_assert_eq!(i, self.start.len(), "rows in order");
+        debug_assert_eq!(i, self.rows.start.len(), "rows in order");
         let first = cols.first().map_or(i, |&c| c as usize);
         let Some(d) = i.checked_sub(first).and_then(|d| u32::try_from(d).ok()) else {
             return false;
         };
-        let holds = |table: &[u32], s: u32| {
-            let s = s as usize;
-            table.get(s) == Some(&d)
-                && table
-                    .get(s + 1..s + 1 + cols.len())
-                    .is_some_and(|t| t.iter().zip(cols).all(|(&r, &c)| r == c - first as u32))
-        };
-        self.entries += cols.len();
-        let mut order = (0..RECENT).map(|back| self.recent[(i + RECENT - 2 + back) % RECENT]);
-        if let Some(s) = order.find(|&s| holds(&self.table, s)) {
-            self.start.push(s);
-            return true;
+        self.stencil.clear();
+        self.stencil.push(d);
+        self.stencil.extend(cols.iter().map(|&c| c - first as u32));
+        if !self.rows.push(&self.stencil) {
+            return false;
         }
-        let hash = cols
-            .iter()
-            .fold((u64::from(d) << 32) ^ cols.len() as u64, |h, &c| {
-                (h ^ u64::from(c - first as u32))
-                    .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-                    .rotate_left(29)
-            });
-        let candidates = self.seen.entry(hash).or_default();
-        let s = match candidates.iter().copied().find(|&s| holds(&self.table, s)) {
-            Some(s) => s,
-            None => {
-                if self.table.len() + 1 + cols.len() > MAX_STENCILS {
-                    return false;
-                }
-                let s = self.table.len() as u32;
-                self.table.push(d);
-                self.table.extend(cols.iter().map(|&c| c - first as u32));
-                candidates.push(s);
-                s
-            }
-        };
-        self.start.push(s);
-        self.recent[i % RECENT] = s;
+        self.entries += cols.len();
         true
     }
 
@@ -244,17 +207,17 @@ impl StencilSharer {
     /// offsets), for a matrix that turned out to have too many stencils.
     pub(super) fn to_plain<O: ColumnIndex>(&self, offsets: &[O]) -> Vec<u32> {
         let view = Columns::Shared {
-            table: &self.table,
-            start: &self.start,
+            table: &self.rows.table,
+            start: &self.rows.start,
         };
         whole(view, offsets, self.entries)
     }
 
-    pub(super) fn finish(mut self) -> StoredColumns {
-        self.table.shrink_to_fit();
+    pub(super) fn finish(self) -> StoredColumns {
+        let (table, start) = self.rows.finish();
         StoredColumns::Shared {
-            table: self.table,
-            start: self.start,
+            table,
+            start,
             entries: self.entries,
         }
     }

@@ -5,6 +5,7 @@ mod builder;
 mod cholesky;
 mod columns;
 mod csr;
+mod sharer;
 pub mod values;
 
 pub use builder::CsrBuilder;

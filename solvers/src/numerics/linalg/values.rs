@@ -12,10 +12,8 @@
 //! sweeps) read the same numbers in the same order: the same sums to the
 //! bit, and less memory traffic.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use super::csr::ColumnIndex;
+use super::sharer::Sharer;
 
 /// Row i's values (at stored positions lo..hi), whichever way they are
 /// stored. The kernels that stream a matrix are generic over it, so that
@@ -196,56 +194,6 @@ pub(super) enum Stored {
 /// row by row.
 const MAX_TABLE: usize = 1 << 16;
 
-/// How many of the last rows' starts [`Stored::share`] tries before it
-/// hashes a row.
-const RECENT: usize = 4;
-
-/// The rows' own hash (below) is the map's key: no second hashing.
-#[derive(Default)]
-pub(super) struct Prehashed(u64);
-
-impl Hasher for Prehashed {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, _: &[u8]) {
-        unreachable!("only u64 keys are hashed")
-    }
-    fn write_u64(&mut self, h: u64) {
-        self.0 = h;
-    }
-}
-
-/// A hash of a row's bit patterns and length.
-fn row_hash(row: &[f64]) -> u64 {
-    bits(row).iter().fold(row.len() as u64, |h, &v| {
-        (h ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29)
-    })
-}
-
-/// The bit patterns of a row.
-fn bits(row: &[f64]) -> &[u64] {
-    // SAFETY: f64 and u64 have the same size and alignment, and every bit
-    // pattern is a valid u64.
-    unsafe { std::slice::from_raw_parts(row.as_ptr().cast::<u64>(), row.len()) }
-}
-
-/// Whether two rows hold the same bit patterns (−0.0 apart from 0.0, a
-/// NaN's payload kept), so that sharing gives back every bit.
-/// (A loop, not `==`: that calls memcmp, whose call costs more than a
-/// stencil's dozen words.)
-fn same_bits(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && bits(a).iter().zip(bits(b)).all(|(x, y)| x == y)
-}
-
-/// Whether `table` holds `row` from `start` on, bit for bit.
-fn holds(table: &[f64], start: u32, row: &[f64]) -> bool {
-    let s = start as usize;
-    table
-        .get(s..s + row.len())
-        .is_some_and(|t| same_bits(t, row))
-}
-
 impl Stored {
     pub(super) fn view(&self) -> Values<'_> {
         match self {
@@ -289,80 +237,44 @@ impl Stored {
 /// Builds shared values row by row, so that an assembly never holds its
 /// values whole ([`Stored::share`] for values already whole).
 pub(super) struct RowSharer {
-    table: Vec<f64>,
-    start: Vec<u32>,
+    rows: Sharer<f64>,
     entries: usize,
-    seen: HashMap<u64, Vec<u32>, BuildHasherDefault<Prehashed>>,
-    /// The starts of the last rows met: on a mesh a row's stencil is
-    /// mostly that of a row shortly before it, found without hashing.
-    recent: [u32; RECENT],
 }
 
 impl RowSharer {
     pub(super) fn with_rows(rows: usize) -> Self {
         Self {
-            table: Vec::new(),
-            start: Vec::with_capacity(rows),
+            rows: Sharer::with_rows(rows, MAX_TABLE),
             entries: 0,
-            seen: HashMap::default(),
-            recent: [u32::MAX; RECENT],
         }
     }
 
     /// Takes the next row; false if the distinct rows would exceed
     /// [`MAX_TABLE`] values.
     pub(super) fn push(&mut self, row: &[f64]) -> bool {
-        let i = self.start.len();
-        // Row i − 2 first: the same kind of node's other component comes
-        // two rows on.
-        let mut order = (0..RECENT).map(|back| self.recent[(i + RECENT - 2 + back) % RECENT]);
-        if let Some(s) = order.find(|&s| holds(&self.table, s, row)) {
-            self.start.push(s);
-            self.entries += row.len();
-            return true;
+        if !self.rows.push(row) {
+            return false;
         }
-        let candidates = self.seen.entry(row_hash(row)).or_default();
-        let found = candidates
-            .iter()
-            .copied()
-            .find(|&s| holds(&self.table, s, row));
-        let s = match found {
-            Some(s) => s,
-            None => {
-                if self.table.len() + row.len() > MAX_TABLE {
-                    return false;
-                }
-                let s = self.table.len() as u32;
-                self.table.extend_from_slice(row);
-                candidates.push(s);
-                s
-            }
-        };
-        self.start.push(s);
         self.entries += row.len();
-        self.recent[i % RECENT] = s;
         true
     }
 
     /// The rows taken so far, each whole, in order (`offsets`: their row
     /// offsets), for a matrix that turned out to have too many.
     pub(super) fn to_plain<O: ColumnIndex>(&self, offsets: &[O]) -> Vec<f64> {
-        self.view().to_vec(offsets)
-    }
-
-    fn view(&self) -> Values<'_> {
         Values::Shared(SharedRows {
-            table: &self.table,
-            start: &self.start,
+            table: &self.rows.table,
+            start: &self.rows.start,
             entries: self.entries,
         })
+        .to_vec(offsets)
     }
 
-    pub(super) fn finish(mut self) -> Stored {
-        self.table.shrink_to_fit();
+    pub(super) fn finish(self) -> Stored {
+        let (table, start) = self.rows.finish();
         Stored::Shared {
-            table: self.table,
-            start: self.start,
+            table,
+            start,
             entries: self.entries,
         }
     }
