@@ -121,3 +121,32 @@ impl<const K: usize> CsrBuilder<K> {
             .unwrap_or_else(|_| unreachable!("one matrix per value sink")))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows whose entries add up past what 32-bit offsets hold are refused
+    /// with their whole count, not wrapped into a matrix whose rows would
+    /// read other rows' entries: 131 073 rows of one band of 32 768
+    /// entries, 2³² + 32 768 in all (one stencil and one row of values,
+    /// each kept once, so that the test itself holds a few hundred KB).
+    #[test]
+    fn entries_past_32_bit_offsets_are_refused_whole() {
+        let width = 1usize << 15;
+        let rows = (1usize << 17) + 1;
+        let mut builder = CsrBuilder::<1>::new(rows, rows + width);
+        let values = vec![1.0; width];
+        let mut cols = vec![0u32; width];
+        for i in 0..rows {
+            for (q, c) in cols.iter_mut().enumerate() {
+                *c = (i + q) as u32;
+            }
+            builder.push_row(&cols, [&values]);
+        }
+        assert!(matches!(
+            builder.finish(),
+            Err(CsrError::TooManyEntries(n)) if n == rows * width
+        ));
+    }
+}
