@@ -33,6 +33,81 @@ pub const BASE_BYTES: f64 = 96.0 * MIB;
 /// exceeds its peak resident memory by 200-400 MiB.
 pub const RESERVED_ADDRESS_SPACE: f64 = 512.0 * MIB;
 
+/// What faer's dense products reserve on the threads that run them,
+/// counted against an address-space or data limit only. Their
+/// matrix-product kernel (private-gemm-x86) gives each thread, at its first
+/// product, a packing buffer of twice the L3 cache, which is mostly never
+/// touched: it is in the address space and the data segment, not in the
+/// resident peak. On a machine whose L3 reads 260 MiB that is 520 MiB a
+/// thread: `solve --problem 1 --h 1/256 --solver newton-coulomb`
+/// (estimated 325 MB) aborted under `ulimit -v` 1.8 GB, with two such
+/// allocations failing at once, and runs under 2.0 GB. Counted here for
+/// every core (faer's pool) and the main thread, with the L3 read as that
+/// kernel reads it ([`product_cache_bytes`]); none where it cannot be read.
+pub fn dense_product_reserve() -> f64 {
+    static RESERVE: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *RESERVE.get_or_init(|| {
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) + 1;
+        threads as f64 * 2.0 * product_cache_bytes().unwrap_or(0.0)
+    })
+}
+
+/// The L3 cache as private-gemm-x86 sizes its buffers by it: the largest
+/// level-3 data or unified cache of any CPU in sysfs, at least 2 MiB and
+/// four times the largest level-2 one. None where sysfs says nothing.
+fn product_cache_bytes() -> Option<f64> {
+    let mut largest = [0.0f64; 4];
+    for cpu in std::fs::read_dir("/sys/devices/system/cpu").ok()?.flatten() {
+        let Ok(caches) = std::fs::read_dir(cpu.path().join("cache")) else {
+            continue;
+        };
+        for index in caches.flatten() {
+            let field = |name: &str| small_file(&index.path().join(name));
+            let (Some(level), Some(kind), Some(size)) =
+                (field("level"), field("type"), field("size"))
+            else {
+                continue;
+            };
+            let level: usize = level.parse().unwrap_or(0);
+            if !matches!(kind.as_str(), "Data" | "Unified") || !(2..=3).contains(&level) {
+                continue;
+            }
+            if let Some(bytes) = cache_size_bytes(&size) {
+                largest[level] = largest[level].max(bytes);
+            }
+        }
+    }
+    (largest[3] > 0.0).then(|| largest[3].max(4.0 * largest[2]).max(2.0 * MIB))
+}
+
+/// A sysfs cache size (`266240K`, `2M`, `512`) in bytes.
+fn cache_size_bytes(text: &str) -> Option<f64> {
+    let (digits, unit) = match text.strip_suffix(['K', 'M', 'G']) {
+        Some(d) => (d, &text[d.len()..]),
+        None => (text, ""),
+    };
+    let scale = match unit {
+        "K" => 1024.0,
+        "M" => MIB,
+        "G" => 1024.0 * MIB,
+        _ => 1.0,
+    };
+    digits.parse::<u64>().ok().map(|n| n as f64 * scale)
+}
+
+/// The trimmed text of a small kernel file (sysfs), read to at most 64
+/// bytes.
+fn small_file(path: &std::path::Path) -> Option<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(64)
+        .read_to_string(&mut text)
+        .ok()?;
+    Some(text.trim().to_string())
+}
+
 /// The assembled problem with its temporaries, per unknown: A (its
 /// stencils and rows of values kept once, built row by row), f, the mesh,
 /// the unknowns' map and the prolongations of every level; measured at its
@@ -179,13 +254,15 @@ pub fn room() -> Option<Room> {
     offer(
         rlimit(libc::RLIMIT_AS)
             .zip(status_kb("VmSize"))
-            .map(|(limit, used)| limit - kib(used) - RESERVED_ADDRESS_SPACE),
+            .map(|(limit, used)| {
+                limit - kib(used) - RESERVED_ADDRESS_SPACE - dense_product_reserve()
+            }),
         Bound::AddressSpace,
     );
     offer(
         rlimit(libc::RLIMIT_DATA)
             .zip(status_kb("VmData"))
-            .map(|(limit, used)| limit - kib(used)),
+            .map(|(limit, used)| limit - kib(used) - dense_product_reserve()),
         Bound::Data,
     );
     offer(cgroup_room(), Bound::Cgroup);
@@ -414,6 +491,18 @@ pub fn check_solve_beside(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sysfs writes cache sizes with a unit suffix; a size it cannot read
+    /// is none, not zero.
+    #[test]
+    fn cache_sizes_read_with_their_units() {
+        assert_eq!(cache_size_bytes("266240K"), Some(260.0 * MIB));
+        assert_eq!(cache_size_bytes("2M"), Some(2.0 * MIB));
+        assert_eq!(cache_size_bytes("1G"), Some(1024.0 * MIB));
+        assert_eq!(cache_size_bytes("512"), Some(512.0));
+        assert_eq!(cache_size_bytes("12Q"), None);
+        assert_eq!(cache_size_bytes("K"), None);
+    }
 
     #[test]
     fn the_estimates_grow_with_the_mesh_and_the_factor_faster() {
