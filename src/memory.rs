@@ -95,8 +95,8 @@ fn cache_size_bytes(text: &str) -> Option<f64> {
     digits.parse::<u64>().ok().map(|n| n as f64 * scale)
 }
 
-/// The trimmed text of a small kernel file (sysfs), read to at most 64
-/// bytes.
+/// The trimmed text of a one-value kernel file (a sysfs cache field, a
+/// cgroup's memory.max or memory.current), read to at most 64 bytes.
 fn small_file(path: &std::path::Path) -> Option<String> {
     use std::io::Read;
     let mut text = String::new();
@@ -310,8 +310,7 @@ fn status_kb(field: &str) -> Option<u64> {
 fn cgroup_room() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/self/cgroup").ok()?;
     let read = |path: String| -> Option<f64> {
-        let t = std::fs::read_to_string(path).ok()?;
-        let t = t.trim();
+        let t = small_file(std::path::Path::new(&path))?;
         if t == "max" {
             return None;
         }
