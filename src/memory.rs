@@ -142,6 +142,13 @@ pub fn assembly(h: MeshSize, mass: bool) -> f64 {
     BASE_BYTES + ASSEMBLY.bytes(n) + if mass { MASS.bytes(n) } else { 0.0 }
 }
 
+/// Assembling the mass matrix M alone at `h`, beside a level that holds
+/// A: its stored values and the assembly's temporaries, bounded by what
+/// assembling A takes.
+pub fn mass(h: MeshSize) -> f64 {
+    assembly(h, false)
+}
+
 /// A whole solve of a scene at `h` by the solver of `entry` (its levels
 /// assembled and solved, as `solve` does).
 pub fn solve(h: MeshSize, entry: &Entry) -> f64 {

@@ -370,6 +370,26 @@ fn mass_matrix_integrates_a_constant_to_each_bodys_area() {
     assert!((zz - 0.5).abs() < 1e-14);
 }
 
+/// A level built without M (what the Python problem holds) gives, on
+/// demand, the M a full assembly holds: the same pattern and the same
+/// values to the bit, with the upper body's area as the rigid mode's
+/// norm². An M on a pattern of its own, summed in another order or in the
+/// physical unknowns instead of (t, s), fails it.
+#[test]
+fn the_mass_matrix_assembled_on_demand_is_the_one_a_full_assembly_holds() {
+    let scene = Scene::paper_problem(2).unwrap();
+    for k in [3, 5] {
+        let full = Discretization::new(&scene, h(k)).unwrap();
+        let lean = Discretization::new_without_mass(&scene, h(k)).unwrap();
+        assert!(!lean.problem.has_mass());
+        let m = lean.assemble_mass().unwrap().to_nalgebra();
+        assert_eq!(m, *full.problem.mass().unwrap(), "h = {}", h(k));
+        let z = lean.kernel_vector();
+        let zz: f64 = z.iter().zip(spmv(&m, &z)).map(|(a, b)| a * b).sum();
+        assert!((zz - 0.5).abs() < 1e-14, "{zz}");
+    }
+}
+
 #[test]
 fn upward_or_zero_total_load_is_rejected_with_the_typed_error() {
     for p2 in [60.0, 0.0] {

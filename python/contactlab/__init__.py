@@ -230,7 +230,8 @@ class Problem:
     ----------
     A, M : scipy.sparse.csr_array
         Stiffness and the mass matrix of the proximal term; built once per
-        problem and cached (do not modify them in place).
+        problem and cached (do not modify them in place). A scene's problem
+        holds no M (a third of its memory): ``M`` assembles it on first use.
     f : numpy.ndarray
         The load vector.
     contact : Contact

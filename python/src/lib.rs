@@ -304,11 +304,16 @@ fn solve<'py>(
         };
         match source {
             Source::Scene { scene, finest } => {
-                // The problem's finest level, lent: a copy, mass matrix
-                // included, took this solve's peak from 1.90 to 3.04 GiB at
-                // h = 1/2048. The coarser levels of a continuation are
-                // assembled.
-                let assembled = Assembled::lending(&scene, entry, finest)?;
+                // The problem's finest level, lent: a copy took this solve's
+                // peak from 1.90 to 3.04 GiB at h = 1/2048. The coarser
+                // levels of a continuation are assembled, and so is the
+                // finest for a solver that reads the mass matrix M, which
+                // the problem does not hold.
+                let assembled = if entry.uses_mass && !finest.problem.has_mass() {
+                    Assembled::for_solver(&scene, entry)?
+                } else {
+                    Assembled::lending(&scene, entry, finest)?
+                };
                 let solved = solve_assembled(
                     assembled,
                     friction,
@@ -494,6 +499,16 @@ fn export(
     let (scene, finest) = problem.scene("export")?;
     let (scene, finest) = (scene.clone(), finest.clone());
     interruptible(py, move |_| {
+        // The export writes M, which the problem does not hold: the level
+        // is assembled with it, as `contactlab export` does.
+        let finest = if finest.problem.has_mass() {
+            finest
+        } else {
+            Arc::new(contactlab::mechanics::discretization::Discretization::new(
+                &scene,
+                finest.h(),
+            )?)
+        };
         let folder = contactlab::io::run_folder::RunFolder::create(&out)?;
         contactlab::formats::instance::export(
             folder.path(),

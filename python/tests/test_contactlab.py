@@ -97,6 +97,33 @@ def test_a_solve_is_the_command_lines_to_the_bit(tmp_path, p32):
     assert np.array_equal(forces[:, 1], r.friction_traction)
 
 
+def test_the_mass_matrix_and_the_relaxation_are_the_command_lines(tmp_path, p32):
+    # A scene's problem holds no M: `M` assembles it on first use, and a
+    # relaxation solve (the one solver that reads it) assembles its own
+    # finest level. An M on another pattern or in other unknowns than the
+    # command line's, or a relaxation refused for want of M, fails it.
+    import scipy.io
+
+    out = tmp_path / "export"
+    subprocess.run(
+        [str(cli()), "export", "--problem", "1", "--h", "1/32", "--out", str(out)],
+        check=True,
+        capture_output=True,
+    )
+    M = scipy.io.mmread(str(out / "M.mtx")).tocsr()
+    assert p32.M.shape == M.shape
+    assert abs(p32.M - M).max() <= 1e-15 * abs(M).max()
+    run = tmp_path / "run"
+    subprocess.run(
+        [str(cli()), "solve", "--problem", "1", "--h", "1/32", "--solver", "relaxation", "--out", str(run)],
+        check=True,
+        capture_output=True,
+    )
+    r = cl.solve(p32, solver="relaxation")
+    assert r.status == "converged" and r.certificate.passed
+    assert np.array_equal(read_mtx_vector(run / "displacements.mtx"), r.displacements)
+
+
 def test_certify_accepts_the_true_answer_and_refuses_a_wrong_one(p32):
     # A certificate that trusted its input, or checked the wrong rows,
     # would pass the wrong answers.

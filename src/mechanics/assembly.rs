@@ -416,6 +416,14 @@ pub fn mass(mesh: &Mesh, dofs: &impl DofExpansion) -> CsrMatrix<f64> {
     assemble(mesh, dofs, None, element_mass)
 }
 
+/// The mass matrix of both bodies stored as the problem's A is (32-bit
+/// columns, each row's stencil and values kept once): on A's pattern,
+/// since the pattern comes from the mesh and the unknowns alone.
+pub fn mass_rows(mesh: &Mesh, dofs: &impl DofExpansion) -> Csr {
+    let [m] = assemble_all(mesh, dofs, None, [&element_mass]);
+    m
+}
+
 /// ‖u‖²_L2 = ∫ |u|² over both bodies for a P1 field `u` (per node, x and
 /// y): Σ over the triangles of u_eᵀ M_e u_e with the element mass matrix,
 /// so vᵀ M v for u = T v without M assembled (at h = 1/2048 M would take

@@ -1,7 +1,7 @@
 //! One scene on one mesh, turned into the algebraic given-friction subproblem,
 //! and the way back from its unknowns to both bodies' nodal displacements.
 
-use contactlab_solvers::{ContactNode, ContactProblem, Mass, ProblemError};
+use contactlab_solvers::{ContactNode, ContactProblem, Csr, Mass, ProblemError};
 use thiserror::Error;
 
 use crate::mechanics::assembly;
@@ -115,6 +115,22 @@ impl Discretization {
 
     pub fn h(&self) -> MeshSize {
         self.mesh.size()
+    }
+
+    /// The mass matrix M of the proximal term, paper (15), assembled from
+    /// the mesh on A's pattern: for a level built without it
+    /// ([`Discretization::new_without_mass`]), to read or export, without
+    /// keeping it. Refused up front, as an assembly is, if it would not
+    /// fit beside what the process holds.
+    pub fn assemble_mass(&self) -> Result<Csr, BuildError> {
+        let h = self.h();
+        crate::memory::check(
+            &format!("assembling the mass matrix M at h = {h}"),
+            h,
+            crate::memory::mass,
+            |_| None,
+        )?;
+        Ok(assembly::mass_rows(&self.mesh, &self.dofs))
     }
 
     /// x of each contact node, increasing.
