@@ -12,13 +12,15 @@
 //! exactly, with the reference's mass and stiffness matrices. The pressure
 //! is compared at the coarse contact nodes (which are reference nodes too),
 //! the separated zone by its start. Every solution is certified. The
-//! standard study's reference is the finest mesh this machine holds,
-//! h = 1/2048 (8.4 million unknowns), which only the multigrid solver
-//! reaches: `tnnmg` under the nested schedule solves every mesh, the friction
-//! fixed point to its default ε = 1e-7 of 𝓕P, more than two decades below
-//! the smallest error measured (3e-5 in L2 at 1/512); it agrees with the
-//! direct `newton-coulomb` to about 1e-11 of P at 1/256 (the speed study's
-//! goal row).
+//! standard study's reference is h = 1/4096 (33.6 million unknowns),
+//! which only the multigrid solver reaches, in about 46 s and 3.9 GiB
+//! (the speed study's row); 1/2048, the reference before, took 2 minutes
+//! and 8.4 GB when it was chosen. `tnnmg` under the nested schedule
+//! solves every mesh, the friction fixed point to its default ε = 1e-7 of
+//! 𝓕P, two decades below the smallest error measured against 1/2048 (3e-5
+//! in L2 at 1/512, falling as h^1.7); it agrees with the direct
+//! `newton-coulomb` to about 1e-11 of P at 1/256 (the speed study's goal
+//! row).
 //! Without a solver of its own a spec uses a direct Coulomb solver, so that
 //! no fixed-point tolerance enters (in `reproduce --quick`, the fastest of
 //! the speed study).
@@ -53,13 +55,14 @@ pub struct ErrorSpec {
 }
 
 impl ErrorSpec {
-    /// Problems 1 and 3, h = 1/16 to 1/512 against 1/2048, by `tnnmg`
-    /// under the nested schedule (about 2 minutes and 8.4 GB at 1/2048).
+    /// Problems 1 and 3, h = 1/16 to 1/1024 against 1/4096 (the finest
+    /// mesh compared a quarter of the reference's size, as 1/512 was of
+    /// 1/2048), by `tnnmg` under the nested schedule.
     pub fn standard() -> Self {
         Self {
             problems: vec![1, 3],
-            meshes: (4..=9).map(level).collect(),
-            reference: level(11),
+            meshes: (4..=10).map(level).collect(),
+            reference: level(12),
             solver: Some(MULTIGRID),
             schedule: Some(Schedule::Nested),
         }
@@ -292,7 +295,8 @@ impl Study for Errors {
     fn estimated_seconds(&self, length: RunLength) -> f64 {
         match length {
             RunLength::Quick => 1.4,
-            _ => 140.0,
+            // Two references at 1/4096, about 46 s each.
+            _ => 150.0,
         }
     }
 
