@@ -429,9 +429,28 @@ pub fn mass_rows(mesh: &Mesh, dofs: &impl DofExpansion) -> Csr {
 /// so vᵀ M v for u = T v without M assembled (at h = 1/2048 M would take
 /// 1.9 GB beside a solve that did not need it).
 pub fn l2_norm_squared(mesh: &Mesh, u: &[[f64; 2]]) -> f64 {
+    element_form(mesh, u, element_mass)
+}
+
+/// A(u, u) = ∫ σ(u):ε(u) over both bodies for a P1 field `u` (per node, x
+/// and y): Σ over the triangles of u_eᵀ K_e u_e, so vᵀ A v for u = T v.
+/// It also measures a field outside this mesh's space of admissible
+/// displacements, such as a coarser mesh's answer interpolated here (the
+/// discretization study): no boundary condition is applied to `u`.
+pub fn energy_norm_squared(mesh: &Mesh, material: &Material, u: &[[f64; 2]]) -> f64 {
+    let d = material.elasticity_matrix();
+    element_form(mesh, u, |p| element_stiffness(p, &d))
+}
+
+/// Σ over the triangles of u_eᵀ E_e u_e, E_e = `element` at its corners.
+fn element_form(
+    mesh: &Mesh,
+    u: &[[f64; 2]],
+    element: impl Fn([[f64; 2]; 3]) -> [[f64; 6]; 6],
+) -> f64 {
     let mut sum = 0.0;
     mesh.triangles().for_each(|(_, tri)| {
-        let m = element_mass(tri.map(|node| mesh.coords(node)));
+        let m = element(tri.map(|node| mesh.coords(node)));
         let ue: [f64; 6] = std::array::from_fn(|q| u[tri[q / 2]][q % 2]);
         for (row, ui) in m.iter().zip(&ue) {
             sum += ui * row.iter().zip(&ue).map(|(mij, uj)| mij * uj).sum::<f64>();

@@ -84,6 +84,28 @@ fn sums_by_nodes_are_the_sums_by_unknowns_bit_for_bit() {
     }
 }
 
+/// The matrix-free energy is vᵀ A v with the assembled A, in the problem's
+/// own unknowns (the change of variables on Γ_K and the boundary
+/// conditions included): a wrong element matrix, or the field read in the
+/// wrong order, fails it.
+#[test]
+fn energy_without_a_is_the_stiffness_form() {
+    let mesh = Mesh::new(MeshSize::from_level(3).unwrap());
+    let dofs = DofMap::new(&mesh);
+    let material = Material::default();
+    let a = stiffness(&mesh, &dofs, &material);
+    let v: Vec<f64> = (0..dofs.n())
+        .map(|i| ((i * 29 % 23) as f64 - 11.0) / 7.0)
+        .collect();
+    let av = contactlab_solvers::numerics::linalg::spmv(&a, &v);
+    let expected: f64 = v.iter().zip(&av).map(|(a, b)| a * b).sum();
+    let got = energy_norm_squared(&mesh, &material, &dofs.to_physical(&v));
+    assert!(
+        (got - expected).abs() <= 1e-12 * expected,
+        "{got} vs {expected}"
+    );
+}
+
 /// The matrix-free L2 norm is vᵀ M v with the assembled M, in the problem's
 /// own unknowns (the change of variables on Γ_K included).
 #[test]
