@@ -499,16 +499,6 @@ fn export(
     let (scene, finest) = problem.scene("export")?;
     let (scene, finest) = (scene.clone(), finest.clone());
     interruptible(py, move |_| {
-        // The export writes M, which the problem does not hold: the level
-        // is assembled with it, as `contactlab export` does.
-        let finest = if finest.problem.has_mass() {
-            finest
-        } else {
-            Arc::new(contactlab::mechanics::discretization::Discretization::new(
-                &scene,
-                finest.h(),
-            )?)
-        };
         let folder = contactlab::io::run_folder::RunFolder::create(&out)?;
         contactlab::formats::instance::export(
             folder.path(),

@@ -468,6 +468,8 @@ def test_an_exported_instance_and_ones_own_matrices_are_the_same_problem(tmp_pat
     p32.export(tmp_path / "e")
     assert (tmp_path / "e" / "README.md").is_file()
     back = cl.Problem.from_instance(tmp_path / "e")
+    # The problem holds no M: the export assembles it from the mesh.
+    assert abs(back.M - p32.M).max() <= 1e-15 * abs(p32.M).max()
     c = p32.contact
     mine = cl.Problem.from_matrices(
         p32.A.tocoo(), p32.f, {"t": c.t, "s": c.s, "weight": c.weight, "coefficient": c.coefficient}, p32.rigid_mode

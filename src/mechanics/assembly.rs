@@ -413,7 +413,7 @@ pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, material: &Material) -> 
 
 /// Mass matrix of both bodies (L2 product of displacement fields).
 pub fn mass(mesh: &Mesh, dofs: &impl DofExpansion) -> CsrMatrix<f64> {
-    assemble(mesh, dofs, None, element_mass)
+    mass_rows(mesh, dofs).to_nalgebra()
 }
 
 /// The mass matrix of both bodies stored as the problem's A is (32-bit

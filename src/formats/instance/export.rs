@@ -45,13 +45,15 @@ pub fn export(
         &dir.join("A.mtx"),
         &mtx_symmetric(&CooMatrix::from(&p.a().to_nalgebra())),
     )?;
-    write_atomic(
-        &dir.join("M.mtx"),
-        &mtx_symmetric(&CooMatrix::from(
-            &*p.mass()
-                .context("the problem to export was assembled without M")?,
-        )),
-    )?;
+    // A level built without M (the Python package's problem) has it
+    // assembled from its mesh here, rather than the whole level again.
+    let mass = match p.mass() {
+        Some(m) => m,
+        None => std::borrow::Cow::Owned(d.assemble_mass()?.to_nalgebra()),
+    };
+    write_atomic(&dir.join("M.mtx"), &mtx_symmetric(&CooMatrix::from(&*mass)))?;
+    // Freed once written: the condensation below needs the room.
+    drop(mass);
     write_atomic(&dir.join("f.mtx"), &mtx(&dense(n, 1, |i, _| p.f()[i])))?;
     let modes = p.rigid_modes();
     write_atomic(
