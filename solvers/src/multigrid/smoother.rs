@@ -18,7 +18,7 @@ use crate::numerics::linalg::{Csr, RowColumns, RowValues};
 use crate::with_values;
 
 use super::laws::Laws;
-use super::parts::{Largest, Parts, Shared, sweep};
+use super::parts::{Largest, Parts, RowUpdate, Shared, sweep};
 use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 
 /// The contact law along one coordinate.
@@ -216,7 +216,7 @@ fn separator_residuals(a: &Csr, parts: &Parts, shift: &[f64], b: &[f64], x: &[f6
 /// # Safety
 /// A's column indices are below r's length, and no other thread touches r
 /// at the rows written (the parts' own rows: see [`Parts`]).
-#[inline]
+#[inline(always)]
 unsafe fn scatter_to_swept(
     row: Row<'_>,
     delta: f64,
@@ -264,6 +264,87 @@ unsafe fn scatter_to_swept(
     }
 }
 
+/// A row of the nonlinear sweep ([`nonlinear_sweep`]).
+struct NonlinearRow<'a, V> {
+    a: &'a Csr,
+    vals: V,
+    diag: &'a [Place],
+    f: &'a [f64],
+    laws: &'a Laws,
+    /// Where f − A v is left, if anywhere.
+    defect: Option<Shared>,
+    separator: Option<&'a [bool]>,
+}
+
+impl<'a, V: RowValues<'a>> RowUpdate for NonlinearRow<'a, V> {
+    type Out = Largest;
+
+    /// v_k the exact minimizer along coordinate k; its move.
+    #[inline(always)]
+    unsafe fn update(&self, k: usize, x: Shared) -> Largest {
+        // SAFETY: sizes checked by the sweep; the parts' ordering keeps the
+        // other thread off row k's pattern and off the defects it writes.
+        unsafe {
+            let row = Row::of(self.a, self.vals, k, self.diag[k] as usize);
+            let c = off_diagonal_rhs(row, self.f[k], x);
+            let akk = row.diagonal();
+            let new = local_minimizer(self.laws[k], akk, c);
+            let delta = new - x.get(k);
+            x.set(k, new);
+            if let Some(rs) = self.defect {
+                rs.set(k, c - akk * new);
+                scatter_to_swept(row, delta, (self.separator, true), rs);
+            }
+            Largest(delta.abs())
+        }
+    }
+}
+
+/// A row of the linear sweep ([`linear_sweep`]).
+struct LinearRow<'a, V> {
+    a: &'a Csr,
+    vals: V,
+    diag: &'a [Place],
+    shift: &'a [f64],
+    b: &'a [f64],
+    fixed: &'a [bool],
+    /// Where b − (A + D) x is left, if anywhere.
+    residual: Option<Shared>,
+    /// The separator, and whether the sweep is forward.
+    scatter: (Option<&'a [bool]>, bool),
+}
+
+impl<'a, V: RowValues<'a>> RowUpdate for LinearRow<'a, V> {
+    type Out = ();
+
+    /// x_k from row k of (A + D) x = b, or kept at zero where fixed.
+    #[inline(always)]
+    unsafe fn update(&self, k: usize, x: Shared) {
+        // SAFETY: as in the nonlinear sweep.
+        unsafe {
+            if self.fixed[k] {
+                if let Some(rs) = self.residual {
+                    rs.set(k, 0.0);
+                }
+                return;
+            }
+            // The reciprocal first: it depends on nothing the sweep moves,
+            // so it leaves the chain of rows (each waits for the unknown
+            // the row before set) a multiplication instead of a division.
+            let row = Row::of(self.a, self.vals, k, self.diag[k] as usize);
+            let inverse = 1.0 / (row.diagonal() + shift_at(self.shift, k));
+            let c = off_diagonal_rhs(row, self.b[k], x);
+            let new = c * inverse;
+            let delta = new - x.get(k);
+            x.set(k, new);
+            if let Some(rs) = self.residual {
+                rs.set(k, 0.0);
+                scatter_to_swept(row, delta, self.scatter, rs);
+            }
+        }
+    }
+}
+
 /// One forward sweep of the nonlinear Gauss-Seidel on J (see the module),
 /// on several threads in the ordering of `parts` when given. With `defect`
 /// it also leaves f − A v of the swept v there, in the same pass over A:
@@ -284,24 +365,15 @@ pub(crate) fn nonlinear_sweep(
     if let Some(r) = &defect {
         assert_eq!(r.len(), v.len(), "a sweep: one defect per unknown");
     }
-    let separator = parts.map(Parts::in_separator);
-    let rs = defect.map(Shared::of);
-    let Largest(moved) = with_values!(a.values(), vals => sweep(parts, v, true, |k, x| {
-        // SAFETY: sizes checked above; the parts' ordering keeps the other
-        // thread off row k's pattern and off the defects it writes.
-        unsafe {
-            let row = Row::of(a, vals, k, diag[k] as usize);
-            let c = off_diagonal_rhs(row, f[k], x);
-            let akk = row.diagonal();
-            let new = local_minimizer(laws[k], akk, c);
-            let delta = new - x.get(k);
-            x.set(k, new);
-            if let Some(rs) = rs {
-                rs.set(k, c - akk * new);
-                scatter_to_swept(row, delta, (separator, true), rs);
-            }
-            Largest(delta.abs())
-        }
+    let (separator, defect) = (parts.map(Parts::in_separator), defect.map(Shared::of));
+    let Largest(moved) = with_values!(a.values(), vals => sweep(parts, v, true, &NonlinearRow {
+        a,
+        vals,
+        diag,
+        f,
+        laws,
+        defect,
+        separator,
     }));
     moved
 }
@@ -331,31 +403,19 @@ pub(crate) fn linear_sweep(
     if let Some(r) = &residual {
         assert_eq!(r.len(), x.len(), "a sweep: one residual per unknown");
     }
-    let separator = parts.map(Parts::in_separator);
-    let rs = residual.as_deref_mut().map(Shared::of);
-    with_values!(a.values(), vals => sweep(parts, x, forward, |k, x| {
-        // SAFETY: as in the nonlinear sweep.
-        unsafe {
-            if fixed[k] {
-                if let Some(rs) = rs {
-                    rs.set(k, 0.0);
-                }
-                return;
-            }
-            // The reciprocal first: it depends on nothing the sweep moves,
-            // so it leaves the chain of rows (each waits for the unknown
-            // the row before set) a multiplication instead of a division.
-            let row = Row::of(a, vals, k, diag[k] as usize);
-            let inverse = 1.0 / (row.diagonal() + shift_at(shift, k));
-            let c = off_diagonal_rhs(row, b[k], x);
-            let new = c * inverse;
-            let delta = new - x.get(k);
-            x.set(k, new);
-            if let Some(rs) = rs {
-                rs.set(k, 0.0);
-                scatter_to_swept(row, delta, (separator, forward), rs);
-            }
-        }
+    let (rs, separator) = (
+        residual.as_deref_mut().map(Shared::of),
+        parts.map(Parts::in_separator),
+    );
+    with_values!(a.values(), vals => sweep(parts, x, forward, &LinearRow {
+        a,
+        vals,
+        diag,
+        shift,
+        b,
+        fixed,
+        residual: rs,
+        scatter: (separator, forward),
     }));
     if let (Some(h), Some(r), false) = (parts, residual.as_deref_mut(), forward) {
         separator_residuals(a, h, shift, b, x, r);
