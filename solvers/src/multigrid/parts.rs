@@ -174,7 +174,7 @@ impl Parts {
         assert_eq!(n, self.in_separator.len(), "a sweep of the split's size");
         let shared = Shared(x.as_mut_ptr());
         let skip = &self.in_separator;
-        let separator = |forward: bool| match forward {
+        let separator = || match forward {
             true => each_row(self.separator.iter().copied(), update, shared),
             false => each_row(self.separator.iter().rev().copied(), update, shared),
         };
@@ -184,7 +184,7 @@ impl Parts {
         };
         let mut joined = U::Out::NONE;
         if !forward {
-            joined = separator(false);
+            joined = separator();
         }
         let parts = std::sync::Mutex::new(U::Out::NONE);
         std::thread::scope(|scope| {
@@ -203,7 +203,7 @@ impl Parts {
         });
         joined = joined.join(parts.into_inner().unwrap_or_else(|e| e.into_inner()));
         if forward {
-            joined = joined.join(separator(true));
+            joined = joined.join(separator());
         }
         joined
     }

@@ -12,13 +12,13 @@
 //! are summed exactly, element by element over the reference mesh, of the
 //! nodal fields. Not through the reference's unknowns: the coarse answer
 //! does not satisfy the reference's roller condition next to the upper
-//! body's free corner (see `errors`). The pressure
-//! is compared at the coarse contact nodes (which are reference nodes too),
-//! in the maximum norm, and along Γ_K in L2 ([`pressure_l2_error`]): where
-//! the pressure is unbounded (problem 3, at an end of Γ_K) its largest
-//! nodal value grows as h falls, so no maximum error can converge, while
-//! the L2 error does. The separated zone is compared by its start. Every solution is certified. The
-//! standard study's reference is h = 1/4096 (33.6 million unknowns),
+//! body's free corner (see `errors`). The pressure is compared at the
+//! coarse contact nodes (which are reference nodes too), in the maximum
+//! norm, and along Γ_K in L2 ([`pressure_l2_error`]): where the pressure
+//! is unbounded (problem 3, at an end of Γ_K) its largest nodal value
+//! grows as h falls, so no maximum error can converge, while the L2 error
+//! does. The separated zone is compared by its start. Every solution is
+//! certified. The standard study's reference is h = 1/4096 (33.6 million unknowns),
 //! which only the multigrid solver reaches, in about 46 s and 3.9 GiB
 //! (the speed study's row); 1/2048, the reference before, took 2 minutes
 //! and 8.4 GB when it was chosen. `tnnmg` under the nested schedule
@@ -222,20 +222,19 @@ fn errors(problem: u32, material: &Material, coarse: &Solved, reference: &Solved
     );
     // Coarse contact node i sits at reference contact node i·ratio.
     let ratio = 1usize << (df.h().level() - dc.h().level());
-    let pf: Vec<f64> = reference.outcome.solution.pressure.clone();
+    let (pc, pf) = (
+        &coarse.outcome.solution.pressure,
+        &reference.outcome.solution.pressure,
+    );
     let p_max = pf.iter().fold(0.0f64, |m, x| m.max(*x));
-    let pressure_error = coarse
-        .outcome
-        .solution
-        .pressure
+    let pressure_error = pc
         .iter()
         .enumerate()
         .map(|(i, p)| (p - pf[i * ratio]).abs())
         .fold(0.0f64, f64::max)
         / p_max;
-    let pc = &coarse.outcome.solution.pressure;
     let xc = dc.contact_x();
-    let pressure_l2 = pressure_l2_error(&xc, pc, &df.contact_x(), &pf);
+    let pressure_l2 = pressure_l2_error(&xc, pc, &df.contact_x(), pf);
     let (peak_pressure, peak_x) =
         pc.iter()
             .zip(&xc)
