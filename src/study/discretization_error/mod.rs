@@ -18,9 +18,9 @@
 //! is unbounded (problem 3, at an end of Γ_K) its largest nodal value
 //! grows as h falls, so no maximum error can converge, while the L2 error
 //! does. The separated zone is compared by its start. Every solution is
-//! certified. The standard study's reference is h = 1/4096 (33.6 million unknowns),
-//! which only the multigrid solver reaches, in about 46 s and 3.9 GiB
-//! (the speed study's row); 1/2048, the reference before, took 2 minutes
+//! certified. The standard study's reference is h = 1/4096 (33.6 million
+//! unknowns), which only the multigrid solver reaches, in about 46 s and
+//! 3.9 GiB (the speed study's row); 1/2048, the reference before, took 2 minutes
 //! and 8.4 GB when it was chosen. `tnnmg` under the nested schedule
 //! solves every mesh, the friction fixed point to its default ε = 1e-7 of
 //! 𝓕P, two decades below the smallest error measured against 1/2048 (3e-5
