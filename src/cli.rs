@@ -81,8 +81,9 @@ pub enum Command {
     /// `benchmark`, success over a collection): assembly, each solver's inner kernel against one SpMV,
     /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
     /// 1/256, as medians after a warm-up on one thread and as ratios to the
-    /// best sparse factorization here (faer on both cores, symbolic analysis
-    /// once); at 1/512 and 1/1024 (not with --quick) assembly and the
+    /// best sparse factorization here (faer's numeric LLᵀ and one solve on
+    /// one thread or both cores, whichever is faster on the mesh, symbolic
+    /// analysis once); at 1/512 and 1/1024 (not with --quick) assembly and the
     /// fastest certified direct Coulomb solver once each, the factorization
     /// as the median of 3 runs after a warm-up; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
     /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle

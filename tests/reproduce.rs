@@ -334,6 +334,26 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
         let seconds: f64 = output[col("median_seconds")].parse().unwrap();
         assert!(seconds > 0.0 && seconds.is_finite(), "{output:?}");
     }
+    // The unit of every ratio is the faster factorization of the two
+    // thread counts timed on the mesh, and the slower one is beside it.
+    let seconds = |r: &Vec<String>| r[col("median_seconds")].parse::<f64>().unwrap();
+    for unit in rows.iter().filter(|r| r[col("what")] == "factorization") {
+        let slower = rows
+            .iter()
+            .find(|r| r[col("what")] == "factorization_slower" && r[col("h")] == unit[col("h")])
+            .unwrap_or_else(|| panic!("no slower factorization beside {unit:?}"));
+        assert!(seconds(unit) <= seconds(slower), "{unit:?} {slower:?}");
+        let threads = [&unit[col("variant")], &slower[col("variant")]];
+        assert!(
+            threads.contains(&&"1 thread".to_string())
+                && threads.contains(&&"2 threads".to_string()),
+            "{threads:?}"
+        );
+        assert_eq!(
+            unit[col("ratio_to_factorization")].parse::<f64>().unwrap(),
+            1.0
+        );
+    }
     // Charts: valid SVG, title, axis labels, one series per solver where drawn per solver.
     let mut seen = 0;
     let mut per_law: Vec<(String, Vec<String>)> = Vec::new();

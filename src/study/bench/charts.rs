@@ -74,7 +74,7 @@ fn chart(rows: &[PerfRow], what: &str, tag: &str, family: &str, factors: bool) -
         series.push(
             Series::line(
                 format!(
-                    "best factorization + solve, 2 threads ({})",
+                    "best factorization + solve, faster of 1 and 2 threads ({})",
                     slope_label(&factor)
                 ),
                 factor,

@@ -1,9 +1,11 @@
 //! `contactlab bench`: speed, as medians of repeated runs after a warm-up on
 //! one thread, every figure also as a ratio to the best sparse Cholesky
 //! factorization and solve of the stiffness matrix (semicoercive mode
-//! removed) available here, measured in the same run: faer's numeric LLᵀ on
-//! both cores with the symbolic analysis done once (both also timed apart,
-//! and the whole factorization on one thread). Nothing that solves this
+//! removed) available here, measured in the same run: faer's numeric LLᵀ and
+//! one solve on one thread or on both cores, whichever is faster on the
+//! mesh, with the symbolic analysis done once (the slower thread count and
+//! the symbolic analysis also timed apart, and the whole factorization on
+//! one thread). Nothing that solves this
 //! elasticity problem directly can be much cheaper than that. CHOLMOD
 //! (Debian's SuiteSparse 5.12, OpenBLAS on two threads) was timed on the
 //! same matrix at h = 1/1024 outside the project and is slower (7.4 s

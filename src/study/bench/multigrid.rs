@@ -427,7 +427,7 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
         let ratio = f.map_or(f64::NAN, |f| used.seconds / f);
         out.push(Goal {
             goal: format!(
-                "`solve --solver {SOLVER}` (whole Coulomb problem, default settings) at h = {}, certified: at most {DEFAULT_GOAL} × the best factorization (faer, 2 threads)",
+                "`solve --solver {SOLVER}` (whole Coulomb problem, default settings) at h = {}, certified: at most {DEFAULT_GOAL} × the best factorization (faer, the faster of 1 and 2 threads)",
                 used.h
             ),
             measured: format!(

@@ -39,7 +39,7 @@ pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
             c,
             "How each solver's time grows with the number of unknowns (slope in the legend, fitted through three or \
              more certified runs; runs stopped or refused are crosses), beside the best sparse factorization (faer on \
-             both cores, symbolic analysis once).",
+             one thread or both cores, whichever is faster on the mesh, symbolic analysis once).",
         );
     }
     s
@@ -55,7 +55,7 @@ fn speed_table(rows: &[super::PerfRow]) -> String {
         }
     }
     let mut s = String::from(
-        "\nWhole Coulomb problem, median seconds (× the best factorization: 2 threads, symbolic once; work units, WU: ÷ one product A·v), certified status:\n\n| solver |",
+        "\nWhole Coulomb problem, median seconds (× the best factorization: numeric LLᵀ + one solve on the faster here of 1 and 2 threads, symbolic once; work units, WU: ÷ one product A·v), certified status:\n\n| solver |",
     );
     for h in &meshes {
         s += &format!(" {h} |");
@@ -105,7 +105,7 @@ fn speed_table(rows: &[super::PerfRow]) -> String {
         s += &format!(
             "| {} |",
             if name == FACTORIZATION {
-                "best factorization + solve (2 threads)"
+                "best factorization + solve (faster of 1 and 2 threads)"
             } else {
                 name
             }
