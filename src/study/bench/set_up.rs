@@ -183,8 +183,8 @@ pub(super) fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, large: bool) {
         &times.factorization,
         "done",
         f,
-    );
-    mesh.set_variant(&best);
+    )
+    .variant = best.clone();
     let slower =
         format!("numeric LLᵀ + one solve on {other}: slower here than on {best}, not the unit");
     let f = runs(&times.slower, slower);
@@ -194,8 +194,8 @@ pub(super) fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, large: bool) {
         &times.slower,
         "done",
         f,
-    );
-    mesh.set_variant(&other);
+    )
+    .variant = other;
     let f = once("AMD ordering and supernodal analysis, once per pattern");
     mesh.push("symbolic", "faer", &times.symbolic, "done", f);
     let f = once("symbolic + numeric + one solve on one thread");
@@ -222,13 +222,8 @@ pub(super) struct MeshRows<'a> {
 }
 
 impl MeshRows<'_> {
-    /// The variant column of the row pushed last.
-    pub(super) fn set_variant(&mut self, variant: &str) {
-        if let Some(last) = self.rows.last_mut() {
-            last.variant = variant.into();
-        }
-    }
-
+    /// Pushes a row of `times` (median, ratio and work units in this mesh's
+    /// units) and returns it, for a caller to fill in what else it knows.
     pub(super) fn push(
         &mut self,
         what: &str,
@@ -236,7 +231,7 @@ impl MeshRows<'_> {
         times: &[f64],
         status: &str,
         note: String,
-    ) {
+    ) -> &mut PerfRow {
         let m = median(times);
         self.rows.push(PerfRow {
             what: what.into(),
@@ -255,6 +250,7 @@ impl MeshRows<'_> {
             work: 0,
             note,
         });
+        self.rows.last_mut().expect("just pushed")
     }
 }
 
