@@ -455,11 +455,12 @@ pub(crate) mod tests {
     }
 
     /// A pattern that is not symmetric can let an interior row read a row
-    /// of another part that is not in the separator: that split is refused,
-    /// whether the stray entry lies past the row's last column in its part
-    /// (the first part reading the second) or before its first (the second
-    /// reading the first, with its first column still inside the part by a
-    /// stored entry of its own to the left).
+    /// of another part that is not in the separator: an entry past the
+    /// row's last column in its part (the first part reading the second's
+    /// interior) must make the split be refused. An entry before a row's
+    /// first column (the second part reading the first) instead puts that
+    /// row in the separator, which is sound. Either way no split may keep
+    /// an interior row reading across parts.
     #[test]
     fn a_split_whose_interior_reads_another_part_is_refused() {
         let q = 300;

@@ -7,9 +7,10 @@
 //!
 //! Both thread counts are timed because neither always wins: on a 2-core
 //! VM (Intel Xeon) faer's two-thread factorization was slower than its
-//! sequential one at every h from 1/64 to 1/512 (at 1/64 13.2 ms against
-//! 9.5 ms for the sequential one with its symbolic analysis), and a unit
-//! slower than the machine's best flatters every ratio measured in it.
+//! sequential one at every h from 1/64 to 1/1024 (2.9× at 1/64, 1.7× at
+//! 1/256, 1.14× at 1/1024, in `results/performance.csv` of 553ea0c), and
+//! a unit slower than the machine's best flatters every ratio measured in
+//! it.
 
 use std::time::Instant;
 
