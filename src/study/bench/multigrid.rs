@@ -144,22 +144,19 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         // speed-up is a ratio of the two medians.
         let sequential_too = Some(&h) == large.last() && !finest;
         let (mut uses, mut sequential) = (Vec::new(), Vec::new());
-        for run in 1..=runs {
+        let fresh = |what: &str, set: &[&str], into: &mut Vec<MemoryUse>, run: usize| {
             log(&format!(
-                "{SOLVER} on the Coulomb problem at h = {h} (fresh process, run {run} of {runs})"
+                "{SOLVER} {what} at h = {h} (fresh process, run {run} of {runs})"
             ));
-            match measure_in_fresh_process(spec.problem, h, SOLVER, schedule, &[]) {
-                Ok(used) => uses.push(used),
+            match measure_in_fresh_process(spec.problem, h, SOLVER, schedule, set) {
+                Ok(used) => into.push(used),
                 Err(e) => log(&format!("not measured: {e:#}")),
             }
+        };
+        for run in 1..=runs {
+            fresh("on the Coulomb problem", &[], &mut uses, run);
             if sequential_too {
-                log(&format!(
-                    "{SOLVER} on one thread at h = {h} (fresh process, run {run} of {runs})"
-                ));
-                match measure_in_fresh_process(spec.problem, h, SOLVER, schedule, &[ONE_THREAD]) {
-                    Ok(used) => sequential.push(used),
-                    Err(e) => log(&format!("not measured: {e:#}")),
-                }
+                fresh("on one thread", &[ONE_THREAD], &mut sequential, run);
             }
         }
         if sequential_too {
