@@ -39,34 +39,53 @@ pub struct MemoryUse {
     pub schur_bytes: Option<f64>,
     /// Seconds of one product A·v with the finest level's A as the solve
     /// got it (its storage) and the machine's cores, the median of
-    /// [`PRODUCTS`] after the solve: the work unit of [`MemoryUse::phases`].
+    /// [`PRODUCTS`] timed before the solve and as many after it: the work
+    /// unit of [`MemoryUse::phases`]. Both sides, because this host's
+    /// speed drifts within a run: timed after the solve alone, the product
+    /// took 30.3 ms in one committed run and 7.9-12.5 ms in others, and
+    /// the work units moved with it (197 against 306-386).
     #[serde(default)]
     pub product_seconds: Option<f64>,
+    /// The medians of the products timed before and after the solve
+    /// (seconds): how far the machine's speed moved meanwhile.
+    #[serde(default)]
+    pub product_sides: Option<(f64, f64)>,
     /// The solver's seconds by phase, as it reports them (its diagnostics
     /// ending in `_seconds`), in its order.
     #[serde(default)]
     pub phases: Vec<(String, f64)>,
 }
 
-/// Products timed for [`MemoryUse::product_seconds`], after one warm-up.
+/// Products timed for [`product_seconds`], after one warm-up (and for
+/// [`MemoryUse::product_seconds`] on each side of the solve).
 pub const PRODUCTS: usize = 11;
 
-/// The median seconds of one product A·v (x all ones) over [`PRODUCTS`],
-/// after a warm-up.
-pub fn product_seconds(a: &contactlab_solvers::Csr) -> f64 {
+/// The seconds of [`PRODUCTS`] products A·v (x all ones), after a warm-up.
+fn product_times(a: &contactlab_solvers::Csr) -> Vec<f64> {
     let x = vec![1.0; a.ncols()];
     let mut y = vec![0.0; a.nrows()];
     contactlab_solvers::numerics::linalg::spmv_into(a, &x, &mut y);
-    let mut times: Vec<f64> = (0..PRODUCTS)
+    let times = (0..PRODUCTS)
         .map(|_| {
             let t = std::time::Instant::now();
             contactlab_solvers::numerics::linalg::spmv_into(a, &x, &mut y);
             t.elapsed().as_secs_f64()
         })
         .collect();
-    times.sort_by(f64::total_cmp);
     std::hint::black_box(&y);
-    times[PRODUCTS / 2]
+    times
+}
+
+/// The median of some seconds (the upper middle one when even).
+fn median_of(mut times: Vec<f64>) -> f64 {
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// The median seconds of one product A·v (x all ones) over [`PRODUCTS`],
+/// after a warm-up.
+pub fn product_seconds(a: &contactlab_solvers::Csr) -> f64 {
+    median_of(product_times(a))
 }
 
 /// A field of `/proc/self/status` in KiB (Linux), e.g. `VmHWM` or `VmRSS`.
@@ -123,6 +142,9 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
     let problem_kb = status_kb("VmRSS")
         .ok_or_else(unread)?
         .saturating_sub(before);
+    // The work unit's first half, on the A the solve gets (the other half
+    // follows the solve), after the problem's size was read.
+    let products_before = product_times(d.problem.a());
     let silent = &mut contactlab_solvers::Silent;
     let problem = if entry.solves(Law::Coulomb) {
         Assembled::one_level(d)
@@ -138,7 +160,12 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
         silent,
     )?;
     let peak_kb = peak_memory_kb().ok_or_else(unread)?;
-    let product = product_seconds(solved.finest.problem.a());
+    let products_after = product_times(solved.finest.problem.a());
+    let sides = (
+        median_of(products_before.clone()),
+        median_of(products_after.clone()),
+    );
+    let product = median_of([products_before, products_after].concat());
     let run = solved.outcome;
     let diagnostic = |name: &str| {
         run.solution
@@ -158,6 +185,7 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
         factor_values_bytes: diagnostic("factor_values_bytes"),
         schur_bytes: diagnostic("schur_bytes"),
         product_seconds: Some(product),
+        product_sides: Some(sides),
         phases: run
             .solution
             .diagnostics

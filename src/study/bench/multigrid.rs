@@ -288,7 +288,8 @@ const FINEST_GOAL_SECONDS: f64 = 120.0;
 const PAPER_GOAL_SECONDS: f64 = 15.0;
 
 /// The whole Coulomb problem in work units (its seconds over one product
-/// A·v with the finest level's A, timed in the same process), by phase:
+/// A·v with the finest level's A, timed in the same process before and
+/// after the solve, [`MemoryUse::product_seconds`]), by phase:
 /// the solver's own phases, and the rest (the friction fixed point's
 /// updates, the continuation's transfers, the harness).
 fn work_units_goal(used: &MemoryUse) -> Goal {
@@ -327,10 +328,20 @@ fn work_units_goal(used: &MemoryUse) -> Goal {
             (used.seconds - inside) / unit
         ));
     }
+    // The product's medians before and after the solve, when both were
+    // timed: how far the machine's speed moved while it ran.
+    let sides = used.product_sides.map_or(String::new(), |(before, after)| {
+        format!(
+            ", the median of {} products: {:.2} ms before the solve, {:.2} ms after",
+            2 * crate::study::bench::memory::PRODUCTS,
+            before * 1e3,
+            after * 1e3
+        )
+    });
     Goal {
         goal,
         measured: format!(
-            "{total:.0} work units ({:.2} s ÷ {:.2} ms): {} ({})",
+            "{total:.0} work units ({:.2} s ÷ {:.2} ms{sides}): {} ({})",
             used.seconds,
             unit * 1e3,
             parts.join(", "),
@@ -527,6 +538,7 @@ mod tests {
             factor_values_bytes: None,
             schur_bytes: None,
             product_seconds: None,
+            product_sides: None,
             phases: Vec::new(),
         }
     }
@@ -595,6 +607,16 @@ mod tests {
         assert!(g.measured.contains("smoothing 150"), "{}", g.measured);
         assert!(g.measured.contains("the rest 50"), "{}", g.measured);
         assert_eq!(g.pass, Some(false));
+        // Both sides of the solve, when timed, are stated with the unit.
+        used.product_sides = Some((0.008, 0.012));
+        let g = work_units_goal(&used);
+        assert!(
+            g.measured.contains(
+                "÷ 10.00 ms, the median of 22 products: 8.00 ms before the solve, 12.00 ms after)"
+            ),
+            "{}",
+            g.measured
+        );
         used.seconds = 0.25;
         assert_eq!(work_units_goal(&used).pass, Some(true));
         used.product_seconds = None;
