@@ -191,7 +191,8 @@ fn rows_of_product_with<'v>(
             }
         }
         touched.sort_unstable();
-        if overflow.is_empty() {
+        // The window's columns, in order, its sums back to zero.
+        let mut window_into = |cols: &mut Vec<u32>, vals: &mut Vec<f64>| {
             for &c in touched.iter() {
                 cols.push((first + c) as u32);
                 vals.push(acc[c]);
@@ -199,36 +200,33 @@ fn rows_of_product_with<'v>(
                 seen[c] = false;
             }
             touched.clear();
-            offsets.push(cols.len());
-            continue;
+        };
+        if overflow.is_empty() {
+            window_into(cols, vals);
+        } else {
+            // The terms outside the window, each column's summed from zero
+            // in the order met (a stable sort), as the window's are: the
+            // same bits whatever the window. Those below it first, then
+            // the window's, then those above.
+            overflow.sort_by_key(|&(col, _)| col);
+            let mut outside = overflow.chunk_by(|x, y| x.0 == y.0).map(|terms| {
+                let sum = terms.iter().fold(0.0, |s, &(_, t)| s + t);
+                (terms[0].0, sum)
+            });
+            let mut next = outside.next();
+            while let Some((col, sum)) = next.filter(|&(col, _)| col < first) {
+                cols.push(col as u32);
+                vals.push(sum);
+                next = outside.next();
+            }
+            window_into(cols, vals);
+            while let Some((col, sum)) = next {
+                cols.push(col as u32);
+                vals.push(sum);
+                next = outside.next();
+            }
+            overflow.clear();
         }
-        // The terms outside the window, each column's summed from zero in
-        // the order met (a stable sort), as the window's are: the same bits
-        // whatever the window.
-        overflow.sort_by_key(|&(col, _)| col);
-        let mut outside = overflow.chunk_by(|x, y| x.0 == y.0).map(|terms| {
-            let sum = terms.iter().fold(0.0, |s, &(_, t)| s + t);
-            (terms[0].0, sum)
-        });
-        let mut next = outside.next();
-        while let Some((col, sum)) = next.filter(|&(col, _)| col < first) {
-            cols.push(col as u32);
-            vals.push(sum);
-            next = outside.next();
-        }
-        for &c in touched.iter() {
-            cols.push((first + c) as u32);
-            vals.push(acc[c]);
-            acc[c] = 0.0;
-            seen[c] = false;
-        }
-        while let Some((col, sum)) = next {
-            cols.push(col as u32);
-            vals.push(sum);
-            next = outside.next();
-        }
-        touched.clear();
-        overflow.clear();
         offsets.push(cols.len());
     }
 }
@@ -252,7 +250,7 @@ pub(crate) fn galerkin(r: &Csr, a: &Csr, p: &Csr) -> Result<Csr, String> {
     let band = local_band(a);
     let mut start = 0;
     while start < n {
-        // This round's blocks, their windows set here (see [`Rows`]).
+        // This round's blocks: the w-th worker takes the w-th.
         let round = |w: usize| {
             let lo = (start + w * block).min(n);
             lo..(lo + block).min(n)
