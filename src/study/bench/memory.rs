@@ -16,6 +16,7 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{Assembled, Caps, level_for, solve, solver_entry};
+use crate::study::runner::median;
 
 /// One solve's memory, measured in a fresh process.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -76,16 +77,10 @@ fn product_times(a: &contactlab_solvers::Csr) -> Vec<f64> {
     times
 }
 
-/// The median of some seconds (the upper middle one when even).
-fn median_of(mut times: Vec<f64>) -> f64 {
-    times.sort_by(f64::total_cmp);
-    times[times.len() / 2]
-}
-
 /// The median seconds of one product A·v (x all ones) over [`PRODUCTS`],
 /// after a warm-up.
 pub fn product_seconds(a: &contactlab_solvers::Csr) -> f64 {
-    median_of(product_times(a))
+    median(&product_times(a))
 }
 
 /// A field of `/proc/self/status` in KiB (Linux), e.g. `VmHWM` or `VmRSS`.
@@ -161,11 +156,8 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
     )?;
     let peak_kb = peak_memory_kb().ok_or_else(unread)?;
     let products_after = product_times(solved.finest.problem.a());
-    let sides = (
-        median_of(products_before.clone()),
-        median_of(products_after.clone()),
-    );
-    let product = median_of([products_before, products_after].concat());
+    let sides = (median(&products_before), median(&products_after));
+    let product = median(&[products_before, products_after].concat());
     let run = solved.outcome;
     let diagnostic = |name: &str| {
         run.solution
