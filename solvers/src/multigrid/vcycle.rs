@@ -25,7 +25,7 @@ use crate::numerics::linalg::Csr;
 use crate::multigrid::galerkin::galerkin;
 use crate::multigrid::parts::Parts;
 use crate::multigrid::smoother::{Place, diagonal_position, linear_sweep, place_in_row, shift_at};
-use crate::numerics::linalg::{spmv_into, spmv_transpose_into};
+use crate::numerics::linalg::{TransposePlan, spmv_into, spmv_transpose_into};
 use crate::numerics::threads::threads;
 
 /// Eigenvalues below this fraction of the largest are the coarsest
@@ -239,6 +239,9 @@ pub(crate) struct Hierarchy {
     pub(crate) diag: Vec<Place>,
     /// The several-core Gauss-Seidel ordering of A's rows, if it has one.
     pub(crate) parts: Option<Parts>,
+    /// Each prolongation's restriction Pᵀ r on every thread, if it has a
+    /// plan ([`TransposePlan`]; else two halves).
+    restrictions: Vec<Option<TransposePlan>>,
     /// The truncated unknowns the levels are built for, ascending (a few
     /// contact unknowns: the flags of every unknown are the caller's, and
     /// a copy of them here was a byte per unknown).
@@ -293,6 +296,7 @@ impl Hierarchy {
         Ok(Self {
             diag,
             parts: Parts::new(a, threads()),
+            restrictions: p.iter().map(|p| TransposePlan::new(p, threads())).collect(),
             truncated: Vec::new(),
             shift: Vec::new(),
             coarsest,
@@ -390,6 +394,7 @@ impl Hierarchy {
         let Self {
             diag,
             parts,
+            restrictions,
             truncated: _,
             shift,
             levels,
@@ -448,8 +453,13 @@ impl Hierarchy {
                 }
             }
             // x below is free until the coarse solve: the scratch of the
-            // two-core restriction.
-            spmv_transpose_into(&p[l - 1], rl, &mut b_below[l - 1], &mut x_below[l - 1]);
+            // two-half restriction, when P has no plan.
+            match &restrictions[l - 1] {
+                Some(plan) => plan.apply(&p[l - 1], rl, &mut b_below[l - 1]),
+                None => {
+                    spmv_transpose_into(&p[l - 1], rl, &mut b_below[l - 1], &mut x_below[l - 1])
+                }
+            }
             if let Some(t) = clock {
                 *finest_seconds += t.elapsed().as_secs_f64();
             }

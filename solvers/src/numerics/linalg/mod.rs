@@ -5,6 +5,7 @@ mod builder;
 mod cholesky;
 mod columns;
 mod csr;
+mod restriction;
 mod sharer;
 pub mod values;
 
@@ -13,6 +14,7 @@ pub(crate) use cholesky::lower_part;
 pub use cholesky::{CholeskyAnalysis, SparseCholesky, kernel_dimension};
 pub use columns::{Columns, RowColumns};
 pub use csr::{ColumnIndex, Csr, CsrError, IntoCsr, SparseRows};
+pub use restriction::TransposePlan;
 pub use values::{RowValues, SharedRows, Values};
 
 use thiserror::Error;
@@ -111,10 +113,10 @@ pub(crate) fn spmv_values_into<'v>(
 /// scatters P_iI·x_i into y_I. Above [`PARALLEL_NNZ`], and with more than
 /// one thread ([`threads`]), the rows are split in two halves, the upper
 /// one scattering into `scratch` (P's column count), which is then added:
-/// a half's columns may overlap the other's. Two, not one per thread: each
-/// more would need a scratch vector of its own, and a restriction is a
-/// small share of a V-cycle. Bits depend only on the matrix and whether
-/// one thread is asked for. No allocation.
+/// a half's columns may overlap the other's. Bits depend only on the
+/// matrix and whether one thread is asked for. No allocation. The
+/// multigrid restricts with a [`TransposePlan`] on every thread where P
+/// has one, and with this where it has none.
 pub(crate) fn spmv_transpose_into(
     p: &impl SparseRows,
     x: &[f64],
@@ -136,13 +138,7 @@ fn transpose_product<'v>(
 ) {
     let scatter = |rows: std::ops::Range<usize>, y: &mut [f64]| {
         y.fill(0.0);
-        for i in rows {
-            let xi = x[i];
-            let (lo, hi) = p.row_range(i);
-            for (c, v) in p.row_columns(i, lo, hi).iter().zip(vals.row(i, lo, hi)) {
-                y[c] += v * xi;
-            }
-        }
+        scatter_rows(p, vals, rows, 0, x, y);
     };
     let n = x.len();
     if p.nnz() < PARALLEL_NNZ || threads() < 2 {
@@ -160,6 +156,29 @@ fn transpose_product<'v>(
         });
         for (yk, sk) in y.iter_mut().zip(scratch.iter()) {
             *yk += sk;
+        }
+    }
+}
+
+/// y_{c − first} += P_ic·x_i over the rows i of `rows`, ascending, for the
+/// columns c of y's band (from `first`, y.len() of them): with `first` = 0
+/// and y of P's column count, the sequential scatter of y = Pᵀ x. Another
+/// band's column (below `first` it wraps past the end) is that band's.
+pub(super) fn scatter_rows<'v>(
+    p: &impl SparseRows,
+    vals: impl RowValues<'v>,
+    rows: std::ops::Range<usize>,
+    first: usize,
+    x: &[f64],
+    y: &mut [f64],
+) {
+    for i in rows {
+        let xi = x[i];
+        let (lo, hi) = p.row_range(i);
+        for (c, v) in p.row_columns(i, lo, hi).iter().zip(vals.row(i, lo, hi)) {
+            if let Some(yc) = y.get_mut(c.wrapping_sub(first)) {
+                *yc += v * xi;
+            }
         }
     }
 }
