@@ -99,6 +99,25 @@ pub fn for_each_chunk(n: usize, f: impl Fn(std::ops::Range<usize>) + Sync) {
     });
 }
 
+/// `f(c, piece)` for the pieces of `y`, `width` entries each (the last may
+/// be shorter), one thread each, the first on the calling thread: a loop
+/// whose pieces own their output (a product's rows, a restriction's band
+/// of coarse unknowns). The caller decides the pieces, and so how many
+/// threads; one piece spawns none.
+pub fn for_each_piece(y: &mut [f64], width: usize, f: impl Fn(usize, &mut [f64]) + Sync) {
+    let f = &f;
+    let mut pieces = y.chunks_mut(width.max(1)).enumerate();
+    let Some((_, first)) = pieces.next() else {
+        return;
+    };
+    std::thread::scope(|scope| {
+        for (c, piece) in pieces {
+            scope.spawn(move || f(c, piece));
+        }
+        f(0, first);
+    });
+}
+
 /// A vector that the threads of [`for_each_chunk`] write at disjoint
 /// indices: each takes the slice of its own chunk.
 #[derive(Clone, Copy)]

@@ -19,7 +19,7 @@ pub use values::{RowValues, SharedRows, Values};
 
 use thiserror::Error;
 
-use crate::numerics::threads::threads;
+use crate::numerics::threads::{for_each_piece, threads};
 
 /// A failed factorization.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -96,16 +96,7 @@ pub(crate) fn spmv_values_into<'v>(
         // Each row is the same sum on any thread: the product is the same
         // to the bit as the sequential one.
         let chunk = y.len().div_ceil(threads);
-        std::thread::scope(|scope| {
-            let mut chunks = y.chunks_mut(chunk).enumerate();
-            let first = chunks.next();
-            for (c, ys) in chunks {
-                scope.spawn(move || rows(c * chunk, ys));
-            }
-            if let Some((_, ys)) = first {
-                rows(0, ys);
-            }
-        });
+        for_each_piece(y, chunk, |c, ys| rows(c * chunk, ys));
     }
 }
 

@@ -14,7 +14,7 @@
 use std::ops::Range;
 
 use super::{RowValues, SparseRows};
-use crate::numerics::threads::MAX_THREADS;
+use crate::numerics::threads::{MAX_THREADS, for_each_piece, threads};
 
 /// A plan whose bands would read P's rows more often than this (summed
 /// over the bands) is refused: its rows reach columns far apart, and the
@@ -120,26 +120,15 @@ impl TransposePlan {
         y: &mut [f64],
     ) {
         // One thread: every row once, in the same order, so the same bits.
-        if crate::numerics::threads::threads() < 2 {
+        if threads() < 2 {
             y.fill(0.0);
             super::scatter_rows(p, vals, 0..self.nrows, 0, x, y);
             return;
         }
-        let band = |b: usize, y: &mut [f64]| {
+        for_each_piece(y, self.width, |b, y| {
             y.fill(0.0);
             for run in &self.runs[b] {
                 super::scatter_rows(p, vals, run.clone(), b * self.width, x, y);
-            }
-        };
-        let mut bands = y.chunks_mut(self.width).enumerate();
-        let band = &band;
-        std::thread::scope(|scope| {
-            let first = bands.next();
-            for (b, ys) in bands {
-                scope.spawn(move || band(b, ys));
-            }
-            if let Some((b, ys)) = first {
-                band(b, ys);
             }
         });
     }
