@@ -10,6 +10,7 @@ use crate::io::charts::Chart;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
 use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
+use crate::study::bench::exact_bound::{self, ExactBound};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, FastestDirect, PerfRow, bench, multigrid};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
@@ -307,6 +308,8 @@ pub struct BenchOutput {
     /// paper's method at equal accuracy.
     pub goals_markdown: String,
     pub charts: Vec<(String, Chart)>,
+    /// The friction fixed point against TNNMG at the exact bound.
+    pub exact_bound: Vec<ExactBound>,
 }
 
 /// The speed measurements as a study: performance.csv,
@@ -406,6 +409,7 @@ pub fn measure_bench(
     let mut md = goals_markdown(&goals);
     md += &memory::markdown(&memory);
     md += &unmeasured;
+    md += &exact_bound::markdown(&multigrid.exact_bound, &rows);
     md += &equal_accuracy_markdown(&rows, spec.problem);
     Ok(BenchOutput {
         problem: spec.problem,
@@ -415,6 +419,7 @@ pub fn measure_bench(
         goals,
         memory,
         goals_markdown: md,
+        exact_bound: multigrid.exact_bound,
     })
 }
 

@@ -16,6 +16,7 @@
 
 mod charts;
 pub mod equal_accuracy;
+pub mod exact_bound;
 pub mod goals;
 pub mod memory;
 pub mod multigrid;

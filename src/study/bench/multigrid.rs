@@ -21,6 +21,7 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{solve_scene, solver_entry};
+use crate::study::bench::exact_bound::{self, ExactBound};
 use crate::study::bench::goals::Goal;
 use crate::study::bench::memory::{MemoryUse, available_memory_kb, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow};
@@ -57,6 +58,9 @@ pub struct MultigridRows {
     pub paper: Option<(MeshSize, f64, String)>,
     /// max|p − p_Newton| / P of the Coulomb answers: (h, gap).
     pub agreement: Vec<(MeshSize, f64)>,
+    /// The friction fixed point against TNNMG at the exact bound, on the
+    /// large meshes.
+    pub exact_bound: Vec<ExactBound>,
 }
 
 /// The meshes of each measurement for a benchmark spec: every mesh of the
@@ -189,6 +193,13 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
     for h in agreement {
         log(&format!("{SOLVER} against newton-coulomb at h = {h}"));
         out.agreement.push((h, agreement_at(spec.problem, h)?));
+    }
+    for &h in &large {
+        log(&format!(
+            "{SOLVER}: the friction fixed point against the exact bound at h = {h}"
+        ));
+        out.exact_bound
+            .extend(exact_bound::measure(spec.problem, h)?);
     }
     Ok(out)
 }

@@ -5,8 +5,8 @@
 use contactlab_solvers::registry;
 
 use crate::study::bench::goals::{BenchOutput, equal_accuracy_markdown, goals_markdown};
-use crate::study::bench::memory;
 use crate::study::bench::set_up::FACTORIZATION;
+use crate::study::bench::{exact_bound, memory};
 use crate::study::lab::chart_markdown;
 
 /// The whole section.
@@ -24,6 +24,7 @@ pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
     s += &goals_markdown(&bench.goals);
     s += "\n";
     s += &memory::markdown(&bench.memory);
+    s += &exact_bound::markdown(&bench.exact_bound, &bench.rows);
     s += "\n";
     s += &equal_accuracy_markdown(&bench.rows, bench.problem);
     s += "\n\nIn that comparison the paper's method stops by its certified rule (`relaxation.target`: the \
