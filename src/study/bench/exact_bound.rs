@@ -29,7 +29,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{solve_scene, solver_entry};
 use crate::study::bench::PerfRow;
-use crate::study::bench::multigrid::SOLVER;
+use crate::study::bench::multigrid::{SOLVER, factorization, largest_gap, tight_settings};
 
 /// The most iterations tried at the exact bound.
 const MAX_ITERATIONS: usize = 30;
@@ -67,15 +67,6 @@ impl ExactBound {
     }
 }
 
-/// Settings of a solve: defaults with `sets` applied.
-fn settings_with(sets: &[(&str, f64)]) -> Result<Settings> {
-    let mut s = Settings::default();
-    for (path, value) in sets {
-        s.set(path, json!(value)).map_err(anyhow::Error::msg)?;
-    }
-    Ok(s)
-}
-
 /// The comparison on problem `problem` at `h` (h coarser than 1/8 has no
 /// level below: None).
 pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
@@ -85,9 +76,14 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
     let below = MeshSize::from_level(below)?;
     let entry = solver_entry(SOLVER)?;
     let scene = Scene::paper_problem_to(problem, h)?;
-    // The reference: as the agreement goal's (`multigrid::agreement_at`).
-    let tight = settings_with(&[("tnnmg.tolerance", 1e-12), ("coulomb.epsilon", 1e-11)])?;
-    let reference = solve_scene(&scene, Friction::Coulomb, entry, &tight, &mut Silent)?;
+    // The reference: as the agreement goal's.
+    let reference = solve_scene(
+        &scene,
+        Friction::Coulomb,
+        entry,
+        &tight_settings()?,
+        &mut Silent,
+    )?;
     anyhow::ensure!(
         reference.outcome.status.is_converged(),
         "the reference at h = {h} is {}",
@@ -96,12 +92,7 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
     let d = &reference.finest;
     let p_star = &reference.outcome.solution.pressure;
     let scale = d.problem.scales().pressure;
-    let error = |p: &[f64]| {
-        p.iter()
-            .zip(p_star)
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-            / scale
-    };
+    let error = |p: &[f64]| largest_gap(p, p_star) / scale;
     let default = solve_scene(
         &scene,
         Friction::Coulomb,
@@ -121,7 +112,10 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
         .coulomb()
         .map_err(anyhow::Error::msg)?
         .coarse_epsilon;
-    let loose = settings_with(&[("coulomb.epsilon", coarse_epsilon)])?;
+    let mut loose = Settings::default();
+    loose
+        .set("coulomb.epsilon", json!(coarse_epsilon))
+        .map_err(anyhow::Error::msg)?;
     let coarse_scene = Scene::paper_problem_to(problem, below)?;
     let coarse = solve_scene(&coarse_scene, Friction::Coulomb, entry, &loose, &mut Silent)?;
     let v0 = d.transfer_from(&coarse.finest, &coarse.outcome.solution.v);
@@ -133,6 +127,7 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
         tolerance: 1e-15,
         ..TnnmgSettings::default()
     });
+    let fixed_point_error = error(&o.solution.pressure);
     let (mut exact, mut increments, mut last) = (None, Vec::new(), None);
     for k in 1..=MAX_ITERATIONS {
         tnnmg.settings.max_iter = k;
@@ -151,7 +146,7 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
         if let Some(before) = last.replace(seconds) {
             increments.push(seconds - before);
         }
-        if error(&s.pressure) <= error(&o.solution.pressure) {
+        if error(&s.pressure) <= fixed_point_error {
             exact = Some(k);
             break;
         }
@@ -162,7 +157,7 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
         h,
         friction_steps: o.friction_iterations(),
         finest_iterations: finest,
-        error: error(&o.solution.pressure),
+        error: fixed_point_error,
         seconds: o.timing.total(),
         start_error: error(&p0),
         exact_iterations: exact,
@@ -188,11 +183,9 @@ pub fn markdown(found: &[ExactBound], rows: &[PerfRow]) -> String {
         return String::new();
     }
     let over = |h: MeshSize, s: f64| {
-        rows.iter()
-            .find(|r| r.what == "factorization" && r.h == h.to_string())
-            .map_or(String::new(), |f| {
-                format!(" = {:.2} × factorization", s / f.median_seconds)
-            })
+        factorization(rows, h).map_or(String::new(), |f| {
+            format!(" = {:.2} × factorization", s / f)
+        })
     };
     let mut md = String::from(
         "\n### Coulomb without the outer loop, at best (problem 1, once each, in this process)\n\n\

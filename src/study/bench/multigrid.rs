@@ -263,6 +263,19 @@ fn agreement_at(problem: u32, h: MeshSize) -> Result<f64> {
             .is_converged()
             .then_some((o.solution.pressure, scale)))
     };
+    let (Some((mg, scale)), Some((newton, _))) = (
+        run(SOLVER, &tight_settings()?)?,
+        run("newton-coulomb", &Settings::default())?,
+    ) else {
+        return Ok(f64::NAN);
+    };
+    Ok(largest_gap(&mg, &newton) / scale)
+}
+
+/// TNNMG in the nested fixed point far tighter than its defaults
+/// (tolerance 1e-12, ε = 1e-11): the reference answers of the agreement
+/// goal and of the exact-bound comparison.
+pub(crate) fn tight_settings() -> Result<Settings> {
     let mut tight = Settings::default();
     tight.schedule = Some(Schedule::Nested);
     tight
@@ -271,17 +284,14 @@ fn agreement_at(problem: u32, h: MeshSize) -> Result<f64> {
     tight
         .set("coulomb.epsilon", json!(1e-11))
         .map_err(anyhow::Error::msg)?;
-    let (Some((mg, scale)), Some((newton, _))) = (
-        run(SOLVER, &tight)?,
-        run("newton-coulomb", &Settings::default())?,
-    ) else {
-        return Ok(f64::NAN);
-    };
-    Ok(mg
-        .iter()
-        .zip(&newton)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-        / scale)
+    Ok(tight)
+}
+
+/// max_i |a_i − b_i|.
+pub(crate) fn largest_gap(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
 }
 
 /// Issue 50's goals: the default solve at most this × the best
@@ -422,7 +432,7 @@ fn finest_goal(
 }
 
 /// The best factorization's median seconds at `h` in `rows`.
-fn factorization(rows: &[PerfRow], h: MeshSize) -> Option<f64> {
+pub(crate) fn factorization(rows: &[PerfRow], h: MeshSize) -> Option<f64> {
     rows.iter()
         .find(|r| r.what == "factorization" && r.h == h.to_string())
         .map(|r| r.median_seconds)
