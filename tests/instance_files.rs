@@ -296,3 +296,130 @@ fn a_byte_order_mark_is_read_past_and_long_lines_are_refused() {
         "longer than",
     );
 }
+
+/// Instances that have no solution are refused with one line naming the
+/// reason, before any answer is judged: a negated A (the energy unbounded
+/// below: −v* passed every pointwise condition), an A made indefinite at
+/// one entry of its diagonal's size, a second rigid mode in A's kernel
+/// left undeclared (a spring of the roller removed is not available in a
+/// file, so the rigid mode is given twice: dependent), a load that lifts
+/// the body off (condition (13)), and no contact node at all.
+#[test]
+fn an_instance_without_a_solution_is_refused() {
+    let fx = fixture();
+    let v = s(&fx.v);
+    let a = fx.read("A.mtx");
+    let f = fx.read("f.mtx");
+    let modes = fx.read("rigid_modes.mtx");
+    let contact = fx.read("contact.csv");
+    let matrix_lines = |text: &str, edit: &dyn Fn(usize, usize, f64) -> f64| -> String {
+        let mut out = String::new();
+        let mut size_seen = false;
+        for line in text.lines() {
+            if line.starts_with('%') || !size_seen {
+                size_seen |= !line.starts_with('%');
+                out += line;
+                out.push('\n');
+                continue;
+            }
+            let parts: Vec<&str> = line.split_whitespace().collect();
+            let (i, j, x): (usize, usize, f64) = (
+                parts[0].parse().unwrap(),
+                parts[1].parse().unwrap(),
+                parts[2].parse().unwrap(),
+            );
+            out += &format!("{i} {j} {:e}\n", edit(i, j, x));
+        }
+        out
+    };
+    let negated = matrix_lines(&a, &|_, _, x| -x);
+    // Entry (2, 1) raised far beyond √(A_11 A_22): indefinite, with a
+    // positive diagonal.
+    let indefinite = matrix_lines(&a, &|i, j, x| {
+        if (i, j) == (2, 1) {
+            1e3 * x.abs() + 1e9
+        } else {
+            x
+        }
+    });
+    // f negated: the load pulls the upper body off Γ_K.
+    let lifted = matrix_lines(&f, &|_, _, x| -x);
+    let twice = {
+        let json = fx
+            .read("problem.json")
+            .replace("\"rigid_modes\": 1", "\"rigid_modes\": 2");
+        let mut lines: Vec<String> = modes.lines().map(String::from).collect();
+        let k = lines.iter().position(|l| !l.starts_with('%')).unwrap();
+        let size: Vec<usize> = lines[k]
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        lines[k] = format!("{} 2 {}", size[0], 2 * size[2]);
+        let second: Vec<String> = lines[k + 1..]
+            .iter()
+            .map(|l| {
+                let p: Vec<&str> = l.split_whitespace().collect();
+                format!("{} 2 {}", p[0], p[2])
+            })
+            .collect();
+        lines.extend(second);
+        (json, lines.join("\n") + "\n")
+    };
+    let cases: Vec<(&str, PathBuf, &str)> = vec![
+        (
+            "negated",
+            fx.variant("negated", "A.mtx", negated.as_bytes()),
+            "diagonal entry",
+        ),
+        (
+            "indefinite",
+            fx.variant("indefinite", "A.mtx", indefinite.as_bytes()),
+            "not positive semidefinite",
+        ),
+        (
+            "lifted",
+            fx.variant("lifted", "f.mtx", lifted.as_bytes()),
+            "condition (13)",
+        ),
+        (
+            "twice",
+            {
+                let dir = fx.variant("twice", "rigid_modes.mtx", twice.1.as_bytes());
+                std::fs::write(dir.join("problem.json"), &twice.0).unwrap();
+                dir
+            },
+            "combination of the modes before it",
+        ),
+    ];
+    assert!(
+        twice.0.contains("\"rigid_modes\": 2"),
+        "problem.json names the modes' count"
+    );
+    for (what, dir, expected) in cases {
+        let o = fx.certify(&dir, &["--displacements", &v]);
+        one_line_error(&o, what, expected);
+    }
+    // No contact node: problem.json declares none, contact.csv its header.
+    let header = contact.lines().next().unwrap().to_string() + "\n";
+    let dir = fx.variant("no_contact", "contact.csv", header.as_bytes());
+    let json = fx.read("problem.json");
+    let re = without_contact_nodes(&json);
+    std::fs::write(dir.join("problem.json"), re).unwrap();
+    let o = fx.certify(&dir, &["--displacements", &v]);
+    one_line_error(&o, "no contact node", "no contact node");
+    // The certify report states the check of A it made.
+    let o = fx.certify(&fx.instance, &["--displacements", &v]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("checked by Cholesky with the modes pinned"),
+        "{out}"
+    );
+}
+
+/// problem.json with `"contact_nodes": 0`.
+fn without_contact_nodes(json: &str) -> String {
+    let k = json.find("\"contact_nodes\"").unwrap();
+    let rest = &json[k..];
+    let end = rest.find(',').unwrap();
+    format!("{}\"contact_nodes\": 0{}", &json[..k], &rest[end..])
+}

@@ -195,9 +195,17 @@ def _overrides(h, young, poisson, plane, friction) -> tuple:
     )
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A copy that cannot be written: the problem's arrays are cached, and
+    a change in place would change what every later read shows."""
+    a = np.array(a, copy=True)
+    a.setflags(write=False)
+    return a
+
+
 def _csr(parts, shape) -> scipy.sparse.csr_array:
-    indptr, indices, data = parts
-    return scipy.sparse.csr_array((data, indices, indptr), shape=shape)
+    indptr, indices, data = (_read_only(x) for x in parts)
+    return scipy.sparse.csr_array((data, indices, indptr), shape=shape, copy=False)
 
 
 def _csr_in(a, name: str, shape=None):
@@ -206,7 +214,18 @@ def _csr_in(a, name: str, shape=None):
     if isinstance(a, np.ndarray) or not scipy.sparse.issparse(a):
         a = np.asarray(a)
         if a.ndim != 2 or a.dtype.kind not in "iuf":
-            raise InputError(f"{name}: give a real matrix (scipy sparse, or a 2-D array)")
+            raise InputError(
+                f"{name}: give a real matrix (scipy sparse, or a 2-D array)"
+                + (": a complex one would lose its imaginary part" if a.dtype.kind == "c" else "")
+            )
+    elif a.dtype.kind not in "iufb":
+        raise InputError(
+            f"{name}: give a real matrix (a sparse matrix of dtype {a.dtype} was given"
+            + (": its imaginary part would be lost)" if a.dtype.kind == "c" else ")")
+        )
+    rows, cols = a.shape
+    stored = a.size if scipy.sparse.issparse(a) else rows * cols
+    _contactlab._check_problem_size(f"reading {name} ({rows} × {cols}, {stored} entries)", max(rows, cols), stored)
     m = scipy.sparse.csr_array(a, dtype=np.float64)
     if shape is not None and m.shape != shape:
         raise InputError(f"{name} has shape {m.shape}, expected {shape}")
@@ -230,7 +249,7 @@ class Problem:
     ----------
     A, M : scipy.sparse.csr_array
         Stiffness and the mass matrix of the proximal term; built once per
-        problem and cached (do not modify them in place). A scene's problem
+        problem and cached, read-only (copy to modify). A scene's problem
         holds no M (a third of its memory): ``M`` assembles it on first use.
     f : numpy.ndarray
         The load vector.
@@ -342,7 +361,23 @@ class Problem:
         s = np.asarray(contact["s"])
         if t.dtype.kind not in "iu" or s.dtype.kind not in "iu":
             raise InputError("contact: t and s are indices of unknowns: give integers")
-        modes = np.asarray(rigid_mode, dtype=np.float64)
+        for key, idx in (("t", t), ("s", s)):
+            if idx.ndim != 1:
+                raise InputError(f"contact {key}: give a one-dimensional array of indices (it has shape {idx.shape})")
+            bad = [int(x) for x in idx if int(x) < 0 or int(x) >= n][:1]
+            if bad:
+                raise InputError(f"contact {key}: index {bad[0]} is out of range 0..{n}")
+        raw_modes = np.asarray(rigid_mode)
+        if raw_modes.dtype.kind not in "iuf":
+            raise InputError(
+                f"rigid_mode: give real numbers (an array of dtype {raw_modes.dtype} was given"
+                + (": its imaginary part would be lost)" if raw_modes.dtype.kind == "c" else ")")
+            )
+        modes = raw_modes.astype(np.float64)
+        if modes.ndim not in (1, 2) or modes.size == 0:
+            raise InputError(
+                f"rigid_mode: give the kernel of A as an array of n, or a list of them (shape {modes.shape} was given)"
+            )
         modes = [modes] if modes.ndim == 1 else list(modes)
         m = None if M is None else _csr_in(M, "M", (n, n))[1]
         ps = []
@@ -396,11 +431,11 @@ class Problem:
 
     @functools.cached_property
     def f(self) -> np.ndarray:
-        return self._p.f
+        return _read_only(self._p.f)
 
     @functools.cached_property
     def contact(self) -> Contact:
-        return Contact(**self._p._contact())
+        return Contact(**{k: (None if v is None else _read_only(v)) for k, v in self._p._contact().items()})
 
     @property
     def scales(self) -> Dict[str, float]:
@@ -411,7 +446,7 @@ class Problem:
 
     @functools.cached_property
     def rigid_mode(self) -> np.ndarray:
-        return self._p.rigid_mode
+        return _read_only(self._p.rigid_mode)
 
     def __repr__(self) -> str:
         return repr(self._p)

@@ -161,6 +161,18 @@ fn solvers() -> Vec<&'static str> {
     registry::names()
 }
 
+/// Refuses, before the matrices are copied, a problem of `n` unknowns and
+/// `nnz` stored entries whose copies would not fit in memory: Python's
+/// lists of the CSR parts (about 100 B per entry), the library's problem
+/// and its definiteness check's factor ([`contactlab::memory`]).
+#[pyfunction]
+fn _check_problem_size(what: &str, n: usize, nnz: usize) -> PyResult<()> {
+    let need = 100.0 * nnz as f64
+        + contactlab::memory::instance(n)
+        + contactlab::memory::error_bound(n) / 2.0;
+    contactlab::memory::check_need(what, need, n, Vec::new()).map_err(|e| error_of(e.into()))
+}
+
 /// Every status a solve can end with, as written in output files.
 #[pyfunction]
 fn statuses() -> Vec<&'static str> {
@@ -552,6 +564,7 @@ fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Problem>()?;
     m.add_function(wrap_pyfunction!(solvers, m)?)?;
     m.add_function(wrap_pyfunction!(statuses, m)?)?;
+    m.add_function(wrap_pyfunction!(_check_problem_size, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(certify, m)?)?;
     m.add_function(wrap_pyfunction!(export, m)?)?;

@@ -286,6 +286,11 @@ impl Problem {
         };
         let mut problem = ContactProblem::new(a, f, mass, contacts, rigid_modes)
             .map_err(|e| input_error(e.to_string()))?;
+        contactlab::certificate::problem_checks::check_definite(
+            &problem,
+            contactlab::certificate::bound_room(),
+        )
+        .map_err(input_error)?;
         if !prolongations.is_empty() {
             let ps = prolongations
                 .into_iter()

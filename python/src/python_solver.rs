@@ -39,6 +39,24 @@ type Functions = Mutex<Vec<(&'static str, Arc<Py<PyAny>>)>>;
 
 static FUNCTIONS: Functions = Mutex::new(Vec::new());
 
+/// The longest solver name: the built-in names are at most 16 characters,
+/// and a name is part of file names, CSV columns and settings paths.
+const MAX_NAME_CHARS: usize = 48;
+
+/// Names that already mean something where a solver's name is read: the
+/// settings sections (`coulomb.*`, `stopping`, `schedule`, `certificate.*`)
+/// and the side of a comparison that is the earned reference, and the
+/// solver lists' `all`.
+const RESERVED: &[&str] = &[
+    contactlab::settings::COULOMB,
+    "reference",
+    "stopping",
+    "schedule",
+    "certificate",
+    "all",
+    "oracle",
+];
+
 /// The function registered under `name`.
 fn function(name: &str) -> Option<Arc<Py<PyAny>>> {
     FUNCTIONS
@@ -54,6 +72,17 @@ fn function(name: &str) -> Option<Arc<Py<PyAny>>> {
 /// name of a built-in solver is refused.
 pub fn register(name: &str, f: Py<PyAny>) -> Result<&'static Entry, String> {
     let name = name.trim();
+    if name.len() > MAX_NAME_CHARS {
+        return Err(format!(
+            "solver name of {} characters: give at most {MAX_NAME_CHARS} (it names files, columns and settings)",
+            name.chars().count()
+        ));
+    }
+    if let Some(word) = RESERVED.iter().find(|w| w.eq_ignore_ascii_case(name)) {
+        return Err(format!(
+            "solver name '{name}': '{word}' is a word contactlab gives its own meaning (a settings section or the earned reference); give your function another name"
+        ));
+    }
     if name.is_empty()
         || !name
             .chars()

@@ -74,7 +74,7 @@ use serde::{Deserialize, Serialize};
 
 use super::accurate_sum::Dot2;
 use super::energy_solve::{EnergySolve, EnergySolveError};
-use super::{fits, implied_forces, row_product};
+use super::{fits, implied_forces};
 
 /// What a bound is a bound on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -149,10 +149,13 @@ pub struct ErrorBounder<'a> {
     /// extension.
     interior: std::cell::OnceCell<Result<EnergySolve, EnergySolveError>>,
     room: f64,
-    /// ‖z‖_A of the rigid mode as assembled: zero in exact arithmetic,
-    /// about 1e-16·K·max|z| per row in floating point. A shift along z
-    /// adds |τ|·‖z‖_A to the bound, so that the bound holds for the
-    /// matrix as it is, not only for the exact one.
+    /// An upper bound on ‖z‖_A of the rigid mode as assembled
+    /// ([`ErrorBounder::energy_upper`]): zero in exact arithmetic, about
+    /// 1e-16·K·max|z| per row in floating point. A shift along z adds
+    /// |τ|·‖z‖_A to the bound, so that the bound holds for the matrix as
+    /// it is, not only for the exact one, and for any plain evaluation of
+    /// ‖τ z‖_A (issue 73: summed plainly, this term was rounding noise
+    /// itself and fell below a measured ‖τ z‖_A by up to 5×).
     rigid_energy: f64,
     /// For each unknown, the contact node whose force acts on it in ρ:
     /// 2i + 1 for the normal jump of node i, 2i + 2 for its slip, 0 for
@@ -201,11 +204,7 @@ impl<'a> ErrorBounder<'a> {
             contact_of,
         };
         if let Some(z) = modes.first() {
-            out.rigid_energy = (0..z.len())
-                .map(|i| z[i] * out.row_product(i, z))
-                .sum::<f64>()
-                .abs()
-                .sqrt();
+            out.rigid_energy = out.energy_upper(z);
         }
         Ok(out)
     }
@@ -384,8 +383,8 @@ impl<'a> ErrorBounder<'a> {
                 d[c.s] = -s;
             }
         }
-        let ad = self.extend(&mut d).ok()?;
-        let correction = self.energy_norm(&d, &ad);
+        self.extend(&mut d).ok()?;
+        let correction = self.energy_upper(&d);
         // ρ = A (v_s + d) − f + Σ w p̂ e_t − Σ w q̂ e_s, each row by Dot2 with
         // a bound on its rounding.
         let (mut rho, mut rounding) = self.residual(&vs, &d, &ph, &qh);
@@ -424,11 +423,10 @@ impl<'a> ErrorBounder<'a> {
 
     /// Extends `d`, given at the contact unknowns (zero elsewhere on
     /// entry), into the bodies with least energy: d_F = −A_FF⁻¹ A_FS d_S.
-    /// Returns A d.
-    fn extend(&self, d: &mut [f64]) -> Result<Vec<f64>, EnergySolveError> {
+    fn extend(&self, d: &mut [f64]) -> Result<(), EnergySolveError> {
         let support: Vec<usize> = (0..d.len()).filter(|&k| d[k] != 0.0).collect();
         if support.is_empty() {
-            return Ok(vec![0.0; d.len()]);
+            return Ok(());
         }
         let interior = self
             .interior
@@ -451,27 +449,46 @@ impl<'a> ErrorBounder<'a> {
                 d[k] = *x;
             }
         }
-        Ok((0..d.len()).map(|i| self.row_product(i, d)).collect())
+        Ok(())
     }
 
-    /// ‖d‖_A from d and A d, with the rounding of the long sums dᵀA d
-    /// allowed for: γ |d|ᵀ|A| |d| with γ = 32 ε (for a rigid shift, where
-    /// dᵀA d is zero in exact arithmetic, this allowance is the whole).
-    fn energy_norm(&self, d: &[f64], ad: &[f64]) -> f64 {
-        let value: f64 = d.iter().zip(ad).map(|(a, b)| a * b).sum();
-        let size: f64 = (0..d.len())
-            .filter(|&i| d[i] != 0.0)
-            .map(|i| {
-                let (cols, vals) = self.problem.a().row(i);
-                d[i].abs()
-                    * cols
-                        .iter()
-                        .zip(vals)
-                        .map(|(c, a)| (a * d[c]).abs())
-                        .sum::<f64>()
-            })
-            .sum();
-        (value.max(0.0) + 32.0 * f64::EPSILON * size).sqrt()
+    /// An upper bound on ‖x‖_A for the stored A, whichever way it is
+    /// evaluated: xᵀA x by Dot2 (each row's (A x)_i and the outer sum,
+    /// with their error bounds), plus γ_{m+n} |x|ᵀ|A| |x| (m the longest
+    /// row, n the unknowns: the worst-case rounding of a plain evaluation,
+    /// Higham, *Accuracy and Stability of Numerical Algorithms*, 2002,
+    /// §3.1), so that the bound is not below ‖x‖_A computed plainly. For a
+    /// rigid shift, where xᵀA x is zero in exact arithmetic, the allowance
+    /// is the whole.
+    fn energy_upper(&self, x: &[f64]) -> f64 {
+        let a = self.problem.a();
+        let mut outer = Dot2::default();
+        let (mut size, mut row_error, mut longest) = (0.0, 0.0, 0usize);
+        for i in 0..x.len() {
+            if x[i] == 0.0 {
+                continue;
+            }
+            let (cols, vals) = a.row(i);
+            let mut row = Dot2::default();
+            let mut row_size = 0.0;
+            let mut len = 0;
+            for (c, v) in cols.iter().zip(vals) {
+                row.add(*v, x[c]);
+                row_size += (v * x[c]).abs();
+                len += 1;
+            }
+            longest = longest.max(len);
+            let (ax, e) = row.value();
+            outer.add(x[i], ax);
+            row_error += x[i].abs() * e;
+            size += x[i].abs() * row_size;
+        }
+        let (value, outer_error) = outer.value();
+        let terms = (longest + x.len()) as f64;
+        let u = f64::EPSILON / 2.0;
+        let gamma = terms * u / (1.0 - terms * u).max(0.5);
+        let upper = value.max(0.0) + outer_error + row_error + gamma * size;
+        (upper * (1.0 + 4.0 * f64::EPSILON)).sqrt()
     }
 
     /// ρ = A (v + d) − f + Σ w p̂ e_t − Σ w q̂ e_s, row by row by Dot2 (the
@@ -523,11 +540,6 @@ impl<'a> ErrorBounder<'a> {
             })
             .sum();
         (sum * (1.0 + 64.0 * f64::EPSILON)).sqrt()
-    }
-
-    /// Row i of A times x, by the certificate's own product.
-    fn row_product(&self, i: usize, x: &[f64]) -> f64 {
-        row_product(self.problem, x, i)
     }
 
     /// A x for an x that is zero outside `support` (a few entries).

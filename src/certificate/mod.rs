@@ -43,6 +43,7 @@
 pub mod accurate_sum;
 pub mod energy_solve;
 pub mod error_bound;
+pub mod problem_checks;
 
 pub use error_bound::{
     BoundError, BoundKind, BoundReport, ErrorBound, ErrorBounder, FixedPointEstimate,

@@ -56,6 +56,10 @@ pub fn run(args: &CertifyArgs) -> Result<()> {
         args.instance.display(),
         law.as_str()
     );
+    text += &format!(
+        "problem: {}; A z = 0, the modes independent, a positive diagonal and the load along each mode carried by the contact (condition (13)): checked\n",
+        instance.definiteness.line()
+    );
     for (cond, x) in c.measures() {
         let mark = if x <= c.tolerance { "ok" } else { "FAILS" };
         text += &format!("  {:<16} {x:.3e}  {mark}\n", cond.as_str());

@@ -87,12 +87,96 @@ pub enum ProblemError {
     NetLoad { index: usize, fraction: f64 },
     #[error("A: {0}")]
     Stiffness(#[from] CsrError),
+    #[error(
+        "the problem has no contact node: give at least one (t, s, weight, coefficient); without contact there is no contact problem"
+    )]
+    NoContact,
+    #[error(
+        "A's diagonal entry ({index}, {index}) is {value:e}: a positive semidefinite A whose kernel is the rigid modes has a positive diagonal (is A negated, or an unknown unused?)"
+    )]
+    Diagonal { index: usize, value: f64 },
+    #[error(
+        "rigid mode {index} is a combination of the modes before it: give each rigid motion once (a basis of A's kernel)"
+    )]
+    DependentRigidModes { index: usize },
+    #[error(
+        "the load along rigid mode {index} ({load:e}) cannot be carried by the contact: it pulls the body off Γ_K, where pressures p ≥ 0 can only push (paper condition (13)); reverse the load or give the rigid mode of a body that is held"
+    )]
+    LiftsOff { index: usize, load: f64 },
     #[error("the problem's {what} scale is {value:e}: {why}")]
     Scale {
         what: &'static str,
         value: f64,
         why: &'static str,
     },
+}
+
+/// Every diagonal entry of A positive: necessary for A ⪰ 0 with no kernel
+/// beyond the rigid modes (A_ii = e_iᵀA e_i, and e_i is in no rigid mode's
+/// span unless the mode is e_i itself, which a stiffness never has). It
+/// catches a negated or indefinite A at the cost of one pass; the full
+/// check, a Cholesky factorization with the modes pinned, is the
+/// certificate's (`contactlab::certificate::problem_checks`).
+fn check_diagonal(a: &Csr) -> Result<(), ProblemError> {
+    for i in 0..a.nrows() {
+        let (cols, vals) = a.row(i);
+        let value = cols.find(i).map_or(0.0, |k| vals[k]);
+        if value.is_nan() || value <= 0.0 {
+            return Err(ProblemError::Diagonal { index: i, value });
+        }
+    }
+    Ok(())
+}
+
+/// The rigid modes linearly independent: Gram–Schmidt on them, each
+/// refused if less than 1e-8 of it is left after the earlier ones are taken
+/// off (a mode given twice, or as a sum of two others).
+fn check_independent(modes: &[Vec<f64>]) -> Result<(), ProblemError> {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for (index, z) in modes.iter().enumerate() {
+        let size = max_abs(z);
+        let mut w: Vec<f64> = z.iter().map(|x| x / size).collect();
+        let norm = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for b in &basis {
+            let along: f64 = w.iter().zip(b).map(|(x, y)| x * y).sum();
+            w.iter_mut().zip(b).for_each(|(x, y)| *x -= along * y);
+        }
+        let left = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if left.is_nan() || left <= 1e-8 * norm {
+            return Err(ProblemError::DependentRigidModes { index });
+        }
+        w.iter_mut().for_each(|x| *x /= left);
+        basis.push(w);
+    }
+    Ok(())
+}
+
+/// Paper condition (13), the solvability of the semicoercive problem: the
+/// load along each rigid mode z must be one the contact forces can carry,
+/// zᵀf = Σ_i w_i (p_i z_{t_i} − q_i z_{s_i}) with p_i ≥ 0. A node can give
+/// a positive share if z_{t_i} > 0 or z_{s_i} ≠ 0 (friction, of either
+/// sign), a negative one if z_{t_i} < 0 or z_{s_i} ≠ 0; a load of a sign
+/// no node can give lifts the body off, and no solution exists (the
+/// energy is unbounded below along z).
+fn check_carried(
+    f: &[f64],
+    contacts: &[ContactNode],
+    modes: &[Vec<f64>],
+) -> Result<(), ProblemError> {
+    for (index, z) in modes.iter().enumerate() {
+        let size = max_abs(z);
+        let load: f64 = z.iter().zip(f).map(|(zk, fk)| (zk / size) * fk).sum();
+        let (mut up, mut down) = (false, false);
+        for c in contacts {
+            let (zt, zs) = (z[c.t], z[c.s]);
+            up |= zt > 0.0 || zs != 0.0;
+            down |= zt < 0.0 || zs != 0.0;
+        }
+        if (load > 0.0 && !up) || (load < 0.0 && !down) {
+            return Err(ProblemError::LiftsOff { index, load });
+        }
+    }
+    Ok(())
 }
 
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
@@ -188,6 +272,9 @@ impl ContactProblem {
         if f.iter().any(|x| !x.is_finite()) {
             return Err(ProblemError::NonFinite { what: "f" });
         }
+        if contacts.is_empty() {
+            return Err(ProblemError::NoContact);
+        }
         let mut used = vec![false; n];
         for (node, c) in contacts.iter().enumerate() {
             for index in [c.t, c.s] {
@@ -223,7 +310,10 @@ impl ContactProblem {
                 return Err(ProblemError::BadRigidMode { index });
             }
         }
+        check_diagonal(&a)?;
+        check_independent(&rigid_modes)?;
         let scales = Scales::of(&a, &f, &contacts, &rigid_modes)?;
+        check_carried(&f, &contacts, &rigid_modes)?;
         for (index, z) in rigid_modes.iter().enumerate() {
             // In units of z's largest entry, so that no product overflows.
             let size = max_abs(z);

@@ -164,6 +164,11 @@ pub fn import(dir: &Path) -> Result<Instance> {
     let (contacts, g) = read_contacts(&dir.join("contact.csv"), m)?;
     let problem = ContactProblem::new(a, f, mass, contacts, modes)
         .with_context(|| format!("{shown}: the files do not form a contact problem"))?;
+    let definiteness = crate::certificate::problem_checks::check_definite(
+        &problem,
+        crate::certificate::bound_room(),
+    )
+    .map_err(|e| anyhow::anyhow!("{shown}: the files do not form a contact problem: {e}"))?;
     let g = match g.iter().filter(|g| g.is_some()).count() {
         0 => None,
         given if given == g.len() => Some(g.into_iter().flatten().collect::<Vec<f64>>()),
@@ -177,14 +182,22 @@ pub fn import(dir: &Path) -> Result<Instance> {
             .check(&problem)
             .map_err(|e| anyhow::anyhow!("{shown}: contact.csv's column g: {e}"))?;
     }
-    Ok(Instance { problem, g })
+    Ok(Instance {
+        problem,
+        g,
+        definiteness,
+    })
 }
 
-/// An exported problem read back: the problem, and the friction bound g of
-/// its given-friction subproblem (`contact.csv`'s column g; None if empty).
+/// An exported problem read back: the problem, the friction bound g of its
+/// given-friction subproblem (`contact.csv`'s column g; None if empty), and
+/// what was checked of A beyond `ContactProblem::new`.
 pub struct Instance {
     pub problem: ContactProblem,
     pub g: Option<Vec<f64>>,
+    /// How far A was checked to be positive semidefinite with exactly the
+    /// declared rigid modes ([`crate::certificate::problem_checks`]).
+    pub definiteness: crate::certificate::problem_checks::Definiteness,
 }
 
 /// Reads exactly `m` rows of `contact.csv`, node i on row i.
