@@ -137,3 +137,84 @@ fn a_bad_pair_is_refused_in_one_line() {
         "not the same mesh",
     );
 }
+
+/// Two profiles whose folders and files have one name (`A1/run/profile.csv`
+/// and `A2/run/profile.csv`) are two answers: each named by its path, and
+/// their difference is the difference of problem 1 and problem 2 at the
+/// same mesh (once 0.0: the second was taken to be the first). A profile
+/// with its rows reversed is the same answer; a state outside
+/// stick/slip/open and a pair given twice are refused in one line.
+#[test]
+fn imported_profiles_are_told_apart_read_in_any_order_and_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a1, a2) = (dir.path().join("A1/run"), dir.path().join("A2/run"));
+    std::fs::create_dir_all(dir.path().join("A1")).unwrap();
+    std::fs::create_dir_all(dir.path().join("A2")).unwrap();
+    let o = run_with_deadline(solve_into("1/8", "newton-coulomb", &a1), 60);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut second = solve_into("1/8", "newton-coulomb", &a2);
+    // Problem 2: twice the load of problem 1 on the same part of the top.
+    let args: Vec<String> = second
+        .get_args()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    let k = args.iter().position(|a| a == "--problem").unwrap();
+    let mut cmd = contactlab();
+    let mut args = args;
+    args[k + 1] = "2".into();
+    cmd.args(&args);
+    second = cmd;
+    let o = run_with_deadline(second, 60);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (p1, p2) = (a1.join("profile.csv"), a2.join("profile.csv"));
+    let compare = |pairs: &[String], out: &Path| {
+        let mut cmd = contactlab();
+        cmd.args(["compare", "--problem", "1", "--h", "1/8"]);
+        for p in pairs {
+            cmd.args(["--side-by-side", p]);
+        }
+        cmd.arg("--out").arg(out);
+        run_with_deadline(cmd, 60)
+    };
+    let out = dir.path().join("two");
+    let o = compare(&[format!("{},{}", p1.display(), p2.display())], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = out.join("side_by_side.csv");
+    let (a, b) = (column(&summary, "a"), column(&summary, "b"));
+    assert_ne!(a[0], b[0], "two files, two names");
+    let dp = floats(&summary, "max_dp_over_p")[0];
+    // Problem 2's pressures are problem 1's doubled (linear elasticity, the
+    // same contact zone at 1/8): differences of the size of P itself.
+    assert!(dp > 0.1, "max dp/P = {dp}");
+
+    // Rows reversed: the same answer, to the profile's digits.
+    let text = std::fs::read_to_string(&p1).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    let head = lines.remove(0);
+    lines.reverse();
+    let reversed = dir.path().join("reversed.csv");
+    std::fs::write(&reversed, format!("{head}\n{}\n", lines.join("\n"))).unwrap();
+    let out = dir.path().join("reversed");
+    let o = compare(&[format!("{},{}", p1.display(), reversed.display())], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = out.join("side_by_side.csv");
+    assert_eq!(floats(&summary, "max_dp_over_p")[0], 0.0);
+
+    // A state that is none of the three.
+    let banana = dir.path().join("banana.csv");
+    std::fs::write(
+        &banana,
+        text.replacen(",stick", ",banana", 1)
+            .replacen(",open", ",banana", 1),
+    )
+    .unwrap();
+    let o = compare(
+        &[format!("newton-coulomb,{}", banana.display())],
+        &dir.path().join("banana"),
+    );
+    one_line_error(&o, "state banana", "is not a contact state");
+    // The same pair twice.
+    let pair = format!("newton-coulomb,{}", p1.display());
+    let o = compare(&[pair.clone(), pair], &dir.path().join("twice"));
+    one_line_error(&o, "a pair twice", "given twice");
+}

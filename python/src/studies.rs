@@ -171,11 +171,8 @@ pub fn _side_by_side<'py>(
         .map(|(a, b)| Ok((parse_side(a)?, parse_side(b)?)))
         .collect::<anyhow::Result<Vec<_>>>()
         .map_err(crate::error_of)?;
-    let settings = resolved(&problem.settings, settings, &solvers_of(&pairs))?;
-    let study = SideBySide {
-        scene: (**scene).clone(),
-        pairs,
-    };
+    let study = SideBySide::new((**scene).clone(), pairs).map_err(crate::error_of)?;
+    let settings = resolved(&problem.settings, settings, &solvers_of(&study.pairs))?;
     run(py, study, settings, out)
 }
 

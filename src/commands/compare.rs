@@ -53,9 +53,9 @@ fn side_by_side(args: &CompareArgs) -> Result<()> {
         .iter()
         .map(|w| parse_pair(w))
         .collect::<Result<Vec<_>>>()?;
-    let settings = args.settings.resolve_for(base, &solvers_of(&pairs))?;
+    let study = SideBySide::new(scene, pairs)?;
+    let settings = args.settings.resolve_for(base, &solvers_of(&study.pairs))?;
     let folder = args.out.as_deref().map(RunFolder::create).transpose()?;
-    let study = SideBySide { scene, pairs };
     let (pairs, artifacts) = run_study(&study, settings)?;
     let charts: Vec<String> = artifacts
         .iter()

@@ -32,9 +32,12 @@ pub enum Side {
     /// The earned reference: the exact solvers at their tightest settings,
     /// the certified answer with the smallest certificate.
     Reference,
-    /// An answer read from a profile (`name`: where it came from).
+    /// An answer read from a profile (`name`: its folder and file, or
+    /// the whole `path` where two profiles share those,
+    /// [`with_distinct_names`]).
     Imported {
         name: String,
+        path: String,
         rows: Vec<ImportedRow>,
     },
 }
@@ -89,6 +92,9 @@ fn from_profile(rows: &[ProfileRow]) -> Vec<ImportedRow> {
         })
         .collect()
 }
+
+/// The contact states a profile may name ([`state_name`]'s words).
+pub const STATES: [&str; 3] = ["stick", "slip", "open"];
 
 fn state_name(s: ContactState) -> &'static str {
     match s {
@@ -266,9 +272,19 @@ fn summary(
     }
 }
 
-/// The file stem of a pair: `side_by_side_relaxation_clarabel`.
+/// The file stem of a pair: `side_by_side_relaxation_clarabel` (each
+/// side's name cleaned and cut to 60 characters; [`unique_stems`] makes
+/// the stems of a run distinct).
 pub fn stem(a: &str, b: &str) -> String {
     let clean = |s: &str| {
+        let s: String = s
+            .chars()
+            .rev()
+            .take(60)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .collect();
         s.chars()
             .map(|c| {
                 if c.is_ascii_alphanumeric() || c == '-' {
@@ -280,6 +296,35 @@ pub fn stem(a: &str, b: &str) -> String {
             .collect::<String>()
     };
     format!("{STUDY}_{}_{}", clean(a), clean(b))
+}
+
+/// The stems of a run's pairs, made distinct: a stem that an earlier pair
+/// has (two names that clean to one, `a/b` and `a_b`) gets `_2`, `_3`, …,
+/// so that no pair's files overwrite another's. A pair given twice is
+/// refused.
+pub fn unique_stems(pairs: &[(Side, Side)]) -> Result<Vec<String>> {
+    let mut names: Vec<(String, String)> = Vec::new();
+    let mut out: Vec<String> = Vec::new();
+    for (a, b) in pairs {
+        let key = (a.name(), b.name());
+        if names.contains(&key) {
+            bail!(
+                "--side-by-side: the pair {},{} is given twice: give each pair once",
+                key.0,
+                key.1
+            );
+        }
+        let base = stem(&key.0, &key.1);
+        let mut candidate = base.clone();
+        let mut k = 2;
+        while out.contains(&candidate) {
+            candidate = format!("{base}_{k}");
+            k += 1;
+        }
+        names.push(key);
+        out.push(candidate);
+    }
+    Ok(out)
 }
 
 /// The overlay: p and q of both answers along Γ_K.
@@ -358,6 +403,17 @@ pub struct SideBySide {
     pub pairs: Vec<(Side, Side)>,
 }
 
+impl SideBySide {
+    /// The study of `pairs` on `scene`, its inputs checked before any
+    /// work: imported sides named distinctly ([`with_distinct_names`]), no
+    /// pair given twice and one set of files per pair ([`unique_stems`]).
+    pub fn new(scene: Scene, pairs: Vec<(Side, Side)>) -> Result<Self> {
+        let pairs = with_distinct_names(pairs);
+        unique_stems(&pairs)?;
+        Ok(Self { scene, pairs })
+    }
+}
+
 /// The solvers that `pairs` run (their settings are resolved for them).
 pub fn solvers_of(pairs: &[(Side, Side)]) -> Vec<&'static Entry> {
     pairs
@@ -422,7 +478,7 @@ impl SideBySide {
                     rows: from_profile(&r.coulomb.profile()),
                 }
             }
-            Side::Imported { name, rows } => Answer {
+            Side::Imported { name, rows, .. } => Answer {
                 label: name.clone(),
                 status: "imported".into(),
                 rows: rows.clone(),
@@ -475,9 +531,10 @@ impl Study for SideBySide {
     fn run(&self, lab: &mut Lab) -> Result<Ran<Pairs>> {
         // The scales, and an imported answer checked against the mesh
         // before anything is solved.
+        let stems = unique_stems(&self.pairs)?;
         let (u, p, xs) = self.mesh()?;
         for side in self.pairs.iter().flat_map(|(a, b)| [a, b]) {
-            if let Side::Imported { name, rows } = side {
+            if let Side::Imported { name, rows, .. } = side {
                 let fits = rows.len() == xs.len()
                     && rows
                         .iter()
@@ -510,10 +567,9 @@ impl Study for SideBySide {
         };
         let mut pairs = Vec::new();
         let mut artifacts = Vec::new();
-        for (sa, sb) in &self.pairs {
+        for ((sa, sb), stem) in self.pairs.iter().zip(stems) {
             let (a, b) = (find(sa), find(sb));
             let nodes = pair(a, b, u, p)?;
-            let stem = stem(&sa.name(), &sb.name());
             artifacts.push(Artifact::csv(&format!("{stem}.csv"), &nodes, &[])?);
             artifacts.push(Artifact::chart(
                 &format!("{stem}_overlay"),
@@ -639,10 +695,29 @@ pub fn parse_side(word: &str) -> Result<Side> {
                 k + 1
             );
         }
+        if !STATES.contains(&r.state.as_str()) {
+            bail!(
+                "side-by-side: {} row {}: state `{}` is not a contact state: give one of {}",
+                path.display(),
+                k + 1,
+                r.state.chars().take(40).collect::<String>(),
+                STATES.join(", ")
+            );
+        }
         rows.push(r);
     }
     if rows.is_empty() {
         bail!("side-by-side: {} has no contact nodes", path.display());
+    }
+    // A profile's rows in any order are the same answer: sorted by x, and
+    // two rows at one x refused.
+    rows.sort_by(|a, b| a.x.total_cmp(&b.x));
+    if let Some(w) = rows.windows(2).find(|w| w[0].x == w[1].x) {
+        bail!(
+            "side-by-side: {}: two rows at x = {}: give one row per contact node",
+            path.display(),
+            w[0].x
+        );
     }
     let name = path
         .parent()
@@ -655,7 +730,33 @@ pub fn parse_side(word: &str) -> Result<Side> {
             )
         })
         .unwrap_or_else(|| word.to_string());
-    Ok(Side::Imported { name, rows })
+    Ok(Side::Imported {
+        name,
+        path: word.to_string(),
+        rows,
+    })
+}
+
+/// The pairs with every imported side's name naming one file: two
+/// profiles of one folder and file name (`A1/run/profile.csv` and
+/// `A2/run/profile.csv`, both `run/profile.csv`, of which the second was
+/// taken to be the first) are named by their whole paths.
+pub fn with_distinct_names(mut pairs: Vec<(Side, Side)>) -> Vec<(Side, Side)> {
+    let mut seen: Vec<(String, String)> = Vec::new();
+    for side in pairs.iter().flat_map(|(a, b)| [a, b]) {
+        if let Side::Imported { name, path, .. } = side {
+            seen.push((name.clone(), path.clone()));
+        }
+    }
+    let shared = |name: &str, path: &str| seen.iter().any(|(n, p)| n == name && p != path);
+    for side in pairs.iter_mut().flat_map(|(a, b)| [a, b]) {
+        if let Side::Imported { name, path, .. } = side
+            && shared(name, path)
+        {
+            *name = path.clone();
+        }
+    }
+    pairs
 }
 
 /// A pair `A,B` of sides.
