@@ -219,12 +219,7 @@ pub fn _tuning_map<'py>(
             )));
         }
     };
-    if !entry.solves(law) {
-        return Err(input_error(format!(
-            "law: {solver} does not solve the {} law",
-            law.as_str()
-        )));
-    }
+    contactlab::study::tuning_map::check_map(entry, law, &axes).map_err(crate::error_of)?;
     let settings = resolved(&problem.settings, settings, &[entry])?;
     let study = TuningMap {
         scene: (**scene).clone(),
@@ -232,6 +227,7 @@ pub fn _tuning_map<'py>(
         law,
         axes,
         repeats,
+        tag: None,
     };
     run(py, study, settings, out)
 }

@@ -12,7 +12,7 @@ use crate::settings::Settings;
 use crate::study::lab::write_artifacts;
 use crate::study::sweep::{STUDY, Sweep, SweepSpec, work_cap};
 use crate::study::trial::TrialSpec;
-use crate::study::tuning_map::{Axis, TuningMap};
+use crate::study::tuning_map::{Axis, TuningMap, check_map};
 
 pub fn run(args: &SweepArgs) -> Result<()> {
     let (scenes, base) = match &args.scene {
@@ -120,33 +120,31 @@ fn map(args: &SweepArgs, scenes: Vec<Scene>, base: Settings) -> Result<()> {
         .iter()
         .map(|g| Axis::parse(g))
         .collect::<Result<Vec<_>>>()?;
-    if !(2..=3).contains(&axes.len()) {
-        bail!(
-            "--grid: a tuning map takes two or three settings, got {}; for one, use --vary",
-            axes.len()
-        );
-    }
     let owners: Vec<&str> = axes
         .iter()
         .map(|a| a.path.split('.').next().unwrap_or(""))
-        .filter(|o| *o != "coulomb")
+        .filter(|o| *o != crate::settings::COULOMB)
         .collect();
     let Some(&owner) = owners.first() else {
         bail!("--grid: name at least one setting of a solver (SOLVER.KNOB=...), e.g. relaxation.r");
     };
-    if owners.iter().any(|o| *o != owner) {
-        bail!(
-            "--grid: a tuning map is of one solver; the settings name {}",
-            owners.join(", ")
-        );
-    }
     let solver = crate::solve::solver_entry(owner)?;
     if !args.solvers.is_empty() && args.solvers.iter().any(|s| s != owner) {
         bail!("--grid maps {owner}, the owner of its settings; drop --solvers or name {owner}");
     }
     let law = args.law.law();
-    if !solver.solves(law) {
-        bail!("--law: {owner} does not solve the {} law", law.as_str());
+    check_map(solver, law, &axes)?;
+    let mut meshes = args.meshes.clone();
+    meshes.sort();
+    if meshes.windows(2).any(|w| w[0] == w[1]) {
+        bail!("--h: a mesh is given twice; give each once");
+    }
+    if args.problems.len() > 1 {
+        let mut p = args.problems.clone();
+        p.sort();
+        if p.windows(2).any(|w| w[0] == w[1]) {
+            bail!("--problem: a problem is given twice; give each once");
+        }
     }
     let settings = args.settings.resolve_for(base, &[solver])?;
     let folder = RunFolder::create(&args.out)?;
@@ -155,12 +153,16 @@ fn map(args: &SweepArgs, scenes: Vec<Scene>, base: Settings) -> Result<()> {
         for &h in &args.meshes {
             let mut scene = scene.clone();
             scene.set_finest(h);
+            // Several scenes in one folder: each map's files carry its
+            // scene's name.
+            let tag = (scenes.len() > 1).then(|| file_tag(&scene.name));
             let study = TuningMap {
                 scene,
                 solver,
                 law,
                 axes: axes.clone(),
                 repeats: args.repeats as usize,
+                tag,
             };
             let (found, artifacts) = run_study(&study, settings.clone())?;
             write_artifacts(folder.path(), &artifacts)?;
@@ -177,4 +179,18 @@ fn map(args: &SweepArgs, scenes: Vec<Scene>, base: Settings) -> Result<()> {
         lines.join("\n"),
         target.display()
     ))
+}
+
+/// A scene's name as part of a file name: `problem_1`.
+fn file_tag(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .take(40)
+        .collect()
 }

@@ -65,16 +65,112 @@ impl Axis {
         if values.len() < 2 {
             bail!("--grid '{text}': give at least two values, PATH=V1,V2,...");
         }
-        Ok(Self {
+        let axis = Self {
             path: path.trim().to_string(),
             values,
-        })
+        };
+        axis.check_values()?;
+        Ok(axis)
+    }
+
+    /// The values distinct as the settings read them: a number in any
+    /// spelling (1e-6, 0.000001, 1.0e-6) is one value, a word is compared
+    /// without case. A value given twice would map a setting against
+    /// itself and rank the two spellings.
+    pub fn check_values(&self) -> Result<()> {
+        if self.values.len() < 2 {
+            bail!("--grid {}: give at least two values", self.path);
+        }
+        let key = |v: &str| match v.trim().parse::<f64>() {
+            Ok(x) => format!("{:e}", x),
+            Err(_) => v.trim().to_lowercase(),
+        };
+        for (i, a) in self.values.iter().enumerate() {
+            if let Some(b) = self.values[..i].iter().find(|b| key(b) == key(a)) {
+                bail!(
+                    "--grid {}: {b} and {a} are one value; give each value once",
+                    self.path
+                );
+            }
+        }
+        Ok(())
     }
 
     /// The knob's name without its owner: `r` of `relaxation.r`.
     pub fn knob(&self) -> &str {
         self.path.rsplit('.').next().unwrap_or(&self.path)
     }
+}
+
+/// The most points a map may have: a map is read cell by cell, and at
+/// 1/64 each point takes one to a few seconds (times its repeats); more
+/// is a grid to split, refused before any work.
+pub const MAX_POINTS: usize = 400;
+
+/// Checks a map's inputs before any work: two or three axes, their paths
+/// distinct, their values distinct ([`Axis::check_values`]), each a setting
+/// the solver reads at `law` (its own `SOLVER.KNOB`, or the fixed point's
+/// `coulomb.*` only where the fixed point runs: the Coulomb law by a
+/// given-friction solver), the law one the solver can be run at, and at
+/// most [`MAX_POINTS`] points.
+pub fn check_map(solver: &Entry, law: Law, axes: &[Axis]) -> Result<()> {
+    if !(2..=3).contains(&axes.len()) {
+        bail!(
+            "--grid: a tuning map takes two or three settings, got {}; for one, use --vary",
+            axes.len()
+        );
+    }
+    for (i, a) in axes.iter().enumerate() {
+        if axes[..i].iter().any(|b| b.path == a.path) {
+            bail!(
+                "--grid {}: the setting is given twice; give each axis once, with all its values",
+                a.path
+            );
+        }
+        a.check_values()?;
+    }
+    if law == Law::GivenFriction && !solver.solves(law) {
+        bail!(
+            "--law given-friction: {} solves the Coulomb law only; map it at --law coulomb",
+            solver.name
+        );
+    }
+    let fixed_point = law == Law::Coulomb && !solver.solves(Law::Coulomb);
+    for a in axes {
+        let owner = a.path.split('.').next().unwrap_or("");
+        if owner == crate::settings::COULOMB && !fixed_point {
+            bail!(
+                "--grid {}: {} at the {} law runs no friction fixed point and never reads coulomb.*; map its own settings ({} settings lists them)",
+                a.path,
+                solver.name,
+                law.as_str().replace('_', "-"),
+                solver.name
+            );
+        }
+        if owner != crate::settings::COULOMB && owner != solver.name {
+            bail!(
+                "--grid {}: a tuning map is of one solver, {}; name its settings ({}.KNOB) or the fixed point's (coulomb.KNOB)",
+                a.path,
+                solver.name,
+                solver.name
+            );
+        }
+    }
+    let points = axes
+        .iter()
+        .map(|a| a.values.len())
+        .fold(1usize, |p, k| p.saturating_mul(k));
+    if points > MAX_POINTS {
+        bail!(
+            "--grid: {} points ({}) is more than a map of {MAX_POINTS}; give fewer values, or split the grid",
+            points,
+            axes.iter()
+                .map(|a| a.values.len().to_string())
+                .collect::<Vec<_>>()
+                .join(" × ")
+        );
+    }
+    Ok(())
 }
 
 /// A map of `solver` on `scene` over `axes` (two or three).
@@ -85,6 +181,9 @@ pub struct TuningMap {
     pub axes: Vec<Axis>,
     /// Timed runs of each point after the first.
     pub repeats: usize,
+    /// Added to the file names when one run maps several scenes
+    /// (`sweep --grid --problem 1,2`), so that no map overwrites another.
+    pub tag: Option<String>,
 }
 
 /// One point of the map, measured and ranked.
@@ -210,12 +309,16 @@ impl TuningMap {
 
     /// The file stem: `tuning_map_relaxation_coulomb_h256`.
     pub fn stem(&self) -> String {
-        format!(
+        let stem = format!(
             "{STUDY}_{}_{}_h{}",
             self.solver.name,
             self.law.as_str(),
             self.scene.finest().divisions()
-        )
+        );
+        match &self.tag {
+            Some(tag) => format!("{stem}_{tag}"),
+            None => stem,
+        }
     }
 }
 

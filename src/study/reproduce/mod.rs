@@ -270,6 +270,7 @@ fn tuning_maps(spec: &ReproduceSpec) -> TuningMaps {
                     ]
                 },
                 repeats: spec.map_repeats,
+                tag: None,
             }
         })
         .collect();
