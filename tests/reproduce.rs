@@ -528,7 +528,7 @@ fn trials_that_do_not_converge_are_marked_not_dropped() {
         trial("relaxation.epsilon", "1e-6"),
     ];
     let mut references = References::default();
-    let measured = measure_all(&specs, &mut references, Keep::default(), &|_| {}).unwrap();
+    let measured = measure_all(&specs, &mut references, Keep::default(), &|_| Ok(())).unwrap();
     assert_eq!(measured.len(), 4, "one row per planned trial");
     let reference = references.all().next().unwrap();
     // The reference is the most accurate exact solver, and the oracle is a

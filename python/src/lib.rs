@@ -197,6 +197,7 @@ fn certificate_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("passed", c.passed())?;
+    d.set_item("law", c.law.as_str())?;
     d.set_item("tolerance", c.tolerance)?;
     d.set_item("summary", c.summary())?;
     d.set_item("residual", c.residual())?;

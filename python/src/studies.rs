@@ -15,7 +15,7 @@ use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
 use contactlab::study::error_bound::{BoundSpec, ErrorBoundStudy};
-use contactlab::study::lab::{Content, Lab, Quiet, Study, write_artifacts};
+use contactlab::study::lab::{Content, Lab, Study, Tracker, write_artifacts};
 use contactlab::study::side_by_side::{SideBySide, parse_side, solvers_of};
 use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::tuning_map::{Axis, TuningMap};
@@ -66,6 +66,21 @@ fn resolved(
 /// Runs `study` at `settings` on a thread of its own (Ctrl-C returns at
 /// once), writes its files into `out` as the command line does, and gives
 /// `{files: {path: bytes}, report: markdown, charts: {name: svg bytes}}`.
+/// A study's progress as Python sees it: nothing shown, and Ctrl-C (the
+/// waiting call's [`crate::Cancel`]) read after every trial, so that an
+/// interrupted study stops at the next trial instead of computing on in
+/// the background and writing its folder.
+struct Interruptible(crate::Cancel);
+
+impl Tracker for Interruptible {
+    fn start(&self, _: &str, _: Vec<f64>, _: f64) {}
+    fn tick(&self, _: &contactlab::study::trial::TrialSpec) {}
+    fn finish(&self) {}
+    fn interrupted(&self) -> bool {
+        (self.0).0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
 fn run<S>(
     py: Python<'_>,
     study: S,
@@ -78,10 +93,14 @@ where
     let folder = out
         .map(|o| RunFolder::create(&o).map_err(crate::error_of))
         .transpose()?;
-    let (files, charts, report) = interruptible(py, move |_| {
+    let (files, charts, report) = interruptible(py, move |cancel| {
         let log = |_: &str| {};
-        let mut lab = Lab::new(settings, &log, &Quiet);
+        let tracker = Interruptible(cancel);
+        let mut lab = Lab::new(settings, &log, &tracker);
         let ran = lab.run(&study)?;
+        if tracker.interrupted() {
+            anyhow::bail!("interrupted: the study wrote nothing");
+        }
         let names: Vec<String> = ran
             .artifacts
             .iter()

@@ -32,6 +32,15 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         spec.targets = args.targets.clone();
     }
     if !args.problem.is_empty() {
+        let mut seen = Vec::new();
+        for &n in &args.problem {
+            if seen.contains(&n) {
+                anyhow::bail!(
+                    "--problem: problem {n} is given twice; give each once (an instance counted twice would weigh twice in the success rates)"
+                );
+            }
+            seen.push(n);
+        }
         let h = args.h.unwrap_or(MeshSize::from_level(6)?);
         spec.instances = Some(
             args.problem

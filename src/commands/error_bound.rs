@@ -1,7 +1,7 @@
 //! `contactlab error-bound`: whether the certificate's error bound holds,
 //! and how sharp it is (issue 51).
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 
 use crate::cli::ErrorBoundArgs;
 use crate::commands::run_study;
@@ -13,6 +13,11 @@ use crate::study::lab::write_artifacts;
 
 pub fn run(args: &ErrorBoundArgs) -> Result<()> {
     let settings = args.settings.resolve()?;
+    if settings.certificate.bound_max_unknowns == 0 {
+        bail!(
+            "certificate.bound_max_unknowns = 0 turns off the error bounds, which are all this study measures (it bounds every answer, whatever its size): drop the setting"
+        );
+    }
     let spec = if args.quick {
         BoundSpec::quick()
     } else {

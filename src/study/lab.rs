@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
 
 use crate::io::charts::{Chart, Panels};
@@ -177,6 +177,24 @@ pub trait Tracker {
     fn start(&self, what: &str, costs: Vec<f64>, cap: f64);
     fn tick(&self, trial: &TrialSpec);
     fn finish(&self);
+    /// Whether the caller asked the run to stop (Python's Ctrl-C): read
+    /// after each trial, so that a study stops at the next one and writes
+    /// nothing.
+    fn interrupted(&self) -> bool {
+        false
+    }
+}
+
+/// Ticks `tracker` past `trial`; an error if the run was interrupted.
+pub fn ticked(tracker: &dyn Tracker, trial: &TrialSpec) -> Result<()> {
+    tracker.tick(trial);
+    if tracker.interrupted() {
+        bail!(
+            "interrupted: the study stopped after {} and wrote nothing",
+            trial.solver.name
+        );
+    }
+    Ok(())
 }
 
 /// A tracker that tells nobody.
@@ -269,7 +287,7 @@ impl<'a> Lab<'a> {
         }
         let tracker = self.tracker;
         tracker.start(self.study, vec![1.0; specs.len()], f64::INFINITY);
-        let measured = measure_all(specs, &mut self.references, keep, &|t| tracker.tick(t));
+        let measured = measure_all(specs, &mut self.references, keep, &|t| ticked(tracker, t));
         tracker.finish();
         measured
     }
@@ -278,7 +296,9 @@ impl<'a> Lab<'a> {
     pub fn measure_alone(&mut self, specs: &[TrialSpec], keep: Keep) -> Result<Vec<Measured>> {
         let tracker = self.tracker;
         tracker.start(self.study, vec![1.0; specs.len()], f64::INFINITY);
-        let measured = measure_all(specs, &mut References::none(), keep, &|t| tracker.tick(t));
+        let measured = measure_all(specs, &mut References::none(), keep, &|t| {
+            ticked(tracker, t)
+        });
         tracker.finish();
         measured
     }

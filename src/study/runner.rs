@@ -288,7 +288,7 @@ pub fn measure_all(
     specs: &[TrialSpec],
     references: &mut References,
     keep: Keep,
-    tick: &dyn Fn(&TrialSpec),
+    tick: &dyn Fn(&TrialSpec) -> Result<()>,
 ) -> Result<Vec<Measured>> {
     refuse_what_cannot_run(specs)?;
     let mut out = Vec::with_capacity(specs.len());
@@ -301,7 +301,7 @@ pub fn measure_all(
         let mut m = measure(spec, reference, keep)?;
         m.timing.trial = i;
         out.push(m);
-        tick(spec);
+        tick(spec)?;
     }
     Ok(out)
 }

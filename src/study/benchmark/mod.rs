@@ -207,7 +207,7 @@ impl Study for Benchmark {
             self.spec.time_limit,
         );
         let tracker = lab.tracker();
-        let done = run(plan, &|t| tracker.tick(t))?;
+        let done = run(plan, &|t| crate::study::lab::ticked(tracker, t))?;
         lab.finish();
         let (rows, measured): (Vec<BenchmarkRow>, Vec<Measured>) = done.into_iter().unzip();
         let mut artifacts = vec![Artifact::csv("benchmark.csv", &rows, &[])?];
@@ -314,7 +314,10 @@ fn unknowns(h: MeshSize, known: &mut Vec<(MeshSize, usize)>) -> usize {
 
 /// Runs the trials of [`plan`] (the caller plans, to count and weigh them
 /// for its progress); returns each row beside its measured trial.
-pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(BenchmarkRow, Measured)>> {
+pub fn run(
+    plan: Vec<Planned>,
+    tick: &dyn Fn(&TrialSpec) -> Result<()>,
+) -> Result<Vec<(BenchmarkRow, Measured)>> {
     let mut out = Vec::with_capacity(plan.len());
     let mut known = Vec::new();
     for (inst, t, target) in plan {
@@ -348,7 +351,7 @@ pub fn run(plan: Vec<Planned>, tick: &dyn Fn(&TrialSpec)) -> Result<Vec<(Benchma
             work: tr.work,
             detail: tr.detail.clone(),
         };
-        tick(&t);
+        tick(&t)?;
         out.push((row, m));
     }
     Ok(out)

@@ -356,7 +356,7 @@ impl ErrorBoundStudy {
             for spec in &specs {
                 let reference = references.get(&scene, &settings)?;
                 let m = measure(spec, reference, Keep::default())?;
-                tracker.tick(spec);
+                crate::study::lab::ticked(tracker, spec)?;
                 let seconds = m.timing.seconds_median;
                 let target = target_of(spec);
                 let key = (spec.law, spec.solver.name, target.to_bits());

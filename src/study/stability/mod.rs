@@ -237,7 +237,7 @@ pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
         t.class = Some(class);
         t.reason = reason;
         map.trials.push(t);
-        tracker.tick(&spec);
+        crate::study::lab::ticked(tracker, &spec)?;
         Ok(m)
     };
     log("each solver at its defaults and under its stress conditions");

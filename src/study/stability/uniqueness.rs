@@ -106,7 +106,7 @@ pub fn run(
                 t.setting = Some(Setting::new("friction", &format!("{f}")));
                 let reference = lab.reference(&sc, settings)?;
                 let m = measure(&t, reference, keep)?;
-                tracker.tick(&t);
+                crate::study::lab::ticked(tracker, &t)?;
                 Some(m)
             }
             None => None,
@@ -138,7 +138,7 @@ pub fn run(
                 ));
                 let reference = lab.reference(&sc, settings)?;
                 let m = measure(&t, reference, keep)?;
-                tracker.tick(&t);
+                crate::study::lab::ticked(tracker, &t)?;
                 answers.push(m);
             }
             let good: Vec<&Measured> = answers.iter().filter(|m| m.trial.certified()).collect();
