@@ -309,7 +309,7 @@ fn a_solver_claiming_success_on_a_wrong_answer_counts_as_failed() {
     let honest = registry::by_name("newton-coulomb").unwrap();
     let spec = BenchmarkSpec::new(true, vec![&LIAR, honest]);
     let plan = benchmark::plan(&spec, &Settings::default()).unwrap();
-    let done = benchmark::run(plan, &|_| {}).unwrap();
+    let done = benchmark::run(plan, &|_| Ok(())).unwrap();
     let rows: Vec<BenchmarkRow> = done.into_iter().map(|(r, _)| r).collect();
     let liar: Vec<&BenchmarkRow> = rows.iter().filter(|r| r.solver == "liar").collect();
     assert!(!liar.is_empty());

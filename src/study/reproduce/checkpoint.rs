@@ -148,6 +148,12 @@ impl Checkpoint {
     pub fn resume(folder: &Path, key: &RunKey, plan: &[&str]) -> Result<Self> {
         let dir = folder.join(DIR);
         let shown = folder.display();
+        if let Some(link) = first_link(folder, 0) {
+            bail!(
+                "--resume: {} is a symbolic link: a partial run holds only what contactlab wrote, and a link could lead its files' checks and removals into a folder of yours; remove the link (nothing behind it is touched), or run without --resume to start anew",
+                link.display()
+            );
+        }
         let key_path = dir.join(KEY);
         if !key_path.exists() {
             let has_studies = std::fs::read_dir(folder)
@@ -266,7 +272,7 @@ impl Checkpoint {
                 record.study
             ));
         }
-        if !(record.seconds.is_finite() && record.seconds >= 0.0) {
+        if !(record.seconds.is_finite() && (0.0..=MAX_STUDY_SECONDS).contains(&record.seconds)) {
             return Err(format!(
                 "its record's time, {} s, is not a time",
                 record.seconds
@@ -332,14 +338,51 @@ pub fn file_hash(path: &Path) -> Result<String> {
     Ok(format!("{:016x}", hasher.finish()))
 }
 
+/// The longest a study may have taken, as a record states it: 30 days (the
+/// longest, `--long`'s, takes hours). A record of 1e308 s was kept and the
+/// run said "in inf h".
+pub const MAX_STUDY_SECONDS: f64 = 30.0 * 86_400.0;
+
 /// `relative` inside `folder`, if it is a plain relative path that stays
-/// there (no `..`, not absolute).
+/// there (no `..`, not absolute) and no part of it is a symbolic link (a
+/// link would lead a check or a removal out of the folder).
 fn inside(folder: &Path, relative: &str) -> Option<PathBuf> {
     let path = Path::new(relative);
     let plain = path
         .components()
         .all(|c| matches!(c, std::path::Component::Normal(_)));
-    (plain && !relative.is_empty()).then(|| folder.join(path))
+    if !plain || relative.is_empty() {
+        return None;
+    }
+    let mut at = folder.to_path_buf();
+    for c in path.components() {
+        at.push(c);
+        if std::fs::symlink_metadata(&at).is_ok_and(|m| m.file_type().is_symlink()) {
+            return None;
+        }
+    }
+    Some(at)
+}
+
+/// The first symbolic link in `folder` and its subfolders (links are not
+/// followed), at most 8 levels down.
+fn first_link(folder: &Path, depth: usize) -> Option<PathBuf> {
+    if depth > 8 {
+        return None;
+    }
+    let entries = std::fs::read_dir(folder).ok()?;
+    for e in entries.flatten() {
+        let Ok(kind) = e.file_type() else { continue };
+        if kind.is_symlink() {
+            return Some(e.path());
+        }
+        if kind.is_dir()
+            && let Some(link) = first_link(&e.path(), depth + 1)
+        {
+            return Some(link);
+        }
+    }
+    None
 }
 
 /// Creates and removes a file in `folder`: a run that cannot write its
@@ -411,6 +454,43 @@ mod tests {
             serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
         edit(&mut v);
         std::fs::write(&path, serde_json::to_vec(&v).unwrap()).unwrap();
+    }
+
+    /// A folder of the partial run replaced by a link to a user's folder
+    /// holding files of the run's names: `--resume` refuses, and the
+    /// user's files are all still there (once 66 were deleted behind the
+    /// link). A record of 1e308 s is not a time: that study runs again.
+    #[test]
+    fn a_link_in_the_partial_run_is_refused_and_nothing_behind_it_removed() {
+        let (dir, key) = two_done();
+        let user = tempfile::tempdir().unwrap();
+        for name in ["table1.csv", "compare.csv", "a.svg"] {
+            std::fs::write(user.path().join(name), "the user's own").unwrap();
+        }
+        std::os::unix::fs::symlink(user.path(), dir.path().join("profiles")).unwrap();
+        let e = Checkpoint::resume(dir.path(), &key, &PLAN)
+            .err()
+            .expect("refused");
+        assert!(e.to_string().contains("is a symbolic link"), "{e}");
+        for name in ["table1.csv", "compare.csv", "a.svg"] {
+            assert_eq!(
+                std::fs::read_to_string(user.path().join(name)).unwrap(),
+                "the user's own"
+            );
+        }
+        std::fs::remove_file(dir.path().join("profiles")).unwrap();
+        edit_record(dir.path(), 1, |v| v["seconds"] = 1e308.into());
+        let resumed = Checkpoint::resume(dir.path(), &key, &PLAN).unwrap();
+        assert_eq!(resumed.done.len(), 1);
+        assert!(
+            resumed.notes[0].contains("is not a time"),
+            "{:?}",
+            resumed.notes
+        );
+        // A record's file path through a link is outside the folder.
+        std::os::unix::fs::symlink(user.path(), dir.path().join("linked")).unwrap();
+        assert!(inside(dir.path(), "linked/a.svg").is_none());
+        assert!(inside(dir.path(), "table1.csv").is_some());
     }
 
     /// What a run saved is what a resumed run reads, in order; a key that
