@@ -376,6 +376,29 @@ pub struct MemoryError {
     pub way_out: String,
 }
 
+thread_local! {
+    /// The estimate of the run this thread admitted last ([`admit`]).
+    static ADMITTED: std::cell::Cell<f64> = const { std::cell::Cell::new(0.0) };
+}
+
+/// Records that this thread's run was checked whole, at `need` bytes (the
+/// largest admitted so far stands): a
+/// later check of a part of it (the assembly of a solve admitted whole,
+/// the instance of a `certify` that counted its completion) is covered
+/// and passes without a second look at the room, which the run's own
+/// first allocations have since taken (one estimate per run, checked once:
+/// with room for 1.05 × a solve's estimate, its assembly was refused after
+/// the solve was admitted). Each Python call runs on a thread of its own,
+/// so an admission ends with the call.
+pub fn admit(need: f64) {
+    ADMITTED.with(|a| a.set(a.get().max(need)));
+}
+
+/// Whether `need` is part of the run this thread admitted.
+fn covered(need: f64) -> bool {
+    ADMITTED.with(|a| need <= a.get())
+}
+
 /// Refuses `what`, which needs `need` bytes for a problem of `unknowns`
 /// unknowns, if that does not fit in what this process may use; `ways`
 /// are the ways out the message offers before the bound's own remedy.
@@ -385,6 +408,9 @@ pub fn check_need(
     unknowns: usize,
     ways: Vec<String>,
 ) -> Result<(), MemoryError> {
+    if covered(need) {
+        return Ok(());
+    }
     match room() {
         Some(room) if need > room.bytes => Err(refusal(what, need, unknowns, room, ways)),
         _ => Ok(()),
@@ -419,6 +445,9 @@ pub fn check(
     leaner: impl FnOnce(Room) -> Option<String>,
 ) -> Result<(), MemoryError> {
     let bytes = need(h);
+    if covered(bytes) {
+        return Ok(());
+    }
     let Some(room) = room().filter(|r| bytes > r.bytes) else {
         return Ok(());
     };
@@ -486,12 +515,16 @@ pub fn check_solve_beside(
             format!("a leaner solver: {}", names.join(" or "))
         })
     };
+    // Checked against the room once per thread's run: a solve of no more
+    // than the run admitted (a study's later trials) is covered.
     check(
         &format!("solving {scene_name} at h = {h} with {}", entry.name),
         h,
         |c| need(c, entry),
         leaner,
-    )
+    )?;
+    admit(need(h, entry));
+    Ok(())
 }
 
 #[cfg(test)]

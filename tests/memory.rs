@@ -428,3 +428,66 @@ fn the_readme_states_each_solvers_memory() {
         assert_eq!(per, expected, "{}: {row}", e.name);
     }
 }
+
+/// One estimate per run, checked once (issue 73): with room just above a
+/// run's estimate (found by bisection on the address-space limit, so that
+/// the test does not depend on this machine's baseline), the run either
+/// succeeds or is refused by its first check, the one that names the whole
+/// run; never admitted first and refused later by a check of a part (an
+/// assembly, the coarse level `info` measures the kernel on), which saw
+/// the room that the run's own first allocations had taken.
+#[test]
+fn a_run_admitted_by_its_estimate_is_not_refused_by_a_later_check() {
+    let cases: [(&[&str], &str); 2] = [
+        (
+            &[
+                "solve",
+                "--problem",
+                "1",
+                "--h",
+                "1/512",
+                "--solver",
+                "tnnmg",
+            ],
+            "solving problem 1 at h = 1/512 with tnnmg",
+        ),
+        (
+            &["info", "--problem", "1", "--h", "1/512"],
+            "info on problem 1 at h = 1/512",
+        ),
+    ];
+    const MB: u64 = 1 << 20;
+    for (args, first) in cases {
+        let refused_first = |limit: u64| {
+            let o = limited(limit, args);
+            let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+            (
+                stderr.contains(first) && stderr.contains("not enough memory"),
+                o,
+                stderr,
+            )
+        };
+        // The smallest limit (to 8 MB) that the first check admits.
+        let (mut lo, mut hi) = (256 * MB, 64 * GB);
+        assert!(refused_first(lo).0, "{first}: admitted under {lo} bytes");
+        assert!(!refused_first(hi).0, "{first}: refused under {hi} bytes");
+        while hi - lo > 8 * MB {
+            let mid = lo + (hi - lo) / 2;
+            if refused_first(mid).0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        for step in 0..8 {
+            let limit = hi + step * 8 * MB;
+            let (first_refused, o, stderr) = refused_first(limit);
+            assert!(
+                o.status.success() || first_refused,
+                "{first}: admitted under {} MB, then refused by a later check: {stderr}",
+                limit / MB
+            );
+            assert!(!stderr.contains("memory allocation"), "{first}: {stderr}");
+        }
+    }
+}

@@ -24,6 +24,25 @@ const KERNEL_MEASURED_UP_TO: u32 = 7;
 pub fn run(args: &InfoArgs) -> Result<()> {
     let scene = args.scene.resolve()?;
     let h = scene.finest();
+    // One estimate for the run, checked once before anything is assembled:
+    // the problem and, finer than the kernel is measured on, the coarser
+    // problem measured beside it (checked alone after the first was
+    // assembled, it was refused where the whole had been admitted).
+    let mut need = memory::assembly(h, false);
+    if h.level() > KERNEL_MEASURED_UP_TO {
+        need += 2.0
+            * memory::assembly(
+                MeshSize::from_level(KERNEL_MEASURED_UP_TO).expect("in range"),
+                false,
+            );
+    }
+    memory::check_need(
+        &format!("info on {} at h = {h}", scene.name),
+        need,
+        memory::unknowns(h),
+        Vec::new(),
+    )?;
+    memory::admit(need);
     // M is not shown: `info` assembles the problem without it.
     let d = Discretization::new_without_mass(&scene, h).context("building the discretization")?;
     let p = &d.problem;

@@ -117,6 +117,14 @@ fn csr(t: &Triplets) -> CsrMatrix<f64> {
 /// (A, M n × n, f n × 1), k rigid modes (n × k), m contact nodes (exactly m
 /// rows of `contact.csv`, node i on row i), before anything is allocated.
 pub fn import(dir: &Path) -> Result<Instance> {
+    import_for(dir, |_| 0.0)
+}
+
+/// As [`import`], for a run that needs `also(n)` bytes beside the instance
+/// (`certify` completing an answer given as forces): the whole checked
+/// once, before the first file is read, and admitted
+/// ([`crate::memory::admit`]).
+pub fn import_for(dir: &Path, also: impl Fn(usize) -> f64) -> Result<Instance> {
     let shown = dir.display();
     let json_path = dir.join("problem.json");
     if !json_path.is_file() {
@@ -144,12 +152,14 @@ pub fn import(dir: &Path) -> Result<Instance> {
             json_path.display()
         );
     }
+    let need = crate::memory::instance(n) + also(n);
     crate::memory::check_need(
         &format!("reading the instance {shown}"),
-        crate::memory::instance(n),
+        need,
         n,
         Vec::new(),
     )?;
+    crate::memory::admit(need);
     let a = csr(&load(dir, "A.mtx", n, n, "A (the stiffness, n × n)")?);
     let mass = csr(&load(dir, "M.mtx", n, n, "M (the mass matrix, n × n)")?);
     let f = load(dir, "f.mtx", n, 1, "f (the load, n × 1)")?.column(0);
