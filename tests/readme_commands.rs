@@ -115,3 +115,33 @@ fn the_quick_start_runs_as_written() {
         }
     }
 }
+
+/// The README's example of a tuning map (an inline `--grid … --grid …`)
+/// runs as written at the default law, on a coarse mesh: it was refused
+/// ("relaxation does not solve the coulomb law") while `reproduce` mapped
+/// the paper's method at that law by the friction fixed point.
+#[test]
+fn the_readmes_tuning_map_example_runs_at_the_default_law() {
+    let readme = include_str!("../README.md");
+    let examples: Vec<&str> = readme
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|span| span.starts_with("--grid ") && !span.contains("PATH"))
+        .collect();
+    assert!(!examples.is_empty(), "no --grid example in the README");
+    let dir = tempfile::tempdir().unwrap();
+    for (k, example) in examples.iter().enumerate() {
+        let mut cmd = common::contactlab();
+        cmd.args(["sweep", "--problem", "1", "--h", "1/8", "--runs", "0"])
+            .args(example.split_whitespace())
+            .arg("--out")
+            .arg(dir.path().join(format!("map{k}")));
+        let o = common::run_with_deadline(cmd, 300);
+        assert!(
+            o.status.success(),
+            "README example `{example}`: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}

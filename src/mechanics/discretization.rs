@@ -48,7 +48,7 @@ impl Discretization {
     /// Validates the scene (condition (13) included) and assembles it on mesh `h`.
     pub fn new(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
         scene.validate()?;
-        Self::assemble(scene, h, true)
+        Self::assemble(scene, h, true, true)
     }
 
     /// As [`Discretization::new`], without the mass matrix M
@@ -56,17 +56,22 @@ impl Discretization {
     /// (`Entry::uses_mass`). A is the same to the bit.
     pub fn new_without_mass(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
         scene.validate()?;
-        Self::assemble(scene, h, false)
+        Self::assemble(scene, h, false, true)
     }
 
     /// Assembles a scene without checking condition (13): only for showing
     /// what a solver does with a problem that has no solution (the stability
     /// map). Everything else should go through [`Discretization::new`].
     pub fn new_unchecked(scene: &Scene, h: MeshSize) -> Result<Self, BuildError> {
-        Self::assemble(scene, h, true)
+        Self::assemble(scene, h, true, false)
     }
 
-    fn assemble(scene: &Scene, h: MeshSize, with_mass: bool) -> Result<Self, BuildError> {
+    fn assemble(
+        scene: &Scene,
+        h: MeshSize,
+        with_mass: bool,
+        checked: bool,
+    ) -> Result<Self, BuildError> {
         // Nothing large is allocated before the estimate says it fits.
         crate::memory::check(
             &format!("assembling {} at h = {h}", scene.name),
@@ -87,7 +92,12 @@ impl Discretization {
         let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
-        let problem = ContactProblem::new(a, f, mass, contacts, vec![rigid_mode])
+        let problem = if checked {
+            ContactProblem::new(a, f, mass, contacts, vec![rigid_mode])
+        } else {
+            ContactProblem::without_solvability_checks(a, f, mass, contacts, vec![rigid_mode])
+        };
+        let problem = problem
             .and_then(|p| {
                 p.with_hierarchy(crate::mechanics::hierarchy::prolongations((&mesh, &dofs)))
             })
