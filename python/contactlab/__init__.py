@@ -374,9 +374,9 @@ class Problem:
                 + (": its imaginary part would be lost)" if raw_modes.dtype.kind == "c" else ")")
             )
         modes = raw_modes.astype(np.float64)
-        if modes.ndim not in (1, 2) or modes.size == 0:
+        if modes.ndim not in (1, 2) or (modes.ndim == 1 and modes.size == 0):
             raise InputError(
-                f"rigid_mode: give the kernel of A as an array of n, or a list of them (shape {modes.shape} was given)"
+                f"rigid_mode: give the kernel of A as an array of n, or a list of them, or an array of shape (0, n) for an A without one (shape {modes.shape} was given)"
             )
         modes = [modes] if modes.ndim == 1 else list(modes)
         m = None if M is None else _csr_in(M, "M", (n, n))[1]
