@@ -277,14 +277,27 @@ fn an_unbounded_problem_is_not_reported_solved() {
     )
     .unwrap();
     let f: Vec<f64> = d.problem.f().iter().map(|x| -x).collect();
-    let p = ContactProblem::new(
-        d.problem.a().clone(),
-        f,
-        d.problem.mass().unwrap().into_owned(),
-        d.problem.contacts().to_vec(),
-        d.problem.rigid_modes().to_vec(),
-    )
-    .unwrap();
+    let build = |f: Vec<f64>, checked: bool| {
+        let parts = (
+            d.problem.a().clone(),
+            f,
+            d.problem.mass().unwrap().into_owned(),
+            d.problem.contacts().to_vec(),
+            d.problem.rigid_modes().to_vec(),
+        );
+        if checked {
+            ContactProblem::new(parts.0, parts.1, parts.2, parts.3, parts.4)
+        } else {
+            ContactProblem::without_solvability_checks(parts.0, parts.1, parts.2, parts.3, parts.4)
+        }
+    };
+    // Refused as posed (condition (13)); built past the check to see what
+    // the oracle does with it.
+    assert!(matches!(
+        build(f.clone(), true),
+        Err(contactlab::solvers::ProblemError::LiftsOff { index: 0, .. })
+    ));
+    let p = build(f, false).unwrap();
     let zero = vec![0.0; p.contacts().len()];
     let s = ConicSolver::default().solve(&p, Friction::Given(&zero), None, &mut Silent);
     assert!(

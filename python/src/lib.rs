@@ -172,6 +172,15 @@ fn _check_problem_size(what: &str, n: usize, nnz: usize) -> PyResult<()> {
     contactlab::memory::check_need(what, need, n, Vec::new()).map_err(|e| error_of(e.into()))
 }
 
+/// The address space the library keeps aside beyond its estimates under
+/// an address-space limit (the dense products' per-thread buffers, sized
+/// by the L3 cache as sysfs reports it: 2.9 GB on a machine whose sysfs
+/// says 480 MiB), so that a test can set a limit relative to it.
+#[pyfunction]
+fn _address_space_reserve() -> f64 {
+    contactlab::memory::dense_product_reserve() + contactlab::memory::RESERVED_ADDRESS_SPACE
+}
+
 /// Every status a solve can end with, as written in output files.
 #[pyfunction]
 fn statuses() -> Vec<&'static str> {
@@ -565,6 +574,7 @@ fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solvers, m)?)?;
     m.add_function(wrap_pyfunction!(statuses, m)?)?;
     m.add_function(wrap_pyfunction!(_check_problem_size, m)?)?;
+    m.add_function(wrap_pyfunction!(_address_space_reserve, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(certify, m)?)?;
     m.add_function(wrap_pyfunction!(export, m)?)?;
