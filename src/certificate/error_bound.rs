@@ -181,14 +181,7 @@ impl<'a> ErrorBounder<'a> {
         if modes.len() > 1 {
             return Err(BoundError::RigidModes(modes.len()));
         }
-        let pinned: Vec<usize> = modes
-            .iter()
-            .map(|z| {
-                (0..z.len())
-                    .max_by(|&a, &b| z[a].abs().total_cmp(&z[b].abs()))
-                    .unwrap_or(0)
-            })
-            .collect();
+        let pinned = super::problem_checks::pinned_unknowns(modes);
         let solve = EnergySolve::new(problem, &pinned, room)?;
         let mut contact_of = vec![0u32; problem.n()];
         for (i, c) in problem.contacts().iter().enumerate() {
