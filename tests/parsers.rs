@@ -107,7 +107,7 @@ proptest! {
     fn csv_files_edited_at_random(file in 0usize..3, e in edits()) {
         let name = ["contact.csv", "forces.csv", "benchmark.csv"][file];
         let data = apply(seed("csv", name), &e);
-        if let Ok((c, g)) = contacts_from(&data[..], 3, "contact.csv") {
+        if let Ok((c, g, _)) = contacts_from(&data[..], 3, "contact.csv") {
             prop_assert_eq!((c.len(), g.len()), (3, 3));
         }
         if let Ok((p, q)) = forces_from(&data[..], 5, "forces.csv") {

@@ -6,7 +6,7 @@ use contactlab::study::benchmark::merge::rows_from;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok((c, g)) = contacts_from(data, 5, "contact.csv") {
+    if let Ok((c, g, _)) = contacts_from(data, 5, "contact.csv") {
         assert_eq!((c.len(), g.len()), (5, 5));
     }
     if let Ok((p, q)) = forces_from(data, 5, "forces.csv") {

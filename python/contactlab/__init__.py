@@ -328,6 +328,7 @@ class Problem:
         M=None,
         prolongations: Optional[Sequence] = None,
         name: str = "matrices",
+        gap=None,
     ) -> "Problem":
         """A problem posed from one's own matrices, checked as an imported
         instance is (symmetry, dimensions, index sets, A z = 0, the net load
@@ -348,6 +349,21 @@ class Problem:
             A nested hierarchy, coarse to fine, the last onto the n
             unknowns: multigrid solvers need one above 256 unknowns, and say
             so without it.
+        gap : array of one value per contact node, optional
+            The initial distance d_i ≥ 0 between the bodies at each contact
+            node: the nonpenetration is t_i ≤ d_i (a curved body: Hertz).
+            Without it the bodies touch everywhere at the start (d = 0).
+            The problem's scales (and so the certificate's tolerances) are
+            those of A and f alone, whatever the gap.
+
+        Conventions: the lower body is primed, the upper double-primed;
+        the normal of Γ_K is vertical; t_i = u2_lower − u2_upper (the
+        jump: t_i < d_i is open), s_i = u1_lower − u1_upper (the slip);
+        ``weight`` is the length of Γ_K each node stands for (trapezoid:
+        h inside, h/2 at the ends); the pressure p_i ≥ 0 pushes the bodies
+        apart and q_i is the tangential traction on the lower body. The
+        paper's method (``relaxation``) needs ``M``; ``tnnmg`` needs a
+        nested hierarchy above 256 unknowns.
         """
         shape, a = _csr_in(A, "A")
         if shape[0] != shape[1]:
@@ -396,6 +412,7 @@ class Problem:
                 [_array(z, "rigid_mode").tolist() for z in modes],
                 m,
                 ps,
+                None if gap is None else _array(gap, "gap").tolist(),
             )
         )
 

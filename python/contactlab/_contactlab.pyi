@@ -47,6 +47,7 @@ class Problem:
         rigid_modes: List[List[float]],
         m: Optional[_CsrIn] = ...,
         prolongations: List[Tuple[Tuple[int, int], _CsrIn]] = ...,
+        gap: Optional[List[float]] = ...,
     ) -> Problem: ...
     @property
     def name(self) -> str: ...

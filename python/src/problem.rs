@@ -243,11 +243,11 @@ impl Problem {
 
     /// A problem from its matrices: A (n × n, symmetric positive
     /// semidefinite), f, M (optional), the contact nodes (t, s, weight,
-    /// coefficient per node), the rigid modes (n each, A z = 0) and the
+    /// coefficient per node, and optionally the initial gap d ≥ 0: t ≤ d), the rigid modes (n each, A z = 0) and the
     /// prolongations of a nested hierarchy (coarse to fine, optional), each
     /// checked as an imported instance is.
     #[staticmethod]
-    #[pyo3(signature = (name, n, a, f, t, s, weight, coefficient, rigid_modes, m=None, prolongations=Vec::new()))]
+    #[pyo3(signature = (name, n, a, f, t, s, weight, coefficient, rigid_modes, m=None, prolongations=Vec::new(), gap=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_matrices(
         name: String,
@@ -261,6 +261,7 @@ impl Problem {
         rigid_modes: Vec<Vec<f64>>,
         m: Option<CsrIn>,
         prolongations: Vec<((usize, usize), CsrIn)>,
+        gap: Option<Vec<f64>>,
     ) -> PyResult<Self> {
         let a = csr_in("A", (n, n), a)?;
         let k = t.len();
@@ -285,6 +286,10 @@ impl Problem {
             None => contactlab::solvers::Mass::Omitted,
         };
         let mut problem = ContactProblem::new(a, f, mass, contacts, rigid_modes)
+            .and_then(|p| match gap {
+                Some(gap) => p.with_gap(gap),
+                None => Ok(p),
+            })
             .map_err(|e| input_error(e.to_string()))?;
         contactlab::certificate::problem_checks::check_definite(
             &problem,

@@ -543,3 +543,32 @@ def test_the_error_bound_study_finds_no_given_friction_bound_below_its_error():
         assert t["kind"] == "rigorous"
         assert t["bound"] >= t["energy_error"] - t["reference_bound"], t
     assert "error_bound_sharpness.csv" in r.files
+
+
+def test_a_uniform_gap_is_a_rigid_translation_of_the_upper_body(p32):
+    # from_matrices(..., gap=) poses t_i <= d_i. A uniform gap d moves the
+    # upper body down by d along its rigid mode z (+1 on its vertical
+    # displacements, -1 on every jump): the pressures are those without a
+    # gap and the displacements are v - d z. A gap on the wrong sign or the
+    # wrong unknowns, or one the certificate ignored, breaks one of these.
+    c = p32.contact
+    contact = {"t": c.t, "s": c.s, "weight": c.weight, "coefficient": c.coefficient}
+    z = np.asarray(p32.rigid_mode)
+    flat = cl.Problem.from_matrices(p32.A, p32.f, contact, z)
+    d = 1e-3
+    gapped = cl.Problem.from_matrices(p32.A, p32.f, contact, z, gap=np.full(len(c.t), d))
+    base = cl.solve(flat, solver="newton-coulomb")
+    for solver in ("newton-coulomb", "clarabel"):
+        r = cl.solve(gapped, solver=solver)
+        assert r.status == "converged", (solver, r.detail)
+        assert np.max(np.abs(r.pressure - base.pressure)) <= 1e-5 * np.max(base.pressure)
+        moved = base.displacements - d * z
+        assert np.max(np.abs(r.displacements - moved)) <= 1e-5 * np.max(np.abs(moved))
+    # The gapped answer closes the gap (t = d > 0 where the bodies touch):
+    # against the problem without it, that is a penetration.
+    assert not cl.certify(flat, displacements=r.displacements).passed
+    assert cl.certify(gapped, displacements=r.displacements).passed
+    with pytest.raises(cl.InputError, match="gap"):
+        cl.Problem.from_matrices(p32.A, p32.f, contact, z, gap=np.full(len(c.t), -1.0))
+    with pytest.raises(cl.InputError, match="gap"):
+        cl.Problem.from_matrices(p32.A, p32.f, contact, z, gap=[0.0])

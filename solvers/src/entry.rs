@@ -24,12 +24,15 @@ pub enum Build {
 }
 
 impl Build {
-    /// The solver for `tree`.
+    /// The solver for `tree`, meeting a problem with an initial gap in
+    /// the closed unknowns ([`crate::reduction::gap`]): every solver,
+    /// built in or registered, solves gaps without code of its own.
     pub fn call(&self, tree: &Value) -> Result<Box<dyn Solver>, String> {
-        match self {
+        let inner = match self {
             Build::Fn(f) => f(tree),
             Build::Closure(f) => f(tree),
-        }
+        }?;
+        Ok(Box::new(crate::reduction::gap::ClosingGap::new(inner)))
     }
 }
 

@@ -150,4 +150,13 @@ pub trait Solver {
     fn tighten(&mut self) -> Option<String> {
         None
     }
+
+    /// Whether the solver poses an initial gap itself (t_i ≤ d_i,
+    /// [`ContactProblem::gap`]). One that does not is handed the problem in
+    /// the closed unknowns ṽ = v − D ([`crate::reduction::gap`]), exact
+    /// but with the load f − A D, which a gap far larger than the
+    /// displacements makes large; by default the harness does that.
+    fn poses_gaps(&self) -> bool {
+        false
+    }
 }

@@ -281,6 +281,10 @@ impl<'a> ErrorBounder<'a> {
     fn energy(&self, v: &[f64], g: &[f64], reading: &Reading<'_>) -> Option<f64> {
         let problem = self.problem;
         let contacts = problem.contacts();
+        // The jump past the initial gap, t_i − d_i ≤ 0, is the cone's
+        // coordinate: the residual A v − f does not see the gap, only the
+        // cone and the complementarity do.
+        let gap = problem.gap();
         let z = problem.rigid_modes().first();
         let mut vs = v.to_vec();
         let mut shifted = 0.0;
@@ -299,8 +303,8 @@ impl<'a> ErrorBounder<'a> {
                 .collect();
             let mean_shift = |force: &[f64]| {
                 let (mut num, mut den) = (0.0, 0.0);
-                for (c, f) in contacts.iter().zip(force) {
-                    num -= f * v[c.t] * z[c.t];
+                for ((c, f), gap) in contacts.iter().zip(force).zip(gap) {
+                    num -= f * (v[c.t] - gap) * z[c.t];
                     den += f * z[c.t] * z[c.t];
                 }
                 num / den
@@ -309,7 +313,7 @@ impl<'a> ErrorBounder<'a> {
             // drop after that shift (small ones on clearly open jumps).
             let first = mean_shift(&force);
             for (i, c) in contacts.iter().enumerate() {
-                let t = v[c.t] + first * z[c.t];
+                let t = v[c.t] - gap[i] + first * z[c.t];
                 if t < 0.0 && drops(self.entry(c.t, c.t), c.weight * reading.p[i], t) {
                     force[i] = 0.0;
                 }
@@ -341,7 +345,7 @@ impl<'a> ErrorBounder<'a> {
         // at slipping nodes: drop them where that is cheapest.
         for (i, c) in contacts.iter().enumerate() {
             let (att, ass) = (self.entry(c.t, c.t), self.entry(c.s, c.s));
-            let t = vs[c.t];
+            let t = vs[c.t] - gap[i];
             if t < 0.0 && ph[i] > 0.0 && drops(att, c.weight * ph[i], t) {
                 ph[i] = 0.0;
             }
@@ -367,7 +371,7 @@ impl<'a> ErrorBounder<'a> {
         // the bodies with least energy.
         let mut d = vec![0.0; vs.len()];
         for (i, c) in contacts.iter().enumerate() {
-            let t = vs[c.t];
+            let t = vs[c.t] - gap[i];
             if t > 0.0 || (t < 0.0 && ph[i] > 0.0) {
                 d[c.t] = -t;
             }

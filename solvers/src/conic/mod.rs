@@ -341,6 +341,11 @@ impl ConicSolver {
 }
 
 impl Solver for ConicSolver {
+    /// The gap is the right-hand side of the rows t_i + slack = d_i.
+    fn poses_gaps(&self) -> bool {
+        true
+    }
+
     /// All three tolerances a tenth of the tightest of them, down to
     /// [`TIGHTEST_TOLERANCE`]. A tolerance looser than the default was
     /// chosen (a work-precision point, a quick look) and is kept.

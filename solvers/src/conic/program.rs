@@ -106,7 +106,7 @@ impl Program<'_> {
                 .zip(self.bound)
                 .map(|(c, g)| c.weight * g / force),
         );
-        // Rows 0..m: t_i + slack = 0 (slack ≥ 0). SOC: rows m+2i, m+2i+1:
+        // Rows 0..m: t_i + slack = d_i (slack ≥ 0). SOC: rows m+2i, m+2i+1:
         // −(z_i, s_i) + slack = 0 in SOC(2). QP: s_i − z_i + slack = 0 and
         // −s_i − z_i + slack = 0, slacks ≥ 0.
         let qp = settings.formulation == Formulation::Qp;
@@ -124,7 +124,15 @@ impl Program<'_> {
             }
         }
         let a = csc_from_triplets(3 * m, n + m, a_trip);
-        let b = vec![0.0; 3 * m];
+        // t_i + slack = d_i: the initial gap, in the unknowns' units (zero
+        // in the paper's scene). Posed here rather than by a shift of the
+        // load (crate::reduction::gap), whose f − A D is 5e4 times the load
+        // on Hertz's far field, where the interior point's dual residual,
+        // relative to its data, then stalled at 7e-8 and the answer failed.
+        let mut b = vec![0.0; 3 * m];
+        for (bi, d) in b.iter_mut().zip(problem.gap()) {
+            *bi = d / displacement;
+        }
         let mut cones = Vec::with_capacity(m + 1);
         if m > 0 {
             if qp {
@@ -167,7 +175,7 @@ impl Program<'_> {
             }
         }
         let sol = &solver.solution;
-        // The duals: λ_i of the row t_i ≤ 0; μ_i the tail of the cone's dual
+        // The duals: λ_i of the row t_i ≤ d_i; μ_i the tail of the cone's dual
         // (SOC) or the difference of the two half-planes' duals (QP, from
         // stationarity in s: (Au − f)_s + γ_a − γ_b = 0).
         let forces = (0..m)

@@ -234,7 +234,7 @@ pub(crate) fn iterate(
         let rk = ws.lin_r[k];
         ws.r_contact.push((k, rk));
         ws.lin_r[k] = if cut {
-            kernel_free &= law != Local::Jump;
+            kernel_free &= !matches!(law, Local::Jump(_));
             0.0
         } else {
             rk - law.slope(v[k], 1.0)
@@ -341,8 +341,8 @@ pub(crate) fn iterate(
     // A c follows the few entries the projection moved: A is symmetric, so
     // its column k is its row k.
     for &k in contact {
-        if laws[k] == Local::Jump {
-            let projected = (v[k] + c[k]).min(0.0) - v[k];
+        if let Local::Jump(d) = laws[k] {
+            let projected = (v[k] + c[k]).min(d) - v[k];
             let moved = projected - c[k];
             if moved != 0.0 {
                 c[k] = projected;
@@ -475,7 +475,7 @@ mod tests {
         let jumps = [0, 32];
         let mut contact = vec![0, 20, 32, 40];
         for j in jumps {
-            laws.set(j, Local::Jump);
+            laws.set(j, Local::Jump(0.0));
         }
         laws.set(20, Local::Slip(0.02));
         laws.set(40, Local::Slip(0.5));

@@ -46,7 +46,7 @@ pub(crate) fn iteration_kernel(problem: &ContactProblem) -> Option<InnerKernel> 
         .map(|c| BOUND_OF_SCALE * c.coefficient * pressure)
         .collect();
     let mut laws = Laws::free(n);
-    let contact = given_friction_laws(problem.contacts(), &bound, &mut laws);
+    let contact = given_friction_laws(&problem, &bound, &mut laws);
     let z = problem.rigid_modes().first().cloned();
     let zz = z.as_deref().map_or(0.0, |z| dot(z, z));
     let cycle = TnnmgSettings::default().cycle();

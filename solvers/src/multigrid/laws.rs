@@ -90,7 +90,7 @@ mod tests {
     #[test]
     fn laws_read_back_what_was_set() {
         let mut laws = Laws::free(6);
-        laws.set(4, Local::Jump);
+        laws.set(4, Local::Jump(0.0));
         laws.set(1, Local::Slip(0.5));
         laws.set(4, Local::Slip(2.0));
         let read: Vec<Local> = (0..6).map(|k| laws[k]).collect();
@@ -98,7 +98,7 @@ mod tests {
         assert_eq!(read, [Free, Slip(0.5), Free, Free, Slip(2.0), Free]);
         laws.clear();
         assert!((0..6).all(|k| laws[k] == Free));
-        laws.set(2, Jump);
-        assert_eq!(laws[2], Jump);
+        laws.set(2, Jump(0.5));
+        assert_eq!(laws[2], Jump(0.5));
     }
 }

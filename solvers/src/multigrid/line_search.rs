@@ -29,8 +29,10 @@ pub(crate) fn exact_step(
 ) -> f64 {
     let mut alpha_max = f64::INFINITY;
     for &k in contact {
-        if laws[k] == Local::Jump && c[k] > 0.0 {
-            alpha_max = alpha_max.min((-v[k]).max(0.0) / c[k]);
+        if let Local::Jump(d) = laws[k]
+            && c[k] > 0.0
+        {
+            alpha_max = alpha_max.min((d - v[k]).max(0.0) / c[k]);
         }
     }
     // The right derivative of J(v + α c) in α.
@@ -104,8 +106,8 @@ pub(crate) fn closing_translation(
         let (vk, zk) = (v[k], z[k]);
         match laws[k] {
             Local::Slip(_) if zk != 0.0 => return None,
-            Local::Jump if zk < 0.0 => beta = beta.max(vk / -zk),
-            Local::Jump if zk > 0.0 => return None,
+            Local::Jump(d) if zk < 0.0 => beta = beta.max((vk - d) / -zk),
+            Local::Jump(_) if zk > 0.0 => return None,
             Local::Penalty { .. } | Local::Huber { .. } => return None,
             _ => {}
         }
@@ -120,7 +122,12 @@ mod tests {
     /// The step is the minimizer of the sampled energy along the line.
     #[test]
     fn the_step_minimizes_the_energy_along_the_line() {
-        let laws = [Local::Free, Local::Jump, Local::Slip(0.3), Local::Slip(0.0)];
+        let laws = [
+            Local::Free,
+            Local::Jump(0.0),
+            Local::Slip(0.3),
+            Local::Slip(0.0),
+        ];
         let v = [0.2, -0.5, 0.1, 0.4];
         let c = [1.0, 0.4, -0.8, 0.3];
         let (cac, cr) = (2.0, 1.5);

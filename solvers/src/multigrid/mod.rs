@@ -214,16 +214,18 @@ impl TnnmgSettings {
 }
 
 /// The laws of the given-friction subproblem with nodal bounds `bound`
-/// (paper (10)): t_i ≤ 0 on each jump, w_i g_i |s_i| on each slip, written
-/// into `laws`; returns the contact unknowns, ascending.
+/// (paper (10)): t_i ≤ d_i on each jump (d the initial gap), w_i g_i |s_i|
+/// on each slip, written into `laws`; returns the contact unknowns,
+/// ascending.
 pub(crate) fn given_friction_laws(
-    contacts: &[crate::problem::ContactNode],
+    problem: &ContactProblem,
     bound: &[f64],
     laws: &mut Laws,
 ) -> Vec<usize> {
+    let contacts = problem.contacts();
     let mut contact = Vec::with_capacity(2 * contacts.len());
-    for (c, g) in contacts.iter().zip(bound) {
-        laws.set(c.t, Local::Jump);
+    for ((c, g), d) in contacts.iter().zip(bound).zip(problem.gap()) {
+        laws.set(c.t, Local::Jump(*d));
         laws.set(c.s, Local::Slip(c.weight * g));
         contact.extend([c.t, c.s]);
     }
@@ -396,6 +398,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 impl Solver for Tnnmg {
+    /// The gap is each jump's obstacle, t_i ≤ d_i (`Local::Jump`).
+    fn poses_gaps(&self) -> bool {
+        true
+    }
+
     /// The hierarchies and vectors: at h = 1/1024 those of the nested
     /// schedule's coarse levels held about 130 MB through the finest
     /// level's solves.
@@ -433,7 +440,7 @@ impl Solver for Tnnmg {
         self.phases.setup += setup;
         let t1 = Instant::now();
         let Buffers { mut ws, mut laws } = Buffers::of_size(self.buffers.take(), n);
-        let contact = given_friction_laws(contacts, bound, &mut laws);
+        let contact = given_friction_laws(problem, bound, &mut laws);
         let f = problem.f();
         let z = problem.rigid_modes().first().map(|z| &z[..]);
         let fz = z.map_or(0.0, |z| dot(f, z));
@@ -462,6 +469,12 @@ impl Solver for Tnnmg {
         let mut v = start.map_or_else(|| vec![0.0; n], |s| s.v.into_owned());
         if v.len() != n {
             v = vec![0.0; n];
+        }
+        // A start interpolated from a coarser mesh keeps t ≤ 0, but not
+        // t ≤ d under a convex gap (the chord lies above the parabola):
+        // projected, so that the iteration starts admissible.
+        for (c, d) in contacts.iter().zip(problem.gap()) {
+            v[c.t] = v[c.t].min(*d);
         }
         let mut pressure_now = vec![0.0; m];
         let mut pressure_before = vec![0.0; m];

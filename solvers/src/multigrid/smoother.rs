@@ -26,8 +26,9 @@ use crate::relaxation::pointwise::{minimize_jump, minimize_slip_huber};
 pub(crate) enum Local {
     /// No contact law: the energy is quadratic along it.
     Free,
-    /// A jump t_i: the constraint t_i ≤ 0.
-    Jump,
+    /// A jump t_i: the constraint t_i ≤ d_i, d_i ≥ 0 the initial gap
+    /// ([`crate::ContactProblem::gap`]; 0 in the paper's scene).
+    Jump(f64),
     /// A slip s_i with its nodal friction bound w_i g_i.
     Slip(f64),
     /// A jump under the modified Lagrangian's penalty
@@ -42,7 +43,7 @@ impl Local {
     /// keeps it fixed: a closed jump, a sticking slip. The C¹ laws have none.
     pub(crate) fn at_kink(self, x: f64) -> bool {
         match self {
-            Local::Jump => x >= 0.0,
+            Local::Jump(d) => x >= d,
             Local::Slip(b) => b > 0.0 && x == 0.0,
             _ => false,
         }
@@ -62,7 +63,7 @@ impl Local {
     /// of a jump excluded: the line search bounds the step instead).
     pub(crate) fn slope(self, x: f64, c: f64) -> f64 {
         match self {
-            Local::Free | Local::Jump => 0.0,
+            Local::Free | Local::Jump(_) => 0.0,
             Local::Slip(b) => {
                 b * if x > 0.0 || (x == 0.0 && c > 0.0) {
                     c
@@ -172,7 +173,7 @@ pub(crate) fn shift_at(shift: &[f64], k: usize) -> f64 {
 pub(crate) fn local_minimizer(law: Local, a: f64, c: f64) -> f64 {
     match law {
         Local::Free => c / a,
-        Local::Jump => (c / a).min(0.0),
+        Local::Jump(d) => (c / a).min(d),
         Local::Slip(bound) => c.signum() * (c.abs() - bound).max(0.0) / a,
         Local::Penalty { w, l, r } => minimize_jump(a, -c, w, l, r),
         Local::Huber { wg, delta } => minimize_slip_huber(a, -c, wg, delta),

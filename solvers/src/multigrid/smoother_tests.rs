@@ -41,7 +41,7 @@ fn fused_sweeps_leave_the_residual_of_a_product() {
     let shift: Vec<f64> = (0..n).map(|k| if k % 5 == 0 { 0.5 } else { 0.0 }).collect();
     let laws: Vec<Local> = (0..n)
         .map(|k| match k % 4 {
-            0 => Local::Jump,
+            0 => Local::Jump(0.0),
             1 => Local::Slip(1.5),
             2 => Local::Huber {
                 wg: 1.0,
@@ -146,7 +146,7 @@ fn a_part_row_scatters_into_its_own_part_only() {
 /// admissible point is lower.
 #[test]
 fn local_minimizers_are_exact() {
-    for law in [Local::Free, Local::Jump, Local::Slip(0.7)] {
+    for law in [Local::Free, Local::Jump(0.0), Local::Slip(0.7)] {
         for c in [-2.0, -0.3, 0.0, 0.5, 3.0] {
             let a = 1.7;
             let energy = |x: f64| {
@@ -157,10 +157,10 @@ fn local_minimizers_are_exact() {
                     }
             };
             let x = local_minimizer(law, a, c);
-            assert!(law != Local::Jump || x <= 0.0);
+            assert!(law != Local::Jump(0.0) || x <= 0.0);
             for i in -400..=400 {
                 let y = i as f64 * 0.01;
-                if law == Local::Jump && y > 0.0 {
+                if law == Local::Jump(0.0) && y > 0.0 {
                     continue;
                 }
                 assert!(

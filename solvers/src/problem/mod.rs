@@ -5,10 +5,14 @@
 //! given-friction (Tresca) problem
 //!
 //! ```text
-//! minimize  ½ vᵀA v − fᵀv + Σ_i w_i g_i |s_i|   subject to  t_i ≤ 0,
+//! minimize  ½ vᵀA v − fᵀv + Σ_i w_i g_i |s_i|   subject to  t_i ≤ d_i,
 //! ```
 //!
-//! where at contact node i, `t_i = v'_2 − v''_2` is the jump [v] and
+//! where at contact node i, `t_i = v'_2 − v''_2` is the jump [v] (the
+//! lower body Ω' is primed, the upper Ω'' double-primed, the normal of
+//! Γ_K is vertical, so t_i > 0 would move the lower body into the upper),
+//! `d_i ≥ 0` the initial gap between them (zero in the paper's scene:
+//! [`ContactProblem::gap`]), and
 //! `s_i = v'_1 − v''_1` the slip, and `w_i` are the trapezoid weights of Γ_K.
 //! The Coulomb problem (paper (8)) is the same with g_i = 𝓕_i p_i, p_i the
 //! contact pressure of the solution itself. A is symmetric positive
@@ -18,6 +22,7 @@
 //! variables, for the proximal term of paper (15).
 
 use std::borrow::Cow;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use nalgebra_sparse::CsrMatrix;
@@ -68,6 +73,14 @@ pub enum ProblemError {
     DuplicateIndex { node: usize, index: usize },
     #[error("contact node {node}: weight {value} must be positive and finite")]
     BadWeight { node: usize, value: f64 },
+    #[error(
+        "contact node {node}: gap {value} must be finite and ≥ 0 (an initial distance between the bodies; an initial overlap is not supported)"
+    )]
+    BadGap { node: usize, value: f64 },
+    #[error(
+        "the largest gap, {size:e}, is beyond {MAX_GAP_IN_DISPLACEMENTS:e} times the problem's displacement scale U = F/K = {displacement:e}: the loads could not close it, and the problem in the closed unknowns could not be represented; give the gap in the units of the displacements"
+    )]
+    GapSize { size: f64, displacement: f64 },
     #[error("contact node {node}: friction coefficient {value} must be finite and ≥ 0")]
     BadCoefficient { node: usize, value: f64 },
     #[error("{what} holds a non-finite value (NaN or infinity)")]
@@ -179,6 +192,11 @@ fn check_carried(
     Ok(())
 }
 
+/// The largest gap, in units of the displacement scale U = F/K: a gap of
+/// 1e12 U is never closed by the loads (their displacements are of size U
+/// and smaller), and f̃ = f − A D would carry the load in its last digits.
+pub const MAX_GAP_IN_DISPLACEMENTS: f64 = 1e12;
+
 static NEXT_OPERATOR_ID: AtomicU64 = AtomicU64::new(1);
 
 /// Whether M has exactly A's pattern.
@@ -226,11 +244,15 @@ impl From<CsrMatrix<f64>> for Mass {
 /// mesh.
 #[derive(Clone, Debug)]
 pub struct ContactProblem {
-    a: Csr,
+    /// Shared between clones and with [`ContactProblem::closed_gap`]'s
+    /// problem, which differs only in f.
+    a: Arc<Csr>,
     f: Vec<f64>,
-    mass: Mass,
+    mass: Arc<Mass>,
     contacts: Vec<ContactNode>,
-    rigid_modes: Vec<Vec<f64>>,
+    rigid_modes: Arc<Vec<Vec<f64>>>,
+    /// The initial gap d_i ≥ 0 per contact node (all zero: a closed start).
+    gap: Vec<f64>,
     scales: Scales,
     operator_id: u64,
     /// Prolongations of a nested hierarchy, coarse to fine, the last onto
@@ -352,12 +374,14 @@ impl ContactProblem {
                 return Err(ProblemError::NotAKernel { index, residual });
             }
         }
+        let gap = vec![0.0; contacts.len()];
         Ok(Self {
-            a: a.shared(),
+            a: Arc::new(a.shared()),
             f,
-            mass,
+            mass: Arc::new(mass),
             contacts,
-            rigid_modes,
+            rigid_modes: Arc::new(rigid_modes),
+            gap,
             scales,
             operator_id: NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed),
             prolongations: std::sync::Arc::from(Vec::new()),
@@ -423,7 +447,7 @@ impl ContactProblem {
     /// When M lives on A's pattern this builds the matrix, a copy of A's
     /// pattern: for products use [`ContactProblem::mass_times_into`].
     pub fn mass(&self) -> Option<Cow<'_, CsrMatrix<f64>>> {
-        match &self.mass {
+        match self.mass.as_ref() {
             Mass::Matrix(m) => Some(Cow::Borrowed(m)),
             Mass::OnStiffnessPattern(values) => {
                 Some(Cow::Owned(self.a.nalgebra_with_values(values.clone())))
@@ -434,13 +458,13 @@ impl ContactProblem {
 
     /// Whether the problem carries M.
     pub fn has_mass(&self) -> bool {
-        !matches!(self.mass, Mass::Omitted)
+        !matches!(self.mass.as_ref(), Mass::Omitted)
     }
 
     /// M's stored values when M lives on A's pattern (in the order of A's
     /// stored entries), so that A + ρM is a sum of values.
     pub fn mass_on_stiffness_pattern(&self) -> Option<&[f64]> {
-        match &self.mass {
+        match self.mass.as_ref() {
             Mass::OnStiffnessPattern(values) => Some(values),
             Mass::Matrix(_) | Mass::Omitted => None,
         }
@@ -452,8 +476,10 @@ impl ContactProblem {
     /// # Panics
     /// If the problem was built without M.
     pub(crate) fn mass_times_into(&self, x: &[f64], y: &mut [f64]) {
-        match &self.mass {
-            Mass::OnStiffnessPattern(values) => spmv_values_into(&self.a, values.as_slice(), x, y),
+        match self.mass.as_ref() {
+            Mass::OnStiffnessPattern(values) => {
+                spmv_values_into(self.a.as_ref(), values.as_slice(), x, y)
+            }
             Mass::Matrix(m) => crate::numerics::linalg::spmv_into(m, x, y),
             Mass::Omitted => panic!("M x on a problem built without M"),
         }
@@ -468,7 +494,90 @@ impl ContactProblem {
     /// hold): here the upper body's vertical translation, +1 on its vertical
     /// displacements away from Γ_K and −1 on every jump t_i (paper (11)).
     pub fn rigid_modes(&self) -> &[Vec<f64>] {
-        &self.rigid_modes
+        self.rigid_modes.as_slice()
+    }
+
+    /// The same problem with the initial gap d_i ≥ 0 at each contact node
+    /// (in contact order): the nonpenetration becomes t_i ≤ d_i, the
+    /// complementarity p_i (d_i − t_i) = 0 (Johnson, *Contact Mechanics*,
+    /// 1985, §4.2 for a curved profile; Kikuchi & Oden, 1988, §2 for the
+    /// discrete form). The scales are those of the loads and the stiffness
+    /// alone ([`Scales`]), whatever the gap: a problem posed with a gap and
+    /// the same problem closed have the same scales, so the certificate's
+    /// tolerances do not follow the gap's size.
+    pub fn with_gap(mut self, gap: Vec<f64>) -> Result<Self, ProblemError> {
+        if gap.len() != self.contacts.len() {
+            return Err(ProblemError::Dimension {
+                what: "gap",
+                expected: self.contacts.len(),
+                got: gap.len(),
+            });
+        }
+        if let Some(node) = gap.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
+            return Err(ProblemError::BadGap {
+                node,
+                value: gap[node],
+            });
+        }
+        // f̃ = f − A D must be representable (closed_gap).
+        let size = max_abs(&gap);
+        if !(size * self.scales.stiffness).is_finite()
+            || size > MAX_GAP_IN_DISPLACEMENTS * self.scales.displacement
+        {
+            return Err(ProblemError::GapSize {
+                size,
+                displacement: self.scales.displacement,
+            });
+        }
+        self.gap = gap;
+        self.operator_id = NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed);
+        Ok(self)
+    }
+
+    /// The initial gap d_i ≥ 0 per contact node (all zero unless
+    /// [`ContactProblem::with_gap`] set one).
+    pub fn gap(&self) -> &[f64] {
+        &self.gap
+    }
+
+    /// Whether some contact node has a nonzero initial gap.
+    pub fn has_gap(&self) -> bool {
+        self.gap.iter().any(|&d| d != 0.0)
+    }
+
+    /// The gap D as a vector of unknowns: d_i at each jump t_i, 0 elsewhere.
+    pub fn gap_vector(&self) -> Vec<f64> {
+        let mut d = vec![0.0; self.n()];
+        for (c, &gi) in self.contacts.iter().zip(&self.gap) {
+            d[c.t] = gi;
+        }
+        d
+    }
+
+    /// The same problem in the unknowns ṽ = v − D, whose gap is closed:
+    /// t̃_i = t_i − d_i ≤ 0, and ½ vᵀAv − fᵀv = ½ ṽᵀAṽ − (f − A D)ᵀṽ + const,
+    /// so the load is f̃ = f − A D; the slips, the pressures and the
+    /// friction are unchanged (D moves no slip). Exact: this is how every
+    /// solver meets a gap ([`crate::reduction::gap`]), each solving the
+    /// problem it was written for. A, M and the rigid modes are shared, and
+    /// the scales are this problem's (a relative stopping test is not
+    /// loosened by the large f̃ a gap far from contact gives); the
+    /// operator id is kept, so factorizations of A are reused.
+    pub fn closed_gap(&self) -> ContactProblem {
+        let d = self.gap_vector();
+        let ad = spmv(self.a.as_ref(), &d);
+        let f = self.f.iter().zip(&ad).map(|(f, ad)| f - ad).collect();
+        ContactProblem {
+            a: Arc::clone(&self.a),
+            f,
+            mass: Arc::clone(&self.mass),
+            contacts: self.contacts.clone(),
+            rigid_modes: Arc::clone(&self.rigid_modes),
+            gap: vec![0.0; self.contacts.len()],
+            scales: self.scales,
+            operator_id: self.operator_id,
+            prolongations: Arc::clone(&self.prolongations),
+        }
     }
 
     /// The problem's own scales.
@@ -495,7 +604,7 @@ impl ContactProblem {
     /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i| of paper (10) at the
     /// bound g (one per contact node).
     pub fn objective(&self, v: &[f64], g: &[f64]) -> f64 {
-        let av = spmv(&self.a, v);
+        let av = spmv(self.a.as_ref(), v);
         let quad: f64 = v.iter().zip(&av).map(|(x, y)| x * y).sum::<f64>() * 0.5;
         let lin: f64 = v.iter().zip(&self.f).map(|(x, y)| x * y).sum();
         let fric: f64 = self

@@ -5,3 +5,4 @@
 
 pub mod condensed;
 pub mod dual;
+pub mod gap;

@@ -73,6 +73,7 @@ pub fn export(
             weight: c.weight,
             g: bound,
             coefficient: c.coefficient,
+            gap: p.gap()[i],
         })
         .collect();
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -105,10 +106,10 @@ pub fn export(
     let description = Description {
         format: FORMAT,
         statement: vec![
-            "Given-friction (Tresca) subproblem, paper (10): minimize 1/2 v'A v - f'v + sum_i w_i g_i |v[s_i]| subject to v[t_i] <= 0 for every contact node i.",
+            "Given-friction (Tresca) subproblem, paper (10): minimize 1/2 v'A v - f'v + sum_i w_i g_i |v[s_i]| subject to v[t_i] <= gap_i for every contact node i (gap: contact.csv's column, the initial distance between the bodies, 0 in the paper's scene).",
             "Coulomb problem, paper (7)-(8): the same with g_i = coefficient_i * p_i, p_i the contact pressure of the solution itself.",
             "A is singular: its kernel is spanned by the columns of rigid_modes.mtx (the upper body's vertical translation); a solution exists only if the contact forces can balance the load along it, paper condition (13).",
-            "Optimality (what `contactlab certify` checks): A v - f + sum_i w_i p_i e_{t_i} - sum_i w_i q_i e_{s_i} = 0; t_i <= 0, p_i >= 0, p_i t_i = 0; |q_i| <= g_i, s_i = 0 where |q_i| < g_i, q_i = -g_i sign(s_i) where s_i != 0.",
+            "Optimality (what `contactlab certify` checks): A v - f + sum_i w_i p_i e_{t_i} - sum_i w_i q_i e_{s_i} = 0; t_i <= gap_i, p_i >= 0, p_i (gap_i - t_i) = 0; |q_i| <= g_i, s_i = 0 where |q_i| < g_i, q_i = -g_i sign(s_i) where s_i != 0.",
             "Condensed form: with y = (t_0, s_0, t_1, s_1, ...) the contact unknowns and r = (w_0 p_0, -w_0 q_0, ...) the nodal contact forces, S y = b_condensed - r, and z_condensed' (b_condensed - r) = 0 (S z_condensed = 0: the rigid mode).",
         ],
         unknowns: format!(
@@ -116,7 +117,7 @@ pub fn export(
         ),
         conventions: vec![
             "indices are 0-based (Matrix Market files are 1-based as the format requires)",
-            "t_i <= 0: negative jump means the bodies separate",
+            "t_i <= gap_i: a jump below the gap means the bodies separate (the lower body is primed, the normal of Gamma_K is vertical: t = u2_lower - u2_upper)",
             "p_i >= 0: contact pressure (the multiplier l = -sigma_n), force per length of Gamma_K",
             "q_i: tangential (x) traction on the lower body, |q_i| <= g_i, opposing the slip",
         ],

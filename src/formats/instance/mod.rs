@@ -13,7 +13,7 @@
 //! | `M.mtx` | mass matrix M (the L2 inner product of displacements) |
 //! | `f.mtx` | load vector f (n × 1) |
 //! | `rigid_modes.mtx` | the kernel of A (n × k; here k = 1, the upper body's vertical translation) |
-//! | `contact.csv` | per contact node: `node,x,t,s,weight,g,coefficient` |
+//! | `contact.csv` | per contact node: `node,x,t,s,weight,g,coefficient,gap` |
 //! | `S.mtx`, `b_condensed.mtx`, `z_condensed.mtx` | the condensed problem on y = (t_0, s_0, t_1, s_1, ...): S y = b̂ − r, and its rigid mode ẑ (2m × k) |
 //! | `problem.json` | the statement, conventions, units, scales and the scene |
 
@@ -52,6 +52,10 @@ pub struct ContactRow {
     pub g: Option<f64>,
     /// Coulomb coefficient 𝓕_i.
     pub coefficient: f64,
+    /// Initial gap d_i ≥ 0 between the bodies (t_i ≤ d_i); a file without
+    /// the column has none.
+    #[serde(default)]
+    pub gap: f64,
 }
 
 /// `problem.json`.
@@ -171,8 +175,9 @@ pub fn import_for(dir: &Path, also: impl Fn(usize) -> f64) -> Result<Instance> {
         "the rigid modes (n × rigid_modes)",
     )?;
     let modes: Vec<Vec<f64>> = (0..k).map(|j| modes.column(j)).collect();
-    let (contacts, g) = read_contacts(&dir.join("contact.csv"), m)?;
+    let (contacts, g, gap) = read_contacts(&dir.join("contact.csv"), m)?;
     let problem = ContactProblem::new(a, f, mass, contacts, modes)
+        .and_then(|p| p.with_gap(gap))
         .with_context(|| format!("{shown}: the files do not form a contact problem"))?;
     let definiteness = crate::certificate::problem_checks::check_definite(
         &problem,
@@ -211,22 +216,23 @@ pub struct Instance {
 }
 
 /// Reads exactly `m` rows of `contact.csv`, node i on row i.
-fn read_contacts(path: &Path, m: usize) -> Result<(Vec<ContactNode>, Vec<Option<f64>>)> {
+fn read_contacts(path: &Path, m: usize) -> Result<Contacts> {
     let (file, _) = guarded::open(path)
         .map_err(|reason| anyhow::anyhow!("cannot read {}: {reason}", path.display()))?;
     contacts_from(file, m, &path.display().to_string())
 }
 
+/// The contact nodes of a `contact.csv`, the friction bound g of each
+/// (None where the column is empty) and the initial gap d.
+pub type Contacts = (Vec<ContactNode>, Vec<Option<f64>>, Vec<f64>);
+
 /// The rows of a `contact.csv` read from `source` (named `shown` in
-/// messages): exactly `m`, node i on row i; the contact nodes and the
-/// friction bound g.
-pub fn contacts_from(
-    source: impl std::io::Read,
-    m: usize,
-    shown: &str,
-) -> Result<(Vec<ContactNode>, Vec<Option<f64>>)> {
+/// messages): exactly `m`, node i on row i; the contact nodes, the
+/// friction bound g and the gap.
+pub fn contacts_from(source: impl std::io::Read, m: usize, shown: &str) -> Result<Contacts> {
     let mut contacts = Vec::with_capacity(m);
     let mut g = Vec::with_capacity(m);
+    let mut gap = Vec::with_capacity(m);
     for (i, rec) in guarded::csv_reader(source)
         .deserialize::<ContactRow>()
         .enumerate()
@@ -249,6 +255,7 @@ pub fn contacts_from(
             coefficient: c.coefficient,
         });
         g.push(c.g);
+        gap.push(c.gap);
     }
     if contacts.len() != m {
         bail!(
@@ -256,7 +263,7 @@ pub fn contacts_from(
             contacts.len()
         );
     }
-    Ok((contacts, g))
+    Ok((contacts, g, gap))
 }
 
 /// Reads the displacements of an `n`-unknown problem: a Matrix Market file
