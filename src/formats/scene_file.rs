@@ -31,6 +31,13 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 /// poisson = 0.34
 /// plane = "strain"
 ///
+/// hold = "roller"                 # optional: "roller" (x = 1, the paper's) or "rollers" (on x = 0 and x = 1)
+///
+/// [gap]                           # optional: the initial gap along Γ_K
+/// shape = "parabola"              # (x − center)²/(2 radius), or "table" with x, d
+/// center = 0.5
+/// radius = 8.0
+///
 /// [[loads]]                       # vertical tractions on the top side y = 1
 /// from = 0.0
 /// to = "1/3"
@@ -56,6 +63,13 @@ pub struct SceneFile {
     pub loads: Vec<Traction>,
     #[serde(default = "default_levels")]
     pub levels: Vec<MeshSize>,
+    /// The initial gap along Γ_K (`[gap]` with `shape = "parabola"`,
+    /// `center`, `radius`, or `shape = "table"`, `x`, `d`).
+    pub gap: Option<crate::mechanics::gap::Gap>,
+    /// How the upper body is held sideways: "roller" (the paper's, on
+    /// x = 1) or "rollers" (u''_1 = 0 on both sides, symmetric).
+    #[serde(default)]
+    pub hold: crate::mechanics::dofs::Hold,
     pub schedule: Option<Schedule>,
     pub stopping: Option<Stopping>,
     pub certificate: Option<CertificateSettings>,
@@ -90,6 +104,8 @@ impl SceneFile {
             friction: self.friction,
             loads: self.loads,
             levels: self.levels,
+            gap: self.gap,
+            hold: self.hold,
         };
         Ok((scene, settings))
     }

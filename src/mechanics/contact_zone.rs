@@ -111,6 +111,7 @@ pub fn contact_profile(
 ) -> Vec<ProfileRow> {
     let u = d.displacements(&solution.v);
     let tol = SEPARATION_TOL * largest_displacement(d, solution);
+    let gap = d.problem.gap();
     d.dofs
         .contacts()
         .iter()
@@ -126,7 +127,8 @@ pub fn contact_profile(
             pressure: solution.pressure[i],
             friction_traction: solution.friction_traction[i],
             g: g[i],
-            state: ContactState::of(solution.v[c.t], solution.v[c.s], tol),
+            // Open where the jump stays short of the initial gap.
+            state: ContactState::of(solution.v[c.t] - gap[i], solution.v[c.s], tol),
             status,
         })
         .collect()
@@ -148,7 +150,8 @@ pub fn separation_of(d: &Discretization, solution: &Solution) -> Separation {
         .problem
         .contacts()
         .iter()
-        .map(|c| solution.v[c.t])
+        .zip(d.problem.gap())
+        .map(|(c, gap)| solution.v[c.t] - gap)
         .collect();
     separation(
         &x,
@@ -168,8 +171,8 @@ pub struct Separation {
     pub tolerance: f64,
 }
 
-/// Where the piecewise linear jump (nodal values at increasing `x`) lies
-/// below −`tol`; crossings inside an edge are found by linear interpolation.
+/// Where the piecewise linear jump past the gap, t − d (nodal values at
+/// increasing `x`), lies below −`tol`; crossings inside an edge are found by linear interpolation.
 pub fn separation(x: &[f64], jump: &[f64], tol: f64) -> Separation {
     let mut intervals: Vec<[f64; 2]> = Vec::new();
     let below = |j: f64| j < -tol;

@@ -80,7 +80,7 @@ impl Discretization {
             |_| None,
         )?;
         let mesh = Mesh::new(h);
-        let dofs = DofMap::new(&mesh);
+        let dofs = DofMap::with_hold(&mesh, scene.hold);
         let (a, mass) = if with_mass {
             let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.material);
             (a, Mass::OnStiffnessPattern(m))
@@ -97,7 +97,18 @@ impl Discretization {
         } else {
             ContactProblem::without_solvability_checks(a, f, mass, contacts, vec![rigid_mode])
         };
+        let gap: Vec<f64> = match &scene.gap {
+            Some(g) => dofs.contacts().iter().map(|c| g.at(c.x)).collect(),
+            None => Vec::new(),
+        };
         let problem = problem
+            .and_then(|p| {
+                if gap.is_empty() {
+                    Ok(p)
+                } else {
+                    p.with_gap(gap)
+                }
+            })
             .and_then(|p| {
                 p.with_hierarchy(crate::mechanics::hierarchy::prolongations((&mesh, &dofs)))
             })

@@ -9,7 +9,37 @@
 //! so that v''_k = v'_k − (s_i, t_i)_k. Fixed values are zero, so elimination
 //! simply drops them.
 
+use serde::{Deserialize, Serialize};
+
 use crate::mechanics::mesh::{Body, Mesh};
+
+/// How the upper body is held sideways (its vertical translation is always
+/// free: the semicoercive mode of paper (11)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hold {
+    /// The paper's roller: u''_1 = 0 on the right side x = 1, ½ < y ≤ 1.
+    #[default]
+    Roller,
+    /// Rollers on both sides: u''_1 = 0 on x = 0 and on x = 1, ½ < y ≤ 1.
+    /// Symmetric about x = ½, where a curved body's contact is centred: the
+    /// paper's roller on one side alone tilts it towards that side (Hertz's
+    /// contact moved by a/43 at R = ½, which cost 4.5% of the pressure in
+    /// L2). (u''_1 = 0 on the top side alone leaves the body free to turn
+    /// about a point of it, a second kernel mode; a rigid platen on top,
+    /// one u''_2 for the whole side, holds that but took `tnnmg` past 500
+    /// iterations at h = 1/512.)
+    Rollers,
+}
+
+impl Hold {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Hold::Roller => "roller",
+            Hold::Rollers => "rollers",
+        }
+    }
+}
 
 /// How one physical displacement component is expressed in the unknowns.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,6 +86,7 @@ pub trait DofExpansion {
 #[derive(Clone, Debug)]
 pub struct DofMap {
     mesh: Mesh,
+    hold: Hold,
     n: usize,
     contacts: Vec<ContactDofs>,
 }
@@ -76,7 +107,12 @@ impl DofMap {
     /// Lower body clamped on y = 0; upper body on a roller (u''_1 = 0) on
     /// x = 1, ½ < y ≤ 1; the upper contact node at (1, ½) is free.
     pub fn new(mesh: &Mesh) -> Self {
-        let n = mesh.unknowns();
+        Self::with_hold(mesh, Hold::Roller)
+    }
+
+    /// As [`DofMap::new`], with the upper body held sideways as `hold` says.
+    pub fn with_hold(mesh: &Mesh, hold: Hold) -> Self {
+        let n = mesh.unknowns_with(hold);
         // Contact node i: (s, t) follow every other unknown, in increasing x.
         let first = n - 2 * mesh.n();
         let contacts = (0..mesh.n())
@@ -94,9 +130,15 @@ impl DofMap {
             .collect();
         Self {
             mesh: mesh.clone(),
+            hold,
             n,
             contacts,
         }
+    }
+
+    /// How the upper body is held sideways.
+    pub fn hold(&self) -> Hold {
+        self.hold
     }
 
     /// Both components of `node` as unknowns: numbered in node order, the
@@ -126,11 +168,25 @@ impl DofMap {
             }
             Body::Upper => {
                 let lower = 2 * per_row * (self.mesh.rows() - 1);
-                let s = lower + (j - 1) * (2 * per_row - 1) + 2 * i;
-                if i == per_row - 1 {
-                    [Dof::Fixed, Dof::Slot(s)]
-                } else {
-                    [Dof::Slot(s), Dof::Slot(s + 1)]
+                match self.hold {
+                    Hold::Roller => {
+                        let s = lower + (j - 1) * (2 * per_row - 1) + 2 * i;
+                        if i == per_row - 1 {
+                            [Dof::Fixed, Dof::Slot(s)]
+                        } else {
+                            [Dof::Slot(s), Dof::Slot(s + 1)]
+                        }
+                    }
+                    Hold::Rollers => {
+                        let row = lower + (j - 1) * (2 * per_row - 2);
+                        if i == 0 {
+                            [Dof::Fixed, Dof::Slot(row)]
+                        } else if i == per_row - 1 {
+                            [Dof::Fixed, Dof::Slot(row + 2 * per_row - 3)]
+                        } else {
+                            [Dof::Slot(row + 2 * i - 1), Dof::Slot(row + 2 * i)]
+                        }
+                    }
                 }
             }
         }
@@ -229,7 +285,7 @@ mod tests {
     /// The numbering by enumeration, as it was built before the map became
     /// a formula: every node in order, a new unknown for each free
     /// component, then (s, t) of each contact node in increasing x.
-    fn enumerated(mesh: &Mesh) -> (Vec<[Dof; 2]>, usize) {
+    fn enumerated(mesh: &Mesh, hold: Hold) -> (Vec<[Dof; 2]>, usize) {
         let mut map = vec![[Dof::Fixed; 2]; mesh.num_nodes()];
         let mut n = 0;
         let mut next = || {
@@ -243,7 +299,10 @@ mod tests {
                 Body::Lower if j == 0 => [Dof::Fixed, Dof::Fixed],
                 Body::Lower => [Dof::Slot(next()), Dof::Slot(next())],
                 Body::Upper if j == 0 => [Dof::Fixed, Dof::Fixed],
-                Body::Upper if i == last => [Dof::Fixed, Dof::Slot(next())],
+                Body::Upper if hold == Hold::Roller && i == last => [Dof::Fixed, Dof::Slot(next())],
+                Body::Upper if hold == Hold::Rollers && (i == 0 || i == last) => {
+                    [Dof::Fixed, Dof::Slot(next())]
+                }
                 Body::Upper => [Dof::Slot(next()), Dof::Slot(next())],
             };
         }
@@ -274,10 +333,10 @@ mod tests {
     /// offset or roller column would move some node's unknowns.
     #[test]
     fn the_numbering_is_the_enumeration() {
-        for level in 1..=6 {
+        for (level, hold) in (1..=6).flat_map(|l| [(l, Hold::Roller), (l, Hold::Rollers)]) {
             let mesh = Mesh::new(MeshSize::from_level(level).unwrap());
-            let map = DofMap::new(&mesh);
-            let (table, n) = enumerated(&mesh);
+            let map = DofMap::with_hold(&mesh, hold);
+            let (table, n) = enumerated(&mesh, hold);
             assert_eq!(map.n(), n, "level {level}");
             for (node, dofs) in table.iter().enumerate() {
                 assert_eq!(map.dofs(node), *dofs, "level {level}, node {node}");

@@ -123,7 +123,8 @@ pub fn prolongations(finest: (&Mesh, &DofMap)) -> Vec<Csr> {
     let meshes: Vec<Mesh> = (MIN_LEVEL..level)
         .map(|k| Mesh::new(MeshSize::from_level(k).expect("between the bounds")))
         .collect();
-    let dofs: Vec<DofMap> = meshes.iter().map(DofMap::new).collect();
+    let hold = finest.1.hold();
+    let dofs: Vec<DofMap> = meshes.iter().map(|m| DofMap::with_hold(m, hold)).collect();
     let level_of = |l: usize| {
         if l < meshes.len() {
             (&meshes[l], &dofs[l])

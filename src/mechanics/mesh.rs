@@ -64,8 +64,19 @@ impl Mesh {
     /// contact node. What a run will need is estimated from it before
     /// anything is allocated ([`crate::memory`]).
     pub fn unknowns(&self) -> usize {
+        self.unknowns_with(crate::mechanics::dofs::Hold::Roller)
+    }
+
+    /// As [`Mesh::unknowns`], with the upper body held sideways as `hold`
+    /// says: on the roller one fewer per row above Γ_K, on rollers on both
+    /// sides two fewer.
+    pub fn unknowns_with(&self, hold: crate::mechanics::dofs::Hold) -> usize {
         let (n, above) = (self.n, self.rows - 1);
-        2 * n * above + (2 * n * above - above) + 2 * n
+        let upper = match hold {
+            crate::mechanics::dofs::Hold::Roller => 2 * n * above - above,
+            crate::mechanics::dofs::Hold::Rollers => (2 * n - 2) * above,
+        };
+        2 * n * above + upper + 2 * n
     }
 
     pub fn num_elements(&self) -> usize {

@@ -3,10 +3,12 @@
 //! solution. Everything here knows meshes; nothing here solves.
 
 pub mod assembly;
+pub mod closed_forms;
 pub mod contact_zone;
 pub mod discretization;
 pub mod dofs;
 pub mod element;
+pub mod gap;
 pub mod hierarchy;
 pub mod material;
 pub mod mesh;

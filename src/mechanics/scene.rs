@@ -35,6 +35,17 @@ pub struct Scene {
     pub loads: Vec<Traction>,
     /// Mesh continuation levels, coarse to fine; the last is the finest.
     pub levels: Vec<MeshSize>,
+    /// The initial gap along Γ_K (None: the paper's flat bodies, touching
+    /// everywhere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gap: Option<crate::mechanics::gap::Gap>,
+    /// How the upper body is held sideways (the paper: a roller on x = 1).
+    #[serde(skip_serializing_if = "is_roller")]
+    pub hold: crate::mechanics::dofs::Hold,
+}
+
+fn is_roller(hold: &crate::mechanics::dofs::Hold) -> bool {
+    *hold == crate::mechanics::dofs::Hold::Roller
 }
 
 /// The sizes that Young's modulus and each nonzero traction may have.
@@ -181,6 +192,8 @@ impl Scene {
                 p1: 0.0,
             }],
             levels: default_levels(),
+            gap: None,
+            hold: crate::mechanics::dofs::Hold::Roller,
         })
     }
 
@@ -314,6 +327,9 @@ impl Scene {
                     "levels must go from coarse to fine, e.g. [\"1/8\", \"1/16\", \"1/32\", \"1/64\"]",
                 ));
             }
+        }
+        if let Some(gap) = &self.gap {
+            gap.validate()?;
         }
         let total = self.total_vertical_load();
         if !total.is_finite() {
