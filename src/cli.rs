@@ -131,6 +131,13 @@ pub enum Command {
     /// error_bound.csv, error_bound_sharpness.csv, error_bound_trials.csv
     /// and charts into --out (about 20 min; --quick: seconds).
     ErrorBound(ErrorBoundArgs),
+    /// Verify against closed forms: the classical scenes of scenes/ (Hertz's
+    /// line contact, a flat punch) at h = 1/128 ... 1/1024 (a/4 ... a/32),
+    /// every solver, each answer certified and its contact pressure
+    /// compared with the half-plane closed form (L2 and max error, half-width,
+    /// p₀, the observed order). Writes verification.csv, profiles/ (each
+    /// run's profile) and charts into --out (--quick: h = 1/64, 1/128).
+    Verify(VerifyArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
     BenchOne(BenchOneArgs),
@@ -318,6 +325,21 @@ pub struct ErrorBoundArgs {
     /// to 1/16).
     #[arg(long)]
     pub quick: bool,
+    /// Output folder (replaced whole).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+#[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// A small run for tests (h = 1/64 and 1/128, 30 s a solve).
+    #[arg(long)]
+    pub quick: bool,
+    /// Solvers to verify [default: every registered solver].
+    #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
+    pub solvers: Vec<String>,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -565,6 +587,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(a) => c::export::run(&a),
         Command::Certify(a) => c::certify::run(&a),
         Command::ErrorBound(a) => c::error_bound::run(&a),
+        Command::Verify(a) => c::verify::run(&a),
         Command::BenchOne(a) => c::bench::run_one(&a),
     }
 }

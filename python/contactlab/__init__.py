@@ -55,6 +55,7 @@ __all__ = [
     "benchmark",
     "work_precision",
     "error_bound",
+    "verify",
     "sweep",
     "side_by_side",
     "tuning_map",
@@ -1014,6 +1015,34 @@ def error_bound(
     d = _contactlab._error_bound(bool(quick), _settings(settings), _out(out))
     files = dict(d["files"])
     return StudyResult(rows=_rows(files["error_bound.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+
+
+def verify(
+    quick: bool = False,
+    solvers: Optional[Sequence[str]] = None,
+    settings: Optional[Mapping[str, object]] = None,
+    out: Optional[PathLike] = None,
+) -> StudyResult:
+    """The classical scenes against their closed forms: ``contactlab verify``.
+
+    Hertz's line contact and a flat punch (``scenes/hertz.toml``,
+    ``scenes/flat_punch.toml``) at h = 1/128 … 1/1024 (``quick``: 1/64,
+    1/128), each solver's certified answer beside the half-plane closed form.
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: ``verification.csv`` (one row per scene, mesh and solver:
+        status, L2 and max error of the pressure, observed order, half-width
+        and p₀ beside their closed forms); ``files`` also holds each
+        profile, ``profiles/SCENE_hN_SOLVER.csv``.
+    """
+    if not isinstance(quick, bool):
+        raise InputError(f"quick = {quick!r}: give True or False")
+    names = [] if solvers is None else [str(s) for s in solvers]
+    d = _contactlab._verify(bool(quick), names, _settings(settings), _out(out))
+    files = dict(d["files"])
+    return StudyResult(rows=_rows(files["verification.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
 
 
 def sweep(

@@ -133,6 +133,12 @@ def _error_bound(
     settings: Sequence[Tuple[str, str]] = ...,
     out: Optional[str] = ...,
 ) -> Dict[str, Any]: ...
+def _verify(
+    quick: bool = ...,
+    solvers: List[str] = ...,
+    settings: Sequence[Tuple[str, str]] = ...,
+    out: Optional[str] = ...,
+) -> Dict[str, Any]: ...
 def _sweep(
     problem: Problem,
     solvers: List[str],

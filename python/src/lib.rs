@@ -583,6 +583,7 @@ fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(studies::_benchmark, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_work_precision, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_error_bound, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_verify, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_side_by_side, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_tuning_map, m)?)?;

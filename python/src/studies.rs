@@ -15,6 +15,7 @@ use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
 use contactlab::study::error_bound::{BoundSpec, ErrorBoundStudy};
+use contactlab::study::verify::{VerifySpec, VerifyStudy};
 use contactlab::study::lab::{Content, Lab, Study, Tracker, write_artifacts};
 use contactlab::study::side_by_side::{SideBySide, parse_side, solvers_of};
 use contactlab::study::sweep::{Sweep, SweepSpec};
@@ -330,6 +331,33 @@ pub fn _error_bound(
         BoundSpec::standard()
     };
     run(py, ErrorBoundStudy { spec }, settings, out)
+}
+
+/// `contactlab verify`: the classical scenes against their closed forms
+/// (issue 74), by the solvers named (all if none).
+#[pyfunction]
+#[pyo3(signature = (quick=false, solvers=Vec::new(), settings=Vec::new(), out=None))]
+pub fn _verify(
+    py: Python<'_>,
+    quick: bool,
+    solvers: Vec<String>,
+    settings: Vec<(String, String)>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'_, PyDict>> {
+    let solvers = if solvers.is_empty() {
+        contactlab::solvers::registry::solvers()
+    } else {
+        entries(&solvers)?
+    };
+    let settings = resolved(&Settings::default(), settings, &solvers)?;
+    let spec = if quick {
+        VerifySpec::quick()
+    } else {
+        VerifySpec::standard()
+    };
+    let mut study = VerifyStudy::new(spec);
+    study.solvers = solvers;
+    run(py, study, settings, out)
 }
 
 /// `contactlab sweep` on the problem's scene and mesh: each solver's

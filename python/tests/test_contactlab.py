@@ -572,3 +572,19 @@ def test_a_uniform_gap_is_a_rigid_translation_of_the_upper_body(p32):
         cl.Problem.from_matrices(p32.A, p32.f, contact, z, gap=np.full(len(c.t), -1.0))
     with pytest.raises(cl.InputError, match="gap"):
         cl.Problem.from_matrices(p32.A, p32.f, contact, z, gap=[0.0])
+
+
+def test_verify_runs_the_classical_scenes_from_python():
+    # The study behind `contactlab verify`, from Python: Hertz's pressure
+    # error falls from h = 1/64 to 1/128 for each solver named, and every
+    # answer is certified. A closed form with a wrong E*, or a gap lost on
+    # the way to a solver, keeps the error from falling.
+    r = cl.verify(quick=True, solvers=["newton-coulomb", "tnnmg"])
+    hertz = [t for t in r.rows if t["scene"] == "hertz"]
+    assert len(hertz) == 4
+    for t in hertz:
+        assert t["status"] == "converged", t
+    for s in ("newton-coulomb", "tnnmg"):
+        e = {t["h"]: t["l2_error"] for t in hertz if t["solver"] == s}
+        assert e["1/128"] < 0.6 * e["1/64"], e
+    assert any(f.startswith("profiles/hertz_h128_") for f in r.files)

@@ -14,6 +14,7 @@ pub mod solve;
 pub mod stability;
 pub mod sweep;
 pub mod table1;
+pub mod verify;
 
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};

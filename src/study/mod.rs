@@ -22,4 +22,5 @@ pub mod sweep;
 pub mod table1;
 pub mod trial;
 pub mod tuning_map;
+pub mod verify;
 pub mod work_precision;

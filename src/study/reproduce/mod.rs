@@ -38,6 +38,7 @@ use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
 use crate::study::tuning_map::{Axis, TuningMap, TuningMaps};
+use crate::study::verify::{VerifySpec, VerifyStudy};
 
 /// What `reproduce` runs.
 #[derive(Clone, Serialize)]
@@ -66,6 +67,8 @@ pub struct ReproduceSpec {
     pub oracle: Oracle,
     /// The error bound's sharpness and validity (issue 51).
     pub error_bound: BoundSpec,
+    /// The classical scenes against their closed forms (issue 74).
+    pub verify: VerifySpec,
     /// The mesh of the side-by-side of the paper's method against the
     /// oracle and against the reference (problem 1).
     pub side_by_side_h: MeshSize,
@@ -120,6 +123,7 @@ impl ReproduceSpec {
             errors: ErrorSpec::standard(),
             oracle: Oracle::standard(),
             error_bound: BoundSpec::standard(),
+            verify: VerifySpec::standard(),
             side_by_side_h: MeshSize::from_level(7).expect("in range"),
             // The paper's own form (sweeps) at 1/64, where a point takes
             // about a second; multigrid inside at 1/256 (tuning_map).
@@ -158,6 +162,7 @@ impl ReproduceSpec {
             errors: ErrorSpec::quick(),
             oracle: Oracle::quick(),
             error_bound: BoundSpec::quick(),
+            verify: VerifySpec::quick(),
             side_by_side_h: h,
             maps: vec![
                 (h, Law::GivenFriction),
@@ -222,6 +227,7 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
         }),
         Box::new(side_by_side(spec)),
         Box::new(tuning_maps(spec)),
+        Box::new(VerifyStudy::new(spec.verify.clone())),
     ]
 }
 

@@ -1,0 +1,444 @@
+//! Verification against closed forms (issue 74): the classical scenes of
+//! `scenes/` at a ladder of meshes, solved by every registered solver, each
+//! answer certified and its pressure compared with the half-plane closed
+//! form of its scene ([`crate::mechanics::closed_forms`]).
+//!
+//! - **hertz** (`scenes/hertz.toml`): Hertz's line contact, a = 1/32;
+//! - **flat punch** (`scenes/flat_punch.toml`): Sadowsky's flat punch,
+//!   b = 1/32, compared away from its singular edges (|x − x₀| ≤ 0.8 b).
+//!
+//! The ladder runs h = a/4 … a/32 (1/128 … 1/1024; quick: 1/64, 1/128).
+//! Each solver climbs it while its answers certify and its last two times
+//! predict a run within the time limit; a mesh it does not reach is a row
+//! `not_run` that says why. The closed forms are for half-planes: the
+//! bodies, 16a wide on either side and 16a deep, differ from them by a
+//! finite-size error, the floor the errors fall to as h is refined.
+
+pub mod views;
+
+use anyhow::{Context, Result};
+use contactlab_solvers::registry::{self, Entry};
+use contactlab_solvers::{Law, Status};
+use serde::Serialize;
+
+use crate::formats::scene_file;
+use crate::mechanics::closed_forms::{FlatPunch, Hertz, effective_modulus, pressure_error};
+use crate::mechanics::contact_zone::ProfileRow;
+use crate::mechanics::gap::Gap;
+use crate::mechanics::mesh_size::MeshSize;
+use crate::mechanics::scene::Scene;
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, ticked};
+use crate::study::runner::{Keep, measure};
+use crate::study::trial::TrialSpec;
+
+/// The study's name in trial records.
+pub const STUDY: &str = "verify";
+
+/// The classical scenes, as committed in `scenes/`: what `verify` runs is
+/// what a user reads there.
+pub const SCENES: [(&str, &str); 2] = [
+    ("hertz", include_str!("../../../scenes/hertz.toml")),
+    (
+        "flat_punch",
+        include_str!("../../../scenes/flat_punch.toml"),
+    ),
+];
+
+/// The closed form a scene is verified against.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ClosedForm {
+    Hertz(Hertz),
+    FlatPunch(FlatPunch),
+}
+
+impl ClosedForm {
+    /// The closed form of `scene`: its gap's parabola (Hertz) or the flat
+    /// stretch of its gap table (a punch), its material's E*, and its load.
+    pub fn of(scene: &Scene) -> Result<Self> {
+        let modulus = effective_modulus(&scene.material, &scene.material);
+        let load = -scene.total_vertical_load();
+        match &scene.gap {
+            Some(Gap::Parabola { center, radius }) => Ok(ClosedForm::Hertz(Hertz {
+                modulus,
+                load,
+                radius: *radius,
+                center: *center,
+            })),
+            Some(Gap::Table { x, d }) => {
+                let flat: Vec<f64> = x
+                    .iter()
+                    .zip(d)
+                    .filter(|(_, d)| **d == 0.0)
+                    .map(|(x, _)| *x)
+                    .collect();
+                let (Some(lo), Some(hi)) = (flat.first(), flat.last()) else {
+                    anyhow::bail!("{}: its gap table touches nowhere: no punch", scene.name);
+                };
+                Ok(ClosedForm::FlatPunch(FlatPunch {
+                    load,
+                    half_width: 0.5 * (hi - lo),
+                    center: 0.5 * (hi + lo),
+                }))
+            }
+            None => anyhow::bail!(
+                "{}: no gap, so no closed form to verify against",
+                scene.name
+            ),
+        }
+    }
+
+    /// The contact's half-width a (Hertz) or b (punch).
+    pub fn half_width(&self) -> f64 {
+        match self {
+            ClosedForm::Hertz(h) => h.half_width(),
+            ClosedForm::FlatPunch(p) => p.half_width,
+        }
+    }
+
+    pub fn center(&self) -> f64 {
+        match self {
+            ClosedForm::Hertz(h) => h.center,
+            ClosedForm::FlatPunch(p) => p.center,
+        }
+    }
+
+    /// The pressure the closed form gives at x.
+    pub fn pressure(&self, x: f64) -> f64 {
+        match self {
+            ClosedForm::Hertz(h) => h.pressure(x),
+            ClosedForm::FlatPunch(p) => p.pressure(x),
+        }
+    }
+
+    /// The pressure p₀ its errors are measured in: Hertz's peak, the
+    /// punch's pressure at its center P/(πb).
+    pub fn p0(&self) -> f64 {
+        match self {
+            ClosedForm::Hertz(h) => h.peak_pressure(),
+            ClosedForm::FlatPunch(p) => p.pressure(p.center),
+        }
+    }
+
+    /// Where the pressure is compared: all of Γ_K for Hertz (a pressure
+    /// leaked outside the contact counts), |x − x₀| ≤ 0.8 b for the punch,
+    /// whose closed form is infinite at its edges.
+    pub fn compared_within(&self) -> f64 {
+        match self {
+            ClosedForm::Hertz(_) => f64::INFINITY,
+            ClosedForm::FlatPunch(p) => 0.8 * p.half_width,
+        }
+    }
+
+    /// Its parameters as `verification.csv` states them: R (Hertz only).
+    pub fn radius(&self) -> Option<f64> {
+        match self {
+            ClosedForm::Hertz(h) => Some(h.radius),
+            ClosedForm::FlatPunch(_) => None,
+        }
+    }
+
+    pub fn source(&self) -> &'static str {
+        match self {
+            ClosedForm::Hertz(_) => "Hertz line contact, Johnson (1985) §4.3",
+            ClosedForm::FlatPunch(_) => "flat punch, Sadowsky (1928), Johnson (1985) §2.8",
+        }
+    }
+}
+
+/// What the study runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct VerifySpec {
+    pub meshes: Vec<MeshSize>,
+    /// Seconds one solve may take; a solver is not run on a finer mesh once
+    /// a solve took longer, failed to certify, or its last two predict one
+    /// that would.
+    pub time_limit: f64,
+}
+
+impl VerifySpec {
+    /// h = 1/128 … 1/1024 (a/4 … a/32), 300 s a solve.
+    pub fn standard() -> Self {
+        Self {
+            meshes: levels(7..=10),
+            time_limit: 300.0,
+        }
+    }
+
+    /// h = 1/64, 1/128 (a/2, a/4), 30 s a solve.
+    pub fn quick() -> Self {
+        Self {
+            meshes: levels(6..=7),
+            time_limit: 30.0,
+        }
+    }
+}
+
+fn levels(range: std::ops::RangeInclusive<u32>) -> Vec<MeshSize> {
+    range
+        .map(|k| MeshSize::from_level(k).expect("in range"))
+        .collect()
+}
+
+/// A classical scene, read from its committed file.
+pub fn scene(name: &str) -> Result<Scene> {
+    let (_, text) = SCENES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .with_context(|| format!("no classical scene named {name}"))?;
+    let (scene, _) = scene_file::parse(text)
+        .map_err(|(l, c, m)| anyhow::anyhow!("scenes/{name}.toml, line {l}, column {c}: {m}"))?
+        .split()
+        .map_err(anyhow::Error::msg)?;
+    scene.validate()?;
+    Ok(scene)
+}
+
+/// One row of `verification.csv`: a scene on a mesh by a solver, each
+/// computed quantity beside its closed form, with the closed form's
+/// parameters.
+#[derive(Clone, Debug, Serialize)]
+pub struct VerifyRow {
+    pub scene: String,
+    pub h: MeshSize,
+    pub solver: &'static str,
+    /// The certified status (`inaccurate`: the solver's claim failed the
+    /// certificate; `not_run`: refused or not reached, `detail` says why).
+    pub status: Status,
+    pub solver_status: Status,
+    pub unknowns: usize,
+    pub seconds: Option<f64>,
+    /// ‖p_h − p‖/‖p‖ in L2 (Hertz: all of Γ_K; punch: |x − x₀| ≤ 0.8 b).
+    pub l2_error: Option<f64>,
+    /// log₂ of the L2 error's fall from the next coarser mesh.
+    pub l2_order: Option<f64>,
+    /// max |p_h − p| / p₀ over the same part of the contact.
+    pub max_error: Option<f64>,
+    pub half_width: Option<f64>,
+    pub half_width_exact: f64,
+    /// Hertz: the peak pressure; punch: the pressure at x₀.
+    pub p0: Option<f64>,
+    pub p0_exact: f64,
+    pub e_star: f64,
+    pub load: f64,
+    pub radius: Option<f64>,
+    pub friction: f64,
+    pub tangential_load: f64,
+    pub detail: String,
+}
+
+/// The findings: the rows, and each run's profile (by the file it is written to).
+pub struct Verified {
+    pub spec: VerifySpec,
+    pub rows: Vec<VerifyRow>,
+    pub profiles: Vec<(String, Vec<ProfileRow>)>,
+}
+
+/// The verification study.
+pub struct VerifyStudy {
+    pub spec: VerifySpec,
+    /// The solvers to run (every registered one by default).
+    pub solvers: Vec<&'static Entry>,
+}
+
+impl VerifyStudy {
+    pub fn new(spec: VerifySpec) -> Self {
+        Self {
+            spec,
+            solvers: registry::solvers(),
+        }
+    }
+}
+
+/// The predicted time of the next mesh from the last two (×4 a mesh at
+/// least: 4 times the unknowns).
+fn predicted(past: &[f64]) -> Option<f64> {
+    match past {
+        [.., a, b] => Some(b * (b / a).max(4.0)),
+        _ => None,
+    }
+}
+
+impl Study for VerifyStudy {
+    type Findings = Verified;
+
+    fn name(&self) -> &'static str {
+        STUDY
+    }
+
+    fn estimated_seconds(&self, length: RunLength) -> f64 {
+        match length {
+            RunLength::Quick => 60.0,
+            _ => 1800.0,
+        }
+    }
+
+    fn run(&self, lab: &mut Lab) -> Result<Ran<Verified>> {
+        let tracker = lab.tracker();
+        let mut rows = Vec::new();
+        let mut profiles = Vec::new();
+        for (name, _) in SCENES {
+            let base = scene(name)?;
+            let closed = ClosedForm::of(&base)?;
+            // Per solver: the times so far, and why it stopped climbing.
+            let mut climbed: Vec<(&'static str, Vec<f64>, Option<String>)> = Vec::new();
+            for &h in &self.spec.meshes {
+                let mut s = base.clone();
+                s.set_finest(h);
+                let unknowns = crate::memory::unknowns(h);
+                let specs: Vec<TrialSpec> = self
+                    .solvers
+                    .iter()
+                    .map(|&e| {
+                        TrialSpec::new(STUDY, name, &s, e, Law::Coulomb, &lab.settings)
+                            .without_reference()
+                            .with_seconds(Some(self.spec.time_limit))
+                    })
+                    .collect();
+                lab.log(&format!("{name}, h = {h}: {} solvers", specs.len()));
+                tracker.start(STUDY, vec![1.0; specs.len()], self.spec.time_limit);
+                for spec in &specs {
+                    let e = spec.solver;
+                    let record = climbed.iter().position(|(n, _, _)| *n == e.name);
+                    let stopped = record.and_then(|k| {
+                        let (_, past, why) = &climbed[k];
+                        why.clone().or_else(|| {
+                            predicted(past).filter(|&t| t > self.spec.time_limit).map(|t| {
+                                format!(
+                                    "not run: its last two meshes predict {t:.0} s here, beyond the time limit of {:.0} s",
+                                    self.spec.time_limit
+                                )
+                            })
+                        })
+                    });
+                    let mut row = VerifyRow {
+                        scene: name.to_string(),
+                        h,
+                        solver: e.name,
+                        status: Status::NotRun,
+                        solver_status: Status::NotRun,
+                        unknowns,
+                        seconds: None,
+                        l2_error: None,
+                        l2_order: None,
+                        max_error: None,
+                        half_width: None,
+                        half_width_exact: closed.half_width(),
+                        p0: None,
+                        p0_exact: closed.p0(),
+                        e_star: effective_modulus(&s.material, &s.material),
+                        load: -s.total_vertical_load(),
+                        radius: closed.radius(),
+                        friction: s.friction,
+                        tangential_load: 0.0,
+                        detail: String::new(),
+                    };
+                    if let Some(why) = stopped {
+                        row.detail = why;
+                        rows.push(row);
+                        ticked(tracker, spec)?;
+                        continue;
+                    }
+                    let m = measure(
+                        spec,
+                        None,
+                        Keep {
+                            history: false,
+                            solution: true,
+                        },
+                    )?;
+                    ticked(tracker, spec)?;
+                    row.status = m.trial.status;
+                    row.solver_status = m.trial.solver_status;
+                    row.detail = m.trial.detail.clone();
+                    let seconds = m.timing.seconds_median;
+                    if m.trial.status != Status::NotRun && m.trial.status != Status::OutOfMemory {
+                        row.seconds = Some(seconds);
+                    }
+                    if let Some(finest) = &m.finest {
+                        let s_ = &m.outcome.solution;
+                        let x = finest.contact_x();
+                        let w: Vec<f64> =
+                            finest.problem.contacts().iter().map(|c| c.weight).collect();
+                        let err = pressure_error(
+                            &x,
+                            &w,
+                            &s_.pressure,
+                            |x| closed.pressure(x),
+                            closed.center(),
+                            closed.compared_within(),
+                            closed.p0(),
+                        );
+                        row.l2_error = Some(err.l2);
+                        row.max_error = Some(err.max);
+                        row.half_width = Some(err.half_width);
+                        row.p0 = Some(match closed {
+                            ClosedForm::Hertz(_) => err.peak,
+                            ClosedForm::FlatPunch(_) => err.at_center,
+                        });
+                        let coarser = rows.iter().rev().find(|r: &&VerifyRow| {
+                            r.scene == name && r.solver == e.name && r.h.level() + 1 == h.level()
+                        });
+                        row.l2_order = coarser
+                            .and_then(|c| c.l2_error)
+                            .map(|c| (c / err.l2).log2());
+                        let stem = format!("{name}_h{}_{}", h.divisions(), e.name);
+                        profiles.push((
+                            format!("profiles/{stem}.csv"),
+                            crate::mechanics::contact_zone::contact_profile(
+                                finest,
+                                s_,
+                                &m.outcome.bound,
+                                m.trial.status,
+                            ),
+                        ));
+                    }
+                    let over = seconds > self.spec.time_limit || !m.trial.certified();
+                    let why = over.then(|| {
+                        format!(
+                            "not run: at h = {h} it {}",
+                            if m.trial.certified() {
+                                format!("took {seconds:.0} s, beyond the time limit")
+                            } else {
+                                format!("ended {}", m.trial.status)
+                            }
+                        )
+                    });
+                    match record {
+                        Some(k) => {
+                            climbed[k].1.push(seconds);
+                            if climbed[k].2.is_none() {
+                                climbed[k].2 = why;
+                            }
+                        }
+                        None => climbed.push((e.name, vec![seconds], why)),
+                    }
+                    rows.push(row);
+                }
+                tracker.finish();
+            }
+        }
+        let mut artifacts = vec![Artifact::csv("verification.csv", &rows, &[])?];
+        for (path, profile) in &profiles {
+            artifacts.push(Artifact::csv(
+                path,
+                profile,
+                &crate::mechanics::contact_zone::PROFILE_COLUMNS,
+            )?);
+        }
+        artifacts.extend(Artifact::charts(views::charts(&rows, &profiles)?));
+        Ok(Ran {
+            findings: Verified {
+                spec: self.spec.clone(),
+                rows,
+                profiles,
+            },
+            artifacts,
+        })
+    }
+
+    fn section(&self, found: &Verified, _: &Lab, charts: &[String]) -> Result<Section> {
+        Ok(Section {
+            markdown: views::section(found, charts),
+        })
+    }
+}

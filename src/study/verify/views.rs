@@ -1,0 +1,162 @@
+//! The verification's views: the computed pressure profiles over the
+//! closed form, the errors against h, and its README section.
+
+use anyhow::Result;
+use contactlab_solvers::Status;
+
+use crate::io::charts::{Chart, Series, solver_color};
+use crate::mechanics::contact_zone::ProfileRow;
+
+use super::{ClosedForm, SCENES, Verified, VerifyRow, scene};
+
+/// The solver whose profiles the profile charts draw at every mesh (the
+/// others are in `profiles/`).
+pub const PROFILE_SOLVER: &str = "newton-coulomb";
+
+/// Per scene: the pressure of `PROFILE_SOLVER` at each mesh over the closed
+/// form (x within 2a of x₀), and each solver's L2 error against h.
+pub fn charts(
+    rows: &[VerifyRow],
+    profiles: &[(String, Vec<ProfileRow>)],
+) -> Result<Vec<(String, Chart)>> {
+    let mut out = Vec::new();
+    for (name, _) in SCENES {
+        let closed = ClosedForm::of(&scene(name)?)?;
+        let (c, a) = (closed.center(), closed.half_width());
+        let window = |x: f64| (x - c).abs() <= 2.0 * a;
+        let mut series = Vec::new();
+        let samples = 400;
+        let exact: Vec<(f64, f64)> = (0..=samples)
+            .map(|k| c - 2.0 * a + 4.0 * a * k as f64 / samples as f64)
+            .map(|x| (x, closed.pressure(x)))
+            .filter(|(_, p)| p.is_finite() && *p <= 4.0 * closed.p0())
+            .collect();
+        series.push(Series::line(format!("closed form ({})", closed.source()), exact).black());
+        for (k, (path, profile)) in profiles
+            .iter()
+            .filter(|(p, _)| {
+                p.starts_with(&format!("profiles/{name}_h"))
+                    && p.ends_with(&format!("_{PROFILE_SOLVER}.csv"))
+            })
+            .enumerate()
+        {
+            let h = path
+                .trim_start_matches(&format!("profiles/{name}_h"))
+                .split('_')
+                .next()
+                .unwrap_or("?")
+                .to_string();
+            let points: Vec<(f64, f64)> = profile
+                .iter()
+                .filter(|r| window(r.x))
+                .map(|r| (r.x, r.pressure))
+                .collect();
+            series.push(
+                Series::line(format!("{PROFILE_SOLVER}, h = 1/{h}"), points)
+                    .with_markers()
+                    .colored(k),
+            );
+        }
+        out.push((
+            format!("verify_{name}_pressure"),
+            Chart::new(
+                format!("{name}: contact pressure against the closed form"),
+                "x",
+                "pressure p",
+                false,
+                false,
+                series,
+            ),
+        ));
+        let mut errors = Vec::new();
+        let mut solvers: Vec<&str> = rows
+            .iter()
+            .filter(|r| r.scene == name)
+            .map(|r| r.solver)
+            .collect();
+        solvers.dedup();
+        let mut seen = Vec::new();
+        for s in solvers {
+            if seen.contains(&s) {
+                continue;
+            }
+            seen.push(s);
+            let points: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| r.scene == name && r.solver == s && r.status == Status::Converged)
+                .filter_map(|r| r.l2_error.map(|e| (r.h.h(), e)))
+                .filter(|(_, e)| *e > 0.0)
+                .collect();
+            if !points.is_empty() {
+                errors.push(
+                    Series::line(s, points)
+                        .with_markers()
+                        .colored(solver_color(s)),
+                );
+            }
+        }
+        out.push((
+            format!("verify_{name}_error"),
+            Chart::new(
+                format!(
+                    "{name}: L2 error of the pressure against the closed form (certified answers)"
+                ),
+                "h",
+                "‖p_h − p‖ / ‖p‖",
+                true,
+                true,
+                errors,
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+fn opt(x: Option<f64>) -> String {
+    x.map_or("–".to_string(), |v| format!("{v:.2e}"))
+}
+
+/// The README section: what was verified, and a table per scene.
+pub fn section(found: &Verified, charts: &[String]) -> String {
+    let mut md = String::new();
+    md.push_str(&format!(
+        "Each classical scene of `scenes/` at h = {}, every registered solver at its defaults, the Coulomb law (𝓕 = 0: frictionless), a time limit of {:.0} s a solve. Errors are those of the nodal pressures against the half-plane closed form: L2 relative over Γ_K (the punch: over |x − x₀| ≤ 0.8 b, away from its singular edges), max over p₀. `order` is log₂ of the L2 error's fall from the next coarser mesh. The bodies are 16 half-widths wide on either side and deep: the closed forms, for half-planes, differ from them by a finite-size error, the floor the errors fall towards.\n\n",
+        found.spec.meshes.iter().map(|h| h.to_string()).collect::<Vec<_>>().join(", "),
+        found.spec.time_limit
+    ));
+    for (name, _) in SCENES {
+        md.push_str(&format!("### {name}\n\n"));
+        md.push_str("| h | solver | status | L2 error | order | max error | half-width (exact) | p₀ (exact) | seconds |\n|---|---|---|---|---|---|---|---|---|\n");
+        for r in found.rows.iter().filter(|r| r.scene == name) {
+            md.push_str(&format!(
+                "| {} | {} | {} | {} | {} | {} | {} ({:.4e}) | {} ({:.4e}) | {} |\n",
+                r.h,
+                r.solver,
+                r.status,
+                opt(r.l2_error),
+                r.l2_order.map_or("–".to_string(), |o| format!("{o:.2}")),
+                opt(r.max_error),
+                opt(r.half_width),
+                r.half_width_exact,
+                opt(r.p0),
+                r.p0_exact,
+                r.seconds.map_or("–".to_string(), |s| format!("{s:.2}")),
+            ));
+        }
+        md.push('\n');
+        for c in charts
+            .iter()
+            .filter(|c| c.starts_with(&format!("verify_{name}_")))
+        {
+            md.push_str(&crate::study::lab::chart_markdown(
+                c,
+                if c.ends_with("_pressure") {
+                    "The computed contact pressure at each mesh over the closed form: the profile should close on it as h falls."
+                } else {
+                    "The L2 error of each solver's certified pressure against h: it falls with h until the finite-size floor."
+                },
+            ));
+        }
+    }
+    md
+}
