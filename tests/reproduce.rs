@@ -20,7 +20,7 @@ use contactlab::study::trial::{Trial, TrialSpec};
 
 /// Files a reproduce run must write (besides profiles and charts): one or
 /// more per study, the manifest and the README.
-const FILES: [&str; 38] = [
+const FILES: [&str; 39] = [
     "README.md",
     "manifest.json",
     "table1.csv",
@@ -59,6 +59,7 @@ const FILES: [&str; 38] = [
     "side_by_side_relaxation_reference.csv",
     "tuning_map_relaxation_given_friction_h16.csv",
     "tuning_map_relaxation_coulomb_h128.csv",
+    "verification.csv",
 ];
 
 /// The committed reference: `compare.csv` of `reproduce --quick`.
@@ -448,6 +449,17 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
                 assert!(has(v), "{name}: no label {v}");
             }
             ("relaxation", "relaxation.r", "relaxation.epsilon", false)
+        } else if name.starts_with("verify_") && name.ends_with("_pressure") {
+            // The computed profiles over the closed form, named with its source.
+            assert!(has("closed form"), "{name}");
+            (
+                "contact pressure against the closed form",
+                "x",
+                "pressure p",
+                false,
+            )
+        } else if name.starts_with("verify_") {
+            ("L2 error of the pressure", "h", "‖p_h − p‖ / ‖p‖", false)
         } else {
             panic!("unexpected chart {name}");
         };

@@ -69,6 +69,8 @@ pub fn run(args: &InfoArgs) -> Result<()> {
          free unknowns      {}\n\
          nonzeros of A      {}\n\
          contact nodes      {}\n\
+         upper body held    {}\n\
+         initial gap        {}\n\
          applied load       {applied:.12} (vertical, on the upper body; scene total {:.12})\n\
          dim ker A          {kernel}\n\
          scales             load F = {:.6e}, length L = {:.6e}, stiffness K = {:.6e}, pressure P = {:.6e}, displacement U = {:.6e}\n\
@@ -84,6 +86,20 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         p.n(),
         p.a().nnz(),
         p.contacts().len(),
+        match scene.hold {
+            crate::mechanics::dofs::Hold::Roller => "on a roller on x = 1 (the paper's)",
+            crate::mechanics::dofs::Hold::Rollers => "on rollers on x = 0 and x = 1",
+        },
+        if p.has_gap() {
+            let gap = p.gap();
+            format!(
+                "from {:.6e} to {:.6e} along Γ_K (t ≤ d)",
+                gap.iter().copied().fold(f64::INFINITY, f64::min),
+                gap.iter().copied().fold(0.0, f64::max)
+            )
+        } else {
+            "none (the bodies touch all along Γ_K)".to_string()
+        },
         d.total_load,
         sc.force,
         sc.length,
