@@ -245,7 +245,7 @@ fn target_of(spec: &TrialSpec) -> f64 {
 
 /// The run's predicted seconds on the next mesh from its last two (the
 /// speed study's rule: at least 4× a mesh).
-fn predicted(past: &[f64]) -> Option<f64> {
+pub(crate) fn predicted(past: &[f64]) -> Option<f64> {
     match past {
         [.., a, b] => Some(b * (b / a).max(4.0)),
         _ => None,

@@ -27,6 +27,7 @@ use crate::mechanics::contact_zone::ProfileRow;
 use crate::mechanics::gap::Gap;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
+use crate::study::error_bound::predicted;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, ticked};
 use crate::study::runner::{Keep, measure};
 use crate::study::trial::TrialSpec;
@@ -246,15 +247,6 @@ impl VerifyStudy {
             spec,
             solvers: registry::solvers(),
         }
-    }
-}
-
-/// The predicted time of the next mesh from the last two (×4 a mesh at
-/// least: 4 times the unknowns).
-fn predicted(past: &[f64]) -> Option<f64> {
-    match past {
-        [.., a, b] => Some(b * (b / a).max(4.0)),
-        _ => None,
     }
 }
 

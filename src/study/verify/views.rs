@@ -69,18 +69,13 @@ pub fn charts(
             ),
         ));
         let mut errors = Vec::new();
-        let mut solvers: Vec<&str> = rows
-            .iter()
-            .filter(|r| r.scene == name)
-            .map(|r| r.solver)
-            .collect();
-        solvers.dedup();
-        let mut seen = Vec::new();
-        for s in solvers {
-            if seen.contains(&s) {
-                continue;
+        let mut solvers: Vec<&str> = Vec::new();
+        for r in rows.iter().filter(|r| r.scene == name) {
+            if !solvers.contains(&r.solver) {
+                solvers.push(r.solver);
             }
-            seen.push(s);
+        }
+        for s in solvers {
             let points: Vec<(f64, f64)> = rows
                 .iter()
                 .filter(|r| r.scene == name && r.solver == s && r.status == Status::Converged)
