@@ -10,7 +10,7 @@
 //! it would pass); a wrong E* or closed form (the error would not fall).
 
 use contactlab::certificate::certify_solution;
-use contactlab::mechanics::closed_forms::pressure_error;
+use contactlab::mechanics::closed_forms::{pressure_error, traction_error};
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::settings::Settings;
@@ -187,12 +187,130 @@ fn hertz_pressure_converges_to_the_closed_form() {
     assert!(errors[0] / errors[2] > 1.8, "{errors:?}");
 }
 
-/// Every registered solver certifies Hertz and the flat punch at h = 1/64
-/// at its defaults (the relaxation by tightening its ε when the
-/// certificate rejects an answer), and they agree on the pressure.
+/// Frictionless Hertz with its held sides shifted by δ is the unshifted
+/// answer with the upper body moved rigidly by δ: a rigid translation has
+/// no strain and frictionless contact does not feel the slip. Fails if the
+/// lifting −Tᵀ K u_D has a wrong sign, misses a triangle or a component, or
+/// if the answer's physical field does not put the held values back.
+#[test]
+fn a_side_shift_without_friction_moves_the_upper_body_rigidly() {
+    let mut s = scene("hertz").unwrap();
+    s.set_finest(h(5));
+    let delta = 3e-4;
+    let entry = solver_entry("newton-coulomb").unwrap();
+    let solve = |s: &contactlab::mechanics::scene::Scene| {
+        let solved = solve_scene(
+            s,
+            Friction::Coulomb,
+            entry,
+            &Settings::default(),
+            &mut Silent,
+        )
+        .unwrap();
+        assert_eq!(
+            solved.outcome.status,
+            Status::Converged,
+            "{}",
+            solved.outcome.detail
+        );
+        let u = solved.finest.displacements(&solved.outcome.solution.v);
+        (solved, u)
+    };
+    let (still, u0) = solve(&s);
+    s.side_shift = delta;
+    let (shifted, u1) = solve(&s);
+    // The shift is a load on the free unknowns next to the held sides.
+    assert_ne!(shifted.finest.problem.f(), still.finest.problem.f());
+    let mesh = &shifted.finest.mesh;
+    let scale = still.finest.problem.scales().displacement;
+    for node in 0..mesh.num_nodes() {
+        let upper = matches!(
+            mesh.locate(node).0,
+            contactlab::mechanics::mesh::Body::Upper
+        );
+        let expected = [if upper { delta } else { 0.0 }, 0.0];
+        for k in 0..2 {
+            let moved = u1[node][k] - u0[node][k];
+            assert!(
+                (moved - expected[k]).abs() <= 1e-8 * (scale + delta),
+                "node {node}, component {k}: moved {moved}, expected {}",
+                expected[k]
+            );
+        }
+    }
+    let p0 = still.finest.problem.scales().pressure;
+    for (a, b) in still
+        .outcome
+        .solution
+        .pressure
+        .iter()
+        .zip(&shifted.outcome.solution.pressure)
+    {
+        assert!((a - b).abs() <= 1e-8 * p0);
+    }
+}
+
+/// Cattaneo–Mindlin at h = 1/256 (a/8): the sheared contact carries about
+/// half of μP, sticks in a zone centred on x₀ whose half-width is
+/// a √(1 − Q/(μP)) to within half a node, and two independent solvers
+/// give one traction. Fails if the side shift does not reach the contact
+/// (Q = 0, full stick), if the traction is read with the wrong sign or
+/// weights (Q off, c off), or if the closed form's c(Q) is wrong.
+/// Measured: Q/(μP) = 0.494, c = 0.6875 a against 0.7113 a.
+#[test]
+fn cattaneo_mindlin_sticks_where_the_closed_form_says() {
+    let mut s = scene("cattaneo_mindlin").unwrap();
+    s.set_finest(h(8));
+    let ClosedForm::CattaneoMindlin(cm) = ClosedForm::of(&s).unwrap() else {
+        panic!("not Cattaneo–Mindlin");
+    };
+    let mut tractions = Vec::new();
+    for name in ["newton-coulomb", "tnnmg"] {
+        let entry = solver_entry(name).unwrap();
+        let solved = solve_scene(
+            &s,
+            Friction::Coulomb,
+            entry,
+            &Settings::default(),
+            &mut Silent,
+        )
+        .unwrap();
+        assert_eq!(solved.outcome.status, Status::Converged, "{name}");
+        let x = solved.finest.contact_x();
+        let w: Vec<f64> = solved
+            .finest
+            .problem
+            .contacts()
+            .iter()
+            .map(|c| c.weight)
+            .collect();
+        let sol = &solved.outcome.solution;
+        let t = traction_error(&x, &w, &sol.pressure, &sol.friction_traction, &cm);
+        let ratio = t.tangential_load.abs() / (cm.friction * cm.hertz.load);
+        assert!(ratio > 0.4 && ratio < 0.6, "{name}: Q/(μP) = {ratio}");
+        let c = cm.stick_half_width(t.tangential_load);
+        assert!(
+            (t.stick_half_width - c).abs() <= 0.5 * s.finest().h(),
+            "{name}: c = {} against {c}",
+            t.stick_half_width
+        );
+        tractions.push(sol.friction_traction.clone());
+    }
+    let mp0 = cm.friction * cm.hertz.peak_pressure();
+    for (a, b) in tractions[0].iter().zip(&tractions[1]) {
+        assert!((a - b).abs() <= 1e-6 * mp0, "{a} against {b}");
+    }
+}
+
+/// Every registered solver certifies Hertz, the flat punch and
+/// Cattaneo–Mindlin at h = 1/64 at its defaults (the relaxation by
+/// tightening its ε when the certificate rejects an answer), and they
+/// agree on the pressure. The relaxation is the exception on
+/// Cattaneo–Mindlin: its Uzawa loop reaches its cap of 1000 in the first
+/// friction step (`verify` reports it); it must not claim convergence.
 #[test]
 fn every_solver_certifies_the_classical_scenes() {
-    for name in ["hertz", "flat_punch"] {
+    for name in ["hertz", "flat_punch", "cattaneo_mindlin"] {
         let mut s = scene(name).unwrap();
         s.set_finest(h(6));
         let mut first: Option<Vec<f64>> = None;
@@ -205,6 +323,10 @@ fn every_solver_certifies_the_classical_scenes() {
                 &mut Silent,
             )
             .unwrap();
+            if name == "cattaneo_mindlin" && entry.name == "relaxation" {
+                assert_ne!(solved.outcome.status, Status::Converged);
+                continue;
+            }
             assert_eq!(
                 solved.outcome.status,
                 Status::Converged,

@@ -61,6 +61,18 @@ pub fn run(args: &InfoArgs) -> Result<()> {
             }
         })
         .collect();
+    let held = format!(
+        "{}{}",
+        match scene.hold {
+            crate::mechanics::dofs::Hold::Roller => "on a roller on x = 1 (the paper's)",
+            crate::mechanics::dofs::Hold::Rollers => "on rollers on x = 0 and x = 1",
+        },
+        if scene.side_shift == 0.0 {
+            String::new()
+        } else {
+            format!(", shifted to u''_1 = {:e} there", scene.side_shift)
+        }
+    );
     let text = format!(
         "scene              {} (plane {}, E = {}, ν = {}, 𝓕 = {})\n\
          h                  {h}\n\
@@ -86,10 +98,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         p.n(),
         p.a().nnz(),
         p.contacts().len(),
-        match scene.hold {
-            crate::mechanics::dofs::Hold::Roller => "on a roller on x = 1 (the paper's)",
-            crate::mechanics::dofs::Hold::Rollers => "on rollers on x = 0 and x = 1",
-        },
+        held,
         if p.has_gap() {
             let gap = p.gap();
             format!(

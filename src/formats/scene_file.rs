@@ -32,6 +32,7 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 /// plane = "strain"
 ///
 /// hold = "roller"                 # optional: "roller" (x = 1, the paper's) or "rollers" (on x = 0 and x = 1)
+/// side_shift = 0.0                # optional: u''_1 prescribed on the held sides (shears the upper body)
 ///
 /// [gap]                           # optional: the initial gap along Γ_K
 /// shape = "parabola"              # (x − center)²/(2 radius), or "table" with x, d
@@ -70,6 +71,10 @@ pub struct SceneFile {
     /// x = 1) or "rollers" (u''_1 = 0 on both sides, symmetric).
     #[serde(default)]
     pub hold: crate::mechanics::dofs::Hold,
+    /// The horizontal displacement u''_1 prescribed on the held sides
+    /// (default 0: the paper's roller in place).
+    #[serde(default)]
+    pub side_shift: f64,
     pub schedule: Option<Schedule>,
     pub stopping: Option<Stopping>,
     pub certificate: Option<CertificateSettings>,
@@ -106,6 +111,7 @@ impl SceneFile {
             levels: self.levels,
             gap: self.gap,
             hold: self.hold,
+            side_shift: self.side_shift,
         };
         Ok((scene, settings))
     }

@@ -49,6 +49,114 @@ impl Hertz {
     }
 }
 
+/// Cattaneo–Mindlin partial slip of Hertz's line contact under a
+/// tangential force Q < μP applied after P, for bodies of one material (no
+/// coupling of the normal and tangential problems: the pressure stays
+/// Hertz's): a stick zone |x − x₀| < c with c/a = √(1 − Q/(μP)), and the
+/// traction q = μp₀ √(1 − ξ²/a²) − μp₀ (c/a) √(1 − ξ²/c²) (the second term
+/// only for |ξ| < c), ξ = x − x₀, in the direction of Q (Johnson 1985,
+/// §7.2; Cattaneo 1938, Mindlin 1949).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CattaneoMindlin {
+    pub hertz: Hertz,
+    /// The friction coefficient μ.
+    pub friction: f64,
+}
+
+impl CattaneoMindlin {
+    /// The stick zone's half-width c = a √(1 − |Q|/(μP)) (0 at gross slip).
+    pub fn stick_half_width(&self, tangential_load: f64) -> f64 {
+        let ratio = tangential_load.abs() / (self.friction * self.hertz.load);
+        self.hertz.half_width() * (1.0 - ratio).max(0.0).sqrt()
+    }
+
+    /// The tangential traction q(x) under the force Q (signed as Q).
+    pub fn traction(&self, x: f64, tangential_load: f64) -> f64 {
+        let a = self.hertz.half_width();
+        let c = self.stick_half_width(tangential_load);
+        let xi = x - self.hertz.center;
+        let mp0 = self.friction * self.hertz.peak_pressure();
+        let slip = mp0 * (1.0 - (xi / a).powi(2)).max(0.0).sqrt();
+        let stick = if xi.abs() < c {
+            mp0 * (c / a) * (1.0 - (xi / c).powi(2)).sqrt()
+        } else {
+            0.0
+        };
+        (slip - stick) * tangential_load.signum()
+    }
+}
+
+/// How far a computed tangential traction is from Cattaneo–Mindlin's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TractionError {
+    /// The tangential force the contact carries, Q = Σ wᵢ qᵢ.
+    pub tangential_load: f64,
+    /// ‖q_h − q‖ / ‖q‖ in L2 over Γ_K, at the computed Q.
+    pub l2: f64,
+    /// max |q_h − q| over the nodes, over μp₀.
+    pub max: f64,
+    /// The computed stick half-width: half the span from the half-node
+    /// before the first stick node to the half-node after the last, a stick
+    /// node one whose friction margin μpᵢ − |qᵢ| exceeds 1e-3 μp₀ (the
+    /// closed form's margin grows as √ from the stick edge, so the
+    /// threshold moves the edge by under a millionth of c).
+    pub stick_half_width: f64,
+    /// ‖q_h − q_h(2x₀ − ·)‖ / (2‖q‖): the part of the computed traction
+    /// odd about x₀, which the closed form (even) does not have. It
+    /// measures what the finite bodies add (the force enters at their
+    /// sides, above the contact, and the two are held differently), apart
+    /// from the discretization; over the nodes whose mirror image is a node.
+    pub asymmetry: f64,
+}
+
+/// The error of the nodal tractions `q` (pressures `p`, weights `w`, at
+/// `x`, uniform spacing) against `exact`.
+pub fn traction_error(
+    x: &[f64],
+    w: &[f64],
+    p: &[f64],
+    q: &[f64],
+    exact: &CattaneoMindlin,
+) -> TractionError {
+    let tangential_load: f64 = w.iter().zip(q).map(|(w, q)| w * q).sum();
+    let mp0 = exact.friction * exact.hertz.peak_pressure();
+    let (mut num, mut den, mut max) = (0.0, 0.0, 0.0f64);
+    for ((&xi, &wi), &qi) in x.iter().zip(w).zip(q) {
+        let e = exact.traction(xi, tangential_load);
+        num += wi * (qi - e) * (qi - e);
+        den += wi * e * e;
+        max = max.max((qi - e).abs());
+    }
+    let stick: Vec<f64> = x
+        .iter()
+        .zip(p.iter().zip(q))
+        .filter(|(_, (p, q))| exact.friction * **p - q.abs() > 1e-3 * mp0)
+        .map(|(x, _)| *x)
+        .collect();
+    let spacing = if x.len() > 1 { x[1] - x[0] } else { 0.0 };
+    let center = exact.hertz.center;
+    let mut odd = 0.0;
+    for (i, (&xi, &wi)) in x.iter().zip(w).enumerate() {
+        let mirror = 2.0 * center - xi;
+        let j = ((mirror - x[0]) / spacing).round();
+        if j >= 0.0 && (j as usize) < x.len() && (x[j as usize] - mirror).abs() < 1e-9 * spacing {
+            let d = 0.5 * (q[i] - q[j as usize]);
+            odd += wi * d * d;
+        }
+    }
+    let stick_half_width = match (stick.first(), stick.last()) {
+        (Some(lo), Some(hi)) => 0.5 * (hi - lo + spacing),
+        _ => 0.0,
+    };
+    TractionError {
+        tangential_load,
+        l2: (num / den).sqrt(),
+        max: max / mp0,
+        stick_half_width,
+        asymmetry: (odd / den).sqrt(),
+    }
+}
+
 /// A flat rigid punch of half-width b pressed by P into a half-plane, or
 /// two half-planes of one material touching on |x − x₀| ≤ b (the pressure
 /// does not depend on the moduli): p(x) = P / (π √(b² − (x − x₀)²))
@@ -163,6 +271,35 @@ mod tests {
             .sum();
         assert!((total / h.load - 1.0).abs() < 1e-6, "{total}");
         assert_eq!(h.pressure(hi + 1e-9), 0.0);
+    }
+
+    /// ∫q dx = Q (Johnson §7.2): the traction's sign and scale; c/a from
+    /// Q/(μP), and full stick (c = a) at Q = 0 with q ≡ 0.
+    #[test]
+    fn cattaneo_mindlin_traction_carries_the_tangential_load() {
+        let cm = CattaneoMindlin {
+            hertz: Hertz {
+                modulus: 41_271.0,
+                load: 60.0,
+                radius: 0.53,
+                center: 0.5,
+            },
+            friction: 0.3,
+        };
+        let a = cm.hertz.half_width();
+        for q_load in [-9.0, 4.5, 17.0] {
+            let c = cm.stick_half_width(q_load);
+            let expected = a * (1.0 - q_load.abs() / 18.0f64).sqrt();
+            assert!((c / expected - 1.0).abs() < 1e-14);
+            let n = 400_000;
+            let dx = 2.0 * a / n as f64;
+            let total: f64 = (0..n)
+                .map(|k| cm.traction(0.5 - a + (k as f64 + 0.5) * dx, q_load) * dx)
+                .sum();
+            assert!((total / q_load - 1.0).abs() < 1e-5, "{q_load}: {total}");
+        }
+        assert_eq!(cm.stick_half_width(0.0), a);
+        assert_eq!(cm.traction(0.5, 0.0), 0.0);
     }
 
     #[test]

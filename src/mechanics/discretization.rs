@@ -80,7 +80,7 @@ impl Discretization {
             |_| None,
         )?;
         let mesh = Mesh::new(h);
-        let dofs = DofMap::with_hold(&mesh, scene.hold);
+        let dofs = DofMap::with_hold(&mesh, scene.hold).with_side_shift(scene.side_shift);
         let (a, mass) = if with_mass {
             let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.material);
             (a, Mass::OnStiffnessPattern(m))
@@ -89,7 +89,11 @@ impl Discretization {
             (a, Mass::Omitted)
         };
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
-        let f = assembly::load_vector(&dofs, &forces);
+        let mut f = assembly::load_vector(&dofs, &forces);
+        let shifted = assembly::side_shift_load(&mesh, &dofs, &scene.material);
+        for (fi, si) in f.iter_mut().zip(&shifted) {
+            *fi += si;
+        }
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
         let problem = if checked {

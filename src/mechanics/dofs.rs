@@ -6,8 +6,9 @@
 //! t_i = v'_2 − v''_2   (replaces v''_2),     s_i = v'_1 − v''_1   (replaces v''_1),
 //! ```
 //!
-//! so that v''_k = v'_k − (s_i, t_i)_k. Fixed values are zero, so elimination
-//! simply drops them.
+//! so that v''_k = v'_k − (s_i, t_i)_k. Fixed values are zero (the clamp,
+//! the paper's roller) or a scene's `side_shift` on the upper body's held
+//! sides, whose work on the free unknowns is then a load.
 
 use serde::{Deserialize, Serialize};
 
@@ -87,6 +88,8 @@ pub trait DofExpansion {
 pub struct DofMap {
     mesh: Mesh,
     hold: Hold,
+    /// u''_1 on the held sides (a scene's `side_shift`; 0: the paper's).
+    side_shift: f64,
     n: usize,
     contacts: Vec<ContactDofs>,
 }
@@ -131,8 +134,36 @@ impl DofMap {
         Self {
             mesh: mesh.clone(),
             hold,
+            side_shift: 0.0,
             n,
             contacts,
+        }
+    }
+
+    /// The same unknowns, with u''_1 = `shift` on the held sides instead
+    /// of 0: the held values are still eliminated (their work on the free
+    /// unknowns is a load, [`crate::mechanics::assembly::side_shift_load`]),
+    /// and [`DofMap::to_physical`] puts them back.
+    pub fn with_side_shift(mut self, shift: f64) -> Self {
+        self.side_shift = shift;
+        self
+    }
+
+    /// u''_1 prescribed on the held sides.
+    pub fn side_shift(&self) -> f64 {
+        self.side_shift
+    }
+
+    /// The prescribed value of component k of `node` if it is held (the
+    /// lower body's clamp 0, the upper body's sides `side_shift`), None if
+    /// it is an unknown or made of them.
+    pub fn held_value(&self, node: usize, k: usize) -> Option<f64> {
+        match self.dofs(node)[k] {
+            Dof::Fixed => Some(match self.mesh.locate(node).0 {
+                Body::Upper => self.side_shift,
+                Body::Lower => 0.0,
+            }),
+            _ => None,
         }
     }
 
@@ -205,8 +236,12 @@ impl DofMap {
     pub fn to_physical(&self, v: &[f64]) -> Vec<[f64; 2]> {
         (0..self.mesh.num_nodes())
             .map(|node| {
+                let held = match self.mesh.locate(node).0 {
+                    Body::Upper => self.side_shift,
+                    Body::Lower => 0.0,
+                };
                 self.dofs(node).map(|d| match d {
-                    Dof::Fixed => 0.0,
+                    Dof::Fixed => held,
                     Dof::Slot(s) => v[s],
                     Dof::Relative { base, own } => v[base] - v[own],
                 })

@@ -42,7 +42,21 @@ pub struct Scene {
     /// How the upper body is held sideways (the paper: a roller on x = 1).
     #[serde(skip_serializing_if = "is_roller")]
     pub hold: crate::mechanics::dofs::Hold,
+    /// The horizontal displacement u''_1 prescribed on the held sides (the
+    /// paper: 0, a roller in place). Nonzero, it shears the upper body over
+    /// the lower one, as Cattaneo–Mindlin's tangential load does: the
+    /// tangential force Q it transmits is a reaction, read from the answer.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub side_shift: f64,
 }
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// The largest |side_shift|: the model is small-strain on bodies of unit
+/// size, and 1e-2 is already a strain of a percent over them.
+pub const MAX_SIDE_SHIFT: f64 = 1e-2;
 
 fn is_roller(hold: &crate::mechanics::dofs::Hold) -> bool {
     *hold == crate::mechanics::dofs::Hold::Roller
@@ -194,6 +208,7 @@ impl Scene {
             levels: default_levels(),
             gap: None,
             hold: crate::mechanics::dofs::Hold::Roller,
+            side_shift: 0.0,
         })
     }
 
@@ -330,6 +345,15 @@ impl Scene {
         }
         if let Some(gap) = &self.gap {
             gap.validate()?;
+        }
+        if !(self.side_shift.is_finite() && self.side_shift.abs() <= MAX_SIDE_SHIFT) {
+            return Err(invalid(
+                "side_shift",
+                self.side_shift,
+                &format!(
+                    "the held sides' prescribed u''_1 must be finite and at most {MAX_SIDE_SHIFT:e} in size (small strain on bodies of size 1; the paper: 0)"
+                ),
+            ));
         }
         let total = self.total_vertical_load();
         if !total.is_finite() {
@@ -503,6 +527,8 @@ mod tests {
         bad(|s| s.loads[0].to = 1.5, "loads[0].to");
         bad(|s| s.loads[0].from = 0.5, "loads[0].to");
         bad(|s| s.levels.reverse(), "levels");
+        bad(|s| s.side_shift = f64::NAN, "side_shift");
+        bad(|s| s.side_shift = -0.5, "side_shift");
         bad(|s| s.name = "a\u{0}b".into(), "name");
         bad(|s| s.name = "two\nlines".into(), "name");
         bad(|s| s.name = "abc\u{202E}fed".into(), "name");

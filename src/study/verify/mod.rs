@@ -5,7 +5,10 @@
 //!
 //! - **hertz** (`scenes/hertz.toml`): Hertz's line contact, a = 1/32;
 //! - **flat punch** (`scenes/flat_punch.toml`): Sadowsky's flat punch,
-//!   b = 1/32, compared away from its singular edges (|x − x₀| ≤ 0.8 b).
+//!   b = 1/32, compared away from its singular edges (|x − x₀| ≤ 0.8 b);
+//! - **cattaneo_mindlin** (`scenes/cattaneo_mindlin.toml`): Hertz's contact
+//!   sheared by its held sides, the stick half-width c and the tangential
+//!   traction against Cattaneo–Mindlin's at the computed force Q.
 //!
 //! The ladder runs h = a/4 … a/32 (1/128 … 1/1024; quick: 1/64, 1/128).
 //! Each solver climbs it while its answers certify and its last two times
@@ -22,7 +25,9 @@ use contactlab_solvers::{Law, Status};
 use serde::Serialize;
 
 use crate::formats::scene_file;
-use crate::mechanics::closed_forms::{FlatPunch, Hertz, effective_modulus, pressure_error};
+use crate::mechanics::closed_forms::{
+    CattaneoMindlin, FlatPunch, Hertz, effective_modulus, pressure_error, traction_error,
+};
 use crate::mechanics::contact_zone::ProfileRow;
 use crate::mechanics::gap::Gap;
 use crate::mechanics::mesh_size::MeshSize;
@@ -37,11 +42,15 @@ pub const STUDY: &str = "verify";
 
 /// The classical scenes, as committed in `scenes/`: what `verify` runs is
 /// what a user reads there.
-pub const SCENES: [(&str, &str); 2] = [
+pub const SCENES: [(&str, &str); 3] = [
     ("hertz", include_str!("../../../scenes/hertz.toml")),
     (
         "flat_punch",
         include_str!("../../../scenes/flat_punch.toml"),
+    ),
+    (
+        "cattaneo_mindlin",
+        include_str!("../../../scenes/cattaneo_mindlin.toml"),
     ),
 ];
 
@@ -50,21 +59,34 @@ pub const SCENES: [(&str, &str); 2] = [
 pub enum ClosedForm {
     Hertz(Hertz),
     FlatPunch(FlatPunch),
+    /// Hertz's pressure, and the traction of a sheared contact.
+    CattaneoMindlin(CattaneoMindlin),
 }
 
 impl ClosedForm {
-    /// The closed form of `scene`: its gap's parabola (Hertz) or the flat
-    /// stretch of its gap table (a punch), its material's E*, and its load.
+    /// The closed form of `scene`: its gap's parabola (Hertz; sheared by
+    /// its sides with friction, Cattaneo–Mindlin) or the flat stretch of
+    /// its gap table (a punch), its material's E*, and its load.
     pub fn of(scene: &Scene) -> Result<Self> {
         let modulus = effective_modulus(&scene.material, &scene.material);
         let load = -scene.total_vertical_load();
         match &scene.gap {
-            Some(Gap::Parabola { center, radius }) => Ok(ClosedForm::Hertz(Hertz {
-                modulus,
-                load,
-                radius: *radius,
-                center: *center,
-            })),
+            Some(Gap::Parabola { center, radius }) => {
+                let hertz = Hertz {
+                    modulus,
+                    load,
+                    radius: *radius,
+                    center: *center,
+                };
+                Ok(if scene.side_shift != 0.0 && scene.friction > 0.0 {
+                    ClosedForm::CattaneoMindlin(CattaneoMindlin {
+                        hertz,
+                        friction: scene.friction,
+                    })
+                } else {
+                    ClosedForm::Hertz(hertz)
+                })
+            }
             Some(Gap::Table { x, d }) => {
                 let flat: Vec<f64> = x
                     .iter()
@@ -92,6 +114,7 @@ impl ClosedForm {
     pub fn half_width(&self) -> f64 {
         match self {
             ClosedForm::Hertz(h) => h.half_width(),
+            ClosedForm::CattaneoMindlin(c) => c.hertz.half_width(),
             ClosedForm::FlatPunch(p) => p.half_width,
         }
     }
@@ -99,6 +122,7 @@ impl ClosedForm {
     pub fn center(&self) -> f64 {
         match self {
             ClosedForm::Hertz(h) => h.center,
+            ClosedForm::CattaneoMindlin(c) => c.hertz.center,
             ClosedForm::FlatPunch(p) => p.center,
         }
     }
@@ -107,6 +131,7 @@ impl ClosedForm {
     pub fn pressure(&self, x: f64) -> f64 {
         match self {
             ClosedForm::Hertz(h) => h.pressure(x),
+            ClosedForm::CattaneoMindlin(c) => c.hertz.pressure(x),
             ClosedForm::FlatPunch(p) => p.pressure(x),
         }
     }
@@ -116,6 +141,7 @@ impl ClosedForm {
     pub fn p0(&self) -> f64 {
         match self {
             ClosedForm::Hertz(h) => h.peak_pressure(),
+            ClosedForm::CattaneoMindlin(c) => c.hertz.peak_pressure(),
             ClosedForm::FlatPunch(p) => p.pressure(p.center),
         }
     }
@@ -125,7 +151,7 @@ impl ClosedForm {
     /// whose closed form is infinite at its edges.
     pub fn compared_within(&self) -> f64 {
         match self {
-            ClosedForm::Hertz(_) => f64::INFINITY,
+            ClosedForm::Hertz(_) | ClosedForm::CattaneoMindlin(_) => f64::INFINITY,
             ClosedForm::FlatPunch(p) => 0.8 * p.half_width,
         }
     }
@@ -134,6 +160,7 @@ impl ClosedForm {
     pub fn radius(&self) -> Option<f64> {
         match self {
             ClosedForm::Hertz(h) => Some(h.radius),
+            ClosedForm::CattaneoMindlin(c) => Some(c.hertz.radius),
             ClosedForm::FlatPunch(_) => None,
         }
     }
@@ -141,6 +168,9 @@ impl ClosedForm {
     pub fn source(&self) -> &'static str {
         match self {
             ClosedForm::Hertz(_) => "Hertz line contact, Johnson (1985) §4.3",
+            ClosedForm::CattaneoMindlin(_) => {
+                "Cattaneo (1938), Mindlin (1949), Johnson (1985) §7.2"
+            }
             ClosedForm::FlatPunch(_) => "flat punch, Sadowsky (1928), Johnson (1985) §2.8",
         }
     }
@@ -223,7 +253,20 @@ pub struct VerifyRow {
     pub load: f64,
     pub radius: Option<f64>,
     pub friction: f64,
-    pub tangential_load: f64,
+    /// The tangential force Q the contact carries, Σ wᵢ qᵢ of the answer
+    /// (Cattaneo–Mindlin's closed form is taken at it; 0 elsewhere).
+    pub tangential_load: Option<f64>,
+    /// Cattaneo–Mindlin: the computed stick half-width c (nodes whose
+    /// friction margin exceeds 1e-3 μp₀), and c = a √(1 − Q/(μP)).
+    pub stick_half_width: Option<f64>,
+    pub stick_half_width_exact: Option<f64>,
+    /// Cattaneo–Mindlin: ‖q_h − q‖/‖q‖ in L2 over Γ_K, and max |q_h − q|/(μp₀).
+    pub traction_l2_error: Option<f64>,
+    pub traction_max_error: Option<f64>,
+    /// Cattaneo–Mindlin: the odd part of the computed traction about x₀
+    /// over ‖q‖, which the (even) closed form lacks: what the finite bodies
+    /// add to its error, apart from the discretization.
+    pub traction_asymmetry: Option<f64>,
     pub detail: String,
 }
 
@@ -321,7 +364,12 @@ impl Study for VerifyStudy {
                         load: -s.total_vertical_load(),
                         radius: closed.radius(),
                         friction: s.friction,
-                        tangential_load: 0.0,
+                        tangential_load: None,
+                        stick_half_width: None,
+                        stick_half_width_exact: None,
+                        traction_l2_error: None,
+                        traction_max_error: None,
+                        traction_asymmetry: None,
                         detail: String::new(),
                     };
                     if let Some(why) = stopped {
@@ -364,9 +412,19 @@ impl Study for VerifyStudy {
                         row.max_error = Some(err.max);
                         row.half_width = Some(err.half_width);
                         row.p0 = Some(match closed {
-                            ClosedForm::Hertz(_) => err.peak,
+                            ClosedForm::Hertz(_) | ClosedForm::CattaneoMindlin(_) => err.peak,
                             ClosedForm::FlatPunch(_) => err.at_center,
                         });
+                        if let ClosedForm::CattaneoMindlin(cm) = &closed {
+                            let t = traction_error(&x, &w, &s_.pressure, &s_.friction_traction, cm);
+                            row.tangential_load = Some(t.tangential_load);
+                            row.stick_half_width = Some(t.stick_half_width);
+                            row.stick_half_width_exact =
+                                Some(cm.stick_half_width(t.tangential_load));
+                            row.traction_l2_error = Some(t.l2);
+                            row.traction_max_error = Some(t.max);
+                            row.traction_asymmetry = Some(t.asymmetry);
+                        }
                         let coarser = rows.iter().rev().find(|r: &&VerifyRow| {
                             r.scene == name && r.solver == e.name && r.h.level() + 1 == h.level()
                         });

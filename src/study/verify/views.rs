@@ -57,6 +57,12 @@ pub fn charts(
                     .colored(k),
             );
         }
+        if let ClosedForm::CattaneoMindlin(cm) = &closed {
+            out.push((
+                format!("verify_{name}_traction"),
+                traction_chart(name, cm, rows, profiles),
+            ));
+        }
         out.push((
             format!("verify_{name}_pressure"),
             Chart::new(
@@ -107,6 +113,70 @@ pub fn charts(
     Ok(out)
 }
 
+/// Cattaneo–Mindlin: the tangential traction of `PROFILE_SOLVER` at each
+/// mesh over the closed form at the Q of its finest certified answer.
+fn traction_chart(
+    name: &str,
+    cm: &crate::mechanics::closed_forms::CattaneoMindlin,
+    rows: &[VerifyRow],
+    profiles: &[(String, Vec<ProfileRow>)],
+) -> Chart {
+    let (c, a) = (cm.hertz.center, cm.hertz.half_width());
+    let q_load = rows
+        .iter()
+        .rev()
+        .filter(|r| r.scene == name && r.solver == PROFILE_SOLVER && r.status.is_converged())
+        .find_map(|r| r.tangential_load);
+    let mut series = Vec::new();
+    if let Some(q_load) = q_load {
+        let samples = 800;
+        let exact: Vec<(f64, f64)> = (0..=samples)
+            .map(|k| c - 1.5 * a + 3.0 * a * k as f64 / samples as f64)
+            .map(|x| (x, cm.traction(x, q_load)))
+            .collect();
+        series.push(
+            Series::line(
+                format!("closed form at Q = {q_load:.4} (Cattaneo–Mindlin)"),
+                exact,
+            )
+            .black(),
+        );
+    }
+    for (k, (path, profile)) in profiles
+        .iter()
+        .filter(|(p, _)| {
+            p.starts_with(&format!("profiles/{name}_h"))
+                && p.ends_with(&format!("_{PROFILE_SOLVER}.csv"))
+        })
+        .enumerate()
+    {
+        let h = path
+            .trim_start_matches(&format!("profiles/{name}_h"))
+            .split('_')
+            .next()
+            .unwrap_or("?")
+            .to_string();
+        let points: Vec<(f64, f64)> = profile
+            .iter()
+            .filter(|r| (r.x - c).abs() <= 1.5 * a)
+            .map(|r| (r.x, r.friction_traction))
+            .collect();
+        series.push(
+            Series::line(format!("{PROFILE_SOLVER}, h = 1/{h}"), points)
+                .with_markers()
+                .colored(k),
+        );
+    }
+    Chart::new(
+        format!("{name}: tangential traction against the closed form"),
+        "x",
+        "traction q",
+        false,
+        false,
+        series,
+    )
+}
+
 fn opt(x: Option<f64>) -> String {
     x.map_or("–".to_string(), |v| format!("{v:.2e}"))
 }
@@ -115,7 +185,7 @@ fn opt(x: Option<f64>) -> String {
 pub fn section(found: &Verified, charts: &[String]) -> String {
     let mut md = String::new();
     md.push_str(&format!(
-        "Each classical scene of `scenes/` at h = {}, every registered solver at its defaults, the Coulomb law (𝓕 = 0: frictionless), a time limit of {:.0} s a solve. Errors are those of the nodal pressures against the half-plane closed form: L2 relative over Γ_K (the punch: over |x − x₀| ≤ 0.8 b, away from its singular edges), max over p₀. `order` is log₂ of the L2 error's fall from the next coarser mesh. The bodies are 16 half-widths wide on either side and deep: the closed forms, for half-planes, differ from them by a finite-size error, the floor the errors fall towards.\n\n",
+        "Each classical scene of `scenes/` at h = {}, every registered solver at its defaults, the Coulomb law (frictionless, 𝓕 = 0, but for Cattaneo–Mindlin's 0.3), a time limit of {:.0} s a solve. Errors are those of the nodal pressures against the half-plane closed form: L2 relative over Γ_K (the punch: over |x − x₀| ≤ 0.8 b, away from its singular edges), max over p₀. `order` is log₂ of the L2 error's fall from the next coarser mesh. The bodies are 16 half-widths wide on either side and deep: the closed forms, for half-planes, differ from them by a finite-size error, the floor the errors fall towards.\n\n",
         found.spec.meshes.iter().map(|h| h.to_string()).collect::<Vec<_>>().join(", "),
         found.spec.time_limit
     ));
@@ -139,6 +209,29 @@ pub fn section(found: &Verified, charts: &[String]) -> String {
             ));
         }
         md.push('\n');
+        if found
+            .rows
+            .iter()
+            .any(|r| r.scene == name && r.tangential_load.is_some())
+        {
+            md.push_str("The tangential side: the force Q the contact carries, the stick half-width c against a √(1 − Q/(μP)), the traction's errors against Cattaneo–Mindlin's at that Q (L2 relative over Γ_K, max over μp₀), and its odd part about x₀ over ‖q‖ (the closed form is even: this part is what the finite bodies, sheared from their sides, add, apart from the discretization).\n\n| h | solver | Q | Q/(μP) | c (exact) | traction L2 error | traction max error | odd part |\n|---|---|---|---|---|---|---|---|\n");
+            for r in found.rows.iter().filter(|r| r.scene == name) {
+                let Some(q) = r.tangential_load else { continue };
+                md.push_str(&format!(
+                    "| {} | {} | {:.4} | {:.4} | {} ({}) | {} | {} | {} |\n",
+                    r.h,
+                    r.solver,
+                    q,
+                    q.abs() / (r.friction * r.load),
+                    opt(r.stick_half_width),
+                    opt(r.stick_half_width_exact),
+                    opt(r.traction_l2_error),
+                    opt(r.traction_max_error),
+                    opt(r.traction_asymmetry),
+                ));
+            }
+            md.push('\n');
+        }
         for c in charts
             .iter()
             .filter(|c| c.starts_with(&format!("verify_{name}_")))
@@ -147,6 +240,8 @@ pub fn section(found: &Verified, charts: &[String]) -> String {
                 c,
                 if c.ends_with("_pressure") {
                     "The computed contact pressure at each mesh over the closed form: the profile should close on it as h falls."
+                } else if c.ends_with("_traction") {
+                    "The computed tangential traction at each mesh over Cattaneo–Mindlin's at the finest mesh's Q: the stick zone in the middle, μp in the slip zones at its sides."
                 } else {
                     "The L2 error of each solver's certified pressure against h: it falls with h until the finite-size floor."
                 },
