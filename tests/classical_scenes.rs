@@ -13,14 +13,34 @@ use contactlab::certificate::certify_solution;
 use contactlab::mechanics::closed_forms::{pressure_error, traction_error};
 use contactlab::mechanics::discretization::Discretization;
 use contactlab::mechanics::mesh_size::MeshSize;
+use contactlab::mechanics::scene::Scene;
 use contactlab::settings::Settings;
-use contactlab::solve::{solve_scene, solver_entry};
+use contactlab::solve::{Solved, solve_scene, solver_entry};
 use contactlab::solvers::registry;
+use contactlab::solvers::registry::Entry;
 use contactlab::solvers::{ContactProblem, Friction, Mass, Silent, Solution, Status};
 use contactlab::study::verify::{ClosedForm, scene};
 
 fn h(k: u32) -> MeshSize {
     MeshSize::from_level(k).unwrap()
+}
+
+/// The Coulomb problem of scene `s` solved by `entry` at its defaults, as
+/// `contactlab solve` runs it (continuation, certificate).
+fn solve_coulomb(s: &Scene, entry: &'static Entry) -> Solved {
+    solve_scene(
+        s,
+        Friction::Coulomb,
+        entry,
+        &Settings::default(),
+        &mut Silent,
+    )
+    .unwrap()
+}
+
+/// The trapezoid weights of Γ_K's contact nodes.
+fn weights(d: &Discretization) -> Vec<f64> {
+    d.problem.contacts().iter().map(|c| c.weight).collect()
 }
 
 /// A solve of a built problem by a registered solver at its defaults, as
@@ -97,14 +117,7 @@ fn the_certificate_holds_an_answer_to_the_gap() {
     let mut hertz = scene("hertz").unwrap();
     hertz.set_finest(h(5));
     let entry = solver_entry("newton-coulomb").unwrap();
-    let solved = solve_scene(
-        &hertz,
-        Friction::Coulomb,
-        entry,
-        &Settings::default(),
-        &mut Silent,
-    )
-    .unwrap();
+    let solved = solve_coulomb(&hertz, entry);
     assert_eq!(
         solved.outcome.status,
         Status::Converged,
@@ -145,23 +158,10 @@ fn hertz_pressure_converges_to_the_closed_form() {
         let mut pressures = Vec::new();
         for name in ["newton-coulomb", "tnnmg"] {
             let entry = solver_entry(name).unwrap();
-            let solved = solve_scene(
-                &s,
-                Friction::Coulomb,
-                entry,
-                &Settings::default(),
-                &mut Silent,
-            )
-            .unwrap();
+            let solved = solve_coulomb(&s, entry);
             assert_eq!(solved.outcome.status, Status::Converged, "{name}");
             let x = solved.finest.contact_x();
-            let w: Vec<f64> = solved
-                .finest
-                .problem
-                .contacts()
-                .iter()
-                .map(|c| c.weight)
-                .collect();
+            let w = weights(&solved.finest);
             let p = solved.outcome.solution.pressure.clone();
             let e = pressure_error(
                 &x,
@@ -198,15 +198,8 @@ fn a_side_shift_without_friction_moves_the_upper_body_rigidly() {
     s.set_finest(h(5));
     let delta = 3e-4;
     let entry = solver_entry("newton-coulomb").unwrap();
-    let solve = |s: &contactlab::mechanics::scene::Scene| {
-        let solved = solve_scene(
-            s,
-            Friction::Coulomb,
-            entry,
-            &Settings::default(),
-            &mut Silent,
-        )
-        .unwrap();
+    let solve = |s: &Scene| {
+        let solved = solve_coulomb(s, entry);
         assert_eq!(
             solved.outcome.status,
             Status::Converged,
@@ -267,23 +260,10 @@ fn cattaneo_mindlin_sticks_where_the_closed_form_says() {
     let mut tractions = Vec::new();
     for name in ["newton-coulomb", "tnnmg"] {
         let entry = solver_entry(name).unwrap();
-        let solved = solve_scene(
-            &s,
-            Friction::Coulomb,
-            entry,
-            &Settings::default(),
-            &mut Silent,
-        )
-        .unwrap();
+        let solved = solve_coulomb(&s, entry);
         assert_eq!(solved.outcome.status, Status::Converged, "{name}");
         let x = solved.finest.contact_x();
-        let w: Vec<f64> = solved
-            .finest
-            .problem
-            .contacts()
-            .iter()
-            .map(|c| c.weight)
-            .collect();
+        let w = weights(&solved.finest);
         let sol = &solved.outcome.solution;
         let t = traction_error(&x, &w, &sol.pressure, &sol.friction_traction, &cm);
         let ratio = t.tangential_load.abs() / (cm.friction * cm.hertz.load);
@@ -315,14 +295,7 @@ fn every_solver_certifies_the_classical_scenes() {
         s.set_finest(h(6));
         let mut first: Option<Vec<f64>> = None;
         for entry in registry::solvers() {
-            let solved = solve_scene(
-                &s,
-                Friction::Coulomb,
-                entry,
-                &Settings::default(),
-                &mut Silent,
-            )
-            .unwrap();
+            let solved = solve_coulomb(&s, entry);
             if name == "cattaneo_mindlin" && entry.name == "relaxation" {
                 assert_ne!(solved.outcome.status, Status::Converged);
                 continue;

@@ -159,11 +159,17 @@ impl DofMap {
     /// it is an unknown or made of them.
     pub fn held_value(&self, node: usize, k: usize) -> Option<f64> {
         match self.dofs(node)[k] {
-            Dof::Fixed => Some(match self.mesh.locate(node).0 {
-                Body::Upper => self.side_shift,
-                Body::Lower => 0.0,
-            }),
+            Dof::Fixed => Some(self.held(self.mesh.locate(node).0)),
             _ => None,
+        }
+    }
+
+    /// The value of a held component of `body`: the clamp's 0 below, the
+    /// sides' `side_shift` above (only u''_1 is held there).
+    fn held(&self, body: Body) -> f64 {
+        match body {
+            Body::Upper => self.side_shift,
+            Body::Lower => 0.0,
         }
     }
 
@@ -236,10 +242,7 @@ impl DofMap {
     pub fn to_physical(&self, v: &[f64]) -> Vec<[f64; 2]> {
         (0..self.mesh.num_nodes())
             .map(|node| {
-                let held = match self.mesh.locate(node).0 {
-                    Body::Upper => self.side_shift,
-                    Body::Lower => 0.0,
-                };
+                let held = self.held(self.mesh.locate(node).0);
                 self.dofs(node).map(|d| match d {
                     Dof::Fixed => held,
                     Dof::Slot(s) => v[s],

@@ -32,31 +32,7 @@ pub fn charts(
             .filter(|(_, p)| p.is_finite() && *p <= 4.0 * closed.p0())
             .collect();
         series.push(Series::line(format!("closed form ({})", closed.source()), exact).black());
-        for (k, (path, profile)) in profiles
-            .iter()
-            .filter(|(p, _)| {
-                p.starts_with(&format!("profiles/{name}_h"))
-                    && p.ends_with(&format!("_{PROFILE_SOLVER}.csv"))
-            })
-            .enumerate()
-        {
-            let h = path
-                .trim_start_matches(&format!("profiles/{name}_h"))
-                .split('_')
-                .next()
-                .unwrap_or("?")
-                .to_string();
-            let points: Vec<(f64, f64)> = profile
-                .iter()
-                .filter(|r| window(r.x))
-                .map(|r| (r.x, r.pressure))
-                .collect();
-            series.push(
-                Series::line(format!("{PROFILE_SOLVER}, h = 1/{h}"), points)
-                    .with_markers()
-                    .colored(k),
-            );
-        }
+        series.extend(profile_series(name, profiles, window, |r| r.pressure));
         if let ClosedForm::CattaneoMindlin(cm) = &closed {
             out.push((
                 format!("verify_{name}_traction"),
@@ -142,31 +118,12 @@ fn traction_chart(
             .black(),
         );
     }
-    for (k, (path, profile)) in profiles
-        .iter()
-        .filter(|(p, _)| {
-            p.starts_with(&format!("profiles/{name}_h"))
-                && p.ends_with(&format!("_{PROFILE_SOLVER}.csv"))
-        })
-        .enumerate()
-    {
-        let h = path
-            .trim_start_matches(&format!("profiles/{name}_h"))
-            .split('_')
-            .next()
-            .unwrap_or("?")
-            .to_string();
-        let points: Vec<(f64, f64)> = profile
-            .iter()
-            .filter(|r| (r.x - c).abs() <= 1.5 * a)
-            .map(|r| (r.x, r.friction_traction))
-            .collect();
-        series.push(
-            Series::line(format!("{PROFILE_SOLVER}, h = 1/{h}"), points)
-                .with_markers()
-                .colored(k),
-        );
-    }
+    series.extend(profile_series(
+        name,
+        profiles,
+        |x| (x - c).abs() <= 1.5 * a,
+        |r| r.friction_traction,
+    ));
     Chart::new(
         format!("{name}: tangential traction against the closed form"),
         "x",
@@ -175,6 +132,38 @@ fn traction_chart(
         false,
         series,
     )
+}
+
+/// One line per mesh of `PROFILE_SOLVER`'s profiles of scene `name`: the
+/// column `value` at the nodes whose x is in `window`.
+fn profile_series(
+    name: &str,
+    profiles: &[(String, Vec<ProfileRow>)],
+    window: impl Fn(f64) -> bool,
+    value: impl Fn(&ProfileRow) -> f64,
+) -> Vec<Series> {
+    let prefix = format!("profiles/{name}_h");
+    let suffix = format!("_{PROFILE_SOLVER}.csv");
+    profiles
+        .iter()
+        .filter(|(p, _)| p.starts_with(&prefix) && p.ends_with(&suffix))
+        .enumerate()
+        .map(|(k, (path, profile))| {
+            let h = path
+                .trim_start_matches(&prefix)
+                .split('_')
+                .next()
+                .unwrap_or("?");
+            let points: Vec<(f64, f64)> = profile
+                .iter()
+                .filter(|r| window(r.x))
+                .map(|r| (r.x, value(r)))
+                .collect();
+            Series::line(format!("{PROFILE_SOLVER}, h = 1/{h}"), points)
+                .with_markers()
+                .colored(k)
+        })
+        .collect()
 }
 
 fn opt(x: Option<f64>) -> String {
