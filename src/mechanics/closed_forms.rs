@@ -91,8 +91,10 @@ impl CattaneoMindlin {
 pub struct TractionError {
     /// The tangential force the contact carries, Q = Σ wᵢ qᵢ.
     pub tangential_load: f64,
-    /// ‖q_h − q‖ / ‖q‖ in L2 over Γ_K, at the computed Q.
-    pub l2: f64,
+    /// ‖q_h − q‖ / ‖q‖ in L2 over Γ_K, at the computed Q (None when the
+    /// computed Q is 0, where the closed form is 0 and no relative error
+    /// is defined: an answer that failed).
+    pub l2: Option<f64>,
     /// max |q_h − q| over the nodes, over μp₀.
     pub max: f64,
     /// The computed stick half-width: half the span from the half-node
@@ -105,8 +107,9 @@ pub struct TractionError {
     /// odd about x₀, which the closed form (even) does not have. It
     /// measures what the finite bodies add (the force enters at their
     /// sides, above the contact, and the two are held differently), apart
-    /// from the discretization; over the nodes whose mirror image is a node.
-    pub asymmetry: f64,
+    /// from the discretization; over the nodes whose mirror image is a node
+    /// (None as for `l2`).
+    pub asymmetry: Option<f64>,
 }
 
 /// The error of the nodal tractions `q` (pressures `p`, weights `w`, at
@@ -150,10 +153,10 @@ pub fn traction_error(
     };
     TractionError {
         tangential_load,
-        l2: (num / den).sqrt(),
+        l2: (den > 0.0).then(|| (num / den).sqrt()),
         max: max / mp0,
         stick_half_width,
-        asymmetry: (odd / den).sqrt(),
+        asymmetry: (den > 0.0).then(|| (odd / den).sqrt()),
     }
 }
 
@@ -300,6 +303,52 @@ mod tests {
         }
         assert_eq!(cm.stick_half_width(0.0), a);
         assert_eq!(cm.traction(0.5, 0.0), 0.0);
+    }
+
+    /// An answer carrying no tangential force (a failed one: all q = 0) has
+    /// no relative traction error, not a NaN in verification.csv; a
+    /// traction even about x₀ has no odd part, and one with an odd part does.
+    #[test]
+    fn a_zero_traction_has_no_relative_error_and_an_odd_part_is_found() {
+        let cm = CattaneoMindlin {
+            hertz: Hertz {
+                modulus: 41_271.0,
+                load: 60.0,
+                radius: 0.5275732959994149,
+                center: 0.5,
+            },
+            friction: 0.3,
+        };
+        let n = 257;
+        let h = 1.0 / (n - 1) as f64;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 * h).collect();
+        let w: Vec<f64> = (0..n)
+            .map(|i| if i == 0 || i == n - 1 { h / 2.0 } else { h })
+            .collect();
+        let p: Vec<f64> = x.iter().map(|&x| cm.hertz.pressure(x)).collect();
+        let zero = traction_error(&x, &w, &p, &vec![0.0; n], &cm);
+        assert_eq!(zero.tangential_load, 0.0);
+        assert_eq!((zero.l2, zero.asymmetry), (None, None));
+        let q: Vec<f64> = x.iter().map(|&x| cm.traction(x, 8.0)).collect();
+        let even = traction_error(&x, &w, &p, &q, &cm);
+        assert_eq!(even.asymmetry, Some(0.0), "{even:?}");
+        // An odd part of 1% of μp₀ on |x − ½| < a: its share of ‖q‖ is
+        // what the mirror finds, not 0.
+        let a = cm.hertz.half_width();
+        let mp0 = cm.friction * cm.hertz.peak_pressure();
+        let tilted: Vec<f64> = x
+            .iter()
+            .zip(&q)
+            .map(|(&x, &q)| {
+                q + if (x - 0.5).abs() < a {
+                    0.01 * mp0 * (x - 0.5) / a
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let odd = traction_error(&x, &w, &p, &tilted, &cm).asymmetry.unwrap();
+        assert!(odd > 1e-3, "{odd}");
     }
 
     #[test]

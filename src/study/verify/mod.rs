@@ -421,9 +421,9 @@ impl Study for VerifyStudy {
                             row.stick_half_width = Some(t.stick_half_width);
                             row.stick_half_width_exact =
                                 Some(cm.stick_half_width(t.tangential_load));
-                            row.traction_l2_error = Some(t.l2);
+                            row.traction_l2_error = t.l2;
                             row.traction_max_error = Some(t.max);
-                            row.traction_asymmetry = Some(t.asymmetry);
+                            row.traction_asymmetry = t.asymmetry;
                         }
                         let coarser = rows.iter().rev().find(|r: &&VerifyRow| {
                             r.scene == name && r.solver == e.name && r.h.level() + 1 == h.level()
