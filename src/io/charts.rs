@@ -245,6 +245,12 @@ const LEGEND_WIDTH: u32 = 260;
 /// Key points of a log axis: every decade in range (with 2 and 5 between
 /// when the range spans less than two decades).
 fn decades(lo: f64, hi: f64) -> Vec<f64> {
+    // A log axis with nothing on it (no positive finite value: a chart
+    // whose series are all empty) has no decades; log10(0) as an i32 is
+    // i32::MIN, and the range from it asked for 17 GB.
+    if !(lo > 0.0 && lo.is_finite() && hi.is_finite() && hi >= lo) {
+        return Vec::new();
+    }
     let (a, b) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
     let mut out: Vec<f64> = (a..=b).map(|k| 10f64.powi(k)).collect();
     if hi / lo < 100.0 {

@@ -206,3 +206,22 @@ fn a_long_legend_lists_the_failed_points_once() {
     );
     assert_eq!(legend_entries(&few), 2);
 }
+
+#[test]
+fn a_log_chart_with_nothing_positive_on_it_renders_without_decades() {
+    // A verify chart whose solvers all failed has only empty series, or a
+    // zero error; its log axis then has no positive value. Before the
+    // guard, log10(0) as an i32 (i32::MIN) made `decades` ask for 17 GB.
+    assert!(decades(0.0, 1.0).is_empty());
+    assert!(decades(f64::NAN, 1.0).is_empty());
+    assert!(decades(1.0, f64::INFINITY).is_empty());
+    assert!(decades(2.0, 1.0).is_empty());
+    for series in [
+        vec![Series::line("empty", vec![])],
+        vec![Series::line("zero", vec![(1.0, 0.0), (2.0, 0.0)])],
+    ] {
+        let chart = Chart::new("Nothing", "h", "error", true, true, series);
+        let svg = chart.to_svg().unwrap();
+        assert!(svg.contains("Nothing"));
+    }
+}
