@@ -159,4 +159,13 @@ pub trait Solver {
     fn poses_gaps(&self) -> bool {
         false
     }
+
+    /// Whether the solver poses a slip offset itself (friction on s_i −
+    /// σ_i, [`ContactProblem::slip_offset`]); one that does not is handed
+    /// the problem in the unknowns with s̃ = s − σ, whose load f − A D
+    /// strains the layer of elements at Γ_K by σ. By default the harness
+    /// does that.
+    fn poses_slip_offsets(&self) -> bool {
+        false
+    }
 }

@@ -346,6 +346,11 @@ impl Solver for ConicSolver {
         true
     }
 
+    /// The slip offset is the right-hand side of the cone's rows on s_i.
+    fn poses_slip_offsets(&self) -> bool {
+        true
+    }
+
     /// All three tolerances a tenth of the tightest of them, down to
     /// [`TIGHTEST_TOLERANCE`]. A tolerance looser than the default was
     /// chosen (a work-precision point, a quick look) and is kept.

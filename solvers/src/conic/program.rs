@@ -107,8 +107,9 @@ impl Program<'_> {
                 .map(|(c, g)| c.weight * g / force),
         );
         // Rows 0..m: t_i + slack = d_i (slack ≥ 0). SOC: rows m+2i, m+2i+1:
-        // −(z_i, s_i) + slack = 0 in SOC(2). QP: s_i − z_i + slack = 0 and
-        // −s_i − z_i + slack = 0, slacks ≥ 0.
+        // −(z_i, s_i) + slack = (0, −σ_i) in SOC(2), the slack (z_i, s_i −
+        // σ_i). QP: s_i − z_i + slack = σ_i and −s_i − z_i + slack = −σ_i,
+        // slacks ≥ 0 (z_i ≥ |s_i − σ_i|).
         let qp = settings.formulation == Formulation::Qp;
         let mut a_trip = Vec::with_capacity(5 * m);
         for (i, &(t, s)) in self.contact.iter().enumerate() {
@@ -132,6 +133,18 @@ impl Program<'_> {
         let mut b = vec![0.0; 3 * m];
         for (bi, d) in b.iter_mut().zip(problem.gap()) {
             *bi = d / displacement;
+        }
+        // The slip offset likewise: its shift of the load strains the
+        // layer of elements at Γ_K, and Clarabel ended AlmostSolved on the
+        // paper's problem with σ = 1e-3 posed that way.
+        for (i, sigma) in problem.slip_offset().iter().enumerate() {
+            let sigma = sigma / displacement;
+            if qp {
+                b[m + 2 * i] = sigma;
+                b[m + 2 * i + 1] = -sigma;
+            } else {
+                b[m + 2 * i + 1] = -sigma;
+            }
         }
         let mut cones = Vec::with_capacity(m + 1);
         if m > 0 {

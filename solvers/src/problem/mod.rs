@@ -5,7 +5,7 @@
 //! given-friction (Tresca) problem
 //!
 //! ```text
-//! minimize  ½ vᵀA v − fᵀv + Σ_i w_i g_i |s_i|   subject to  t_i ≤ d_i,
+//! minimize  ½ vᵀA v − fᵀv + Σ_i w_i g_i |s_i − σ_i|   subject to  t_i ≤ d_i,
 //! ```
 //!
 //! where at contact node i, `t_i = v'_2 − v''_2` is the jump [v] (the
@@ -13,7 +13,10 @@
 //! Γ_K is vertical, so t_i > 0 would move the lower body into the upper),
 //! `d_i ≥ 0` the initial gap between them (zero in the paper's scene:
 //! [`ContactProblem::gap`]), and
-//! `s_i = v'_1 − v''_1` the slip, and `w_i` are the trapezoid weights of Γ_K.
+//! `s_i = v'_1 − v''_1` the slip, `σ_i` a prescribed slip offset (zero in
+//! the paper's scene: [`ContactProblem::slip_offset`]; a body moved
+//! sideways by a rigid lift slips by s_i − σ_i), and `w_i` are the
+//! trapezoid weights of Γ_K.
 //! The Coulomb problem (paper (8)) is the same with g_i = 𝓕_i p_i, p_i the
 //! contact pressure of the solution itself. A is symmetric positive
 //! semidefinite: the upper body keeps a rigid vertical translation (the
@@ -81,6 +84,14 @@ pub enum ProblemError {
         "the largest gap, {size:e}, is beyond {MAX_GAP_IN_DISPLACEMENTS:e} times the problem's displacement scale U = F/K = {displacement:e}: the loads could not close it, and the problem in the closed unknowns could not be represented; give the gap in the units of the displacements"
     )]
     GapSize { size: f64, displacement: f64 },
+    #[error(
+        "contact node {node}: slip offset {value} must be finite (the slip s_i − σ_i is what friction acts on)"
+    )]
+    BadSlipOffset { node: usize, value: f64 },
+    #[error(
+        "the largest slip offset, {size:e}, is beyond {MAX_GAP_IN_DISPLACEMENTS:e} times the problem's displacement scale U = F/K = {displacement:e}: the problem in the shifted unknowns could not be represented; give the offset in the units of the displacements"
+    )]
+    SlipOffsetSize { size: f64, displacement: f64 },
     #[error("contact node {node}: friction coefficient {value} must be finite and ≥ 0")]
     BadCoefficient { node: usize, value: f64 },
     #[error("{what} holds a non-finite value (NaN or infinity)")]
@@ -244,7 +255,7 @@ impl From<CsrMatrix<f64>> for Mass {
 /// mesh.
 #[derive(Clone, Debug)]
 pub struct ContactProblem {
-    /// Shared between clones and with [`ContactProblem::closed_gap`]'s
+    /// Shared between clones and with [`ContactProblem::closed`]'s
     /// problem, which differs only in f.
     a: Arc<Csr>,
     f: Vec<f64>,
@@ -253,6 +264,8 @@ pub struct ContactProblem {
     rigid_modes: Arc<Vec<Vec<f64>>>,
     /// The initial gap d_i ≥ 0 per contact node (all zero: a closed start).
     gap: Vec<f64>,
+    /// The slip offset σ_i per contact node (all zero: the paper's).
+    slip_offset: Vec<f64>,
     scales: Scales,
     operator_id: u64,
     /// Prolongations of a nested hierarchy, coarse to fine, the last onto
@@ -375,6 +388,7 @@ impl ContactProblem {
             }
         }
         let gap = vec![0.0; contacts.len()];
+        let slip_offset = gap.clone();
         Ok(Self {
             a: Arc::new(a.shared()),
             f,
@@ -382,6 +396,7 @@ impl ContactProblem {
             contacts,
             rigid_modes: Arc::new(rigid_modes),
             gap,
+            slip_offset,
             scales,
             operator_id: NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed),
             prolongations: std::sync::Arc::from(Vec::new()),
@@ -519,7 +534,7 @@ impl ContactProblem {
                 value: gap[node],
             });
         }
-        // f̃ = f − A D must be representable (closed_gap).
+        // f̃ = f − A D must be representable (closed).
         let size = max_abs(&gap);
         if !(size * self.scales.stiffness).is_finite()
             || size > MAX_GAP_IN_DISPLACEMENTS * self.scales.displacement
@@ -545,6 +560,66 @@ impl ContactProblem {
         self.gap.iter().any(|&d| d != 0.0)
     }
 
+    /// The same problem with a slip offset σ_i at each contact node (in
+    /// contact order): friction acts on s_i − σ_i, the slip past it, in the
+    /// bound (paper (7)) and in the objective Σ w_i g_i |s_i − σ_i|. This is
+    /// how a body moved sideways by δ is posed without a load: in unknowns
+    /// from which its rigid translation δ is taken (a rigid lift, which A
+    /// does not see), the load stays the applied one and only the slip
+    /// moves, s_i − δ. The scales are those of the loads and the stiffness,
+    /// as for a gap ([`ContactProblem::with_gap`]).
+    pub fn with_slip_offset(mut self, offset: Vec<f64>) -> Result<Self, ProblemError> {
+        if offset.len() != self.contacts.len() {
+            return Err(ProblemError::Dimension {
+                what: "slip offset",
+                expected: self.contacts.len(),
+                got: offset.len(),
+            });
+        }
+        if let Some(node) = offset.iter().position(|x| !x.is_finite()) {
+            return Err(ProblemError::BadSlipOffset {
+                node,
+                value: offset[node],
+            });
+        }
+        let size = max_abs(&offset);
+        if !(size * self.scales.stiffness).is_finite()
+            || size > MAX_GAP_IN_DISPLACEMENTS * self.scales.displacement
+        {
+            return Err(ProblemError::SlipOffsetSize {
+                size,
+                displacement: self.scales.displacement,
+            });
+        }
+        self.slip_offset = offset;
+        self.operator_id = NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed);
+        Ok(self)
+    }
+
+    /// The slip offset σ_i per contact node (all zero unless
+    /// [`ContactProblem::with_slip_offset`] set one).
+    pub fn slip_offset(&self) -> &[f64] {
+        &self.slip_offset
+    }
+
+    /// Whether some contact node has a nonzero slip offset.
+    pub fn has_slip_offset(&self) -> bool {
+        self.slip_offset.iter().any(|&x| x != 0.0)
+    }
+
+    /// The jump past the gap, t_i − d_i (≤ 0 when the bodies do not
+    /// overlap), of contact node i in `v`.
+    #[inline]
+    pub fn jump(&self, v: &[f64], i: usize) -> f64 {
+        v[self.contacts[i].t] - self.gap[i]
+    }
+
+    /// The slip friction acts on, s_i − σ_i, of contact node i in `v`.
+    #[inline]
+    pub fn slip(&self, v: &[f64], i: usize) -> f64 {
+        v[self.contacts[i].s] - self.slip_offset[i]
+    }
+
     /// The gap D as a vector of unknowns: d_i at each jump t_i, 0 elsewhere.
     pub fn gap_vector(&self) -> Vec<f64> {
         let mut d = vec![0.0; self.n()];
@@ -554,26 +629,45 @@ impl ContactProblem {
         d
     }
 
-    /// The same problem in the unknowns ṽ = v − D, whose gap is closed:
-    /// t̃_i = t_i − d_i ≤ 0, and ½ vᵀAv − fᵀv = ½ ṽᵀAṽ − (f − A D)ᵀṽ + const,
-    /// so the load is f̃ = f − A D; the slips, the pressures and the
-    /// friction are unchanged (D moves no slip). Exact: this is how every
-    /// solver meets a gap ([`crate::reduction::gap`]), each solving the
-    /// problem it was written for. A, M and the rigid modes are shared, and
-    /// the scales are this problem's (a relative stopping test is not
-    /// loosened by the large f̃ a gap far from contact gives); the
-    /// operator id is kept, so factorizations of A are reused.
-    pub fn closed_gap(&self) -> ContactProblem {
-        let d = self.gap_vector();
+    /// The offsets D as a vector of unknowns: d_i at each jump t_i if
+    /// `gap`, σ_i at each slip s_i if `slip`, 0 elsewhere.
+    pub fn offset_vector(&self, gap: bool, slip: bool) -> Vec<f64> {
+        let mut d = if gap {
+            self.gap_vector()
+        } else {
+            vec![0.0; self.n()]
+        };
+        if slip {
+            for (c, &x) in self.contacts.iter().zip(&self.slip_offset) {
+                d[c.s] = x;
+            }
+        }
+        d
+    }
+
+    /// The same problem in the unknowns ṽ = v − D, whose gap (if `gap`)
+    /// and slip offset (if `slip`) are closed: t̃_i = t_i − d_i ≤ 0, s̃_i = s_i − σ_i,
+    /// and ½ vᵀAv − fᵀv = ½ ṽᵀAṽ − (f − A D)ᵀṽ + const, so the load is
+    /// f̃ = f − A D; the pressures and the frictional tractions are
+    /// unchanged. Exact: this is how every solver meets a gap or a slip
+    /// offset ([`crate::reduction::gap`]), each solving the problem it was
+    /// written for. A, M and the rigid modes are shared, and the scales
+    /// are this problem's (a relative stopping test is not loosened by
+    /// the large f̃ a gap far from contact gives); the operator id is
+    /// kept, so factorizations of A are reused.
+    pub fn closed(&self, gap: bool, slip: bool) -> ContactProblem {
+        let d = self.offset_vector(gap, slip);
         let ad = spmv(self.a.as_ref(), &d);
         let f = self.f.iter().zip(&ad).map(|(f, ad)| f - ad).collect();
+        let zero = vec![0.0; self.contacts.len()];
         ContactProblem {
             a: Arc::clone(&self.a),
             f,
             mass: Arc::clone(&self.mass),
             contacts: self.contacts.clone(),
             rigid_modes: Arc::clone(&self.rigid_modes),
-            gap: vec![0.0; self.contacts.len()],
+            gap: if gap { zero.clone() } else { self.gap.clone() },
+            slip_offset: if slip { zero } else { self.slip_offset.clone() },
             scales: self.scales,
             operator_id: self.operator_id,
             prolongations: Arc::clone(&self.prolongations),
@@ -601,8 +695,8 @@ impl ContactProblem {
             .sum()
     }
 
-    /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i| of paper (10) at the
-    /// bound g (one per contact node).
+    /// The objective ½ vᵀAv − fᵀv + Σ w_i g_i |s_i − σ_i| of paper (10) at
+    /// the bound g (one per contact node).
     pub fn objective(&self, v: &[f64], g: &[f64]) -> f64 {
         let av = spmv(self.a.as_ref(), v);
         let quad: f64 = v.iter().zip(&av).map(|(x, y)| x * y).sum::<f64>() * 0.5;
@@ -611,7 +705,8 @@ impl ContactProblem {
             .contacts
             .iter()
             .zip(g)
-            .map(|(c, g)| c.weight * g * v[c.s].abs())
+            .enumerate()
+            .map(|(i, (c, g))| c.weight * g * self.slip(v, i).abs())
             .sum();
         quad - lin + fric
     }
