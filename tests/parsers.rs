@@ -107,8 +107,8 @@ proptest! {
     fn csv_files_edited_at_random(file in 0usize..3, e in edits()) {
         let name = ["contact.csv", "forces.csv", "benchmark.csv"][file];
         let data = apply(seed("csv", name), &e);
-        if let Ok((c, g, _)) = contacts_from(&data[..], 3, "contact.csv") {
-            prop_assert_eq!((c.len(), g.len()), (3, 3));
+        if let Ok(c) = contacts_from(&data[..], 3, "contact.csv") {
+            prop_assert_eq!((c.nodes.len(), c.g.len(), c.gap.len(), c.slip_offset.len()), (3, 3, 3, 3));
         }
         if let Ok((p, q)) = forces_from(&data[..], 5, "forces.csv") {
             prop_assert_eq!((p.len(), q.len()), (5, 5));
@@ -182,7 +182,7 @@ fn the_seeds_read() {
     assert_eq!(
         contacts_from(&seed("csv", "contact.csv")[..], 3, "contact.csv")
             .unwrap()
-            .0
+            .nodes
             .len(),
         3
     );

@@ -6,8 +6,8 @@ use contactlab::study::benchmark::merge::rows_from;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok((c, g, _)) = contacts_from(data, 5, "contact.csv") {
-        assert_eq!((c.len(), g.len()), (5, 5));
+    if let Ok(c) = contacts_from(data, 5, "contact.csv") {
+        assert_eq!((c.nodes.len(), c.g.len(), c.gap.len(), c.slip_offset.len()), (5, 5, 5, 5));
     }
     if let Ok((p, q)) = forces_from(data, 5, "forces.csv") {
         assert_eq!((p.len(), q.len()), (5, 5));

@@ -330,6 +330,7 @@ class Problem:
         prolongations: Optional[Sequence] = None,
         name: str = "matrices",
         gap=None,
+        slip_offset=None,
     ) -> "Problem":
         """A problem posed from one's own matrices, checked as an imported
         instance is (symmetry, dimensions, index sets, A z = 0, the net load
@@ -356,6 +357,12 @@ class Problem:
             Without it the bodies touch everywhere at the start (d = 0).
             The problem's scales (and so the certificate's tolerances) are
             those of A and f alone, whatever the gap.
+        slip_offset : array of one value per contact node, optional
+            The slip σ_i at which friction holds: friction acts on
+            s_i − σ_i. This poses a body moved sideways by δ without a
+            load: take its rigid translation out of the unknowns (a rigid
+            lift, which A does not see) and give σ = δ. The scales are
+            those of A and f alone.
 
         Conventions: the lower body is primed, the upper double-primed;
         the normal of Γ_K is vertical; t_i = u2_lower − u2_upper (the
@@ -414,6 +421,7 @@ class Problem:
                 m,
                 ps,
                 None if gap is None else _array(gap, "gap").tolist(),
+                None if slip_offset is None else _array(slip_offset, "slip_offset").tolist(),
             )
         )
 

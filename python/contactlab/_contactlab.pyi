@@ -48,6 +48,7 @@ class Problem:
         m: Optional[_CsrIn] = ...,
         prolongations: List[Tuple[Tuple[int, int], _CsrIn]] = ...,
         gap: Optional[List[float]] = ...,
+        slip_offset: Optional[List[float]] = ...,
     ) -> Problem: ...
     @property
     def name(self) -> str: ...

@@ -243,11 +243,12 @@ impl Problem {
 
     /// A problem from its matrices: A (n × n, symmetric positive
     /// semidefinite), f, M (optional), the contact nodes (t, s, weight,
-    /// coefficient per node, and optionally the initial gap d ≥ 0: t ≤ d), the rigid modes (n each, A z = 0) and the
+    /// coefficient per node, and optionally the initial gap d ≥ 0: t ≤ d,
+    /// and the slip offset σ: friction on s − σ), the rigid modes (n each, A z = 0) and the
     /// prolongations of a nested hierarchy (coarse to fine, optional), each
     /// checked as an imported instance is.
     #[staticmethod]
-    #[pyo3(signature = (name, n, a, f, t, s, weight, coefficient, rigid_modes, m=None, prolongations=Vec::new(), gap=None))]
+    #[pyo3(signature = (name, n, a, f, t, s, weight, coefficient, rigid_modes, m=None, prolongations=Vec::new(), gap=None, slip_offset=None))]
     #[allow(clippy::too_many_arguments)]
     fn from_matrices(
         name: String,
@@ -262,6 +263,7 @@ impl Problem {
         m: Option<CsrIn>,
         prolongations: Vec<((usize, usize), CsrIn)>,
         gap: Option<Vec<f64>>,
+        slip_offset: Option<Vec<f64>>,
     ) -> PyResult<Self> {
         let a = csr_in("A", (n, n), a)?;
         let k = t.len();
@@ -288,6 +290,10 @@ impl Problem {
         let mut problem = ContactProblem::new(a, f, mass, contacts, rigid_modes)
             .and_then(|p| match gap {
                 Some(gap) => p.with_gap(gap),
+                None => Ok(p),
+            })
+            .and_then(|p| match slip_offset {
+                Some(offset) => p.with_slip_offset(offset),
                 None => Ok(p),
             })
             .map_err(|e| input_error(e.to_string()))?;

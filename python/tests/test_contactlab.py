@@ -574,6 +574,35 @@ def test_a_uniform_gap_is_a_rigid_translation_of_the_upper_body(p32):
         cl.Problem.from_matrices(p32.A, p32.f, contact, z, gap=[0.0])
 
 
+def test_a_slip_offset_far_past_the_displacements_slides_every_node(p32):
+    # from_matrices(..., slip_offset=) puts friction on s_i - sigma_i. An
+    # offset far beyond the displacements (the upper body moved +x by a
+    # rigid lift) slides every node that carries pressure towards it: the
+    # traction on the lower body is +F p there (Coulomb's bound, along +x).
+    # An offset read with the wrong sign, or ignored, or one the
+    # certificate did not read, breaks one of these.
+    c = p32.contact
+    contact = {"t": c.t, "s": c.s, "weight": c.weight, "coefficient": c.coefficient}
+    z = np.asarray(p32.rigid_mode)
+    sigma = 1e-2
+    moved = cl.Problem.from_matrices(p32.A, p32.f, contact, z, slip_offset=np.full(len(c.t), sigma))
+    flat = cl.Problem.from_matrices(p32.A, p32.f, contact, z)
+    # (clarabel ends AlmostSolved and nsgs at its sweep cap on this full
+    # slide: neither claims convergence.)
+    for solver in ("newton-coulomb", "newton"):
+        r = cl.solve(moved, solver=solver)
+        assert r.status == "converged", (solver, r.detail)
+        loaded = r.pressure > 1e-3 * np.max(r.pressure)
+        bound = np.asarray(c.coefficient) * r.pressure
+        assert np.all(np.abs(r.friction_traction[loaded] - bound[loaded]) <= 1e-4 * np.max(bound)), solver
+    assert cl.certify(moved, displacements=r.displacements).passed
+    assert not cl.certify(flat, displacements=r.displacements).passed
+    with pytest.raises(cl.InputError, match="slip offset"):
+        cl.Problem.from_matrices(p32.A, p32.f, contact, z, slip_offset=[np.nan] * len(c.t))
+    with pytest.raises(cl.InputError, match="slip offset"):
+        cl.Problem.from_matrices(p32.A, p32.f, contact, z, slip_offset=[0.0])
+
+
 def test_verify_runs_the_classical_scenes_from_python():
     # The study behind `contactlab verify`, from Python: Hertz's pressure
     # error falls from h = 1/64 to 1/128 for each solver named, and every

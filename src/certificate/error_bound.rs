@@ -349,7 +349,9 @@ impl<'a> ErrorBounder<'a> {
             if t < 0.0 && ph[i] > 0.0 && drops(att, c.weight * ph[i], t) {
                 ph[i] = 0.0;
             }
-            let s = vs[c.s];
+            // The slip past its offset, s_i − σ_i, is the cone's other
+            // coordinate.
+            let s = problem.slip(&vs, i);
             let slack = g[i] * s.abs() + qh[i] * s;
             if s != 0.0 && slack > 0.0 {
                 let keep = c.weight * slack;
@@ -375,7 +377,7 @@ impl<'a> ErrorBounder<'a> {
             if t > 0.0 || (t < 0.0 && ph[i] > 0.0) {
                 d[c.t] = -t;
             }
-            let s = vs[c.s];
+            let s = problem.slip(&vs, i);
             if g[i] * s.abs() + qh[i] * s > 0.0 {
                 d[c.s] = -s;
             }

@@ -374,9 +374,10 @@ fn contact_law(
 ) {
     let s = problem.scales();
     let (u, pr) = (s.displacement, s.pressure);
-    for (i, (c, d)) in problem.contacts().iter().zip(problem.gap()).enumerate() {
-        // The jump past the gap: t_i − d_i ≤ 0 (d = 0 in the paper's scene).
-        let (t, sl, pi, qi) = (v[c.t] - d, v[c.s], p[i], q[i]);
+    for (i, c) in problem.contacts().iter().enumerate() {
+        // The jump past the gap, t_i − d_i ≤ 0, and the slip past its
+        // offset, s_i − σ_i (d = σ = 0 in the paper's scene).
+        let (t, sl, pi, qi) = (problem.jump(v, i), problem.slip(v, i), p[i], q[i]);
         let g = friction.bound(i, c.coefficient, pi);
         raise(&mut out.nonpenetration, t.max(0.0) / u);
         raise(&mut out.pressure_sign, (-pi).max(0.0) / pr);

@@ -96,7 +96,8 @@ pub fn vtu(d: &Discretization, material: &Material, s: &Solution) -> String {
     let mut pressure = vec![0.0; n];
     let mut traction = vec![0.0; n];
     for (i, c) in d.dofs.contacts().iter().enumerate() {
-        let st = ContactState::of(s.v[c.t] - d.problem.gap()[i], s.v[c.s], tol) as i32;
+        let p = &d.problem;
+        let st = ContactState::of(p.jump(&s.v, i), p.slip(&s.v, i), tol) as i32;
         for node in [c.lower_node, c.upper_node] {
             state[node] = st;
             pressure[node] = s.pressure[i];

@@ -111,7 +111,7 @@ pub fn contact_profile(
 ) -> Vec<ProfileRow> {
     let u = d.displacements(&solution.v);
     let tol = SEPARATION_TOL * largest_displacement(d, solution);
-    let gap = d.problem.gap();
+    let p = &d.problem;
     d.dofs
         .contacts()
         .iter()
@@ -123,12 +123,13 @@ pub fn contact_profile(
             u1_upper: u[c.upper_node][0],
             u2_upper: u[c.upper_node][1],
             jump: solution.v[c.t],
-            slip: solution.v[c.s],
+            // The slip of the bodies, s − σ (σ: a side shift's rigid lift).
+            slip: p.slip(&solution.v, i),
             pressure: solution.pressure[i],
             friction_traction: solution.friction_traction[i],
             g: g[i],
             // Open where the jump stays short of the initial gap.
-            state: ContactState::of(solution.v[c.t] - gap[i], solution.v[c.s], tol),
+            state: ContactState::of(p.jump(&solution.v, i), p.slip(&solution.v, i), tol),
             status,
         })
         .collect()

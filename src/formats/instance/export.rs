@@ -74,6 +74,7 @@ pub fn export(
             g: bound,
             coefficient: c.coefficient,
             gap: p.gap()[i],
+            slip_offset: p.slip_offset()[i],
         })
         .collect();
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -106,10 +107,10 @@ pub fn export(
     let description = Description {
         format: FORMAT,
         statement: vec![
-            "Given-friction (Tresca) subproblem, paper (10): minimize 1/2 v'A v - f'v + sum_i w_i g_i |v[s_i]| subject to v[t_i] <= gap_i for every contact node i (gap: contact.csv's column, the initial distance between the bodies, 0 in the paper's scene).",
+            "Given-friction (Tresca) subproblem, paper (10): minimize 1/2 v'A v - f'v + sum_i w_i g_i |v[s_i] - slip_offset_i| subject to v[t_i] <= gap_i for every contact node i (gap: contact.csv's column, the initial distance between the bodies; slip_offset: its column, the slip of a body moved sideways by a rigid lift; both 0 in the paper's scene).",
             "Coulomb problem, paper (7)-(8): the same with g_i = coefficient_i * p_i, p_i the contact pressure of the solution itself.",
             "A is singular: its kernel is spanned by the columns of rigid_modes.mtx (the upper body's vertical translation); a solution exists only if the contact forces can balance the load along it, paper condition (13).",
-            "Optimality (what `contactlab certify` checks): A v - f + sum_i w_i p_i e_{t_i} - sum_i w_i q_i e_{s_i} = 0; t_i <= gap_i, p_i >= 0, p_i (gap_i - t_i) = 0; |q_i| <= g_i, s_i = 0 where |q_i| < g_i, q_i = -g_i sign(s_i) where s_i != 0.",
+            "Optimality (what `contactlab certify` checks): A v - f + sum_i w_i p_i e_{t_i} - sum_i w_i q_i e_{s_i} = 0; t_i <= gap_i, p_i >= 0, p_i (gap_i - t_i) = 0; |q_i| <= g_i, and with the slip s_i - slip_offset_i: it is 0 where |q_i| < g_i, q_i = -g_i sign(it) where it is not 0.",
             "Condensed form: with y = (t_0, s_0, t_1, s_1, ...) the contact unknowns and r = (w_0 p_0, -w_0 q_0, ...) the nodal contact forces, S y = b_condensed - r, and z_condensed' (b_condensed - r) = 0 (S z_condensed = 0: the rigid mode).",
         ],
         unknowns: format!(

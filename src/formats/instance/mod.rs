@@ -13,7 +13,7 @@
 //! | `M.mtx` | mass matrix M (the L2 inner product of displacements) |
 //! | `f.mtx` | load vector f (n × 1) |
 //! | `rigid_modes.mtx` | the kernel of A (n × k; here k = 1, the upper body's vertical translation) |
-//! | `contact.csv` | per contact node: `node,x,t,s,weight,g,coefficient,gap` |
+//! | `contact.csv` | per contact node: `node,x,t,s,weight,g,coefficient,gap,slip_offset` |
 //! | `S.mtx`, `b_condensed.mtx`, `z_condensed.mtx` | the condensed problem on y = (t_0, s_0, t_1, s_1, ...): S y = b̂ − r, and its rigid mode ẑ (2m × k) |
 //! | `problem.json` | the statement, conventions, units, scales and the scene |
 
@@ -56,6 +56,10 @@ pub struct ContactRow {
     /// the column has none.
     #[serde(default)]
     pub gap: f64,
+    /// Slip offset σ_i: friction acts on s_i − σ_i (a body moved sideways
+    /// by a rigid lift); a file without the column has none.
+    #[serde(default)]
+    pub slip_offset: f64,
 }
 
 /// `problem.json`.
@@ -175,9 +179,15 @@ pub fn import_for(dir: &Path, also: impl Fn(usize) -> f64) -> Result<Instance> {
         "the rigid modes (n × rigid_modes)",
     )?;
     let modes: Vec<Vec<f64>> = (0..k).map(|j| modes.column(j)).collect();
-    let (contacts, g, gap) = read_contacts(&dir.join("contact.csv"), m)?;
-    let problem = ContactProblem::new(a, f, mass, contacts, modes)
+    let Contacts {
+        nodes,
+        g,
+        gap,
+        slip_offset,
+    } = read_contacts(&dir.join("contact.csv"), m)?;
+    let problem = ContactProblem::new(a, f, mass, nodes, modes)
         .and_then(|p| p.with_gap(gap))
+        .and_then(|p| p.with_slip_offset(slip_offset))
         .with_context(|| format!("{shown}: the files do not form a contact problem"))?;
     let definiteness = crate::certificate::problem_checks::check_definite(
         &problem,
@@ -222,17 +232,25 @@ fn read_contacts(path: &Path, m: usize) -> Result<Contacts> {
     contacts_from(file, m, &path.display().to_string())
 }
 
-/// The contact nodes of a `contact.csv`, the friction bound g of each
-/// (None where the column is empty) and the initial gap d.
-pub type Contacts = (Vec<ContactNode>, Vec<Option<f64>>, Vec<f64>);
+/// The columns of a `contact.csv`, one entry per contact node.
+#[derive(Debug)]
+pub struct Contacts {
+    pub nodes: Vec<ContactNode>,
+    /// The friction bound g (None where the column is empty).
+    pub g: Vec<Option<f64>>,
+    /// The initial gap d.
+    pub gap: Vec<f64>,
+    /// The slip offset σ.
+    pub slip_offset: Vec<f64>,
+}
 
 /// The rows of a `contact.csv` read from `source` (named `shown` in
-/// messages): exactly `m`, node i on row i; the contact nodes, the
-/// friction bound g and the gap.
+/// messages): exactly `m`, node i on row i.
 pub fn contacts_from(source: impl std::io::Read, m: usize, shown: &str) -> Result<Contacts> {
     let mut contacts = Vec::with_capacity(m);
     let mut g = Vec::with_capacity(m);
     let mut gap = Vec::with_capacity(m);
+    let mut slip_offset = Vec::with_capacity(m);
     for (i, rec) in guarded::csv_reader(source)
         .deserialize::<ContactRow>()
         .enumerate()
@@ -256,6 +274,7 @@ pub fn contacts_from(source: impl std::io::Read, m: usize, shown: &str) -> Resul
         });
         g.push(c.g);
         gap.push(c.gap);
+        slip_offset.push(c.slip_offset);
     }
     if contacts.len() != m {
         bail!(
@@ -263,7 +282,12 @@ pub fn contacts_from(source: impl std::io::Read, m: usize, shown: &str) -> Resul
             contacts.len()
         );
     }
-    Ok((contacts, g, gap))
+    Ok(Contacts {
+        nodes: contacts,
+        g,
+        gap,
+        slip_offset,
+    })
 }
 
 /// Reads the displacements of an `n`-unknown problem: a Matrix Market file
