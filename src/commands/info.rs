@@ -70,7 +70,10 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         if scene.side_shift == 0.0 {
             String::new()
         } else {
-            format!(", shifted to u''_1 = {:e} there", scene.side_shift)
+            format!(
+                ", shifted to u''_1 = {:e} there (a rigid lift of the whole body: the slip offset σ = {:e}, no load)",
+                scene.side_shift, scene.side_shift
+            )
         }
     );
     let text = format!(

@@ -8,7 +8,7 @@ use nalgebra_sparse::CsrMatrix;
 
 pub use crate::mechanics::element::{element_mass, element_stiffness, strain_matrix};
 
-use crate::mechanics::dofs::{DofExpansion, DofMap};
+use crate::mechanics::dofs::DofExpansion;
 use crate::mechanics::material::Material;
 use crate::mechanics::mesh::{Body, Mesh};
 use crate::mechanics::scene::Traction;
@@ -514,37 +514,6 @@ pub fn load_vector(dofs: &impl DofExpansion, forces: &[[f64; 2]]) -> Vec<f64> {
             }
         }
     }
-    f
-}
-
-/// The load of the held values in the unknowns of `dofs`: −Tᵀ K u_D, with
-/// u_D the displacement that is `side_shift` on the upper body's held
-/// sides' u''_1 and 0 elsewhere (the lifting of a nonhomogeneous Dirichlet
-/// condition: u = u_D + T v, so A v = f − Tᵀ K u_D). Summed over the
-/// triangles that touch a held side only; zero when `side_shift` is.
-pub fn side_shift_load(mesh: &Mesh, dofs: &DofMap, material: &Material) -> Vec<f64> {
-    let mut f = vec![0.0; dofs.n()];
-    if dofs.side_shift() == 0.0 {
-        return f;
-    }
-    let d = material.elasticity_matrix();
-    mesh.triangles().for_each(|(body, tri)| {
-        if body != Body::Upper {
-            return;
-        }
-        let ud: [f64; 6] =
-            std::array::from_fn(|q| dofs.held_value(tri[q / 2], q % 2).unwrap_or(0.0));
-        if ud.iter().all(|&u| u == 0.0) {
-            return;
-        }
-        let k = element_stiffness(tri.map(|node| mesh.coords(node)), &d);
-        for (q, row) in k.iter().enumerate() {
-            let r: f64 = row.iter().zip(&ud).map(|(kij, uj)| kij * uj).sum();
-            for &(i, c) in dofs.terms(tri[q / 2], q % 2).as_slice() {
-                f[i] -= c * r;
-            }
-        }
-    });
     f
 }
 

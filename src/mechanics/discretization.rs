@@ -89,11 +89,7 @@ impl Discretization {
             (a, Mass::Omitted)
         };
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
-        let mut f = assembly::load_vector(&dofs, &forces);
-        let shifted = assembly::side_shift_load(&mesh, &dofs, &scene.material);
-        for (fi, si) in f.iter_mut().zip(&shifted) {
-            *fi += si;
-        }
+        let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
         let rigid_mode = kernel_vector(&mesh, &dofs);
         let problem = if checked {
@@ -111,6 +107,15 @@ impl Discretization {
                     Ok(p)
                 } else {
                     p.with_gap(gap)
+                }
+            })
+            .and_then(|p| {
+                // A side shift is a rigid lift of the upper body: no load,
+                // the slip offset σ = δ ([`DofMap::with_side_shift`]).
+                if dofs.side_shift() == 0.0 {
+                    Ok(p)
+                } else {
+                    p.with_slip_offset(dofs.slip_offset())
                 }
             })
             .and_then(|p| {
@@ -249,7 +254,7 @@ fn kernel_vector(mesh: &Mesh, dofs: &DofMap) -> Vec<f64> {
             Body::Upper => [0.0, 1.0],
         })
         .collect();
-    dofs.from_physical(&u)
+    dofs.from_direction(&u)
 }
 
 fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs], coefficient: f64) -> Vec<ContactNode> {

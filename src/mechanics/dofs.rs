@@ -7,8 +7,12 @@
 //! ```
 //!
 //! so that v''_k = v'_k − (s_i, t_i)_k. Fixed values are zero (the clamp,
-//! the paper's roller) or a scene's `side_shift` on the upper body's held
-//! sides, whose work on the free unknowns is then a load.
+//! the paper's roller). A scene's `side_shift` δ on the upper body's held
+//! sides is a rigid lift: u''_1 = δ + v''_1 on the whole upper body, with
+//! v''_1 = 0 where it is held. The stiffness does not see a rigid
+//! translation, so the load stays the applied one; the slip of the bodies
+//! is s_i − δ, the problem's slip offset
+//! ([`contactlab_solvers::ContactProblem::with_slip_offset`]).
 
 use serde::{Deserialize, Serialize};
 
@@ -88,7 +92,8 @@ pub trait DofExpansion {
 pub struct DofMap {
     mesh: Mesh,
     hold: Hold,
-    /// u''_1 on the held sides (a scene's `side_shift`; 0: the paper's).
+    /// The rigid lift δ of the upper body: u''_1 on its held sides (a
+    /// scene's `side_shift`; 0: the paper's).
     side_shift: f64,
     n: usize,
     contacts: Vec<ContactDofs>,
@@ -141,9 +146,9 @@ impl DofMap {
     }
 
     /// The same unknowns, with u''_1 = `shift` on the held sides instead
-    /// of 0: the held values are still eliminated (their work on the free
-    /// unknowns is a load, [`crate::mechanics::assembly::side_shift_load`]),
-    /// and [`DofMap::to_physical`] puts them back.
+    /// of 0, as a rigid lift: every u''_1 is `shift` plus its unknown part
+    /// ([`DofMap::to_physical`] adds it), the held parts are zero, and the
+    /// slip the friction sees is s_i − `shift` ([`DofMap::slip_offset`]).
     pub fn with_side_shift(mut self, shift: f64) -> Self {
         self.side_shift = shift;
         self
@@ -154,22 +159,18 @@ impl DofMap {
         self.side_shift
     }
 
-    /// The prescribed value of component k of `node` if it is held (the
-    /// lower body's clamp 0, the upper body's sides `side_shift`), None if
-    /// it is an unknown or made of them.
-    pub fn held_value(&self, node: usize, k: usize) -> Option<f64> {
-        match self.dofs(node)[k] {
-            Dof::Fixed => Some(self.held(self.mesh.locate(node).0)),
-            _ => None,
-        }
+    /// The slip offset σ_i of each contact node: the rigid lift δ, since
+    /// u'_1 − u''_1 = (v'_1 − v''_1) − δ = s_i − δ.
+    pub fn slip_offset(&self) -> Vec<f64> {
+        vec![self.side_shift; self.contacts.len()]
     }
 
-    /// The value of a held component of `body`: the clamp's 0 below, the
-    /// sides' `side_shift` above (only u''_1 is held there).
-    fn held(&self, body: Body) -> f64 {
+    /// The rigid lift's part of component k of a node of `body`: δ on the
+    /// upper body's u''_1, 0 elsewhere.
+    fn lift(&self, body: Body, k: usize) -> f64 {
         match body {
-            Body::Upper => self.side_shift,
-            Body::Lower => 0.0,
+            Body::Upper if k == 0 => self.side_shift,
+            _ => 0.0,
         }
     }
 
@@ -242,31 +243,53 @@ impl DofMap {
     pub fn to_physical(&self, v: &[f64]) -> Vec<[f64; 2]> {
         (0..self.mesh.num_nodes())
             .map(|node| {
-                let held = self.held(self.mesh.locate(node).0);
-                self.dofs(node).map(|d| match d {
-                    Dof::Fixed => held,
-                    Dof::Slot(s) => v[s],
-                    Dof::Relative { base, own } => v[base] - v[own],
+                let body = self.mesh.locate(node).0;
+                let dofs = self.dofs(node);
+                std::array::from_fn(|k| {
+                    self.lift(body, k)
+                        + match dofs[k] {
+                            Dof::Fixed => 0.0,
+                            Dof::Slot(s) => v[s],
+                            Dof::Relative { base, own } => v[base] - v[own],
+                        }
                 })
             })
             .collect()
     }
 
-    /// The unknowns representing a physical displacement field. Components on
-    /// fixed boundaries are ignored (the field is assumed to satisfy them).
+    /// The unknowns representing a physical displacement field, the rigid
+    /// lift taken off. Components on fixed boundaries are ignored (the
+    /// field is assumed to satisfy them).
     pub fn from_physical(&self, u: &[[f64; 2]]) -> Vec<f64> {
+        self.unknowns_of(u, true)
+    }
+
+    /// The unknowns of a change of displacement (a direction, such as a
+    /// rigid mode): linear, without the rigid lift.
+    pub fn from_direction(&self, u: &[[f64; 2]]) -> Vec<f64> {
+        self.unknowns_of(u, false)
+    }
+
+    fn unknowns_of(&self, u: &[[f64; 2]], lifted: bool) -> Vec<f64> {
         let mut v = vec![0.0; self.n];
-        for (node, un) in u.iter().enumerate().take(self.mesh.num_nodes()) {
-            let dofs = self.dofs(node);
-            for k in 0..2 {
-                if let Dof::Slot(s) = dofs[k] {
-                    v[s] = un[k];
+        let unlifted = |node: usize, k: usize| {
+            u[node][k]
+                - if lifted {
+                    self.lift(self.mesh.locate(node).0, k)
+                } else {
+                    0.0
+                }
+        };
+        for node in 0..u.len().min(self.mesh.num_nodes()) {
+            for (k, dof) in self.dofs(node).into_iter().enumerate() {
+                if let Dof::Slot(s) = dof {
+                    v[s] = unlifted(node, k);
                 }
             }
         }
         for c in &self.contacts {
             for (k, own) in [(0, c.s), (1, c.t)] {
-                v[own] = u[c.lower_node][k] - u[c.upper_node][k];
+                v[own] = unlifted(c.lower_node, k) - unlifted(c.upper_node, k);
             }
         }
         v
