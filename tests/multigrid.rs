@@ -239,3 +239,36 @@ fn a_loose_accuracy_is_one_of_the_pressure() {
     eprintln!("{}: pressure off by {gap:.2e}·P", loose.detail);
     assert!(gap <= need, "pressure off by {gap:e}·P, need {need:e}");
 }
+
+/// A hierarchy whose coarsest level is too large for the dense exact coarse
+/// solve is refused before any work, with the reason: the paper's problem
+/// at h = 1/32 with its hierarchy cut at 1/16 (more than 256 unknowns
+/// there). A user hierarchy whose coarsest level had 1721 unknowns took 79 s
+/// before its first iteration. The whole hierarchy, down to h = 1/2,
+/// certifies.
+#[test]
+fn a_hierarchy_with_a_coarsest_level_too_large_is_refused() {
+    let d = level(5);
+    let full = d.problem.prolongations().to_vec();
+    let cut = full[full.len() - 1..].to_vec();
+    assert!(cut[0].ncols() > contactlab::solvers::multigrid::ONE_LEVEL_MAX_UNKNOWNS);
+    let problem = d.problem.clone().with_hierarchy(cut).unwrap();
+    let g = vec![5.0; problem.contacts().len()];
+    for name in ["tnnmg", "relaxation"] {
+        let entry = registry::by_name(name).unwrap();
+        let mut tree = (entry.defaults)(Default::default());
+        if name == "relaxation" {
+            tree["inner"] = serde_json::json!("multigrid");
+        }
+        let mut solver = entry.build.call(&tree).unwrap();
+        let s = solver.solve(&problem, Friction::Given(&g), None, &mut Silent);
+        assert_eq!(s.status, contactlab::solvers::Status::NotRun, "{name}: {}", s.detail);
+        assert!(s.detail.contains("coarsest level has"), "{name}: {}", s.detail);
+        let s = solver.solve(&d.problem, Friction::Given(&g), None, &mut Silent);
+        assert!(
+            certify_solution(&d.problem, Friction::Given(&g), &s, 1e-5).passed(),
+            "{name}: {}",
+            s.detail
+        );
+    }
+}

@@ -299,12 +299,14 @@ impl Tnnmg {
     }
 }
 
-/// The hierarchy of operator `id` in `kept`, built if missing (the oldest
-/// dropped beyond [`KEPT_HIERARCHIES`]).
-/// The largest problem without a mesh hierarchy that the multigrid
-/// solvers take on one level: the coarsest level's exact solve (a dense
-/// eigendecomposition, O(n³)) on the whole problem, with the identity as
-/// its one prolongation. The paper's scenes at h = 1/2 have 12 unknowns.
+/// The largest coarsest level the multigrid solvers take: its exact solve
+/// is dense (an eigendecomposition and a pseudo-inverse, O(n³), redone
+/// when the truncated set changes), so a problem without a mesh hierarchy
+/// is taken on one level up to this size (the identity its one
+/// prolongation), and a hierarchy whose coarsest level is larger is
+/// refused. The scenes' hierarchies go down to h = 1/2, 12 to 17
+/// unknowns; a user hierarchy whose coarsest level had 1721 took 79 s
+/// before its first iteration.
 pub const ONE_LEVEL_MAX_UNKNOWNS: usize = 256;
 
 /// The prolongations a multigrid solve of `problem` runs on: the
@@ -312,12 +314,19 @@ pub const ONE_LEVEL_MAX_UNKNOWNS: usize = 256;
 /// is small enough ([`ONE_LEVEL_MAX_UNKNOWNS`]: a scene at h = 1/2, whose
 /// mesh is the coarsest) the identity, so that the V-cycle's coarse
 /// correction is the exact solve. A larger problem without a hierarchy
-/// (an imported instance) is refused with the reason.
+/// (an imported instance), or a hierarchy whose coarsest level is larger,
+/// is refused with the reason.
 pub(crate) fn prolongations_of(
     problem: &ContactProblem,
 ) -> Result<std::borrow::Cow<'_, [Csr]>, String> {
     let p = problem.prolongations();
-    if !p.is_empty() {
+    if let Some(first) = p.first() {
+        let coarsest = first.ncols();
+        if coarsest > ONE_LEVEL_MAX_UNKNOWNS {
+            return Err(format!(
+                "cannot use this hierarchy: its coarsest level has {coarsest} unknowns, more than the {ONE_LEVEL_MAX_UNKNOWNS} its exact coarse solve takes (dense, O(n³), redone when the truncated set changes); give prolongations down to a coarser mesh (a scene's go down to h = 1/2, at most 17 unknowns)"
+            ));
+        }
         return Ok(std::borrow::Cow::Borrowed(p));
     }
     let n = problem.n();
@@ -337,6 +346,8 @@ pub(crate) fn prolongations_of(
     Ok(std::borrow::Cow::Owned(vec![identity]))
 }
 
+/// The hierarchy of operator `id` in `kept`, built if missing (the oldest
+/// dropped beyond [`KEPT_HIERARCHIES`]).
 pub(crate) fn kept_hierarchy<'k, K: PartialEq>(
     kept: &'k mut Vec<(K, Hierarchy)>,
     id: K,
