@@ -262,8 +262,17 @@ fn a_hierarchy_with_a_coarsest_level_too_large_is_refused() {
         }
         let mut solver = entry.build.call(&tree).unwrap();
         let s = solver.solve(&problem, Friction::Given(&g), None, &mut Silent);
-        assert_eq!(s.status, contactlab::solvers::Status::NotRun, "{name}: {}", s.detail);
-        assert!(s.detail.contains("coarsest level has"), "{name}: {}", s.detail);
+        assert_eq!(
+            s.status,
+            contactlab::solvers::Status::NotRun,
+            "{name}: {}",
+            s.detail
+        );
+        assert!(
+            s.detail.contains("coarsest level has"),
+            "{name}: {}",
+            s.detail
+        );
         let s = solver.solve(&d.problem, Friction::Given(&g), None, &mut Silent);
         assert!(
             certify_solution(&d.problem, Friction::Given(&g), &s, 1e-5).passed(),

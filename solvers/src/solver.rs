@@ -168,4 +168,15 @@ pub trait Solver {
     fn poses_slip_offsets(&self) -> bool {
         false
     }
+
+    /// How many rigid modes (the kernel of A) the solver handles: the
+    /// paper's problem has one, the upper body's vertical translation; a
+    /// body free sideways adds its horizontal one, which only friction
+    /// holds. A problem with more is refused before any work
+    /// ([`crate::reduction::gap::ClosingGap`]), with the reason. By default
+    /// one: a method built around the paper's mode (a dual operator made
+    /// definite along it, a line search along it) must say it handles more.
+    fn rigid_modes_handled(&self) -> usize {
+        1
+    }
 }

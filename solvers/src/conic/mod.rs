@@ -341,6 +341,12 @@ impl ConicSolver {
 }
 
 impl Solver for ConicSolver {
+    /// Two rigid modes, measured: Cattaneo–Mindlin with the upper body free
+    /// to slide (`scenes/cattaneo_mindlin_sliding.toml`) certifies.
+    fn rigid_modes_handled(&self) -> usize {
+        2
+    }
+
     /// The gap is the right-hand side of the rows t_i + slack = d_i.
     fn poses_gaps(&self) -> bool {
         true

@@ -409,6 +409,12 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 impl Solver for Tnnmg {
+    /// Two rigid modes, measured: Cattaneo–Mindlin with the upper body free
+    /// to slide (`scenes/cattaneo_mindlin_sliding.toml`) certifies.
+    fn rigid_modes_handled(&self) -> usize {
+        2
+    }
+
     /// The gap is each jump's obstacle, t_i ≤ d_i (`Local::Jump`).
     fn poses_gaps(&self) -> bool {
         true

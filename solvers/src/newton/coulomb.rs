@@ -319,6 +319,12 @@ fn perturb(x: &mut [f64], m: usize, p: f64, seed: u64) {
 }
 
 impl Solver for NewtonCoulomb {
+    /// Two rigid modes, measured: Cattaneo–Mindlin with the upper body free
+    /// to slide (`scenes/cattaneo_mindlin_sliding.toml`) certifies.
+    fn rigid_modes_handled(&self) -> usize {
+        2
+    }
+
     fn solve(
         &mut self,
         problem: &ContactProblem,

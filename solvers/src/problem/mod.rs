@@ -39,7 +39,7 @@ use crate::numerics::linalg::{
 mod scales;
 mod symmetry;
 
-pub use scales::{MIN_NET_LOAD_FRACTION, Scales};
+pub use scales::{MIN_NET_LOAD_FRACTION, Scales, moves_a_jump};
 use symmetry::check_stiffness_and_mass;
 
 /// The unknowns of one contact node of Γ_K.
@@ -783,6 +783,51 @@ mod tests {
         ));
         assert!(matches!(
             problem(vec![1.0, -1.0 + 1e-12], vec![1.0, 1.0]),
+            Err(ProblemError::NetLoad { index: 0, .. })
+        ));
+    }
+
+    /// A rigid mode that moves slips alone (a body free to slide) is held
+    /// by friction: the load along it may be zero, and it sets no contact
+    /// load; a mode that moves a jump with no load along it is refused.
+    /// Unknowns (a, t, b, s): A couples a with t and b with s.
+    #[test]
+    fn a_mode_of_slips_alone_is_held_by_friction_and_sets_no_scale() {
+        let pair = |i: usize| {
+            [
+                (i, i, 1.0),
+                (i, i + 1, -1.0),
+                (i + 1, i, -1.0),
+                (i + 1, i + 1, 1.0),
+            ]
+        };
+        let entries: Vec<_> = pair(0).into_iter().chain(pair(2)).collect();
+        let a = csr(4, &entries);
+        let contact = ContactNode {
+            t: 1,
+            s: 3,
+            weight: 1.0,
+            coefficient: 0.5,
+        };
+        let normal = vec![1.0, 1.0, 0.0, 0.0];
+        let sliding = vec![0.0, 0.0, 1.0, 1.0];
+        let problem = |f: Vec<f64>| {
+            ContactProblem::new(
+                a.clone(),
+                f,
+                Mass::Omitted,
+                vec![contact],
+                vec![normal.clone(), sliding.clone()],
+            )
+        };
+        let p = problem(vec![1.0, 2.0, 0.0, 0.0]).unwrap();
+        assert!(moves_a_jump(&normal, p.contacts()) && !moves_a_jump(&sliding, p.contacts()));
+        assert_eq!(p.scales().contact_load, 3.0);
+        // A tangential load along it: still the normal mode's contact load.
+        let p = problem(vec![1.0, 2.0, 0.5, 0.0]).unwrap();
+        assert_eq!(p.scales().contact_load, 3.0);
+        assert!(matches!(
+            problem(vec![0.0, 0.0, 0.5, 0.0]),
             Err(ProblemError::NetLoad { index: 0, .. })
         ));
     }

@@ -21,9 +21,12 @@ pub const MIN_NET_LOAD_FRACTION: f64 = 1e-8;
 ///
 /// - force F = Σ_i |f_i|, the gross load (for a traction load: ∫|P| ds,
 ///   whatever the mesh);
-/// - contact load N, the load the contact forces must carry: for each rigid
-///   mode z, |zᵀf| / ‖z‖∞ (the largest), since the contact forces balance the
-///   load along z; F when the problem has no rigid mode;
+/// - contact load N, the load the contact pressures must carry: for each
+///   rigid mode z that moves a jump (z_t ≠ 0 at some contact node),
+///   |zᵀf| / ‖z‖∞ (the smallest), since the contact forces balance the load
+///   along z; F when the problem has no such mode. A mode that moves only
+///   slips (a body free sideways) is held by friction alone, and its load
+///   may be zero: it sets no scale;
 /// - length L = Σ_i w_i (the length of Γ_K);
 /// - stiffness K = max_i A_ii;
 /// - pressure P = N/L (the mean contact pressure): measured in the net load
@@ -51,12 +54,11 @@ impl Scales {
     ) -> Result<Self, ProblemError> {
         let or_one = |x: f64| if x > 0.0 { x } else { 1.0 };
         let force = or_one(f.iter().map(|x| x.abs()).sum());
-        let mut contact_load = if rigid_modes.is_empty() {
-            force
-        } else {
-            f64::INFINITY
-        };
+        let mut contact_load = f64::INFINITY;
         for (index, z) in rigid_modes.iter().enumerate() {
+            if !moves_a_jump(z, contacts) {
+                continue;
+            }
             let size = max_abs(z);
             let along: f64 = z.iter().zip(f).map(|(zk, fk)| (zk / size) * fk).sum();
             let load = along.abs();
@@ -68,6 +70,9 @@ impl Scales {
                 });
             }
             contact_load = contact_load.min(load);
+        }
+        if contact_load == f64::INFINITY {
+            contact_load = force;
         }
         let length = or_one(contacts.iter().map(|c| c.weight).sum());
         let stiffness = or_one(
@@ -105,4 +110,10 @@ impl Scales {
         }
         Ok(scales)
     }
+}
+
+/// Whether the rigid mode z moves a jump t_i (the contact pressures carry
+/// its load), rather than slips alone (friction carries it).
+pub fn moves_a_jump(z: &[f64], contacts: &[ContactNode]) -> bool {
+    contacts.iter().any(|c| z[c.t] != 0.0)
 }

@@ -42,6 +42,20 @@ impl Solver for ClosingGap {
         start: Option<Start<'_>>,
         observer: &mut dyn Observer,
     ) -> Solution {
+        let (modes, handled) = (
+            problem.rigid_modes().len(),
+            self.inner.rigid_modes_handled(),
+        );
+        if modes > handled {
+            return Solution::failed(
+                problem.n(),
+                problem.contacts().len(),
+                crate::solution::Status::NotRun,
+                format!(
+                    "this solver handles {handled} rigid mode (the upper body's vertical translation), and this problem has {modes} (a body free to slide keeps its horizontal translation too): solve it with newton-coulomb or clarabel"
+                ),
+            );
+        }
         let gap = problem.has_gap() && !self.inner.poses_gaps();
         let slip = problem.has_slip_offset() && !self.inner.poses_slip_offsets();
         if !gap && !slip {
@@ -83,6 +97,10 @@ impl Solver for ClosingGap {
 
     fn poses_slip_offsets(&self) -> bool {
         true
+    }
+
+    fn rigid_modes_handled(&self) -> usize {
+        self.inner.rigid_modes_handled()
     }
 }
 

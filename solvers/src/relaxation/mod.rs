@@ -340,6 +340,12 @@ fn friction_traction(
 pub const TIGHTEST_EPSILON: f64 = 1e-10;
 
 impl Solver for ProxUzawa {
+    /// Two rigid modes, measured: Cattaneo–Mindlin with the upper body free
+    /// to slide (`scenes/cattaneo_mindlin_sliding.toml`) certifies.
+    fn rigid_modes_handled(&self) -> usize {
+        2
+    }
+
     /// ε (Uzawa's max|Δl| ≤ ε·P) a tenth, in relative stopping only, from
     /// its default down to [`TIGHTEST_EPSILON`]: the sweeps' threshold
     /// follows it (it is ε·U·w). The paper's own values are kept (Table 1

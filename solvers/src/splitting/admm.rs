@@ -139,6 +139,12 @@ impl Admm {
 }
 
 impl Solver for Admm {
+    /// Two rigid modes, measured: Cattaneo–Mindlin with the upper body free
+    /// to slide (`scenes/cattaneo_mindlin_sliding.toml`) certifies.
+    fn rigid_modes_handled(&self) -> usize {
+        2
+    }
+
     fn solve(
         &mut self,
         problem: &ContactProblem,
