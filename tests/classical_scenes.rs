@@ -383,3 +383,65 @@ fn every_solver_certifies_the_classical_scenes() {
         }
     }
 }
+
+/// Cattaneo–Mindlin driven by a force on a body free to slide (its
+/// horizontal translation a second rigid mode, held by friction alone;
+/// `scenes/cattaneo_mindlin_sliding.toml`, Q = 9 = 0.5 μP). At h = 1/256
+/// (a/8) newton-coulomb and tnnmg carry exactly the applied Q through the
+/// contact, along +x, and stick over c = a √(1 − Q/(μP)) to within half a
+/// node. At 1/32 every registered solver certifies or refuses before any
+/// work, naming the second mode (newton, nsgs and apgd are built around
+/// one). Fails if the fixed point starts at g = 0 (no solution there: the
+/// conic oracle reported `unbounded`), if a solver that cannot hold the
+/// mode runs anyway, or if the certificate's force balance along the new
+/// mode divides by its (possibly zero) load.
+#[test]
+fn a_body_free_to_slide_is_held_by_friction() {
+    let text = include_str!("../scenes/cattaneo_mindlin_sliding.toml");
+    let (mut s, _) = contactlab::formats::scene_file::parse(text)
+        .unwrap()
+        .split()
+        .unwrap();
+    s.set_finest(h(8));
+    let ClosedForm::CattaneoMindlin(cm) = ClosedForm::of(&s).unwrap() else {
+        panic!("not Cattaneo–Mindlin");
+    };
+    let applied = 9.0;
+    for name in ["newton-coulomb", "tnnmg"] {
+        let solved = solve_coulomb(&s, solver_entry(name).unwrap());
+        assert_eq!(
+            solved.outcome.status,
+            Status::Converged,
+            "{name}: {}",
+            solved.outcome.detail
+        );
+        assert_eq!(solved.finest.problem.rigid_modes().len(), 2);
+        let x = solved.finest.contact_x();
+        let w = weights(&solved.finest);
+        let sol = &solved.outcome.solution;
+        let t = traction_error(&x, &w, &sol.pressure, &sol.friction_traction, &cm);
+        assert!(
+            (t.tangential_load - applied).abs() <= 1e-6 * applied,
+            "{name}: Q = {}",
+            t.tangential_load
+        );
+        let c = cm.stick_half_width(t.tangential_load);
+        assert!(
+            (t.stick_half_width - c).abs() <= 0.5 * s.finest().h(),
+            "{name}: c = {} against {c}",
+            t.stick_half_width
+        );
+    }
+    s.set_finest(h(5));
+    for entry in registry::solvers() {
+        let solved = solve_coulomb(&s, entry);
+        let status = solved.outcome.status;
+        let refused = status == Status::NotRun && solved.outcome.detail.contains("rigid mode");
+        assert!(
+            status == Status::Converged || refused,
+            "{}: {status}: {}",
+            entry.name,
+            solved.outcome.detail
+        );
+    }
+}

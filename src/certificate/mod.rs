@@ -454,9 +454,13 @@ fn stationarity(
 
 /// zᵀ(f − contact forces) for every rigid mode z: the load the contact
 /// forces `force` leave unbalanced, over the load zᵀf they must carry (F
-/// times max|z| where that is zero).
+/// times max|z| where that is zero). A mode that moves slips alone (a body
+/// free sideways) is held by friction, whose forces are of the size of
+/// the contact load N whatever its own load (which may be zero): over the
+/// larger of its load and N·max|z|.
 fn force_balance(out: &mut Certificate, problem: &ContactProblem, force: &[(usize, f64)]) {
     let gross = problem.scales().force;
+    let contact_load = problem.scales().contact_load;
     for z in problem.rigid_modes() {
         let load: f64 = z.iter().zip(problem.f()).map(|(zk, fk)| zk * fk).sum();
         let unbalanced: f64 = z
@@ -465,10 +469,13 @@ fn force_balance(out: &mut Certificate, problem: &ContactProblem, force: &[(usiz
             .zip(each_row(force, z.len()))
             .map(|((zk, fk), ck)| zk * (fk - ck))
             .sum();
-        let scale = if load != 0.0 {
+        let size = z.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let scale = if !contactlab_solvers::problem::moves_a_jump(z, problem.contacts()) {
+            load.abs().max(contact_load * size)
+        } else if load != 0.0 {
             load.abs()
         } else {
-            gross * z.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+            gross * size
         };
         if scale > 0.0 {
             raise(&mut out.force_balance, unbalanced.abs() / scale);

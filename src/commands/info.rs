@@ -66,6 +66,9 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         match scene.hold {
             crate::mechanics::dofs::Hold::Roller => "on a roller on x = 1 (the paper's)",
             crate::mechanics::dofs::Hold::Rollers => "on rollers on x = 0 and x = 1",
+            crate::mechanics::dofs::Hold::Sliding => {
+                "on rollers on x = 0 and x = 1 that slide together (its horizontal translation a second rigid mode, held by friction alone)"
+            }
         },
         if scene.side_shift == 0.0 {
             String::new()

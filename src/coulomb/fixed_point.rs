@@ -200,6 +200,27 @@ pub trait GivenFrictionStep {
     }
 }
 
+/// The fixed point's first bound g⁰ when no step gives a better one:
+/// g⁰ = 0, the frictionless problem, unless a rigid mode moves slips
+/// alone (a body free sideways). Friction alone holds that mode, and the
+/// given-friction problem at g = 0 has no solution under a tangential
+/// load; g⁰ = 𝓕 P, the bound of the mean pressure P = N/L, carries what
+/// every later bound 𝓕p carries (Σ w p = N by the force balance), so each
+/// step is solvable when the Coulomb problem is (|Q| < 𝓕N).
+pub fn first_bound(problem: &ContactProblem) -> Vec<f64> {
+    let contacts = problem.contacts();
+    let held_by_friction = problem
+        .rigid_modes()
+        .iter()
+        .any(|z| !contactlab_solvers::problem::moves_a_jump(z, contacts));
+    let p = if held_by_friction {
+        problem.scales().pressure
+    } else {
+        0.0
+    };
+    contacts.iter().map(|c| c.coefficient * p).collect()
+}
+
 /// g_i = 𝓕_i p_i⁺ for the problem's coefficients: the bound of paper (9).
 pub fn bound_of(problem: &ContactProblem, pressure: &[f64]) -> Vec<f64> {
     problem
@@ -322,7 +343,7 @@ pub fn friction_fixed_point_accepting(
     let mut g = step
         .initial_bound(settings, observer)
         .filter(|g| g.len() == coefficient.len())
-        .unwrap_or_else(|| vec![0.0; coefficient.len()]);
+        .unwrap_or_else(|| first_bound(step.problem()));
     let mut history: Vec<FrictionIteration> = Vec::new();
     let mut last_change: Option<f64> = None;
     // The stall test looks back only to the last tightening of the solver

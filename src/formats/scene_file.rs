@@ -31,7 +31,7 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 /// poisson = 0.34
 /// plane = "strain"
 ///
-/// hold = "roller"                 # optional: "roller" (x = 1, the paper's) or "rollers" (on x = 0 and x = 1)
+/// hold = "roller"                 # optional: "roller" (x = 1, the paper's), "rollers" (on x = 0 and x = 1) or "sliding" (rollers on both sides that move together: a second rigid mode, held by friction)
 /// side_shift = 0.0                # optional: u''_1 prescribed on the held sides (shears the upper body)
 ///
 /// [gap]                           # optional: the initial gap along Γ_K

@@ -5,7 +5,7 @@ use contactlab_solvers::{ContactNode, ContactProblem, Csr, Mass, ProblemError};
 use thiserror::Error;
 
 use crate::mechanics::assembly;
-use crate::mechanics::dofs::{ContactDofs, DofMap};
+use crate::mechanics::dofs::{ContactDofs, DofMap, Hold};
 use crate::mechanics::mesh::{Body, Mesh};
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, SceneError, Traction};
@@ -91,11 +91,11 @@ impl Discretization {
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
         let f = assembly::load_vector(&dofs, &forces);
         let contacts = contact_nodes(&mesh, dofs.contacts(), scene.friction);
-        let rigid_mode = kernel_vector(&mesh, &dofs);
+        let modes = rigid_modes(&mesh, &dofs);
         let problem = if checked {
-            ContactProblem::new(a, f, mass, contacts, vec![rigid_mode])
+            ContactProblem::new(a, f, mass, contacts, modes)
         } else {
-            ContactProblem::without_solvability_checks(a, f, mass, contacts, vec![rigid_mode])
+            ContactProblem::without_solvability_checks(a, f, mass, contacts, modes)
         };
         let gap: Vec<f64> = match &scene.gap {
             Some(g) => dofs.contacts().iter().map(|c| g.at(c.x)).collect(),
@@ -170,7 +170,7 @@ impl Discretization {
 
     /// The rigid vertical translation of the upper body (paper (11)).
     pub fn kernel_vector(&self) -> Vec<f64> {
-        kernel_vector(&self.mesh, &self.dofs)
+        rigid_modes(&self.mesh, &self.dofs).swap_remove(0)
     }
 
     /// Nodal displacements of both bodies (per node, x and y).
@@ -245,16 +245,25 @@ impl Discretization {
     }
 }
 
-/// The rigid vertical translation of the upper body, z'' = (0, 1), in the
-/// unknowns: +1 on v''_2 away from Γ_K, −1 on every jump t_i (paper (11)).
-fn kernel_vector(mesh: &Mesh, dofs: &DofMap) -> Vec<f64> {
-    let u: Vec<[f64; 2]> = (0..mesh.num_nodes())
-        .map(|node| match mesh.locate(node).0 {
-            Body::Lower => [0.0, 0.0],
-            Body::Upper => [0.0, 1.0],
-        })
-        .collect();
-    dofs.from_direction(&u)
+/// The kernel of A: the rigid vertical translation of the upper body,
+/// z'' = (0, 1), in the unknowns +1 on v''_2 away from Γ_K and −1 on every
+/// jump t_i (paper (11)); and for a body free to slide ([`Hold::Sliding`])
+/// its horizontal translation (1, 0), +1 on v''_1 and −1 on every slip s_i.
+fn rigid_modes(mesh: &Mesh, dofs: &DofMap) -> Vec<Vec<f64>> {
+    let translation = |e: [f64; 2]| {
+        let u: Vec<[f64; 2]> = (0..mesh.num_nodes())
+            .map(|node| match mesh.locate(node).0 {
+                Body::Lower => [0.0, 0.0],
+                Body::Upper => e,
+            })
+            .collect();
+        dofs.from_direction(&u)
+    };
+    let mut modes = vec![translation([0.0, 1.0])];
+    if dofs.hold() == Hold::Sliding {
+        modes.push(translation([1.0, 0.0]));
+    }
+    modes
 }
 
 fn contact_nodes(mesh: &Mesh, contacts: &[ContactDofs], coefficient: f64) -> Vec<ContactNode> {

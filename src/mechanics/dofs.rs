@@ -35,6 +35,14 @@ pub enum Hold {
     /// one u''_2 for the whole side, holds that but took `tnnmg` past 500
     /// iterations at h = 1/512.)
     Rollers,
+    /// Free to slide: rollers on x = 0 and x = 1 that move together,
+    /// u''_1 = δ on both held sides with δ one unknown. The sides keep the
+    /// body from turning (nothing held at all, it keeps three rigid modes,
+    /// its rotation among them), and its horizontal translation is a second
+    /// rigid mode, which only friction holds: a tangential load on it must
+    /// stay below what friction can carry, |Q| < 𝓕P. Cattaneo–Mindlin's
+    /// force-driven form.
+    Sliding,
 }
 
 impl Hold {
@@ -42,6 +50,7 @@ impl Hold {
         match self {
             Hold::Roller => "roller",
             Hold::Rollers => "rollers",
+            Hold::Sliding => "sliding",
         }
     }
 }
@@ -215,12 +224,20 @@ impl DofMap {
                             [Dof::Slot(s), Dof::Slot(s + 1)]
                         }
                     }
-                    Hold::Rollers => {
+                    Hold::Rollers | Hold::Sliding => {
                         let row = lower + (j - 1) * (2 * per_row - 2);
+                        // Sliding: the sides' shared u''_1 follows the
+                        // bodies' other unknowns, before the contacts'.
+                        let side = match self.hold {
+                            Hold::Sliding => {
+                                Dof::Slot(lower + (self.mesh.rows() - 1) * (2 * per_row - 2))
+                            }
+                            _ => Dof::Fixed,
+                        };
                         if i == 0 {
-                            [Dof::Fixed, Dof::Slot(row)]
+                            [side, Dof::Slot(row)]
                         } else if i == per_row - 1 {
-                            [Dof::Fixed, Dof::Slot(row + 2 * per_row - 3)]
+                            [side, Dof::Slot(row + 2 * per_row - 3)]
                         } else {
                             [Dof::Slot(row + 2 * i - 1), Dof::Slot(row + 2 * i)]
                         }

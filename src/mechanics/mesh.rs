@@ -75,6 +75,7 @@ impl Mesh {
         let upper = match hold {
             crate::mechanics::dofs::Hold::Roller => 2 * n * above - above,
             crate::mechanics::dofs::Hold::Rollers => (2 * n - 2) * above,
+            crate::mechanics::dofs::Hold::Sliding => (2 * n - 2) * above + 1,
         };
         2 * n * above + upper + 2 * n
     }

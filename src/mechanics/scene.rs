@@ -355,6 +355,13 @@ impl Scene {
                 ),
             ));
         }
+        if self.side_shift != 0.0 && self.hold == crate::mechanics::dofs::Hold::Sliding {
+            return Err(invalid(
+                "side_shift",
+                self.side_shift,
+                "a body free to slide (hold = \"sliding\") has no sides held in place to shift: load its top tangentially (p1) instead, or hold it by \"rollers\"",
+            ));
+        }
         let total = self.total_vertical_load();
         if !total.is_finite() {
             return Err(invalid(
@@ -529,6 +536,14 @@ mod tests {
         bad(|s| s.levels.reverse(), "levels");
         bad(|s| s.side_shift = f64::NAN, "side_shift");
         bad(|s| s.side_shift = -0.5, "side_shift");
+        // A body free to slide has no sides held in place to shift.
+        bad(
+            |s| {
+                s.hold = crate::mechanics::dofs::Hold::Sliding;
+                s.side_shift = 1e-4;
+            },
+            "side_shift",
+        );
         bad(|s| s.name = "a\u{0}b".into(), "name");
         bad(|s| s.name = "two\nlines".into(), "name");
         bad(|s| s.name = "abc\u{202E}fed".into(), "name");

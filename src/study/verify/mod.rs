@@ -78,7 +78,10 @@ impl ClosedForm {
                     radius: *radius,
                     center: *center,
                 };
-                Ok(if scene.side_shift != 0.0 && scene.friction > 0.0 {
+                // Sheared by its held sides, or pushed while free to slide.
+                let sheared =
+                    scene.side_shift != 0.0 || scene.hold == crate::mechanics::dofs::Hold::Sliding;
+                Ok(if sheared && scene.friction > 0.0 {
                     ClosedForm::CattaneoMindlin(CattaneoMindlin {
                         hertz,
                         friction: scene.friction,
