@@ -521,32 +521,47 @@ impl ContactProblem {
     /// the same problem closed have the same scales, so the certificate's
     /// tolerances do not follow the gap's size.
     pub fn with_gap(mut self, gap: Vec<f64>) -> Result<Self, ProblemError> {
-        if gap.len() != self.contacts.len() {
-            return Err(ProblemError::Dimension {
-                what: "gap",
-                expected: self.contacts.len(),
-                got: gap.len(),
-            });
-        }
-        if let Some(node) = gap.iter().position(|d| !(d.is_finite() && *d >= 0.0)) {
-            return Err(ProblemError::BadGap {
-                node,
-                value: gap[node],
-            });
-        }
-        // f̃ = f − A D must be representable (closed).
-        let size = max_abs(&gap);
-        if !(size * self.scales.stiffness).is_finite()
-            || size > MAX_GAP_IN_DISPLACEMENTS * self.scales.displacement
-        {
-            return Err(ProblemError::GapSize {
-                size,
-                displacement: self.scales.displacement,
-            });
-        }
+        self.check_per_contact(
+            "gap",
+            &gap,
+            |d| d.is_finite() && d >= 0.0,
+            |node, value| ProblemError::BadGap { node, value },
+            |size, displacement| ProblemError::GapSize { size, displacement },
+        )?;
         self.gap = gap;
         self.operator_id = NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed);
         Ok(self)
+    }
+
+    /// The checks of a per-contact offset (a gap, a slip offset): one value
+    /// per contact node, each `valid` (else `bad`), and none so large that
+    /// the closed problem's load f̃ = f − A D could not be represented
+    /// ([`ContactProblem::closed`]; else `too_large`, with U).
+    fn check_per_contact(
+        &self,
+        what: &'static str,
+        values: &[f64],
+        valid: fn(f64) -> bool,
+        bad: fn(usize, f64) -> ProblemError,
+        too_large: fn(f64, f64) -> ProblemError,
+    ) -> Result<(), ProblemError> {
+        if values.len() != self.contacts.len() {
+            return Err(ProblemError::Dimension {
+                what,
+                expected: self.contacts.len(),
+                got: values.len(),
+            });
+        }
+        if let Some(node) = values.iter().position(|&x| !valid(x)) {
+            return Err(bad(node, values[node]));
+        }
+        let size = max_abs(values);
+        if !(size * self.scales.stiffness).is_finite()
+            || size > MAX_GAP_IN_DISPLACEMENTS * self.scales.displacement
+        {
+            return Err(too_large(size, self.scales.displacement));
+        }
+        Ok(())
     }
 
     /// The initial gap d_i ≥ 0 per contact node (all zero unless
@@ -569,28 +584,13 @@ impl ContactProblem {
     /// moves, s_i − δ. The scales are those of the loads and the stiffness,
     /// as for a gap ([`ContactProblem::with_gap`]).
     pub fn with_slip_offset(mut self, offset: Vec<f64>) -> Result<Self, ProblemError> {
-        if offset.len() != self.contacts.len() {
-            return Err(ProblemError::Dimension {
-                what: "slip offset",
-                expected: self.contacts.len(),
-                got: offset.len(),
-            });
-        }
-        if let Some(node) = offset.iter().position(|x| !x.is_finite()) {
-            return Err(ProblemError::BadSlipOffset {
-                node,
-                value: offset[node],
-            });
-        }
-        let size = max_abs(&offset);
-        if !(size * self.scales.stiffness).is_finite()
-            || size > MAX_GAP_IN_DISPLACEMENTS * self.scales.displacement
-        {
-            return Err(ProblemError::SlipOffsetSize {
-                size,
-                displacement: self.scales.displacement,
-            });
-        }
+        self.check_per_contact(
+            "slip offset",
+            &offset,
+            f64::is_finite,
+            |node, value| ProblemError::BadSlipOffset { node, value },
+            |size, displacement| ProblemError::SlipOffsetSize { size, displacement },
+        )?;
         self.slip_offset = offset;
         self.operator_id = NEXT_OPERATOR_ID.fetch_add(1, Ordering::Relaxed);
         Ok(self)

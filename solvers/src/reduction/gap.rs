@@ -161,29 +161,34 @@ mod tests {
         }
     }
 
-    /// ½·2t² − f t subject to t ≤ d: t = min(f/2, d), p = f − 2t. With
-    /// f = 4 and d = 0.5 the bodies touch (t = d, p = 3); with d = 5 they
-    /// do not (t = 2, p = 0).
-    #[test]
-    fn a_gap_is_met_in_the_closed_unknowns_and_moved_back() {
+    /// The problem [`Spring`] solves: A = diag(2, 1) on (t, s), f = (4, 0),
+    /// one contact node.
+    fn springs() -> ContactProblem {
         let mut coo = CooMatrix::new(2, 2);
         coo.push(0, 0, 2.0);
         coo.push(1, 1, 1.0);
-        let a = CsrMatrix::from(&coo);
         let contact = crate::problem::ContactNode {
             t: 0,
             s: 1,
             weight: 1.0,
             coefficient: 0.0,
         };
-        let problem = ContactProblem::new(
-            a,
+        ContactProblem::new(
+            CsrMatrix::from(&coo),
             vec![4.0, 0.0],
             crate::problem::Mass::Omitted,
             vec![contact],
             vec![],
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    /// ½·2t² − f t subject to t ≤ d: t = min(f/2, d), p = f − 2t. With
+    /// f = 4 and d = 0.5 the bodies touch (t = d, p = 3); with d = 5 they
+    /// do not (t = 2, p = 0).
+    #[test]
+    fn a_gap_is_met_in_the_closed_unknowns_and_moved_back() {
+        let problem = springs();
         let mut solver = ClosingGap::new(Box::new(Spring));
         for (d, t, p) in [(0.5, 0.5, 3.0), (5.0, 2.0, 0.0), (0.0, 0.0, 4.0)] {
             let gapped = problem.clone().with_gap(vec![d]).unwrap();
@@ -202,23 +207,7 @@ mod tests {
     /// (sticking).
     #[test]
     fn a_slip_offset_is_met_in_the_closed_unknowns_and_moved_back() {
-        let mut coo = CooMatrix::new(2, 2);
-        coo.push(0, 0, 2.0);
-        coo.push(1, 1, 1.0);
-        let contact = crate::problem::ContactNode {
-            t: 0,
-            s: 1,
-            weight: 1.0,
-            coefficient: 0.0,
-        };
-        let problem = ContactProblem::new(
-            CsrMatrix::from(&coo),
-            vec![4.0, 0.0],
-            crate::problem::Mass::Omitted,
-            vec![contact],
-            vec![],
-        )
-        .unwrap();
+        let problem = springs();
         let mut solver = ClosingGap::new(Box::new(Spring));
         for (sigma, slip) in [(3.0, 1.0), (0.5, 0.5), (-3.0, -1.0), (0.0, 0.0)] {
             let offset = problem.clone().with_slip_offset(vec![sigma]).unwrap();
