@@ -408,10 +408,16 @@ pub fn friction_fixed_point_accepting(
             }
         };
         if !solution.status.is_converged() {
-            let detail = format!(
-                "given-friction step {m} did not converge: {}",
-                solution.detail
-            );
+            // A solver that declines the problem (not run) says why, and
+            // that is the whole of it: no step was taken.
+            let detail = if solution.status == Status::NotRun {
+                solution.detail.clone()
+            } else {
+                format!(
+                    "given-friction step {m} did not converge: {}",
+                    solution.detail
+                )
+            };
             return finish(
                 solution.status,
                 Ending::InnerFailed,
