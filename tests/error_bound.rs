@@ -241,7 +241,7 @@ fn the_bound_of_the_reference_is_at_the_noise_of_its_solve() {
 
 /// Every solver's answers on the benchmark's small collection (problems 1
 /// and 3 with 𝓕 = 0.5 and 2, a sideways load, a nearly lifted body; h =
-/// 1/8) at targets 1e-4, 1e-6 and 1e-8: the Coulomb answer's bound (of the
+/// 1/8; Hertz's line contact, with its gap, at 1/16) at targets 1e-4, 1e-6 and 1e-8: the Coulomb answer's bound (of the
 /// given-friction problem at its own g = 𝓕 max(p, 0)) is never below its
 /// distance from that problem's solution, solved by `newton`. Returns the
 /// ratios for the sharpness check.

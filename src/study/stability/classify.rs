@@ -3,7 +3,9 @@
 //!
 //! - refused: the problem has no solution (condition (13) fails) and this
 //!   is said: by our check before any solve, or by a solver that reports the
-//!   problem unbounded or infeasible;
+//!   problem unbounded or infeasible; or the solver declines, before any
+//!   work, a problem it was not built for and says why (a second rigid
+//!   mode, a hierarchy it cannot use);
 //! - diverged: a NaN or infinity, a numerical breakdown, a fixed point whose
 //!   max|Δg| grows (contraction factor > 1), or a solver that reports a
 //!   problem unbounded or infeasible although condition (13) holds;
@@ -67,6 +69,8 @@ pub fn classify(t: &Trial, cx: &Context) -> (Class, String) {
     match t.status {
         // The machine's memory, not the method: refused before or at set-up.
         Status::OutOfMemory => (Class::Refused, t.detail.clone()),
+        // The solver declined the problem before any work, saying why.
+        Status::NotRun => (Class::Refused, t.detail.clone()),
         Status::NonFinite | Status::NumericalError => (Class::Diverged, t.detail.clone()),
         _ if t.outcome == TrialOutcome::NotContracting => match cx.trend {
             Some(q) if q > 1.0 => (

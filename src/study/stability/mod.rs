@@ -8,6 +8,9 @@
 //! - `friction`: the friction coefficient 𝓕, with bisection for the largest
 //!   𝓕 whose Coulomb solve is certified, on problems 1-3;
 //! - `load`: total vertical loads approaching 0 (condition (13) barely holds);
+//! - `scenes`: each solver at its defaults on the classical scenes of
+//!   `scenes/` (Hertz, a flat punch, Cattaneo–Mindlin sheared and free to
+//!   slide): a gap, a slip offset and a second rigid mode;
 //! - `refused`: loads that violate condition (13): refused by our check,
 //!   and (check bypassed) what each solver does with such a problem.
 
@@ -43,6 +46,8 @@ pub struct StabilitySpec {
     pub h: MeshSize,
     /// Mesh of the friction scan.
     pub h_friction: MeshSize,
+    /// Mesh of the classical scenes (their contact half-width is 1/32).
+    pub h_scenes: MeshSize,
     /// The registry's short value lists.
     pub quick: bool,
     /// Multiplies each solver's study work cap.
@@ -66,6 +71,7 @@ impl StabilitySpec {
         Self {
             h: k(4),
             h_friction: k(4),
+            h_scenes: k(5),
             quick: false,
             work_scale: 1.0,
             friction_values: vec![0.0, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 64.0],
@@ -82,6 +88,7 @@ impl StabilitySpec {
         Self {
             h: k(3),
             h_friction: k(4),
+            h_scenes: k(4),
             quick: true,
             work_scale: 0.2,
             friction_values: vec![0.0, 0.5, 16.0],
@@ -112,6 +119,7 @@ pub struct FrictionStep {
 pub const DEFAULT: &str = "default";
 pub const STRESS: &str = "stress";
 pub const LOAD: &str = "load";
+pub const SCENES: &str = "scenes";
 pub const REFUSED: &str = "refused";
 pub const BYPASSED: &str = "refused_check_bypassed";
 pub const FRICTION: &str = "friction";
@@ -271,6 +279,20 @@ pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
         let scene = lifted_problem(total, spec.h)?;
         for entry in registry::solvers() {
             let t = TrialSpec::new(STUDY, LOAD, &scene, entry, Law::Coulomb, base)
+                .with_work(work_cap(entry, spec.work_scale));
+            let cx = Context {
+                solvable: true,
+                ..Context::default()
+            };
+            one(&mut map, t, cx)?;
+        }
+    }
+    log("the classical scenes");
+    for (name, _) in crate::study::verify::SCENES {
+        let mut scene = crate::study::verify::scene(name)?;
+        scene.set_finest(spec.h_scenes);
+        for entry in registry::solvers() {
+            let t = TrialSpec::new(STUDY, SCENES, &scene, entry, Law::Coulomb, base)
                 .with_work(work_cap(entry, spec.work_scale));
             let cx = Context {
                 solvable: true,

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use crate::certificate::Condition;
 use crate::study::stability::classify::{Class, SLOW_FACTOR, WRONG_PRESSURE};
-use crate::study::stability::{BYPASSED, DEFAULT, FRICTION, LOAD, STRESS};
+use crate::study::stability::{BYPASSED, DEFAULT, FRICTION, LOAD, SCENES, STRESS};
 use crate::study::trial::Trial;
 
 pub(super) fn class_of(t: &Trial) -> Class {
@@ -298,6 +298,37 @@ pub fn readme_section(trials: &[Trial]) -> String {
             ""
         }
     );
+    let mut scenes: Vec<&str> = Vec::new();
+    for t in trials.iter().filter(|t| t.group == SCENES) {
+        if !scenes.contains(&t.scene.as_str()) {
+            scenes.push(&t.scene);
+        }
+    }
+    for scene in scenes {
+        let own: Vec<&Trial> = trials
+            .iter()
+            .filter(|t| t.group == SCENES && t.scene == scene)
+            .collect();
+        let converged = own
+            .iter()
+            .filter(|t| class_of(t) == Class::Converged)
+            .count();
+        let others: Vec<String> = own
+            .iter()
+            .filter(|t| class_of(t) != Class::Converged)
+            .map(|t| format!("{} {} ({})", t.solver.name, class_text(t), t.reason))
+            .collect();
+        let _ = writeln!(
+            s,
+            "- **Scene {scene}**: {converged} of {} solvers converged at their defaults{}.",
+            own.len(),
+            if others.is_empty() {
+                String::new()
+            } else {
+                format!("; {}", others.join("; "))
+            }
+        );
+    }
     let bypassed: Vec<String> = trials
         .iter()
         .filter(|t| t.group == BYPASSED)
