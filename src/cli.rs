@@ -132,11 +132,13 @@ pub enum Command {
     /// and charts into --out (about 20 min; --quick: seconds).
     ErrorBound(ErrorBoundArgs),
     /// Verify against closed forms: the classical scenes of scenes/ (Hertz's
-    /// line contact, a flat punch) at h = 1/128 ... 1/1024 (a/4 ... a/32),
-    /// every solver, each answer certified and its contact pressure
-    /// compared with the half-plane closed form (L2 and max error, half-width,
-    /// p₀, the observed order). Writes verification.csv, profiles/ (each
-    /// run's profile) and charts into --out (--quick: h = 1/64, 1/128).
+    /// line contact, a flat punch, Cattaneo–Mindlin sheared by its sides and
+    /// free to slide) at h = 1/64 ... 1/1024 (a/2 ... a/32), every solver,
+    /// each answer certified and its contact pressure (and, for
+    /// Cattaneo–Mindlin, the stick zone and the traction) compared with the
+    /// half-plane closed form (L2 and max error, half-width, p₀, the
+    /// observed order). Writes verification.csv, profiles/ (each run's
+    /// profile) and charts into --out (--quick: h = 1/64, 1/128).
     Verify(VerifyArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
@@ -381,7 +383,7 @@ pub struct ReproduceArgs {
     /// Also the studies that take hours (about 2.5 h on a 2-core machine):
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
     /// bench's solvers with three timed runs each and 15 s per run, and the whole
-    /// benchmark collection (73 instances, not its core 42 up to h = 1/32).
+    /// benchmark collection (81 instances, not its core 46 up to h = 1/32).
     /// Without it the run takes about an hour.
     #[arg(long)]
     pub long: bool,

@@ -244,11 +244,13 @@ fn target_of(spec: &TrialSpec) -> f64 {
 }
 
 /// The run's predicted seconds on the next mesh from its last two (the
-/// speed study's rule: at least 4× a mesh).
+/// speed study's rule: at least 4× a mesh, as the unknowns quadruple), or
+/// from its one: 4× it, the least a mesh of 4× the unknowns costs.
 pub(crate) fn predicted(past: &[f64]) -> Option<f64> {
     match past {
         [.., a, b] => Some(b * (b / a).max(4.0)),
-        _ => None,
+        [b] => Some(4.0 * b),
+        [] => None,
     }
 }
 
