@@ -52,6 +52,11 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
     let balanced = "name = \"x\"\n[[loads]]\nfrom = \"3/5\"\nto = \"4/5\"\np2 = -5.0\n[[loads]]\nfrom = 0.0\nto = 1.0\np2 = 1.0\n";
     let huge_load = GOOD.replace("-60.0", "-1e308");
     let name_nul = GOOD.replace("name = \"x\"", "name = \"a\\u0000b\"");
+    // A lower body of its own material: out of range, of another plane
+    // model, or changed by a flag that cannot say which body it meant.
+    let lower_soft = format!("{GOOD}[lower_material]\nyoung = 0.0\n");
+    let lower_plane = format!("{GOOD}[lower_material]\nplane = \"stress\"\n");
+    let lower_ok = format!("{GOOD}[lower_material]\nyoung = 200e3\n");
     let name_newline = GOOD.replace("name = \"x\"", "name = \"a\\nb\"");
     let name_rlo = GOOD.replace("name = \"x\"", "name = \"abc\\u202Efed\"");
     let cases: Vec<(Input<'_>, &str)> = vec![
@@ -259,6 +264,18 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             "loads[0].to",
         ),
         (Input::Scene(upward.as_bytes(), &[]), "condition (13)"),
+        (
+            Input::Scene(lower_soft.as_bytes(), &[]),
+            "lower_material.young",
+        ),
+        (
+            Input::Scene(lower_plane.as_bytes(), &[]),
+            "lower_material.plane",
+        ),
+        (
+            Input::Scene(lower_ok.as_bytes(), &["--young", "1e5"]),
+            "each body its own material",
+        ),
         (Input::Scene(b"name = \n", &[]), "line 1"),
         (Input::Scene(truncated.as_bytes(), &[]), "scene file"),
         (Input::Scene(b"name = \"x\"\n\xff\xfe\n", &[]), "not UTF-8"),
@@ -417,6 +434,7 @@ fn fragment() -> impl Strategy<Value = String> {
     let header = prop::sample::select(vec![
         "",
         "[material]\n",
+        "[lower_material]\n",
         "[[loads]]\n",
         "[coulomb]\n",
         "[solver.relaxation]\n",

@@ -188,6 +188,55 @@ fn hertz_pressure_converges_to_the_closed_form() {
     assert!(errors[0] / errors[2] > 1.8, "{errors:?}");
 }
 
+/// Hertz with a lower body three times as stiff (`lower_material`),
+/// frictionless so that the normal problem stands alone: the contact
+/// follows the two materials' E* (1/E* = Σ (1 − ν²)/E), 1.5× the one
+/// material's. With R chosen so that a = 1/32 at that E*, the contact
+/// zone ends on the node of a and the pressure is Hertz's as closely as
+/// with one material; assembling either body with the other's material
+/// moves the edge by √1.5 or √(1/2) of a (two nodes or more at h = a/8).
+#[test]
+fn hertz_with_two_materials_follows_their_effective_modulus() {
+    use contactlab::mechanics::closed_forms::effective_modulus;
+    use contactlab::mechanics::gap::Gap;
+    let mut s = scene("hertz").unwrap();
+    let lower = contactlab::mechanics::material::Material {
+        young: 3.0 * s.material.young,
+        ..s.material
+    };
+    s.lower_material = Some(lower);
+    let e_star = effective_modulus(&lower, &s.material);
+    let one = effective_modulus(&s.material, &s.material);
+    assert!((e_star / one - 1.5).abs() < 1e-12);
+    let (a, load) = (1.0 / 32.0, -s.total_vertical_load());
+    s.gap = Some(Gap::Parabola {
+        center: 0.5,
+        radius: std::f64::consts::PI * e_star * a * a / (4.0 * load),
+    });
+    s.validate().unwrap();
+    let closed = ClosedForm::of(&s).unwrap();
+    assert!((closed.half_width() - a).abs() < 1e-12);
+    s.set_finest(h(8));
+    let solved = solve_coulomb(&s, solver_entry("tnnmg").unwrap());
+    assert_eq!(
+        solved.outcome.status,
+        Status::Converged,
+        "{}",
+        solved.outcome.detail
+    );
+    let e = pressure_error(
+        &solved.finest.contact_x(),
+        &weights(&solved.finest),
+        &solved.outcome.solution.pressure,
+        |x| closed.pressure(x),
+        closed.center(),
+        closed.compared_within(),
+        closed.p0(),
+    );
+    assert!((e.half_width - a).abs() < 1e-12, "{e:?}");
+    assert!(e.l2 < 3e-2, "{e:?}");
+}
+
 /// Frictionless Hertz with its held sides shifted by δ is the unshifted
 /// answer with the upper body moved rigidly by δ: a rigid translation has
 /// no strain and frictionless contact does not feel the slip. The shift is

@@ -1,7 +1,7 @@
 //! The paper's scene as one algebraic problem: counts, symmetry, rigid
 //! motions, the one-dimensional kernel, the patch test, loads and masses.
 
-use contactlab::mechanics::assembly::{self, strain_matrix};
+use contactlab::mechanics::assembly::{self, BodyMaterials, strain_matrix};
 use contactlab::mechanics::discretization::{BuildError, Discretization};
 use contactlab::mechanics::dofs::{DofExpansion, DofMap, PhysicalDofs};
 use contactlab::mechanics::material::{Material, PlaneModel};
@@ -96,7 +96,7 @@ fn stiffness_is_symmetric() {
             &PhysicalDofs {
                 num_nodes: mesh.num_nodes(),
             },
-            &m,
+            &BodyMaterials::both(&m),
         )
         .to_nalgebra();
         let scale = max_abs(a.values());
@@ -141,7 +141,7 @@ fn rigid_motions_of_each_body_have_zero_energy_before_boundary_conditions() {
             &PhysicalDofs {
                 num_nodes: mesh.num_nodes(),
             },
-            &m,
+            &BodyMaterials::both(&m),
         )
         .to_nalgebra();
         let scale = max_abs(a.values());
@@ -171,7 +171,7 @@ fn a_deformation_has_positive_energy() {
         &PhysicalDofs {
             num_nodes: mesh.num_nodes(),
         },
-        &Material::default(),
+        &BodyMaterials::both(&Material::default()),
     )
     .to_nalgebra();
     let stretch: Vec<f64> = (0..mesh.num_nodes())
@@ -258,7 +258,7 @@ fn patch_test_affine_field_gives_constant_stress_and_no_interior_forces() {
             &PhysicalDofs {
                 num_nodes: mesh.num_nodes(),
             },
-            &m,
+            &BodyMaterials::both(&m),
         )
         .to_nalgebra();
         let u: Vec<f64> = (0..mesh.num_nodes())
@@ -514,7 +514,8 @@ fn row_wise_assembly_equals_the_triplet_assembly_entry_by_entry() {
         let dofs = DofMap::new(&mesh);
         for material in materials() {
             let d = material.elasticity_matrix();
-            let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &material);
+            let (a, m) =
+                assembly::stiffness_and_mass(&mesh, &dofs, &BodyMaterials::both(&material));
             let m = a.nalgebra_with_values(m);
             let a = a.to_nalgebra();
             let pairs = [

@@ -80,7 +80,7 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         }
     );
     let text = format!(
-        "scene              {} (plane {}, E = {}, ν = {}, 𝓕 = {})\n\
+        "scene              {} (plane {}, E = {}, ν = {}{}, 𝓕 = {})\n\
          h                  {h}\n\
          nodes              {} (n = {}, N = n² + n)\n\
          elements           {}\n\
@@ -97,6 +97,13 @@ pub fn run(args: &InfoArgs) -> Result<()> {
         m.plane,
         m.young,
         m.poisson,
+        match &scene.lower_material {
+            Some(l) => format!(
+                " (the upper body); the lower body E = {}, ν = {}",
+                l.young, l.poisson
+            ),
+            None => String::new(),
+        },
         scene.friction,
         d.mesh.num_nodes(),
         d.mesh.n(),

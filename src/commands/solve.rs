@@ -73,8 +73,11 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         }
         write_atomic(&dir.join("forces.csv"), &forces.into_inner()?)?;
         if args.vtu {
-            let text =
-                crate::formats::vtu::vtu(&solved.finest, &scene.material, &solved.outcome.solution);
+            let text = crate::formats::vtu::vtu(
+                &solved.finest,
+                &scene.materials(),
+                &solved.outcome.solution,
+            );
             write_atomic(&dir.join("field.vtu"), text.as_bytes())?;
         }
         let target = folder.commit()?;

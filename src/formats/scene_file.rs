@@ -31,6 +31,10 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 20;
 /// poisson = 0.34
 /// plane = "strain"
 ///
+/// [lower_material]                # optional: the lower body's own (default: [material])
+/// young = 200e3
+/// poisson = 0.3
+///
 /// hold = "roller"                 # optional: "roller" (x = 1, the paper's), "rollers" (on x = 0 and x = 1) or "sliding" (rollers on both sides that move together: a second rigid mode, held by friction)
 /// side_shift = 0.0                # optional: u''_1 prescribed on the held sides (shears the upper body)
 ///
@@ -59,6 +63,8 @@ pub struct SceneFile {
     pub name: String,
     #[serde(default)]
     pub material: Material,
+    /// The lower body's material, when it differs (`[lower_material]`).
+    pub lower_material: Option<Material>,
     #[serde(default = "default_friction")]
     pub friction: f64,
     pub loads: Vec<Traction>,
@@ -106,6 +112,7 @@ impl SceneFile {
         let scene = Scene {
             name: self.name,
             material: self.material,
+            lower_material: self.lower_material,
             friction: self.friction,
             loads: self.loads,
             levels: self.levels,

@@ -14,22 +14,33 @@ use std::fmt::Write;
 
 use contactlab_solvers::Solution;
 
+use crate::mechanics::assembly::BodyMaterials;
 use crate::mechanics::assembly::strain_matrix;
 use crate::mechanics::contact_zone::{ContactState, SEPARATION_TOL, largest_displacement};
 use crate::mechanics::discretization::Discretization;
 use crate::mechanics::material::{Material, PlaneModel};
 use crate::mechanics::mesh::Body;
 
-/// Stress (σ₁₁, σ₂₂, σ₁₂) of each triangle and its von Mises stress.
+/// Stress (σ₁₁, σ₂₂, σ₁₂) of each triangle and its von Mises stress, each
+/// body by its own material.
 pub fn element_stresses(
     d: &Discretization,
-    material: &Material,
+    materials: &BodyMaterials,
     u: &[[f64; 2]],
 ) -> Vec<([f64; 3], f64)> {
-    let dm = material.elasticity_matrix();
+    let of = |body| match body {
+        Body::Lower => &materials.lower,
+        Body::Upper => &materials.upper,
+    };
+    let dms = [
+        materials.lower.elasticity_matrix(),
+        materials.upper.elasticity_matrix(),
+    ];
     d.mesh
         .triangles()
-        .map(|(_, nodes)| {
+        .map(|(body, nodes)| {
+            let material: &Material = of(body);
+            let dm = &dms[usize::from(body == Body::Upper)];
             let p = nodes.map(|n| d.mesh.coords(n));
             let b = strain_matrix(p);
             let ue: Vec<f64> = nodes.iter().flat_map(|&n| u[n]).collect();
@@ -87,7 +98,7 @@ fn named_data_array(
 }
 
 /// The VTU text of a solution on `d` (its finest level).
-pub fn vtu(d: &Discretization, material: &Material, s: &Solution) -> String {
+pub fn vtu(d: &Discretization, materials: &BodyMaterials, s: &Solution) -> String {
     let mesh = &d.mesh;
     let u = d.displacements(&s.v);
     let n = mesh.num_nodes();
@@ -105,7 +116,7 @@ pub fn vtu(d: &Discretization, material: &Material, s: &Solution) -> String {
         }
     }
     let triangles: Vec<(Body, [usize; 3])> = mesh.triangles().collect();
-    let stresses = element_stresses(d, material, &u);
+    let stresses = element_stresses(d, materials, &u);
     let mut out = String::new();
     out.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n");
     let _ = writeln!(
@@ -229,7 +240,7 @@ mod tests {
             .collect();
         let (e, nu) = (m.young, m.poisson);
         let c = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
-        for (s, _) in element_stresses(&d, &m, &u) {
+        for (s, _) in element_stresses(&d, &BodyMaterials::both(&m), &u) {
             assert!((s[0] - c * (1.0 - nu) * a).abs() < 1e-9 * e * a);
             assert!((s[1] - c * nu * a).abs() < 1e-9 * e * a);
             assert!(s[2].abs() < 1e-9 * e * a);

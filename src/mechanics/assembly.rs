@@ -63,18 +63,20 @@ impl Lists {
     }
 }
 
-/// An element matrix of a triangle from its corners, local order
-/// (u1_a, u2_a, u1_b, ...).
-pub type ElementMatrix<'a> = dyn Fn([[f64; 2]; 3]) -> [[f64; 6]; 6] + 'a;
+/// An element matrix of a triangle of a body from its corners, local order
+/// (u1_a, u2_a, u1_b, ...): the body, because each may have its own
+/// material.
+pub type ElementMatrix<'a> = dyn Fn(Body, [[f64; 2]; 3]) -> [[f64; 6]; 6] + 'a;
 
 /// Up to this many distinct shapes are found by a scan.
 const SCANNED_SHAPES: usize = 8;
 
-/// The element matrices of every triangle, computed once per shape: an
-/// element matrix depends on the edge vectors only, and on a mesh of
-/// h = 1/2^k those are exact, so congruent triangles share one matrix
-/// bit for bit (this mesh has two shapes). Any other mesh gets one entry per
-/// distinct shape, at worst one per triangle.
+/// The element matrices of every triangle, computed once per shape and
+/// body: an element matrix depends on the edge vectors and the body's
+/// material only, and on a mesh of h = 1/2^k the edge vectors are exact, so
+/// congruent triangles of a body share one matrix bit for bit (this mesh has
+/// two shapes per body). Any other mesh gets one entry per distinct shape,
+/// at worst one per triangle.
 struct ElementTable<const K: usize> {
     shape: Vec<u32>,
     matrices: Vec<[[[f64; 6]; 6]; K]>,
@@ -87,20 +89,22 @@ impl<const K: usize> ElementTable<K> {
         let coords: Vec<[f64; 2]> = (0..mesh.num_nodes()).map(|v| mesh.coords(v)).collect();
         // Shapes seen so far; looked up by scanning while they are few (this
         // mesh has two), by hashing beyond.
-        let mut keys: Vec<[u64; 4]> = Vec::new();
-        let mut index: HashMap<[u64; 4], u32> = HashMap::new();
+        let mut keys: Vec<[u64; 5]> = Vec::new();
+        let mut index: HashMap<[u64; 5], u32> = HashMap::new();
         let mut matrices = Vec::new();
         let shape = tris
             .iter()
             .map(|tri| {
                 let p = tri.map(|node| coords[node as usize]);
-                let key = [
+                let body = mesh.body_of(tri[0] as usize);
+                let edges = [
                     p[1][0] - p[0][0],
                     p[1][1] - p[0][1],
                     p[2][0] - p[0][0],
                     p[2][1] - p[0][1],
                 ]
                 .map(f64::to_bits);
+                let key = [edges[0], edges[1], edges[2], edges[3], body as u64];
                 let known = if keys.len() <= SCANNED_SHAPES {
                     keys.iter().position(|k| *k == key).map(|i| i as u32)
                 } else {
@@ -108,7 +112,7 @@ impl<const K: usize> ElementTable<K> {
                 };
                 known.unwrap_or_else(|| {
                     let i = matrices.len() as u32;
-                    matrices.push(elements.map(|element| element(p)));
+                    matrices.push(elements.map(|element| element(body, p)));
                     keys.push(key);
                     if keys.len() == SCANNED_SHAPES + 1 {
                         index.extend(keys.iter().enumerate().map(|(i, k)| (*k, i as u32)));
@@ -398,15 +402,49 @@ pub fn assemble(
     only: Option<Body>,
     element: impl Fn([[f64; 2]; 3]) -> [[f64; 6]; 6],
 ) -> CsrMatrix<f64> {
+    let element = |_: Body, p| element(p);
     let [a] = assemble_all(mesh, dofs, only, [&element]);
     a.to_nalgebra()
 }
 
+/// The materials of the two bodies, lower (primed) and upper
+/// (double-primed): one D per body.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyMaterials {
+    pub lower: Material,
+    pub upper: Material,
+}
+
+impl BodyMaterials {
+    /// One material for both bodies.
+    pub fn both(material: &Material) -> Self {
+        Self {
+            lower: *material,
+            upper: *material,
+        }
+    }
+
+    /// The elasticity matrix D of each body, as [`ElementMatrix`] reads it.
+    fn elasticity(&self) -> [[[f64; 3]; 3]; 2] {
+        [
+            self.lower.elasticity_matrix(),
+            self.upper.elasticity_matrix(),
+        ]
+    }
+}
+
+fn body_index(body: Body) -> usize {
+    match body {
+        Body::Lower => 0,
+        Body::Upper => 1,
+    }
+}
+
 /// Stiffness matrix of both bodies, with 32-bit column indices (the
-/// problem's A).
-pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, material: &Material) -> Csr {
-    let d = material.elasticity_matrix();
-    let element = |p| element_stiffness(p, &d);
+/// problem's A), each body with its own material.
+pub fn stiffness(mesh: &Mesh, dofs: &impl DofExpansion, materials: &BodyMaterials) -> Csr {
+    let d = materials.elasticity();
+    let element = |b, p| element_stiffness(p, &d[body_index(b)]);
     let [a] = assemble_all(mesh, dofs, None, [&element]);
     a
 }
@@ -420,7 +458,7 @@ pub fn mass(mesh: &Mesh, dofs: &impl DofExpansion) -> CsrMatrix<f64> {
 /// columns, each row's stencil and values kept once): on A's pattern,
 /// since the pattern comes from the mesh and the unknowns alone.
 pub fn mass_rows(mesh: &Mesh, dofs: &impl DofExpansion) -> Csr {
-    let [m] = assemble_all(mesh, dofs, None, [&element_mass]);
+    let [m] = assemble_all(mesh, dofs, None, [&|_, p| element_mass(p)]);
     m
 }
 
@@ -464,14 +502,16 @@ fn element_form(
 pub fn stiffness_and_mass(
     mesh: &Mesh,
     dofs: &impl DofExpansion,
-    material: &Material,
+    materials: &BodyMaterials,
 ) -> (Csr, Vec<f64>) {
-    let d = material.elasticity_matrix();
+    let d = materials.elasticity();
     let [a, m] = assemble_all(
         mesh,
         dofs,
         None,
-        [&|p| element_stiffness(p, &d), &element_mass],
+        [&|b, p| element_stiffness(p, &d[body_index(b)]), &|_, p| {
+            element_mass(p)
+        }],
     );
     let m = m.values().to_vec(m.row_offsets());
     (a, m)

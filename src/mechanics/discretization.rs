@@ -82,10 +82,10 @@ impl Discretization {
         let mesh = Mesh::new(h);
         let dofs = DofMap::with_hold(&mesh, scene.hold).with_side_shift(scene.side_shift);
         let (a, mass) = if with_mass {
-            let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.material);
+            let (a, m) = assembly::stiffness_and_mass(&mesh, &dofs, &scene.materials());
             (a, Mass::OnStiffnessPattern(m))
         } else {
-            let a = assembly::stiffness(&mesh, &dofs, &scene.material);
+            let a = assembly::stiffness(&mesh, &dofs, &scene.materials());
             (a, Mass::Omitted)
         };
         let forces = assembly::top_traction_forces(&mesh, &scene.loads);
@@ -124,7 +124,7 @@ impl Discretization {
             .map_err(|e| match e {
                 ProblemError::Scale { .. } => BuildError::Scales(e),
                 ProblemError::NonFinite { what: "A" } => BuildError::Overflow {
-                    young: scene.material.young,
+                    young: scene.material.young.max(scene.materials().lower.young),
                 },
                 other => BuildError::Problem(other),
             })?;

@@ -104,6 +104,15 @@ impl Mesh {
         (body, local % self.n, local / self.n)
     }
 
+    /// The body a node belongs to (the lower body's nodes come first).
+    pub fn body_of(&self, node: usize) -> Body {
+        if node < self.n * self.rows {
+            Body::Lower
+        } else {
+            Body::Upper
+        }
+    }
+
     /// Coordinates of a node.
     pub fn coords(&self, node: usize) -> [f64; 2] {
         let (body, i, j) = self.locate(node);

@@ -29,7 +29,14 @@ pub struct Traction {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Scene {
     pub name: String,
+    /// The upper (double-primed) body's material, and the lower's unless
+    /// `lower_material` gives its own.
     pub material: Material,
+    /// The lower (primed) body's material when it differs from the upper's
+    /// (scene files: `[lower_material]`; None: `material` for both, as in
+    /// the paper). The plane model must be the same.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lower_material: Option<Material>,
     /// Coulomb friction coefficient 𝓕 (paper: 0.5).
     pub friction: f64,
     pub loads: Vec<Traction>,
@@ -113,6 +120,34 @@ pub enum SceneError {
     UnknownProblem(u32),
 }
 
+/// Young's modulus and Poisson's ratio of the table `table` in range;
+/// `flag_e`, `flag_nu` name the command-line flags that set them, if any.
+fn check_material(
+    table: &str,
+    flag_e: &str,
+    flag_nu: &str,
+    m: &Material,
+) -> Result<(), SceneError> {
+    if !(m.young >= MAGNITUDES.0 && m.young <= MAGNITUDES.1) {
+        return Err(invalid(
+            &format!("{table}.young{flag_e}"),
+            m.young,
+            &format!(
+                "Young's modulus must lie in [{:e}, {:e}] (the paper: 73e3), the range of units in which every solver is shown to give the same answer",
+                MAGNITUDES.0, MAGNITUDES.1
+            ),
+        ));
+    }
+    if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
+        return Err(invalid(
+            &format!("{table}.poisson{flag_nu}"),
+            m.poisson,
+            "Poisson's ratio must lie in (-1, 0.5) (the paper: 0.34)",
+        ));
+    }
+    Ok(())
+}
+
 fn invalid(field: &str, value: impl Shown, expected: &str) -> SceneError {
     SceneError::Invalid {
         field: field.to_string(),
@@ -163,10 +198,26 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    /// `scene` with these changes, validated (condition (13) included).
+    /// `scene` with these changes, validated (condition (13) included). A
+    /// scene whose bodies have two materials takes no material change: which
+    /// body it meant is not said.
     pub fn apply(&self, mut scene: Scene) -> Result<Scene, SceneError> {
         if let Some(h) = self.h {
             scene.set_finest(h);
+        }
+        if scene.lower_material.is_some() {
+            let given = [
+                ("--young", self.young.map(|e| e.shown())),
+                ("--poisson", self.poisson.map(|nu| nu.shown())),
+                ("--plane", self.plane.map(|p| p.to_string())),
+            ];
+            if let Some((flag, Some(value))) = given.into_iter().find(|(_, v)| v.is_some()) {
+                return Err(invalid(
+                    flag,
+                    value,
+                    "this scene gives each body its own material ([material] for the upper, [lower_material] for the lower): change them in the scene file",
+                ));
+            }
         }
         if let Some(e) = self.young {
             scene.material.young = e;
@@ -198,6 +249,7 @@ impl Scene {
         Ok(Self {
             name: format!("problem {number}"),
             material: Material::default(),
+            lower_material: None,
             friction: default_friction(),
             loads: vec![Traction {
                 from: 0.0,
@@ -210,6 +262,14 @@ impl Scene {
             hold: crate::mechanics::dofs::Hold::Roller,
             side_shift: 0.0,
         })
+    }
+
+    /// Each body's material: the lower's own if given, else `material`.
+    pub fn materials(&self) -> crate::mechanics::assembly::BodyMaterials {
+        crate::mechanics::assembly::BodyMaterials {
+            lower: self.lower_material.unwrap_or(self.material),
+            upper: self.material,
+        }
     }
 
     /// The paper's problem `number` with its continuation levels 1/8, ..., h.
@@ -263,23 +323,19 @@ impl Scene {
                 &format!("give a name of 1 to {MAX_NAME_CHARS} characters"),
             ));
         }
-        let m = &self.material;
-        if !(m.young >= MAGNITUDES.0 && m.young <= MAGNITUDES.1) {
-            return Err(invalid(
-                "material.young (--young)",
-                m.young,
-                &format!(
-                    "Young's modulus must lie in [{:e}, {:e}] (the paper: 73e3), the range of units in which every solver is shown to give the same answer",
-                    MAGNITUDES.0, MAGNITUDES.1
-                ),
-            ));
-        }
-        if !(m.poisson.is_finite() && m.poisson > -1.0 && m.poisson < 0.5) {
-            return Err(invalid(
-                "material.poisson (--poisson)",
-                m.poisson,
-                "Poisson's ratio must lie in (-1, 0.5) (the paper: 0.34)",
-            ));
+        check_material("material", " (--young)", " (--poisson)", &self.material)?;
+        if let Some(lower) = &self.lower_material {
+            check_material("lower_material", "", "", lower)?;
+            if lower.plane != self.material.plane {
+                return Err(invalid(
+                    "lower_material.plane",
+                    lower.plane.name(),
+                    &format!(
+                        "both bodies are one plane reduction: give plane = \"{}\" as in [material], or leave it out",
+                        self.material.plane
+                    ),
+                ));
+            }
         }
         if !(self.friction == 0.0
             || (self.friction >= MAGNITUDES.0 && self.friction <= MAX_FRICTION))

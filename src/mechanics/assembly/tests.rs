@@ -12,7 +12,8 @@ fn both_sums(
     only: Option<Body>,
 ) -> [(Pattern, Vec<Vec<u64>>); 2] {
     let d = Material::default().elasticity_matrix();
-    let elements: [&ElementMatrix<'_>; 2] = [&|p| element_stiffness(p, &d), &element_mass];
+    let elements: [&ElementMatrix<'_>; 2] =
+        [&|_, p| element_stiffness(p, &d), &|_, p| element_mass(p)];
     [Sum::ByNodesWherePossible, Sum::ByUnknowns].map(|sum| {
         let matrices = assemble_rows(mesh, dofs, only, elements, sum);
         let pattern = (
@@ -93,7 +94,7 @@ fn energy_without_a_is_the_stiffness_form() {
     let mesh = Mesh::new(MeshSize::from_level(3).unwrap());
     let dofs = DofMap::new(&mesh);
     let material = Material::default();
-    let a = stiffness(&mesh, &dofs, &material);
+    let a = stiffness(&mesh, &dofs, &BodyMaterials::both(&material));
     let v: Vec<f64> = (0..dofs.n())
         .map(|i| ((i * 29 % 23) as f64 - 11.0) / 7.0)
         .collect();
@@ -123,4 +124,48 @@ fn l2_norm_without_m_is_the_mass_matrix_form() {
         (got - expected).abs() <= 1e-12 * expected,
         "{got} vs {expected}"
     );
+}
+
+/// Each body is assembled with its own material: with the lower body
+/// twice as stiff, vᵀ A v grows by exactly the lower body's energy (the
+/// upper's unchanged), for a v that strains both. Assembling either body
+/// with the other's material, or the element cache sharing one matrix
+/// across bodies, fails it.
+#[test]
+fn each_body_is_assembled_with_its_own_material() {
+    let mesh = Mesh::new(MeshSize::from_level(3).unwrap());
+    let dofs = DofMap::new(&mesh);
+    let upper = Material::default();
+    let lower = Material {
+        young: 2.0 * upper.young,
+        ..upper
+    };
+    let v: Vec<f64> = (0..dofs.n())
+        .map(|i| ((i * 29 % 23) as f64 - 11.0) / 7.0)
+        .collect();
+    let energy = |a: &Csr| {
+        let av = contactlab_solvers::numerics::linalg::spmv(a, &v);
+        v.iter().zip(&av).map(|(a, b)| a * b).sum::<f64>()
+    };
+    let one = energy(&stiffness(&mesh, &dofs, &BodyMaterials::both(&upper)));
+    let two = energy(&stiffness(&mesh, &dofs, &BodyMaterials { lower, upper }));
+    let d = upper.elasticity_matrix();
+    let lower_only = assemble(&mesh, &dofs, Some(Body::Lower), |p| {
+        element_stiffness(p, &d)
+    });
+    let lower_energy: f64 = lower_only
+        .triplet_iter()
+        .map(|(i, j, x)| v[i] * x * v[j])
+        .sum();
+    assert!(
+        lower_energy > 0.1 * one && lower_energy < 0.9 * one,
+        "{lower_energy} of {one}"
+    );
+    assert!(
+        (two - (one + lower_energy)).abs() <= 1e-12 * two,
+        "{two} vs {one} + {lower_energy}"
+    );
+    // With the mass on the same pattern, the stiffness is the same.
+    let (a, _) = stiffness_and_mass(&mesh, &dofs, &BodyMaterials { lower, upper });
+    assert!((energy(&a) - two).abs() <= 1e-12 * two);
 }

@@ -75,11 +75,23 @@ pub enum ClosedForm {
 impl ClosedForm {
     /// The closed form of `scene`: its gap's parabola (Hertz; sheared by
     /// its sides with friction, Cattaneo–Mindlin) or the flat stretch of
-    /// its gap table (a punch), its material's E*, and its load.
+    /// its gap table (a punch), its materials' E*, and its load. With
+    /// friction the parabola's closed forms need one material on both
+    /// sides, so that the normal and tangential problems decouple (Johnson
+    /// §7.1; otherwise Dundurs' β ≠ 0 couples them): refused otherwise.
     pub fn of(scene: &Scene) -> Result<Self> {
-        let modulus = effective_modulus(&scene.material, &scene.material);
+        let materials = scene.materials();
+        let modulus = effective_modulus(&materials.lower, &materials.upper);
         let load = -scene.total_vertical_load();
         match &scene.gap {
+            Some(Gap::Parabola { .. })
+                if scene.friction > 0.0 && materials.lower != materials.upper =>
+            {
+                anyhow::bail!(
+                    "{}: Hertz's and Cattaneo–Mindlin's closed forms with friction hold for one material on both bodies (the normal and tangential problems then decouple); give [lower_material] the upper's or friction = 0",
+                    scene.name
+                )
+            }
             Some(Gap::Parabola { center, radius }) => {
                 let hertz = Hertz {
                     modulus,
@@ -374,7 +386,7 @@ impl Study for VerifyStudy {
                         half_width_exact: closed.half_width(),
                         p0: None,
                         p0_exact: closed.p0(),
-                        e_star: effective_modulus(&s.material, &s.material),
+                        e_star: effective_modulus(&s.materials().lower, &s.material),
                         load: -s.total_vertical_load(),
                         radius: closed.radius(),
                         friction: s.friction,
