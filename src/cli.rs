@@ -64,9 +64,11 @@ pub enum Command {
     /// three problems, profiles, a sweep, the stability map, the speed
     /// measurements of `bench`, the benchmark, the discretization error, the
     /// oracle at 1/128 and 1/256, the error bound's validity and sharpness, a
-    /// side-by-side at 1/128, r × ε maps, charts, a manifest and a README,
+    /// side-by-side at 1/128, r × ε maps, the verification against closed
+    /// forms (h = 1/32 ... 1/1024, 30 s a solve; --long: verify's own
+    /// ladder), charts, a manifest and a README,
     /// all into --out (default results/).
-    /// About an hour on 2 cores; --long adds the studies that take hours (the
+    /// About 1.5 h on 2 cores (78 min measured before verify joined it, which adds about 15); --long adds the studies that take hours (the
     /// paper's method by sweeps at equal accuracy on 1/128 and 1/256, the
     /// whole benchmark collection): about 2.5 h. It states its estimate as it
     /// starts; the manifest records each study's time (--quick: a minute).
@@ -384,7 +386,7 @@ pub struct ReproduceArgs {
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
     /// bench's solvers with three timed runs each and 15 s per run, and the whole
     /// benchmark collection (81 instances, not its core 46 up to h = 1/32).
-    /// Without it the run takes about an hour.
+    /// Without it the run takes about 1.5 h.
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:

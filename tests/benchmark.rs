@@ -212,11 +212,11 @@ fn quick_benchmark_writes_every_file_and_shards_merge_to_the_whole() {
             "benchmark",
             "--quick",
             "--shard",
-            "7/7",
+            "8/8",
             "--out",
             &s("never"),
         ],
-        "has 6 instances",
+        "has 7 instances",
     );
     refused(
         &[

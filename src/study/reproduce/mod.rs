@@ -97,6 +97,7 @@ impl ReproduceSpec {
         spec.bench.runs = 1;
         spec.bench.budget = 5.0;
         spec.benchmark.core = true;
+        spec.verify = VerifySpec::main();
         spec
     }
 
