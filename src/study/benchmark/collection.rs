@@ -176,7 +176,7 @@ pub fn collection(quick: bool) -> Result<Vec<Instance>> {
     };
     for &(name, k) in classical {
         let h = level(k);
-        let s = crate::study::verify::scene(name)?;
+        let s = crate::formats::classical::scene(name)?;
         out.push(instance("classical", format!("{name}_{}", h_tag(h)), s, h));
     }
     for i in &out {
@@ -208,7 +208,7 @@ mod tests {
                 assert!(i.scene.gap.is_some(), "{}", i.id);
             }
             if !quick {
-                for (name, _) in crate::study::verify::SCENES {
+                for (name, _) in crate::formats::classical::SCENES {
                     assert!(
                         classical
                             .iter()

@@ -288,8 +288,8 @@ pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
         }
     }
     log("the classical scenes");
-    for (name, _) in crate::study::verify::SCENES {
-        let mut scene = crate::study::verify::scene(name)?;
+    for (name, _) in crate::formats::classical::SCENES {
+        let mut scene = crate::formats::classical::scene(name)?;
         scene.set_finest(spec.h_scenes);
         for entry in registry::solvers() {
             let t = TrialSpec::new(STUDY, SCENES, &scene, entry, Law::Coulomb, base)

@@ -24,12 +24,11 @@
 
 pub mod views;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};
 use contactlab_solvers::{Law, Status};
 use serde::Serialize;
 
-use crate::formats::scene_file;
 use crate::mechanics::closed_forms::{
     CattaneoMindlin, FlatPunch, Hertz, effective_modulus, pressure_error, traction_error,
 };
@@ -45,23 +44,7 @@ use crate::study::trial::TrialSpec;
 /// The study's name in trial records.
 pub const STUDY: &str = "verify";
 
-/// The classical scenes, as committed in `scenes/`: what `verify` runs is
-/// what a user reads there.
-pub const SCENES: [(&str, &str); 4] = [
-    ("hertz", include_str!("../../../scenes/hertz.toml")),
-    (
-        "flat_punch",
-        include_str!("../../../scenes/flat_punch.toml"),
-    ),
-    (
-        "cattaneo_mindlin",
-        include_str!("../../../scenes/cattaneo_mindlin.toml"),
-    ),
-    (
-        "cattaneo_mindlin_sliding",
-        include_str!("../../../scenes/cattaneo_mindlin_sliding.toml"),
-    ),
-];
+pub use crate::formats::classical::{SCENES, scene};
 
 /// The closed form a scene is verified against.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -246,20 +229,6 @@ fn levels(range: std::ops::RangeInclusive<u32>) -> Vec<MeshSize> {
     range
         .map(|k| MeshSize::from_level(k).expect("in range"))
         .collect()
-}
-
-/// A classical scene, read from its committed file.
-pub fn scene(name: &str) -> Result<Scene> {
-    let (_, text) = SCENES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .with_context(|| format!("no classical scene named {name}"))?;
-    let (scene, _) = scene_file::parse(text)
-        .map_err(|(l, c, m)| anyhow::anyhow!("scenes/{name}.toml, line {l}, column {c}: {m}"))?
-        .split()
-        .map_err(anyhow::Error::msg)?;
-    scene.validate()?;
-    Ok(scene)
 }
 
 /// One row of `verification.csv`: a scene on a mesh by a solver, each
