@@ -1,22 +1,30 @@
-//! Tables for a paper: booktabs `tabular`s (`\toprule`, `\midrule`,
+//! Tables for a paper: booktabs tables (`\toprule`, `\midrule`,
 //! `\bottomrule`, Fear & Els, the booktabs manual) in plain ASCII, so that
 //! pdfLaTeX, XeLaTeX and LuaLaTeX all compile them with `booktabs` alone.
 //!
+//! - Each is a `table` float with its `\caption` (above, as tables have
+//!   it) and a `\label` (`tab:` and the file's name), set `\footnotesize`
+//!   with 4 pt between columns so that it fits `\linewidth` of a default
+//!   one-column `article` (345 pt); `tests/reproduce.rs` compiles every
+//!   table a run writes into one and fails on any overfull box.
 //! - Symbols are in math mode: Δ is `$\Delta$`, 𝓕 is `$\mathcal{F}$`, ≤ is
 //!   `$\le$`, ...; a character with no LaTeX form here is an error in a
 //!   test (`tests/latex.rs` compiles every table a run writes).
-//! - Numbers in scientific notation are set as `$3.3\times10^{-9}$`.
-//! - A table has at most [`MAX_COLUMNS`] columns (a page's width); what
-//!   varies down a table goes into group rows ([`Tabular::group`]).
+//! - Numbers in scientific notation are set compactly as `$3.3\mathrm{e}{-9}$`
+//!   (3.3e−9), the width of a page being the tables' scarce resource.
+//! - What varies down a table goes into group rows ([`Tabular::group`]).
 //! - Markdown emphasis and code marks are dropped.
 
-/// The widest table a page holds in a journal's text width.
-pub const MAX_COLUMNS: usize = 8;
+/// The most columns a table may have; whether it fits the page is the
+/// compile test's to say (an overfull box fails it).
+pub const MAX_COLUMNS: usize = 11;
 
-/// A booktabs table: a header, then rows, optionally in titled groups.
+/// A booktabs table: a caption, a header, then rows, optionally in titled
+/// groups.
 #[derive(Clone, Debug)]
 pub struct Tabular {
-    comment: String,
+    caption: String,
+    label: String,
     header: Vec<String>,
     lines: Vec<Line>,
 }
@@ -28,11 +36,13 @@ enum Line {
 }
 
 impl Tabular {
-    /// A table with `header` (LaTeX: see [`math`] and [`text`]) and a `%`
-    /// comment line above it saying what it is.
-    pub fn new(comment: &str, header: Vec<String>) -> Self {
+    /// A table with `header` (LaTeX: see [`math`] and [`text`]), its
+    /// `caption` (plain text, set by [`text`]) and `label` (`tab:label`;
+    /// letters, digits and `-` only, as the file's name without `.tex`).
+    pub fn new(caption: &str, label: &str, header: Vec<String>) -> Self {
         Self {
-            comment: comment.replace('\n', " "),
+            caption: caption.replace('\n', " "),
+            label: label_of(label),
             header,
             lines: Vec::new(),
         }
@@ -54,8 +64,30 @@ impl Tabular {
         self.lines.push(Line::Row(cells));
     }
 
-    /// The `tabular`: columns whose cells are all numbers right-aligned.
+    /// The `table` float around this table's `tabular`.
     pub fn render(&self) -> String {
+        Self::stacked(std::slice::from_ref(self))
+    }
+
+    /// One `table` float holding `panels`' tabulars one above the other,
+    /// with the first one's caption and label: a table with more columns
+    /// than a page's width holds, in parts that share their first column.
+    pub fn stacked(panels: &[Tabular]) -> String {
+        let Some(first) = panels.first() else {
+            return String::new();
+        };
+        let body: Vec<String> = panels.iter().map(Tabular::tabular).collect();
+        format!(
+            "% contactlab: needs \\usepackage{{booktabs}}\n\\begin{{table}}[htbp]\n\\centering\n\\footnotesize\n\
+             \\setlength{{\\tabcolsep}}{{4pt}}\n\\caption{{{}}}\n\\label{{tab:{}}}\n{}\\end{{table}}\n",
+            text(&first.caption),
+            first.label,
+            body.join("\\par\\medskip\n")
+        )
+    }
+
+    /// The `tabular`: columns whose cells are all numbers right-aligned.
+    fn tabular(&self) -> String {
         let rows = || {
             self.lines.iter().filter_map(|l| match l {
                 Line::Row(r) => Some(r),
@@ -73,11 +105,9 @@ impl Tabular {
             })
             .collect();
         let mut out = format!(
-            "% {}\n\\begin{{tabular}}{{{spec}}}\n\\toprule\n{} \\\\\n",
-            text(&self.comment),
+            "\\begin{{tabular}}{{{spec}}}\n\\toprule\n{} \\\\\n\\midrule\n",
             self.header.join(" & ")
         );
-        out += "\\midrule\n";
         for (k, line) in self.lines.iter().enumerate() {
             match line {
                 Line::Group(title) => {
@@ -94,18 +124,25 @@ impl Tabular {
     }
 }
 
+/// A label's name: letters and digits kept, anything else `-`.
+fn label_of(name: &str) -> String {
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect()
+}
+
 /// A cell that reads as a number: `$...$` math of a number, or digits.
 fn is_number_cell(cell: &str) -> bool {
     let c = cell.trim();
     let bare = c.trim_matches('$');
     bare.split_whitespace().next().is_some_and(|w| {
-        let mantissa = w.split("\\times10^").next().unwrap_or(w);
+        let mantissa = w.split("\\mathrm{e}").next().unwrap_or(w);
         mantissa.trim_end_matches("\\%").parse::<f64>().is_ok()
     })
 }
 
-/// `x` as LaTeX math: `$3.3\times10^{-9}$` (two significant digits), `$0$`,
-/// or plain digits for numbers between 0.01 and 10⁴.
+/// `x` as LaTeX math: `$3.3\mathrm{e}{-9}$` (two significant digits),
+/// `$0$`, or `$2.5$` without an exponent.
 pub fn number(x: f64) -> String {
     if x == 0.0 {
         return "$0$".into();
@@ -121,7 +158,7 @@ fn scientific(s: &str) -> String {
     let (mantissa, exponent) = s.split_once('e').unwrap_or((s, "0"));
     match exponent.parse::<i32>() {
         Ok(0) => format!("${mantissa}$"),
-        Ok(e) => format!("${mantissa}\\times10^{{{e}}}$"),
+        Ok(e) => format!("${mantissa}\\mathrm{{e}}{{{e}}}$"),
         Err(_) => text(s),
     }
 }
@@ -234,18 +271,18 @@ fn cells(line: &str) -> Vec<String> {
     inner.split('|').map(text).collect()
 }
 
-/// The first Markdown table in `markdown` as a booktabs `tabular`, with
-/// `comment` on a `%` line above it.
-pub fn booktabs(markdown: &str, comment: &str) -> String {
+/// The first Markdown table in `markdown` as a booktabs table with
+/// `caption` and `label`.
+pub fn booktabs(markdown: &str, caption: &str, label: &str) -> String {
     let lines: Vec<&str> = markdown
         .lines()
         .skip_while(|l| !l.trim_start().starts_with('|'))
         .take_while(|l| l.trim_start().starts_with('|'))
         .collect();
     let Some((head, rest)) = lines.split_first() else {
-        return format!("% {}: no table\n", text(comment));
+        return format!("% {}: no table\n", text(caption));
     };
-    let mut table = Tabular::new(comment, cells(head));
+    let mut table = Tabular::new(caption, label, cells(head));
     for l in rest {
         if !l.replace(['|', '-', ':', ' '], "").is_empty() {
             table.row(cells(l));
@@ -255,13 +292,14 @@ pub fn booktabs(markdown: &str, comment: &str) -> String {
 }
 
 /// A whole LaTeX document of `tables` (file names, `\input` from the same
-/// folder): what a test compiles, and a template for a paper's preamble.
+/// folder): a default one-column `article` with `booktabs`, what a test
+/// compiles (an overfull box fails it), and a template for a paper's
+/// preamble.
 pub fn document(tables: &[&str]) -> String {
-    let mut out = String::from(
-        "\\documentclass{article}\n\\usepackage{booktabs}\n\\usepackage[margin=2cm]{geometry}\n\\begin{document}\n",
-    );
+    let mut out =
+        String::from("\\documentclass{article}\n\\usepackage{booktabs}\n\\begin{document}\n");
     for t in tables {
-        out += &format!("\\begin{{table}}[h]\\centering\\small\n\\input{{{t}}}\n\\end{{table}}\n");
+        out += &format!("\\input{{{t}}}\n");
     }
     out + "\\end{document}\n"
 }
@@ -273,32 +311,33 @@ mod tests {
     #[test]
     fn a_markdown_table_becomes_booktabs() {
         let md = "Some text\n\n| solver | Δp | note |\n|---|---|---|\n| `newton_x` | 1.5e-8 | **wrong** & 50% |\n| b | 2 | c |\n\nafter";
-        let tex = booktabs(md, "a test");
+        let tex = booktabs(md, "a test", "my_table");
         assert!(
-            tex.starts_with(
-                "% a test\n\\begin{tabular}{lrl}\n\\toprule\nsolver & $\\Delta$p & note \\\\\n\\midrule\n"
+            tex.contains(
+                "\\caption{a test}\n\\label{tab:my-table}\n\\begin{tabular}{lrl}\n\\toprule\nsolver & $\\Delta$p & note \\\\\n\\midrule\n"
             ),
             "{tex}"
         );
+        assert!(tex.contains("\\begin{table}"), "{tex}");
         assert!(
-            tex.contains("newton\\_x & $1.5\\times10^{-8}$ & wrong \\& 50\\% \\\\"),
+            tex.contains("newton\\_x & $1.5\\mathrm{e}{-8}$ & wrong \\& 50\\% \\\\"),
             "{tex}"
         );
-        assert!(tex.ends_with("\\bottomrule\n\\end{tabular}\n"));
+        assert!(tex.ends_with("\\bottomrule\n\\end{tabular}\n\\end{table}\n"));
         assert!(tex.is_ascii());
     }
 
     #[test]
     fn numbers_are_set_in_math_and_words_are_left_alone() {
-        assert_eq!(number(3.3e-9), "$3.3\\times10^{-9}$");
+        assert_eq!(number(3.3e-9), "$3.3\\mathrm{e}{-9}$");
         assert_eq!(number(0.0), "$0$");
         assert_eq!(number(2.5), "$2.5$");
         assert_eq!(number(f64::NAN), "--");
         assert_eq!(text("0.0e0"), "$0.0$");
-        assert_eq!(text("-2.0e-3 (a1e5)"), "$-2.0\\times10^{-3}$ (a1e5)");
+        assert_eq!(text("-2.0e-3 (a1e5)"), "$-2.0\\mathrm{e}{-3}$ (a1e5)");
         assert_eq!(
             text("r = 1e12, ε ≤ 1e-4"),
-            "r = $1\\times10^{12}$, $\\varepsilon$ $\\le$ $1\\times10^{-4}$"
+            "r = $1\\mathrm{e}{12}$, $\\varepsilon$ $\\le$ $1\\mathrm{e}{-4}$"
         );
         assert_eq!(text("1/64"), "1/64");
         assert_eq!(
@@ -309,7 +348,7 @@ mod tests {
 
     #[test]
     fn groups_span_the_table_between_rules() {
-        let mut t = Tabular::new("t", vec!["a".into(), "b".into()]);
+        let mut t = Tabular::new("t", "t", vec!["a".into(), "b".into()]);
         t.group("Problem 1".into());
         t.row(vec!["x".into(), number(1e-3)]);
         t.group("Problem 2".into());
@@ -317,7 +356,7 @@ mod tests {
         let tex = t.render();
         assert!(tex.contains("{lr}"), "{tex}");
         assert!(
-            tex.contains("\\midrule\n\\multicolumn{2}{l}{Problem 1} \\\\\nx & $1.0\\times10^{-3}$ \\\\\n\\midrule\n\\multicolumn{2}{l}{Problem 2}"),
+            tex.contains("\\midrule\n\\multicolumn{2}{l}{Problem 1} \\\\\nx & $1.0\\mathrm{e}{-3}$ \\\\\n\\midrule\n\\multicolumn{2}{l}{Problem 2}"),
             "{tex}"
         );
     }

@@ -110,9 +110,12 @@ pub fn true_answer(scene: &contactlab::mechanics::scene::Scene) -> contactlab::s
     run
 }
 
-/// Every `.tex` table in `dir`: plain ASCII, booktabs rules, at most
+/// Every `.tex` table in `dir`: plain ASCII, a `table` float with its
+/// caption and the label of its file, booktabs rules, at most
 /// [`contactlab::io::latex::MAX_COLUMNS`] columns, and compiled together by
-/// pdfLaTeX in one document ([`contactlab::io::latex::document`]). Without
+/// pdfLaTeX into a default one-column article
+/// ([`contactlab::io::latex::document`]) without an overfull box or a
+/// label defined twice. Without
 /// pdfLaTeX the compile is skipped with a line saying so, unless
 /// `CONTACTLAB_REQUIRE_LATEX` is set (CI sets it when it could install TeX).
 pub fn latex_tables_compile(dir: &std::path::Path) {
@@ -130,16 +133,27 @@ pub fn latex_tables_compile(dir: &std::path::Path) {
         for rule in ["\\toprule", "\\midrule", "\\bottomrule"] {
             assert!(tex.contains(rule), "{t} has no {rule}");
         }
-        let spec = tex
-            .split("\\begin{tabular}{")
-            .nth(1)
-            .and_then(|s| s.split('}').next())
-            .unwrap_or_else(|| panic!("{t} has no tabular"));
-        assert!(
-            spec.len() <= MAX_COLUMNS,
-            "{t} has {} columns: {spec}",
-            spec.len()
+        for env in ["\\begin{table}", "\\caption{", "\\end{table}"] {
+            assert!(tex.contains(env), "{t} has no {env}");
+        }
+        let label = format!(
+            "\\label{{tab:{}}}",
+            t.trim_end_matches(".tex").replace('_', "-")
         );
+        assert!(tex.contains(&label), "{t} has no {label}");
+        let specs: Vec<&str> = tex
+            .split("\\begin{tabular}{")
+            .skip(1)
+            .filter_map(|s| s.split('}').next())
+            .collect();
+        assert!(!specs.is_empty(), "{t} has no tabular");
+        for spec in specs {
+            assert!(
+                spec.len() <= MAX_COLUMNS,
+                "{t} has {} columns: {spec}",
+                spec.len()
+            );
+        }
         assert!(
             !tex.lines().any(|l| !l.starts_with('%')
                 && l.contains("e-")
@@ -174,6 +188,16 @@ pub fn latex_tables_compile(dir: &std::path::Path) {
     let log = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "pdflatex failed:\n{log}");
     assert!(!log.contains("Missing character"), "{log}");
+    // A default one-column article: a table wider than \linewidth is an
+    // overfull box (the committed tables once ran 151-202 pt past it).
+    assert!(
+        !log.contains("Overfull \\hbox"),
+        "a table does not fit the page:\n{log}"
+    );
+    assert!(
+        !log.contains("multiply defined"),
+        "two tables share a label:\n{log}"
+    );
     for extra in [
         "tables_document.tex",
         "tables_document.aux",

@@ -1,10 +1,12 @@
 //! The comparison as tables for a paper: one booktabs table per law
-//! (`compare_given_friction.tex`, `compare_coulomb.tex`), eight columns,
-//! a group row per problem and mesh. A view of the trials, as the Markdown
-//! table is.
+//! (`compare_given_friction.tex`, `compare_coulomb.tex`), a group row per
+//! problem and mesh, every column of the Markdown table in two panels that
+//! fit a page's width (the verdict and the work above, the answer against
+//! the reference below). A view of the trials, as the Markdown table is.
 
 use contactlab_solvers::Law;
 
+use crate::certificate::BoundKind;
 use crate::io::latex::{Tabular, math, number, text};
 use crate::study::compare::STUDY;
 use crate::study::runner::Measured;
@@ -36,23 +38,74 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
         .iter()
         .find_map(|m| m.trial.reference)
         .unwrap_or("none");
-    let comment = format!(
-        "{what}: each solver against the reference ({reference}, the most accurate certified answer of the exact solvers). \
-         Delta: max difference from the reference over its largest value (u: displacements, p: pressures, q: friction tractions); \
-         certificate: the largest violation of the law's conditions in the problem's scales; iterations: [friction:] outer [/ inner]; \
-         time: minimum over the runs ({source})"
+    // A status the solver's own claim differs from is marked by a letter,
+    // one per claim, named in the caption.
+    let mut claims: Vec<&str> = Vec::new();
+    for m in rows {
+        let (status, claim) = (m.trial.status.as_str(), m.trial.solver_status.as_str());
+        if status != claim && !claims.contains(&claim) {
+            claims.push(claim);
+        }
+    }
+    let marks: Vec<String> = claims
+        .iter()
+        .enumerate()
+        .map(|(k, c)| format!("{}: the solver claimed {c}", letter(k)))
+        .collect();
+    let studies: Vec<String> = {
+        let mut v = Vec::new();
+        for m in rows.iter().filter(|m| m.trial.study != STUDY) {
+            let s = format!("* {}", m.trial.study.replace('_', " "));
+            if !v.contains(&s) {
+                v.push(s);
+            }
+        }
+        v
+    };
+    let caption = format!(
+        "Each solver on {what} against the reference ({reference}, the most accurate certified answer of the exact solvers). \
+         Above, the verdict and the work: status: certified{}; certificate: the largest violation of the law's conditions \
+         in the problem's scales; iterations: [friction:] outer [/ inner]; time: minimum over the runs. Below, the answer: \
+         Delta: max difference from the reference over its largest value (u: displacements, p: pressures, q: friction \
+         tractions); ‖Δv‖_A: the difference in the energy seminorm over √K·U; bound: the certificate's bound on it \
+         († at the answer's own g = 𝓕p; -- where not computed); separated: the share of Γ_K where the bodies part{} \
+         ({source}).",
+        if marks.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", marks.join("; "))
+        },
+        if studies.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", studies.join(", "))
+        }
     );
-    let header = vec![
-        "solver".into(),
-        "status".into(),
-        math("\\Delta u"),
-        math("\\Delta p"),
-        math("\\Delta q"),
-        "certificate".into(),
-        "iterations".into(),
-        "time (s)".into(),
-    ];
-    let mut t = Tabular::new(&comment, header);
+    let label = file_name(law);
+    let mut verdict = Tabular::new(
+        &caption,
+        label.trim_end_matches(".tex"),
+        vec![
+            "solver".into(),
+            "status".into(),
+            "certificate".into(),
+            "iterations".into(),
+            "time (s)".into(),
+        ],
+    );
+    let mut answer = Tabular::new(
+        &caption,
+        label.trim_end_matches(".tex"),
+        vec![
+            "solver".into(),
+            math("\\Delta u"),
+            math("\\Delta p"),
+            math("\\Delta q"),
+            math("\\|\\Delta v\\|_A"),
+            "bound".into(),
+            "separated".into(),
+        ],
+    );
     // A group per problem and mesh, in the order they first appear.
     let mut groups = Vec::new();
     for m in rows {
@@ -62,44 +115,82 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
         }
     }
     for (scene, h) in groups {
-        t.group(format!("{}, $h = {h}$", text(&capitalized(scene))));
+        let title = format!("{}, $h = {h}$", text(&capitalized(scene)));
+        verdict.group(title.clone());
+        answer.group(title);
         for m in rows
             .iter()
             .filter(|m| m.trial.scene == scene && m.trial.h == h)
         {
-            t.row(cells(m));
+            verdict.row(verdict_cells(m, &claims));
+            answer.row(answer_cells(m));
         }
     }
-    t.render()
+    Tabular::stacked(&[verdict, answer])
 }
 
-/// One trial's eight cells.
-fn cells(m: &Measured) -> Vec<String> {
+/// The caption's mark of the k-th claim: a, b, c, ...
+fn letter(k: usize) -> char {
+    (b'a' + (k % 26) as u8) as char
+}
+
+/// The solver's name, starred when the trial is another study's
+/// (the paper's settings), the star named in the caption.
+fn solver_cell(m: &Measured) -> String {
     let r = &m.trial;
-    {
-        let solver = if r.study == STUDY {
-            r.solver.name.to_string()
-        } else {
-            format!("{} ({})", r.solver.name, r.study.replace('_', " "))
-        };
-        let iterations = match (r.friction_iterations, r.inner_iterations) {
-            (0, 0) => format!("{}", r.outer_iterations),
-            (0, i) => format!("{} / {i}", r.outer_iterations),
-            (f, 0) => format!("{f}: {}", r.outer_iterations),
-            (f, i) => format!("{f}: {} / {i}", r.outer_iterations),
-        };
-        let or_dash = |x: Option<f64>| x.map_or("--".to_string(), number);
-        vec![
-            text(&solver),
-            text(r.status.as_str()),
-            or_dash(r.displacement_error()),
-            or_dash(r.pressure_error()),
-            or_dash(r.agreement.map(|a| a.traction_max)),
-            number(r.residual()),
-            text(&iterations),
-            format!("{:.3}", m.timing.seconds_min),
-        ]
+    if r.study == STUDY {
+        text(r.solver.name)
+    } else {
+        format!("{}$^*$", text(r.solver.name))
     }
+}
+
+/// A trial's verdict and work: solver, status, certificate, iterations,
+/// time.
+fn verdict_cells(m: &Measured, claims: &[&str]) -> Vec<String> {
+    let r = &m.trial;
+    let iterations = match (r.friction_iterations, r.inner_iterations) {
+        (0, 0) => format!("{}", r.outer_iterations),
+        (0, i) => format!("{} / {i}", r.outer_iterations),
+        (f, 0) => format!("{f}: {}", r.outer_iterations),
+        (f, i) => format!("{f}: {} / {i}", r.outer_iterations),
+    };
+    let mut status = text(r.status.as_str());
+    if let Some(k) = claims.iter().position(|c| *c == r.solver_status.as_str())
+        && r.status.as_str() != r.solver_status.as_str()
+    {
+        status += &format!("$^{}$", letter(k));
+    }
+    vec![
+        solver_cell(m),
+        status,
+        number(r.residual()),
+        text(&iterations),
+        format!("{:.3}", m.timing.seconds_min),
+    ]
+}
+
+/// A trial's answer against the reference: solver, Δu, Δp, Δq, ‖Δv‖_A,
+/// its error bound, the separated share of Γ_K.
+fn answer_cells(m: &Measured) -> Vec<String> {
+    let r = &m.trial;
+    let or_dash = |x: Option<f64>| x.map_or("--".to_string(), number);
+    let bound = match r.error_bound() {
+        Some(b) if b.kind == BoundKind::AtOwnBound => {
+            format!("{}$^\\dagger$", number(b.displacement))
+        }
+        Some(b) => number(b.displacement),
+        None => "--".into(),
+    };
+    vec![
+        solver_cell(m),
+        or_dash(r.displacement_error()),
+        or_dash(r.pressure_error()),
+        or_dash(r.agreement.map(|a| a.traction_max)),
+        or_dash(r.agreement.map(|a| a.energy)),
+        bound,
+        format!("{:.1}\\%", 100.0 * r.separated_fraction),
+    ]
 }
 
 fn capitalized(s: &str) -> String {
