@@ -91,6 +91,8 @@ fn pairs_are_compared_node_by_node_in_the_problems_scales() {
     // Certified at 1e-5, the paper's method is close, but not equal.
     assert!(largest > 0.0 && largest < 1e-4, "{largest}");
     assert_eq!(floats(&summary, "max_dp_over_p")[1], largest);
+    // Both pairs within 1e-3 of the scales: a verdict of agreement.
+    assert_eq!(column(&summary, "verdict"), ["agree", "agree"]);
     for chart in ["overlay", "difference"] {
         assert!(
             out.join(format!(
@@ -99,6 +101,52 @@ fn pairs_are_compared_node_by_node_in_the_problems_scales() {
             .is_file()
         );
     }
+}
+
+/// The verdict holds each largest difference to 1e-3 of the problem's
+/// scales: one node's pressure of a profile moved by 2e-3 P (P = 20)
+/// disagrees in p alone, at that node; moved by 5e-4 P it agrees.
+#[test]
+fn the_verdict_names_what_is_past_the_threshold_and_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let own = dir.path().join("own");
+    let o = run_with_deadline(solve_into("1/16", "newton-coulomb", &own), 60);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let profile = own.join("profile.csv");
+    let moved = |folder: &str, by: f64| {
+        let text = std::fs::read_to_string(&profile).unwrap();
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        let j = lines[0].split(',').position(|h| h == "pressure").unwrap();
+        let mut cells: Vec<String> = lines[6].split(',').map(String::from).collect();
+        let p: f64 = cells[j].parse().unwrap();
+        cells[j] = format!("{:.12e}", p + by);
+        let x: f64 = cells[0].parse().unwrap();
+        lines[6] = cells.join(",");
+        let path = dir.path().join(folder).join("profile.csv");
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+        (path, x)
+    };
+    let (far, x) = moved("far", 2e-3 * 20.0);
+    let (near, _) = moved("near", 5e-4 * 20.0);
+    assert_eq!(header(&profile)[0], "x");
+    let out = dir.path().join("sbs");
+    let mut cmd = contactlab();
+    cmd.args(["compare", "--problem", "1", "--h", "1/16"]);
+    for p in [&far, &near] {
+        cmd.arg("--side-by-side")
+            .arg(format!("newton-coulomb,{}", p.display()));
+    }
+    cmd.arg("--out").arg(&out);
+    let o = run_with_deadline(cmd, 120);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = out.join("side_by_side.csv");
+    assert_eq!(column(&summary, "verdict"), ["disagree (p)", "agree"]);
+    assert!((floats(&summary, "x_max_dp")[0] - x).abs() < 1e-12);
+    assert_eq!(floats(&summary, "threshold"), [1e-3, 1e-3]);
+    let report = String::from_utf8_lossy(&o.stdout);
+    assert!(report.contains("| **disagree (p)** |"), "{report}");
+    assert!(report.contains("| **agree** |"), "{report}");
 }
 
 /// A pair that is not two answers, a file that is not there and a profile

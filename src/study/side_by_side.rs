@@ -17,6 +17,7 @@ use crate::io::charts::{Chart, Series};
 use crate::io::csv::fixed;
 use crate::mechanics::contact_zone::{ContactState, ProfileRow, contact_profile};
 use crate::mechanics::scene::Scene;
+use crate::study::class::WRONG_PRESSURE;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::Keep;
 use crate::study::trial::TrialSpec;
@@ -165,9 +166,27 @@ pub struct PairSummary {
     pub max_dp_over_p: f64,
     #[serde(serialize_with = "fixed")]
     pub max_dq_over_p: f64,
+    /// Where (x) each largest difference sits.
+    #[serde(serialize_with = "fixed")]
+    pub x_max_du: f64,
+    #[serde(serialize_with = "fixed")]
+    pub x_max_djump: f64,
+    #[serde(serialize_with = "fixed")]
+    pub x_max_dslip: f64,
+    #[serde(serialize_with = "fixed")]
+    pub x_max_dp: f64,
+    #[serde(serialize_with = "fixed")]
+    pub x_max_dq: f64,
     /// Nodes whose contact states differ, and where (x).
     pub states_differ: usize,
     pub differing_at: String,
+    /// The threshold each largest difference is held to, in the problem's
+    /// scales ([`AGREEMENT`]), and the verdict: `agree`, or `disagree`
+    /// with the quantities past it (`u`, `jump`, `slip`, `p`, `q`,
+    /// `states`).
+    #[serde(serialize_with = "fixed")]
+    pub threshold: f64,
+    pub verdict: String,
     /// The scales: U = F/K and P = N/L of the problem.
     #[serde(serialize_with = "fixed")]
     pub scale_u: f64,
@@ -238,6 +257,51 @@ fn pair(a: &Answer, b: &Answer, u: f64, p: f64) -> Result<Vec<NodeRow>> {
     Ok(out)
 }
 
+/// The threshold of a side-by-side's verdict: two answers agree when
+/// every largest difference is within it, displacements over U and
+/// forces over P, and their contact states match at every node. It is the
+/// threshold of "wrong" of the comparison and the stability map
+/// ([`WRONG_PRESSURE`], about what moves the separation zone by a node at
+/// h = 1/64), here in the problem's scales.
+pub const AGREEMENT: f64 = WRONG_PRESSURE;
+
+/// The quantities past [`AGREEMENT`], by name, and whether the states
+/// differ: empty when the two answers agree.
+fn past_threshold(x: &PairSummary) -> Vec<&'static str> {
+    let mut out: Vec<&'static str> = [
+        ("u", x.max_du_over_u),
+        ("jump", x.max_djump_over_u),
+        ("slip", x.max_dslip_over_u),
+        ("p", x.max_dp_over_p),
+        ("q", x.max_dq_over_p),
+    ]
+    .into_iter()
+    // A NaN difference is no agreement.
+    .filter(|(_, d)| d.is_nan() || *d > x.threshold)
+    .map(|(name, _)| name)
+    .collect();
+    if x.states_differ > 0 {
+        out.push("states");
+    }
+    out
+}
+
+/// The largest of `f` over the nodes and where it sits (the first node
+/// of the largest; a NaN wins, so that it is seen).
+fn largest(nodes: &[NodeRow], f: fn(&NodeRow) -> f64) -> (f64, f64) {
+    let mut best = (0.0f64, nodes.first().map_or(f64::NAN, |n| n.x));
+    for n in nodes {
+        let d = f(n);
+        if d.is_nan() {
+            return (d, n.x);
+        }
+        if d > best.0 {
+            best = (d, n.x);
+        }
+    }
+    best
+}
+
 fn summary(
     scene: &Scene,
     a: &Answer,
@@ -246,13 +310,17 @@ fn summary(
     u: f64,
     p: f64,
 ) -> PairSummary {
-    let max = |f: fn(&NodeRow) -> f64| nodes.iter().map(f).fold(0.0f64, f64::max);
+    let (du, x_du) = largest(nodes, |n| n.du_over_u);
+    let (djump, x_djump) = largest(nodes, |n| n.djump_over_u);
+    let (dslip, x_dslip) = largest(nodes, |n| n.dslip_over_u);
+    let (dp, x_dp) = largest(nodes, |n| n.dp_over_p);
+    let (dq, x_dq) = largest(nodes, |n| n.dq_over_p);
     let differing: Vec<String> = nodes
         .iter()
         .filter(|n| !n.states_match)
         .map(|n| format!("{:.4}", n.x))
         .collect();
-    PairSummary {
+    let mut out = PairSummary {
         scene: scene.name.clone(),
         h: scene.finest().to_string(),
         a: a.label.clone(),
@@ -260,16 +328,30 @@ fn summary(
         status_a: a.status.clone(),
         status_b: b.status.clone(),
         nodes: nodes.len(),
-        max_du_over_u: max(|n| n.du_over_u),
-        max_djump_over_u: max(|n| n.djump_over_u),
-        max_dslip_over_u: max(|n| n.dslip_over_u),
-        max_dp_over_p: max(|n| n.dp_over_p),
-        max_dq_over_p: max(|n| n.dq_over_p),
+        max_du_over_u: du,
+        max_djump_over_u: djump,
+        max_dslip_over_u: dslip,
+        max_dp_over_p: dp,
+        max_dq_over_p: dq,
+        x_max_du: x_du,
+        x_max_djump: x_djump,
+        x_max_dslip: x_dslip,
+        x_max_dp: x_dp,
+        x_max_dq: x_dq,
         states_differ: differing.len(),
         differing_at: differing.join(" "),
+        threshold: AGREEMENT,
+        verdict: String::new(),
         scale_u: u,
         scale_p: p,
-    }
+    };
+    let past = past_threshold(&out);
+    out.verdict = if past.is_empty() {
+        "agree".into()
+    } else {
+        format!("disagree ({})", past.join(", "))
+    };
+    out
 }
 
 /// The file stem of a pair: `side_by_side_relaxation_clarabel` (each
@@ -605,9 +687,12 @@ pub fn markdown(scene: &Scene, pairs: &Pairs, charts: &[String]) -> String {
     let mut s = format!(
         "## Side by side ({}, h = {})\n\nTwo answers of the Coulomb problem node by node along Γ_K \
          (`side_by_side_<a>_<b>.csv`: both answers and their differences at every contact node). \
-         Differences in the problem's scales: displacements over U = F/K, pressures and tractions over P = N/L.\n\n\
-         | a | b | status of a, b | max\\|Δu\\|/U | max\\|Δjump\\|/U | max\\|Δp\\|/P | max\\|Δq\\|/P | contact states |\n\
-         |---|---|---|---|---|---|---|---|\n",
+         Differences in the problem's scales: displacements over U = F/K, pressures and tractions over P = N/L, \
+         each largest one with the x where it sits. Verdict: the two **agree** when every largest difference is within \
+         {AGREEMENT:e} (the threshold of a wrong pressure in the comparison and the stability map, here in the \
+         problem's scales) and the contact states match at every node; otherwise they **disagree**, with what is past it.\n\n\
+         | a | b | status of a, b | max\\|Δu\\|/U | max\\|Δjump\\|/U | max\\|Δslip\\|/U | max\\|Δp\\|/P | max\\|Δq\\|/P | contact states | verdict |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
         scene.name,
         scene.finest()
     );
@@ -621,16 +706,19 @@ pub fn markdown(scene: &Scene, pairs: &Pairs, charts: &[String]) -> String {
                 x.states_differ, x.nodes, x.differing_at
             )
         };
+        let at = |d: f64, x: f64| format!("{d:.1e} (x = {x:.4})");
         s += &format!(
-            "| {} | {} | {}, {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {states} |\n",
+            "| {} | {} | {}, {} | {} | {} | {} | {} | {} | {states} | **{}** |\n",
             x.a,
             x.b,
             x.status_a,
             x.status_b,
-            x.max_du_over_u,
-            x.max_djump_over_u,
-            x.max_dp_over_p,
-            x.max_dq_over_p
+            at(x.max_du_over_u, x.x_max_du),
+            at(x.max_djump_over_u, x.x_max_djump),
+            at(x.max_dslip_over_u, x.x_max_dslip),
+            at(x.max_dp_over_p, x.x_max_dp),
+            at(x.max_dq_over_p, x.x_max_dq),
+            x.verdict
         );
     }
     s += "\n";
