@@ -265,8 +265,9 @@ pub struct SweepArgs {
     /// two or three settings of one solver, PATH=V1,V2,... each (e.g.
     /// --grid relaxation.r=1e3,1e5,1e7 --grid relaxation.epsilon=1e-4,1e-6).
     /// Every point timed over --runs and certified; heat maps of time and
-    /// work, the best setting with its margin, ties within the timing noise
-    /// marked. Beyond h = 1/64 a solver is mapped in its fast form (the
+    /// work titled with the form mapped; the best setting by work (then by
+    /// time among points of equal work, ties within the timing noise
+    /// marked) and how much each axis moves the work. Beyond h = 1/64 a solver is mapped in its fast form (the
     /// paper's method with inner = multigrid) unless --set says otherwise.
     /// Writes tuning_map_<solver>_<law>_h<N>.csv, its trials and charts.
     #[arg(long, value_name = "PATH=VALUES", conflicts_with_all = ["vary", "fine_meshes"])]

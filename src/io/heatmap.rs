@@ -1,7 +1,7 @@
 //! Heat maps of a tuning grid: one cell per pair of settings, coloured by
 //! a value on a log scale (time to a certified answer), failed cells grey
 //! with the reason, the best cell and the cells tied with it within the
-//! timing noise marked. Drawn with plotters into SVG, as the charts are.
+//! timing noise marked, and a footer that explains the marks drawn. Drawn with plotters into SVG, as the charts are.
 
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
@@ -78,6 +78,23 @@ pub fn short(v: f64) -> String {
 }
 
 impl HeatMap {
+    /// The footer: what each mark drawn means, only the marks drawn.
+    pub fn legend(&self) -> String {
+        let cells = || self.cells.iter().flatten();
+        let marked = |m: Mark| cells().any(|c| matches!(c, Cell::Value { mark, .. } if *mark == m));
+        let mut parts = Vec::new();
+        if marked(Mark::Best) {
+            parts.push("best (orange frame): least work, then least time");
+        }
+        if marked(Mark::Tie) {
+            parts.push("=: of equal work, within the timing noise of the best");
+        }
+        if cells().any(|c| matches!(c, Cell::Failed(_))) {
+            parts.push("x: not certified (grey)");
+        }
+        parts.join("; ")
+    }
+
     /// The range of the certified values (None: no cell certified).
     fn range(&self) -> Option<(f64, f64)> {
         let values: Vec<f64> = self
@@ -200,8 +217,7 @@ impl HeatMap {
             ))
             .map_err(err)?;
             root.draw(&Text::new(
-                "best: least value (orange frame); =: within the timing noise of the best; x: not certified (grey)"
-                    .to_string(),
+                self.legend(),
                 (LEFT + nx as i32 * w / 2, HEIGHT as i32 - 24),
                 centered(12),
             ))
@@ -283,6 +299,24 @@ mod tests {
         ] {
             assert!(svg.contains(text), "{text} not in the SVG");
         }
+        // The footer explains only what is drawn: no tie, no failure here.
+        let mut plain = map.clone();
+        plain.cells = vec![vec![
+            Cell::Value {
+                value: 1.0,
+                mark: Mark::Best,
+            },
+            Cell::Value {
+                value: 2.0,
+                mark: Mark::None,
+            },
+        ]];
+        plain.y_values.truncate(1);
+        assert_eq!(
+            plain.legend(),
+            "best (orange frame): least work, then least time"
+        );
+        assert!(svg.contains("orange frame") && svg.contains("=: of equal work"));
         assert_eq!(viridis(0.0), RGBColor(68, 1, 84));
         assert_eq!(viridis(1.0), RGBColor(253, 231, 37));
     }

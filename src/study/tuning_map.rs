@@ -263,6 +263,33 @@ impl TuningMap {
         out
     }
 
+    /// The form the map shows, named on its charts whatever the mesh: the
+    /// value of each setting that chooses the solver's form at fine h
+    /// (`inner = sweeps`, the paper's, or `inner = multigrid`), as the
+    /// points run it; empty for a solver with one form.
+    fn shown_form(&self, lab: &Lab) -> Result<Form> {
+        let (settings, _) = self.base(lab)?;
+        let Some(fine) = plans::plan(self.solver).fine else {
+            return Ok(Vec::new());
+        };
+        Ok(fine
+            .settings
+            .iter()
+            .filter_map(|(knob, _)| {
+                let path = format!("{}.{knob}", self.solver.name);
+                // An axis of the map varies it: each point names its value.
+                if self.axes.iter().any(|a| a.path == path) {
+                    return None;
+                }
+                let value = settings.get(&path)?;
+                let text = value
+                    .as_str()
+                    .map_or_else(|| value.to_string(), String::from);
+                Some((knob.to_string(), text))
+            })
+            .collect())
+    }
+
     /// The trials: one per point of the grid.
     pub fn plan(&self, lab: &Lab) -> Result<(Vec<TrialSpec>, Form)> {
         if !(2..=3).contains(&self.axes.len()) {
@@ -334,30 +361,95 @@ pub fn noise(points: &[Point]) -> f64 {
         .fold(0.0f64, f64::max)
 }
 
-/// Ranks `points` in place: the certified point of least median time is
-/// `best`, and a certified point whose median is within twice the run's
-/// relative [`noise`] of it is a `tie`.
+/// Work within this fraction of another point's is equal work: the same
+/// iterations to the count's resolution (the committed 1/64 map's
+/// r = 1e5 … 1e11 did 23,840-23,842 sweeps), where only time can rank
+/// and time is noise.
+pub const EQUAL_WORK: f64 = 0.01;
+
+/// Ranks `points` in place by what is not noise: the certified points of
+/// least work (within [`EQUAL_WORK`] of the least) are the candidates; of
+/// them the least median time is `best`, and another whose median is
+/// within twice the run's relative [`noise`] of it is a `tie`; a
+/// candidate beyond the noise is `equal work`. Work is exact, so a point
+/// of more work is never ranked by its time against the best.
 pub fn rank(points: &mut [Point]) {
+    let least = points.iter().filter(|p| p.certified).map(|p| p.work).min();
+    let Some(least) = least else { return };
+    let equal = |p: &Point| p.certified && p.work as f64 <= least as f64 * (1.0 + EQUAL_WORK);
     let best = points
         .iter()
         .enumerate()
-        .filter(|(_, p)| p.certified)
+        .filter(|(_, p)| equal(p))
         .min_by(|a, b| a.1.seconds_median.total_cmp(&b.1.seconds_median))
         .map(|(k, _)| k);
     let Some(b) = best else { return };
+    let timed = points[b].runs >= 2;
     let limit = points[b].seconds_median * (1.0 + 2.0 * noise(points));
-    for (k, p) in points.iter_mut().enumerate() {
-        p.mark = if k == b {
-            "best".into()
-        } else if p.certified && p.seconds_median <= limit {
-            "tie".into()
-        } else {
-            String::new()
-        };
+    let marks: Vec<&str> = points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            if k == b {
+                "best"
+            } else if equal(p) && timed && p.seconds_median <= limit {
+                "tie"
+            } else if equal(p) {
+                "equal work"
+            } else {
+                ""
+            }
+        })
+        .collect();
+    for (p, mark) in points.iter_mut().zip(marks) {
+        p.mark = mark.into();
     }
 }
 
-/// The sentence stating the best setting with its margin.
+/// How much an axis moves the work: over every slice of the grid with the
+/// other axes fixed, the largest ratio of most to least work among its
+/// certified points (None when no slice has two certified points).
+pub fn work_effect(axis: usize, points: &[Point]) -> Option<f64> {
+    let mut slices: Vec<(Vec<&str>, usize, usize)> = Vec::new();
+    for p in points.iter().filter(|p| p.certified) {
+        let others: Vec<&str> = p
+            .values
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != axis)
+            .map(|(_, v)| v.as_str())
+            .collect();
+        match slices.iter_mut().find(|(o, _, _)| *o == others) {
+            Some((_, lo, hi)) => {
+                *lo = (*lo).min(p.work);
+                *hi = (*hi).max(p.work);
+            }
+            None => slices.push((others, p.work, p.work)),
+        }
+    }
+    let counts = |o: &Vec<&str>| {
+        points
+            .iter()
+            .filter(|p| p.certified)
+            .filter(|p| {
+                p.values
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != axis)
+                    .map(|(_, v)| v.as_str())
+                    .eq(o.iter().copied())
+            })
+            .count()
+    };
+    slices
+        .iter()
+        .filter(|(o, _, _)| counts(o) >= 2)
+        .map(|(_, lo, hi)| *hi as f64 / (*lo).max(1) as f64)
+        .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
+}
+
+/// The sentence stating the best setting: by work, with what moves the
+/// work along each axis, then by time among the points of equal work.
 pub fn verdict(axes: &[Axis], points: &[Point]) -> String {
     let name = |p: &Point| {
         axes.iter()
@@ -370,46 +462,82 @@ pub fn verdict(axes: &[Axis], points: &[Point]) -> String {
         return "No point of the grid was certified.".into();
     };
     let mut s = format!(
-        "Fastest certified: {} in {:.3} s (median of {} runs, the fastest {:.3} s; {} work).",
+        "Least work, certified: {} with {} work in {:.3} s (median of {} runs, the fastest {:.3} s).",
         name(best),
+        best.work,
         best.seconds_median,
         best.runs,
-        best.seconds_min,
-        best.work
+        best.seconds_min
     );
-    let ties: Vec<&Point> = points.iter().filter(|p| p.mark == "tie").collect();
-    if best.runs < 2 {
-        s += " One run a point: the timing noise is not measured, so no tie can be told.";
-    } else if !ties.is_empty() {
+    let effects: Vec<String> = axes
+        .iter()
+        .enumerate()
+        .map(|(k, a)| match work_effect(k, points) {
+            None => format!(
+                "{}: not measured (no two certified points along it)",
+                a.knob()
+            ),
+            Some(r) if r <= 1.0 + EQUAL_WORK => format!(
+                "{} has no effect on work (within {:.0}%)",
+                a.knob(),
+                100.0 * EQUAL_WORK
+            ),
+            Some(r) => format!("{} changes it up to {r:.1}×", a.knob()),
+        })
+        .collect();
+    s += &format!(
+        " Along each axis, the others fixed: {}.",
+        effects.join("; ")
+    );
+    let equal: Vec<&Point> = points
+        .iter()
+        .filter(|p| p.mark == "tie" || p.mark == "equal work")
+        .collect();
+    if !equal.is_empty() {
         s += &format!(
-            " Within twice the run's timing noise ({:.1}%) of it ({} {}), so not ranked by time: {}.",
-            100.0 * noise(points),
-            ties.len(),
-            if ties.len() == 1 {
+            " Of equal work (within {:.0}%), {} other {}, ranked by time only among these: ",
+            100.0 * EQUAL_WORK,
+            equal.len(),
+            if equal.len() == 1 {
                 "setting"
             } else {
                 "settings"
-            },
-            ties.iter()
-                .map(|p| format!("{} ({:.3} s, {} work)", name(p), p.seconds_median, p.work))
-                .collect::<Vec<_>>()
-                .join("; ")
+            }
         );
+        if best.runs < 2 {
+            s += "one run a point, so the timing noise is not measured and no time can be told from noise.";
+        } else {
+            let ties: Vec<&&Point> = equal.iter().filter(|p| p.mark == "tie").collect();
+            s += &format!(
+                "{} within twice the run's timing noise ({:.1}%) of the best, a tie{}.",
+                ties.len(),
+                100.0 * noise(points),
+                if ties.is_empty() {
+                    String::new()
+                } else {
+                    format!(
+                        " ({})",
+                        ties.iter()
+                            .map(|p| format!("{}, {:.3} s", name(p), p.seconds_median))
+                            .collect::<Vec<_>>()
+                            .join("; ")
+                    )
+                }
+            );
+        }
     }
     let next = points
         .iter()
         .filter(|p| p.certified && p.mark.is_empty())
-        .min_by(|a, b| a.seconds_median.total_cmp(&b.seconds_median));
-    match next {
-        Some(n) => {
-            s += &format!(
-                " The fastest setting beyond the noise: {} in {:.3} s, {:.0}% slower.",
-                name(n),
-                n.seconds_median,
-                100.0 * (n.seconds_median / best.seconds_median - 1.0)
-            )
-        }
-        None => s += " Every other certified setting is within the noise.",
+        .min_by_key(|p| p.work);
+    if let Some(n) = next {
+        s += &format!(
+            " The next least work: {} with {} work ({:.0}% more) in {:.3} s.",
+            name(n),
+            n.work,
+            100.0 * (n.work as f64 / best.work.max(1) as f64 - 1.0),
+            n.seconds_median
+        );
     }
     let failed = points.iter().filter(|p| !p.certified).count();
     if failed > 0 {
@@ -427,7 +555,9 @@ fn heat_maps(
     form: &[(String, String)],
 ) -> (HeatMap, HeatMap) {
     let (ax, ay) = (&map.axes[0], &map.axes[1]);
-    let cell = |i: usize, j: usize, value: &dyn Fn(&Point) -> f64, marks: bool| {
+    // The best framed on both maps; ties (equal work, time within the
+    // noise) marked on the time map, where they are ties.
+    let cell = |i: usize, j: usize, value: &dyn Fn(&Point) -> f64, ties: bool| {
         let p = points
             .iter()
             .find(|p| p.values[0] == ax.values[i] && p.values[1] == ay.values[j])
@@ -435,9 +565,9 @@ fn heat_maps(
         if p.certified {
             Cell::Value {
                 value: value(p),
-                mark: match (marks, p.mark.as_str()) {
-                    (true, "best") => Mark::Best,
-                    (true, "tie") => Mark::Tie,
+                mark: match (p.mark.as_str(), ties) {
+                    ("best", _) => Mark::Best,
+                    ("tie", true) => Mark::Tie,
                     _ => Mark::None,
                 },
             }
@@ -445,11 +575,11 @@ fn heat_maps(
             Cell::Failed(p.status.clone())
         }
     };
-    let grid = |value: &dyn Fn(&Point) -> f64, marks: bool| {
+    let grid = |value: &dyn Fn(&Point) -> f64, ties: bool| {
         (0..ay.values.len())
             .map(|j| {
                 (0..ax.values.len())
-                    .map(|i| cell(i, j, value, marks))
+                    .map(|i| cell(i, j, value, ties))
                     .collect()
             })
             .collect()
@@ -514,6 +644,7 @@ impl Study for TuningMap {
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<MapFindings>> {
         let (specs, form) = self.plan(lab)?;
+        let shown = self.shown_form(lab)?;
         let measured = lab.measure(&specs, Keep::default())?;
         let mut points: Vec<Point> = measured
             .iter()
@@ -586,7 +717,7 @@ impl Study for TuningMap {
                 .iter()
                 .filter(|p| third.is_none_or(|v| p.values.get(2).map(String::as_str) == Some(v)))
                 .collect();
-            let (time, work) = heat_maps(self, &slice, third, &form);
+            let (time, work) = heat_maps(self, &slice, third, &shown);
             let tail = third
                 .map(|v| format!("_{}{v}", self.axes[2].knob()))
                 .unwrap_or_default();
@@ -636,9 +767,9 @@ impl Study for TuningMap {
         );
         for c in charts {
             let intent = if c.ends_with("_work") {
-                "Work at each point of the grid (exact: no timing noise); grey cells were not certified."
+                "Work at each point of the grid (exact: no timing noise), the best (least work, then least time) framed; grey cells were not certified."
             } else {
-                "Time to a certified answer at each point of the grid; the best framed, ties within the timing noise marked =, failures grey with their status."
+                "Time to a certified answer at each point of the grid; the best (least work, then least time) framed, points of equal work within the timing noise of it marked =, failures grey with their status."
             };
             markdown += &chart_markdown(c, intent);
         }
@@ -716,7 +847,14 @@ mod tests {
         }
     }
 
-    /// The best is the least median among certified points; a point
+    fn worked(values: &[&str], work: usize, median: f64, min: f64) -> Point {
+        Point {
+            work,
+            ..point(values, true, median, min)
+        }
+    }
+
+    /// Among points of equal work the least median is the best; a point
     /// within twice the run's noise of it ties (a failed point's spread
     /// does not count); a faster failed point is no best.
     #[test]
@@ -730,27 +868,67 @@ mod tests {
         ];
         rank(&mut points);
         let marks: Vec<&str> = points.iter().map(|p| p.mark.as_str()).collect();
-        assert_eq!(marks, ["", "best", "tie", ""]);
+        assert_eq!(marks, ["", "best", "tie", "equal work"]);
         let axes = [
             Axis::parse("relaxation.r=1e3,1e5,1e7").unwrap(),
             Axis::parse("relaxation.epsilon=1e-4,1e-6").unwrap(),
         ];
         let v = verdict(&axes, &points);
         assert!(
-            v.starts_with("Fastest certified: r = 1e5, epsilon = 1e-4 in 1.000 s"),
+            v.starts_with("Least work, certified: r = 1e5, epsilon = 1e-4 with 10 work in 1.000 s"),
             "{v}"
         );
         assert!(
-            v.contains(
-                "noise (5.0%) of it (1 setting), so not ranked by time: r = 1e7, epsilon = 1e-4"
-            ),
+            v.contains("2 other settings, ranked by time only among these: 1 within twice the run's timing noise (5.0%) of the best, a tie (r = 1e7, epsilon = 1e-4, 1.090 s)"),
             "{v}"
         );
-        assert!(
-            v.contains("beyond the noise: r = 1e3, epsilon = 1e-6 in 1.200 s, 20% slower"),
-            "{v}"
-        );
+        assert!(v.contains("r has no effect on work (within 1%)"), "{v}");
         assert!(v.contains("1 of 4 points not certified"), "{v}");
+    }
+
+    /// Work ranks before time: the committed 1/128 map called a point of
+    /// 58 work the best where one of 38 was slower by noise. Here the
+    /// faster point does more work and is not the best; the verdict says
+    /// that ε moves the work 3× and r not at all.
+    #[test]
+    fn work_ranks_before_time_and_the_verdict_names_what_moves_it() {
+        let mut points = vec![
+            worked(&["1e5", "1e-4"], 38, 1.30, 1.2),
+            worked(&["1e7", "1e-4"], 38, 1.25, 1.2),
+            worked(&["1e5", "1e-6"], 114, 1.00, 0.9),
+            worked(&["1e7", "1e-6"], 115, 1.10, 1.0),
+        ];
+        rank(&mut points);
+        let marks: Vec<&str> = points.iter().map(|p| p.mark.as_str()).collect();
+        // 1e7, 1e-4: least time among the equal-work pair.
+        assert_eq!(marks, ["tie", "best", "", ""]);
+        assert_eq!(work_effect(0, &points), Some(115.0 / 114.0));
+        assert_eq!(work_effect(1, &points), Some(115.0 / 38.0));
+        let axes = [
+            Axis::parse("relaxation.r=1e5,1e7").unwrap(),
+            Axis::parse("relaxation.epsilon=1e-4,1e-6").unwrap(),
+        ];
+        let v = verdict(&axes, &points);
+        assert!(
+            v.starts_with("Least work, certified: r = 1e7, epsilon = 1e-4 with 38 work"),
+            "{v}"
+        );
+        assert!(
+            v.contains("r has no effect on work (within 1%); epsilon changes it up to 3.0×"),
+            "{v}"
+        );
+        assert!(
+            v.contains("The next least work: r = 1e5, epsilon = 1e-6 with 114 work (200% more)"),
+            "{v}"
+        );
+        // One run a point: no tie can be told; the equal-work point says so.
+        for p in &mut points {
+            p.runs = 1;
+            p.seconds_min = p.seconds_median;
+        }
+        rank(&mut points);
+        assert_eq!(points[0].mark, "equal work");
+        assert!(verdict(&axes, &points).contains("no time can be told from noise"));
     }
 
     #[test]
