@@ -179,6 +179,12 @@ pub struct SolveArgs {
     /// displacement, stress, von Mises stress and the contact state.
     #[arg(long, requires = "out")]
     pub vtu: bool,
+    /// Wall-clock limit on the solve in seconds: past it the solver stops
+    /// with the status time_limit, and the answer it had is certified and
+    /// written like any other (a non-zero exit says it stopped) [default:
+    /// none].
+    #[arg(long = "time-limit", value_name = "SECONDS", value_parser = positive_seconds)]
+    pub time_limit: Option<f64>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }

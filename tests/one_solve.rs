@@ -199,3 +199,29 @@ fn a_lent_finest_level_is_solved_where_it_is() {
     drop(lent);
     assert_eq!(Arc::strong_count(&finest), 1, "the solve kept no reference");
 }
+
+/// `solve --time-limit`: the paper's method (about 11 s at 1/64 on one
+/// core) stopped at 0.5 s ends with the status `time_limit`, its answer
+/// certified and written whole, and a
+/// non-zero exit whose one line names the limit.
+#[test]
+fn a_solve_past_its_time_limit_stops_with_a_status_and_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("limited");
+    let mut cmd = common::solve_into("1/64", "relaxation", &out);
+    cmd.args(["--time-limit", "0.5"]);
+    let o = common::run_with_deadline(cmd, 120);
+    assert!(!o.status.success(), "a stopped solve is not a success");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let last = stderr.lines().last().unwrap_or_default();
+    assert!(
+        last.contains("--time-limit 0.5 s") && last.contains("time_limit"),
+        "{stderr}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"].as_str(), Some("time_limit"), "{summary}");
+    for file in ["profile.csv", "displacements.mtx", "forces.csv"] {
+        assert!(out.join(file).is_file(), "{file} not written");
+    }
+}

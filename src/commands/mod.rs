@@ -26,16 +26,65 @@ use crate::settings::Settings;
 use crate::study::lab::{Artifact, Lab, Study, Tracker};
 use crate::study::trial::TrialSpec;
 
-/// Logs the friction loop to stderr.
-pub struct LogObserver;
+/// Logs the friction loop to stderr, each iteration with an estimate of
+/// what is left: the fixed point contracts linearly (paper, section 3), so
+/// from the last two changes' ratio ρ the iterations left to the tolerance
+/// are ln(tol/Δ)/ln ρ, at the pace of the last iteration. Before two
+/// iterations, or while the change does not fall, it says so rather than
+/// guess.
+pub struct LogObserver {
+    /// The fixed point's threshold on max|Δg| (None: not known).
+    tolerance: Option<f64>,
+    /// The last iteration's change and the seconds at its end.
+    last: Option<(f64, f64)>,
+}
+
+impl LogObserver {
+    /// An observer that estimates the iterations left to `tolerance`.
+    pub fn toward(tolerance: Option<f64>) -> Self {
+        Self {
+            tolerance,
+            last: None,
+        }
+    }
+
+    /// What is left after a change `change` at `seconds`: iterations and
+    /// seconds, when the change falls and the tolerance is known.
+    pub fn estimate(&self, change: f64, seconds: f64) -> Option<(usize, f64)> {
+        let tol = self.tolerance?;
+        let (previous, at) = self.last?;
+        if change <= tol {
+            return Some((0, 0.0));
+        }
+        let ratio = change / previous;
+        if !(ratio > 0.0 && ratio < 1.0 && change.is_finite()) {
+            return None;
+        }
+        // Less a hair: ln(1e-4)/ln(0.1) is 4 only up to rounding.
+        let left = ((tol / change).ln() / ratio.ln() - 1e-9).ceil().max(1.0);
+        (left < 1e6).then(|| (left as usize, left * (seconds - at).max(0.0)))
+    }
+}
 
 impl Observer for LogObserver {
     fn observe(&mut self, p: &Progress) -> Control {
         if p.stage == fixed_point::STAGE {
+            // A new fixed point (the nested schedule's next level) starts
+            // its own count.
+            if p.iteration <= 1 {
+                self.last = None;
+            }
+            let left = match self.estimate(p.residual, p.seconds) {
+                Some((0, _)) => String::new(),
+                Some((n, s)) => format!(", about {n} more at this rate (about {s:.0} s)"),
+                None if self.last.is_some() => ", not contracting yet: no estimate".into(),
+                None => String::new(),
+            };
             log(format!(
-                "friction iteration {:>3}: max|Δg| = {:.3e}  ({:.2} s)",
+                "friction iteration {:>3}: max|Δg| = {:.3e}  ({:.2} s){left}",
                 p.iteration, p.residual, p.seconds
             ));
+            self.last = Some((p.residual, p.seconds));
         }
         Control::Continue
     }
@@ -262,7 +311,33 @@ pub fn solver_list(names: &[String]) -> Result<Vec<&'static Entry>> {
 
 #[cfg(test)]
 mod tests {
-    use super::StudyProgress;
+    use super::{LogObserver, StudyProgress};
+    use contactlab_solvers::{Observer, Progress};
+
+    fn friction(o: &mut LogObserver, iteration: usize, change: f64, seconds: f64) {
+        o.observe(&Progress {
+            stage: crate::coulomb::fixed_point::STAGE,
+            iteration,
+            residual: change,
+            seconds,
+        });
+    }
+
+    /// A change falling tenfold an iteration from 1e-2 reaches 1e-6 in 4
+    /// more, at the last iteration's 10 s each; no estimate before two
+    /// iterations, none while the change grows, and a new fixed point
+    /// (iteration 1 again) forgets the last one's pace.
+    #[test]
+    fn the_friction_estimate_follows_the_contraction() {
+        let mut o = LogObserver::toward(Some(1e-6));
+        friction(&mut o, 1, 1e-1, 10.0);
+        assert_eq!(o.estimate(1e-2, 20.0), Some((4, 40.0)));
+        assert_eq!(o.estimate(2e-1, 20.0), None);
+        friction(&mut o, 2, 1e-2, 20.0);
+        friction(&mut o, 1, 1e-1, 25.0);
+        assert_eq!(o.estimate(1e-3, 27.0), Some((2, 4.0)));
+        assert!(LogObserver::toward(None).estimate(1e-3, 1.0).is_none());
+    }
 
     /// Two cheap units done in 2 s, two eight times dearer left: 16 s at the
     /// measured rate, not the 2 s a count of units predicts; a cap per unit

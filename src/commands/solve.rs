@@ -14,7 +14,7 @@ use crate::io::output::{json_bytes, log, print, write_atomic};
 use crate::io::run_folder::RunFolder;
 use crate::mechanics::contact_zone::PROFILE_COLUMNS;
 use crate::solve::summary::{Summary, answer_bound};
-use crate::solve::{solve_scene, solver_entry};
+use crate::solve::{Assembled, Caps, solve, solver_entry};
 
 pub fn run(args: &SolveArgs) -> Result<()> {
     let (scene, base) = args.scene.load()?;
@@ -35,12 +35,22 @@ pub fn run(args: &SolveArgs) -> Result<()> {
         scene.finest(),
         solver.name
     ));
-    let solved = solve_scene(
-        &scene,
+    let problem = Assembled::for_solver(&scene, solver)?;
+    let tolerance = settings
+        .coulomb()
+        .ok()
+        .map(|c| c.tolerance(&problem.finest().problem));
+    let caps = Caps {
+        work: None,
+        seconds: args.time_limit,
+    };
+    let solved = solve(
+        problem,
         Friction::Coulomb,
         solver,
         &settings,
-        &mut LogObserver,
+        caps,
+        &mut LogObserver::toward(tolerance),
     )?;
     let bound = answer_bound(&solved, &settings.certificate);
     let summary = Summary::of(&solved, &scene, &settings, bound, git_commit());
@@ -95,6 +105,14 @@ pub fn run(args: &SolveArgs) -> Result<()> {
             "the answer is inaccurate: {} claims convergence but the certificate {}",
             solver.name,
             o.certificate.summary()
+        );
+    }
+    if o.status == Status::TimeLimit {
+        bail!(
+            "the solve stopped at --time-limit {} s: {} ({}); what it had is written and certified above",
+            args.time_limit.unwrap_or(f64::NAN),
+            o.status,
+            o.detail
         );
     }
     if !o.status.is_converged() {
