@@ -491,7 +491,7 @@ class Certificate:
     summary: str
     violations: Dict[str, float]
     law: str = "coulomb"
-    #: An upper bound on the answer's error (``certify`` only): ``energy``
+    #: An upper bound on the answer's error (``solve`` and ``certify``): ``energy``
     #: (‖v − v*‖_A), ``displacement`` (the same over √K·U), ``pressure``
     #: (max|p − p*| over P), ``kind`` and ``summary``; or ``not_computed``
     #: saying why. See the README's "The error bound".

@@ -24,6 +24,7 @@ use std::time::Duration;
 use contactlab::certificate::certify as certify_answer;
 use contactlab::settings::Changes;
 use contactlab::settings::changes::AS_PATHS;
+use contactlab::solve::summary::bound_within_limit;
 use contactlab::solve::{Assembled, Caps, solve as solve_assembled, solve_algebraic, solver_entry};
 use contactlab::solvers::{Control, Friction, Observer, Progress, Status, registry};
 use numpy::{IntoPyArray, PyReadonlyArray1};
@@ -311,7 +312,10 @@ fn solve<'py>(
     stages.push(contactlab::coulomb::fixed_point::STAGE);
     let source = problem.source.clone();
     let (theirs, stop) = (raised.clone(), stopped.clone());
-    let (outcome, profile) = interruptible(py, move |cancel| {
+    // The answer's error bound, as `solve` prints it: the same gate
+    // (certificate.bound_max_unknowns) and the same friction.
+    let certificate = settings.certificate;
+    let (outcome, profile, error_bound) = interruptible(py, move |cancel| {
         let friction = match &bound {
             Some(g) => Friction::Given(g),
             None => Friction::Coulomb,
@@ -348,22 +352,32 @@ fn solve<'py>(
                     &solved.profile(),
                     &contactlab::mechanics::contact_zone::PROFILE_COLUMNS,
                 )?;
+                let error_bound = bound_within_limit(
+                    &solved.finest.problem,
+                    friction,
+                    &solved.outcome.solution,
+                    &certificate,
+                )
+                .with_contraction(solved.outcome.contraction_for_estimate());
                 Ok((
                     solved.outcome,
                     Some(String::from_utf8_lossy(&profile).into_owned()),
+                    error_bound,
                 ))
             }
-            Source::Algebraic(p) => Ok((
-                solve_algebraic(
+            Source::Algebraic(p) => {
+                let outcome = solve_algebraic(
                     &p,
                     friction,
                     entry,
                     &settings,
                     Caps::default(),
                     &mut observer,
-                )?,
-                None,
-            )),
+                )?;
+                let error_bound = bound_within_limit(&p, friction, &outcome.solution, &certificate)
+                    .with_contraction(outcome.contraction_for_estimate());
+                Ok((outcome, None, error_bound))
+            }
         }
     })?;
     if let Some(e) = raised.lock().unwrap_or_else(|e| e.into_inner()).take() {
@@ -376,7 +390,9 @@ fn solve<'py>(
     d.set_item("solver_status", o.claim.to_string())?;
     d.set_item("detail", o.detail.clone())?;
     d.set_item("stopped_by_callback", stopped.load(Ordering::Relaxed))?;
-    d.set_item("certificate", certificate_dict(py, &o.certificate)?)?;
+    let c = certificate_dict(py, &o.certificate)?;
+    c.set_item("error_bound", bound_dict(py, &error_bound)?)?;
+    d.set_item("certificate", c)?;
     let s = &o.solution;
     d.set_item("displacements", s.v.clone().into_pyarray(py))?;
     d.set_item("pressure", s.pressure.clone().into_pyarray(py))?;
@@ -484,7 +500,22 @@ fn certify<'py>(
     };
     let d = certificate_dict(py, &c)?;
     d.set_item("law", friction_law.as_str())?;
-    // The bound on the answer's error (issue 51), or why there is none.
+    d.set_item("error_bound", bound_dict(py, &bound)?)?;
+    // The answer the certificate judged, completed (forces from the
+    // displacements by stationarity, or displacements from the forces).
+    d.set_item("displacements", v.into_pyarray(py))?;
+    d.set_item("pressure", p.into_pyarray(py))?;
+    d.set_item("friction_traction", q.into_pyarray(py))?;
+    Ok(d)
+}
+
+/// The bound on an answer's error (issue 51) as a dict: `energy`,
+/// `displacement`, `pressure`, `kind` and `summary`, or `not_computed`
+/// saying why there is none.
+fn bound_dict<'py>(
+    py: Python<'py>,
+    bound: &contactlab::certificate::BoundReport,
+) -> PyResult<Bound<'py, PyDict>> {
     let b = PyDict::new(py);
     match &bound.bound {
         Some(e) => {
@@ -496,13 +527,7 @@ fn certify<'py>(
         None => b.set_item("not_computed", bound.not_computed.as_deref().unwrap_or(""))?,
     }
     b.set_item("summary", bound.line())?;
-    d.set_item("error_bound", b)?;
-    // The answer the certificate judged, completed (forces from the
-    // displacements by stationarity, or displacements from the forces).
-    d.set_item("displacements", v.into_pyarray(py))?;
-    d.set_item("pressure", p.into_pyarray(py))?;
-    d.set_item("friction_traction", q.into_pyarray(py))?;
-    Ok(d)
+    Ok(b)
 }
 
 /// Writes the problem as `contactlab export` does (A, M, f, the contact

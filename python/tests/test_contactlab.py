@@ -173,6 +173,12 @@ def test_certify_bounds_the_error_and_the_bound_grows_with_it(p32):
     # A Coulomb answer is bounded at its own g = 𝓕p, and says so.
     coulomb = cl.certify(p32, displacements=r.displacements)
     assert "fixed-point part not included" in coulomb.error_bound["kind"]
+    # solve carries the same bound as the command line prints (issue 75:
+    # it was None), and where it is not computed it says why.
+    assert r.certificate.error_bound["kind"] == "rigorous", r.certificate.error_bound
+    assert r.certificate.error_bound["energy"] == pytest.approx(b["energy"], rel=1e-6, abs=1e-300)
+    skipped = cl.solve(p32, solver="newton", bound=g, settings={"certificate.bound_max_unknowns": 0})
+    assert "bound_max_unknowns" in skipped.certificate.error_bound["not_computed"]
 
 
 def test_errors_are_the_command_lines_one_line_messages(p32):
