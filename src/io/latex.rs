@@ -195,6 +195,7 @@ fn symbol(c: char) -> Option<&'static str> {
         '—' => "---",
         '…' => "\\dots{}",
         '’' => "'",
+        '†' => "$^{\\dagger}$",
         _ => return None,
     })
 }
@@ -340,6 +341,7 @@ mod tests {
             "r = $1\\mathrm{e}{12}$, $\\varepsilon$ $\\le$ $1\\mathrm{e}{-4}$"
         );
         assert_eq!(text("1/64"), "1/64");
+        assert_eq!(text("2.8e-3†"), "$2.8\\mathrm{e}{-3}$$^{\\dagger}$");
         assert_eq!(
             text("[0.8283, 1.0000] (17.2%)"),
             "[0.8283, 1.0000] (17.2\\%)"
