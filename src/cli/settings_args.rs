@@ -190,10 +190,13 @@ impl<S: SolverSet> clap::FromArgMatches for SettingsArgs<S> {
         // Every change with its position on the command line.
         let mut given: Vec<(usize, Change)> = Vec::new();
         let mut add = |id: &str, path: &str, flag: String| {
-            let (Ok(Some(values)), Some(at)) = (
-                m.try_get_raw(id),
-                m.indices_of(id).map(|i| i.collect::<Vec<_>>()),
-            ) else {
+            // An id this command does not declare (table1 has its own
+            // --schedules) is asked for only through try_get_raw:
+            // indices_of panics on it in a debug build.
+            let Ok(Some(values)) = m.try_get_raw(id) else {
+                return;
+            };
+            let Some(at) = m.indices_of(id).map(|i| i.collect::<Vec<_>>()) else {
                 return;
             };
             for (value, index) in values.zip(at) {
