@@ -482,7 +482,8 @@ pub fn verdict(axes: &[Axis], points: &[Point]) -> String {
                 a.knob(),
                 100.0 * EQUAL_WORK
             ),
-            Some(r) => format!("{} changes it up to {r:.1}×", a.knob()),
+            // Two decimals: a 2% change is not "1.0×".
+            Some(r) => format!("{} changes it up to {r:.2}×", a.knob()),
         })
         .collect();
     s += &format!(
@@ -914,7 +915,7 @@ mod tests {
             "{v}"
         );
         assert!(
-            v.contains("r has no effect on work (within 1%); epsilon changes it up to 3.0×"),
+            v.contains("r has no effect on work (within 1%); epsilon changes it up to 3.03×"),
             "{v}"
         );
         assert!(
