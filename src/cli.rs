@@ -68,7 +68,7 @@ pub enum Command {
     /// forms (h = 1/32 ... 1/1024, 30 s a solve; --long: verify's own
     /// ladder), charts, a manifest and a README,
     /// all into --out (default results/).
-    /// About 1.5 h on 2 cores (78 min measured before verify joined it, which adds about 15); --long adds the studies that take hours (the
+    /// About 75 min on 2 cores (72 measured for the committed results/, verify 9 of them); --long adds the studies that take hours (the
     /// paper's method by sweeps at equal accuracy on 1/128 and 1/256, the
     /// whole benchmark collection): about 2.5 h. It states its estimate as it
     /// starts; the manifest records each study's time (--quick: a minute).
@@ -393,7 +393,7 @@ pub struct ReproduceArgs {
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
     /// bench's solvers with three timed runs each and 15 s per run, and the whole
     /// benchmark collection (81 instances, not its core 46 up to h = 1/32).
-    /// Without it the run takes about 1.5 h.
+    /// Without it the run takes about 75 min (72 measured).
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:
