@@ -142,9 +142,15 @@ pub fn measure(spec: &TrialSpec, reference: Option<&Reference>, keep: Keep) -> R
         events: Vec::new(),
     };
     let (finest, outcome) = solve_once(spec, reference, &mut recorder)?;
-    let mut times = vec![outcome.timing.total()];
+    // The first run is the warm-up: with repeats, the runs after it are
+    // what is timed (the median of a cold and a warm run was reported as
+    // "the median after a warm-up"); without, the one run there is.
+    let mut times = Vec::with_capacity(spec.repeats.max(1));
     for _ in 0..spec.repeats {
         times.push(solve_once(spec, reference, &mut Silent)?.1.timing.total());
+    }
+    if times.is_empty() {
+        times.push(outcome.timing.total());
     }
     let trial = trial_row(spec, reference, &finest, &outcome);
     let (knob, value) = trial.knob();

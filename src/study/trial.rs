@@ -511,6 +511,8 @@ pub struct TrialTiming {
     pub law: Law,
     pub knob: String,
     pub value: String,
+    /// The timed runs: those after the first, warm-up run, or that one
+    /// run when the trial has no repeats.
     pub runs: usize,
     #[serde(serialize_with = "fixed")]
     pub seconds_min: f64,

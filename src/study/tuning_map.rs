@@ -755,7 +755,7 @@ impl Study for TuningMap {
             .map(|a| format!("`{}` ∈ {{{}}}", a.path, a.values.join(", ")))
             .collect();
         let mut markdown = format!(
-            "## Tuning map: {} ({}, h = {}, {} law)\n\n`{}`{form} on the joint grid {} (`{}.csv`); each point timed over {} runs and certified. {}\n\n",
+            "## Tuning map: {} ({}, h = {}, {} law)\n\n`{}`{form} on the joint grid {} (`{}.csv`); each point certified and timed over {}. {}\n\n",
             self.group(),
             self.scene.name,
             self.scene.finest(),
@@ -763,7 +763,11 @@ impl Study for TuningMap {
             self.solver.name,
             axes.join(" × "),
             self.stem(),
-            1 + self.repeats,
+            if self.repeats == 0 {
+                "one run".to_string()
+            } else {
+                format!("{} runs after a warm-up", self.repeats)
+            },
             verdict(&self.axes, &found.points)
         );
         for c in charts {
