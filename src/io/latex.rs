@@ -124,6 +124,54 @@ impl Tabular {
     }
 }
 
+/// The solver's claims that differ from the certified status, each marked
+/// on the status by a letter (a, b, …) and named once in the caption: a
+/// claim column would not fit the page.
+pub struct ClaimMarks<'a> {
+    claims: Vec<&'a str>,
+}
+
+impl<'a> ClaimMarks<'a> {
+    /// The marks of `(status, claim)` pairs, in the order first seen.
+    pub fn of(pairs: impl IntoIterator<Item = (&'a str, &'a str)>) -> Self {
+        let mut claims = Vec::new();
+        for (status, claim) in pairs {
+            if status != claim && !claims.contains(&claim) {
+                claims.push(claim);
+            }
+        }
+        Self { claims }
+    }
+
+    /// The status as a cell, with its claim's letter if they differ.
+    pub fn status(&self, status: &str, claim: &str) -> String {
+        match self.claims.iter().position(|c| *c == claim) {
+            Some(k) if status != claim => format!("{}$^{}$", text(status), letter(k)),
+            _ => text(status),
+        }
+    }
+
+    /// For the caption: ` (a: the solver claimed converged; …)`, or
+    /// nothing when every claim is its status.
+    pub fn caption(&self) -> String {
+        if self.claims.is_empty() {
+            return String::new();
+        }
+        let named: Vec<String> = self
+            .claims
+            .iter()
+            .enumerate()
+            .map(|(k, c)| format!("{}: the solver claimed {c}", letter(k)))
+            .collect();
+        format!(" ({})", named.join("; "))
+    }
+}
+
+/// The k-th mark: a, b, c, …
+fn letter(k: usize) -> char {
+    (b'a' + (k % 26) as u8) as char
+}
+
 /// A label's name: letters and digits kept, anything else `-`.
 fn label_of(name: &str) -> String {
     name.chars()

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use crate::coulomb::continuation::Schedule;
 use crate::io::csv::fixed;
-use crate::io::latex::{Tabular, math, number, text};
+use crate::io::latex::{ClaimMarks, Tabular, math, number, text};
 use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
@@ -267,29 +267,17 @@ pub fn latex(rows: &[Table1Row]) -> String {
         math("\\mathrm{MPR}_{1/32}"),
         math("\\mathrm{MPR}_{1/64}"),
     ];
-    let mut claims: Vec<&str> = Vec::new();
-    for r in rows {
-        if r.status != r.solver_status && !claims.contains(&r.solver_status.as_str()) {
-            claims.push(&r.solver_status);
-        }
-    }
-    let letter = |k: usize| (b'a' + (k % 26) as u8) as char;
-    let marks: Vec<String> = claims
-        .iter()
-        .enumerate()
-        .map(|(k, c)| format!("{}: the solver claimed {c}", letter(k)))
-        .collect();
+    let claims = ClaimMarks::of(
+        rows.iter()
+            .map(|r| (r.status.as_str(), r.solver_status.as_str())),
+    );
     let mut t = Tabular::new(
         &format!(
             "Table 1 of Zhiltsov & Namm (2019) beside ours: iteration counts of the paper's method, the paper's in each \
              problem's first row. MPP: friction iterations; MU: Uzawa iterations; MPR: relaxation sweeps (in all, at \
              h = 1/32, at 1/64); status: certified{}; certificate: the largest violation of the Coulomb law's conditions \
              in the problem's scales (contactlab reproduce).",
-            if marks.is_empty() {
-                String::new()
-            } else {
-                format!(" ({})", marks.join("; "))
-            }
+            claims.caption()
         ),
         "table1",
         header,
@@ -313,15 +301,9 @@ pub fn latex(rows: &[Table1Row]) -> String {
             p.paper_mpr_1_64.to_string(),
         ]);
         for r in ours {
-            let mut status = text(&r.status);
-            if let Some(k) = claims.iter().position(|c| *c == r.solver_status)
-                && r.status != r.solver_status
-            {
-                status += &format!("$^{}$", letter(k));
-            }
             t.row(vec![
                 text(&r.schedule.to_string()),
-                status,
+                claims.status(&r.status, &r.solver_status),
                 number(r.certificate),
                 r.mpp.to_string(),
                 r.mu.to_string(),
@@ -399,24 +381,7 @@ mod tests {
 
     #[test]
     fn a_level_never_run_reads_not_run_not_zero() {
-        let row = Table1Row {
-            problem: 1,
-            schedule: Schedule::Revisit,
-            status: "converged".into(),
-            solver_status: "converged".into(),
-            mpp: 3,
-            mu: 40,
-            mpr: 900,
-            mpr_1_32: Some(700),
-            mpr_1_64: None,
-            separated_fraction: 0.2,
-            certificate: 1e-7,
-            paper_mpp: 4,
-            paper_mu: 47,
-            paper_mpr: 27550,
-            paper_mpr_1_32: 5478,
-            paper_mpr_1_64: 21440,
-        };
+        let row = row(1, Schedule::Revisit);
         let table = markdown(&[row]);
         assert!(
             table.contains("| 700 / 5478 | not run / 21440 |"),

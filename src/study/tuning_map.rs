@@ -410,7 +410,9 @@ pub fn rank(points: &mut [Point]) {
 /// other axes fixed, the largest ratio of most to least work among its
 /// certified points (None when no slice has two certified points).
 pub fn work_effect(axis: usize, points: &[Point]) -> Option<f64> {
-    let mut slices: Vec<(Vec<&str>, usize, usize)> = Vec::new();
+    // Per slice (the other axes' values): least and most work, and how
+    // many certified points it has.
+    let mut slices: Vec<(Vec<&str>, usize, usize, usize)> = Vec::new();
     for p in points.iter().filter(|p| p.certified) {
         let others: Vec<&str> = p
             .values
@@ -419,32 +421,19 @@ pub fn work_effect(axis: usize, points: &[Point]) -> Option<f64> {
             .filter(|(k, _)| *k != axis)
             .map(|(_, v)| v.as_str())
             .collect();
-        match slices.iter_mut().find(|(o, _, _)| *o == others) {
-            Some((_, lo, hi)) => {
+        match slices.iter_mut().find(|(o, ..)| *o == others) {
+            Some((_, lo, hi, n)) => {
                 *lo = (*lo).min(p.work);
                 *hi = (*hi).max(p.work);
+                *n += 1;
             }
-            None => slices.push((others, p.work, p.work)),
+            None => slices.push((others, p.work, p.work, 1)),
         }
     }
-    let counts = |o: &Vec<&str>| {
-        points
-            .iter()
-            .filter(|p| p.certified)
-            .filter(|p| {
-                p.values
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != axis)
-                    .map(|(_, v)| v.as_str())
-                    .eq(o.iter().copied())
-            })
-            .count()
-    };
     slices
         .iter()
-        .filter(|(o, _, _)| counts(o) >= 2)
-        .map(|(_, lo, hi)| *hi as f64 / (*lo).max(1) as f64)
+        .filter(|(.., n)| *n >= 2)
+        .map(|(_, lo, hi, _)| *hi as f64 / (*lo).max(1) as f64)
         .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
 }
 

@@ -7,8 +7,8 @@
 use contactlab_solvers::Law;
 
 use crate::certificate::BoundKind;
-use crate::io::latex::{Tabular, math, number, text};
-use crate::study::compare::STUDY;
+use crate::io::latex::{ClaimMarks, Tabular, math, number, text};
+use crate::study::compare::{STUDY, iterations};
 use crate::study::runner::Measured;
 
 /// The file of `law`'s table.
@@ -38,20 +38,10 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
         .iter()
         .find_map(|m| m.trial.reference)
         .unwrap_or("none");
-    // A status the solver's own claim differs from is marked by a letter,
-    // one per claim, named in the caption.
-    let mut claims: Vec<&str> = Vec::new();
-    for m in rows {
-        let (status, claim) = (m.trial.status.as_str(), m.trial.solver_status.as_str());
-        if status != claim && !claims.contains(&claim) {
-            claims.push(claim);
-        }
-    }
-    let marks: Vec<String> = claims
-        .iter()
-        .enumerate()
-        .map(|(k, c)| format!("{}: the solver claimed {c}", letter(k)))
-        .collect();
+    let claims = ClaimMarks::of(
+        rows.iter()
+            .map(|m| (m.trial.status.as_str(), m.trial.solver_status.as_str())),
+    );
     let studies: Vec<String> = {
         let mut v = Vec::new();
         for m in rows.iter().filter(|m| m.trial.study != STUDY) {
@@ -70,11 +60,7 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
          tractions); ‖Δv‖_A: the difference in the energy seminorm over √K·U; bound: the certificate's bound on it \
          († at the answer's own g = 𝓕p; -- where not computed); separated: the share of Γ_K where the bodies part{} \
          ({source}).",
-        if marks.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", marks.join("; "))
-        },
+        claims.caption(),
         if studies.is_empty() {
             String::new()
         } else {
@@ -129,11 +115,6 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
     Tabular::stacked(&[verdict, answer])
 }
 
-/// The caption's mark of the k-th claim: a, b, c, ...
-fn letter(k: usize) -> char {
-    (b'a' + (k % 26) as u8) as char
-}
-
 /// The solver's name, starred when the trial is another study's
 /// (the paper's settings), the star named in the caption.
 fn solver_cell(m: &Measured) -> String {
@@ -147,25 +128,14 @@ fn solver_cell(m: &Measured) -> String {
 
 /// A trial's verdict and work: solver, status, certificate, iterations,
 /// time.
-fn verdict_cells(m: &Measured, claims: &[&str]) -> Vec<String> {
+fn verdict_cells(m: &Measured, claims: &ClaimMarks) -> Vec<String> {
     let r = &m.trial;
-    let iterations = match (r.friction_iterations, r.inner_iterations) {
-        (0, 0) => format!("{}", r.outer_iterations),
-        (0, i) => format!("{} / {i}", r.outer_iterations),
-        (f, 0) => format!("{f}: {}", r.outer_iterations),
-        (f, i) => format!("{f}: {} / {i}", r.outer_iterations),
-    };
-    let mut status = text(r.status.as_str());
-    if let Some(k) = claims.iter().position(|c| *c == r.solver_status.as_str())
-        && r.status.as_str() != r.solver_status.as_str()
-    {
-        status += &format!("$^{}$", letter(k));
-    }
+    let status = claims.status(r.status.as_str(), r.solver_status.as_str());
     vec![
         solver_cell(m),
         status,
         number(r.residual()),
-        text(&iterations),
+        text(&iterations(r)),
         format!("{:.3}", m.timing.seconds_min),
     ]
 }

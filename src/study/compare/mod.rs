@@ -118,6 +118,16 @@ pub fn plan(
     out
 }
 
+/// A trial's iterations: `[friction iterations:] outer [/ inner]`.
+pub fn iterations(r: &Trial) -> String {
+    match (r.friction_iterations, r.inner_iterations) {
+        (0, 0) => format!("{}", r.outer_iterations),
+        (0, i) => format!("{} / {i}", r.outer_iterations),
+        (f, 0) => format!("{f}: {}", r.outer_iterations),
+        (f, i) => format!("{f}: {} / {i}", r.outer_iterations),
+    }
+}
+
 /// A Markdown table of comparison trials.
 pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
     let mut out = String::from(
@@ -126,12 +136,6 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
     );
     let e = |x: Option<f64>| x.map(|v| format!("{v:.1e}")).unwrap_or_else(|| "–".into());
     for (r, t) in trials.iter().zip(seconds) {
-        let iterations = match (r.friction_iterations, r.inner_iterations) {
-            (0, 0) => format!("{}", r.outer_iterations),
-            (0, i) => format!("{} / {i}", r.outer_iterations),
-            (f, 0) => format!("{f}: {}", r.outer_iterations),
-            (f, i) => format!("{f}: {} / {i}", r.outer_iterations),
-        };
         let sep = if r.separated.is_empty() {
             "none".to_string()
         } else {
@@ -164,7 +168,7 @@ pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
             sep,
             100.0 * r.separated_fraction,
             certificate,
-            iterations,
+            iterations(r),
             t
         );
     }
