@@ -187,6 +187,22 @@ pub fn error_bound(n: usize) -> f64 {
     ERROR_BOUND.bytes(n)
 }
 
+/// The error bound by multigrid beside an answer (`solve` and every trial
+/// above 40 000 unknowns, [`crate::certificate::energy_multigrid`]): the
+/// Galerkin hierarchy and the vectors of a solve on each core, O(n);
+/// measured beside tnnmg on problem 1 (the whole solve's peak, less that
+/// without the bound) 750 B per unknown at h = 1/256, 625 at 1/512, 605 at
+/// 1/1024, rounded up. Like the factors, it checks its own size before it
+/// allocates and is not part of a command's check before the run.
+pub fn multigrid_bound(n: usize) -> f64 {
+    MULTIGRID_BOUND.bytes(n)
+}
+
+const MULTIGRID_BOUND: Memory = Memory {
+    per_unknown: 900.0,
+    per_unknown_log2: 0.0,
+};
+
 const ERROR_BOUND: Memory = Memory {
     per_unknown: 0.0,
     per_unknown_log2: 130.0,

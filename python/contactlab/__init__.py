@@ -952,7 +952,7 @@ def work_precision(
         The chart's accuracy: ``"violation"``, the certificate's largest
         violation; ``"bound"``, the error bound on ‖v − v*‖_A over √K·U
         (issue 51: it needs no reference; computed up to
-        ``certificate.bound_max_unknowns`` unknowns, h = 1/128 by default);
+        ``certificate.bound_max_unknowns`` unknowns, h = 1/512 by default);
         or ``"bound-vs-error"``, the bound against the measured distance
         from the reference (no time axis). Every chart is also in
         ``charts`` of the result.

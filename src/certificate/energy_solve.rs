@@ -28,6 +28,10 @@ pub enum EnergySolveError {
     NotDefinite(usize),
     #[error("faer's analysis failed: {0}")]
     Analysis(String),
+    #[error(
+        "the preconditioned conjugate gradients did not converge in {steps} steps (relative residual {residual:.1e})"
+    )]
+    NotConverged { steps: usize, residual: f64 },
 }
 
 /// A factorization of A without the pinned unknowns.

@@ -73,6 +73,7 @@ use contactlab_solvers::{ContactProblem, Friction, Law, Solution};
 use serde::{Deserialize, Serialize};
 
 use super::accurate_sum::Dot2;
+use super::energy_multigrid::MultigridSolve;
 use super::energy_solve::{EnergySolve, EnergySolveError};
 use super::{fits, implied_forces};
 
@@ -144,10 +145,10 @@ pub enum BoundError {
 /// change made at Γ_K).
 pub struct ErrorBounder<'a> {
     problem: &'a ContactProblem,
-    solve: EnergySolve,
+    solve: Inverse,
     /// Built on first use: an answer that needs no change at Γ_K needs no
     /// extension.
-    interior: std::cell::OnceCell<Result<EnergySolve, EnergySolveError>>,
+    interior: std::sync::OnceLock<Result<Inverse, EnergySolveError>>,
     room: f64,
     /// An upper bound on ‖z‖_A of the rigid mode as assembled
     /// ([`ErrorBounder::energy_upper`]): zero in exact arithmetic, about
@@ -163,6 +164,86 @@ pub struct ErrorBounder<'a> {
     contact_of: Vec<u32>,
 }
 
+/// The most unknowns at which the bound factors A (a sparse
+/// Cholesky, [`EnergySolve`]); above, where the problem has a hierarchy of
+/// nested meshes, it solves by multigrid-preconditioned conjugate
+/// gradients ([`MultigridSolve`]): O(n) memory, where the factors grow as
+/// n log n and their cost as n^1.5 (at h = 1/512 they took 1.3 GB).
+pub const FACTOR_MAX_UNKNOWNS: usize = 40_000;
+
+/// The relative residual of the solve of ρ and of the extension, by
+/// multigrid: the refinement then counts what the first left (ρᵀA⁺ρ equals
+/// ρᵀy + ρᵀA⁺(ρ − A y) exactly), and counts it twice over; any extension gives
+/// a valid bound (its energy is computed as it is), the least-energy one
+/// the sharpest (at 1e-2 the bounds of rough answers came out 2e-4 above
+/// the factorization's; at this accuracy they agree to 1e-9).
+const MAIN_ACCURACY: f64 = 1e-6;
+
+/// The relative residual of the refinement's solve and of the rounding's
+/// allowance, by multigrid: each enters the bound as an allowance, of which
+/// two digits are enough.
+const CORRECTION_ACCURACY: f64 = 1e-2;
+
+/// How the bound solves with A.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoundSolve {
+    /// A factorization up to [`FACTOR_MAX_UNKNOWNS`], multigrid above it
+    /// where the problem has a hierarchy.
+    Auto,
+    /// A sparse Cholesky ([`EnergySolve`]) at every size.
+    Factor,
+    /// Multigrid ([`MultigridSolve`]) at every size (a factorization
+    /// without a hierarchy).
+    Multigrid,
+}
+
+/// The certificate's solve with A: a factorization, or multigrid.
+enum Inverse {
+    Factor(Box<EnergySolve>),
+    Multigrid(MultigridSolve),
+}
+
+impl Inverse {
+    /// A with one unknown per rigid mode pinned (factored), or A on z^⊥
+    /// (multigrid, above [`FACTOR_MAX_UNKNOWNS`] with a hierarchy).
+    fn new(problem: &ContactProblem, room: f64, how: BoundSolve) -> Result<Self, EnergySolveError> {
+        let multigrid = match how {
+            BoundSolve::Auto => problem.n() > FACTOR_MAX_UNKNOWNS,
+            BoundSolve::Factor => false,
+            BoundSolve::Multigrid => true,
+        };
+        if multigrid && let Some(multigrid) = MultigridSolve::new(problem, room) {
+            return multigrid.map(Inverse::Multigrid);
+        }
+        let pinned = super::problem_checks::pinned_unknowns(problem.rigid_modes());
+        EnergySolve::new(problem, &pinned, room).map(|f| Inverse::Factor(Box::new(f)))
+    }
+
+    /// The same kind of solve for A without the unknowns `pinned`.
+    fn pinned(
+        &self,
+        problem: &ContactProblem,
+        pinned: &[usize],
+        room: f64,
+    ) -> Result<Self, EnergySolveError> {
+        match self {
+            Inverse::Factor(_) => {
+                EnergySolve::new(problem, pinned, room).map(|f| Inverse::Factor(Box::new(f)))
+            }
+            Inverse::Multigrid(m) => Ok(Inverse::Multigrid(m.pinned(pinned))),
+        }
+    }
+
+    /// A⁺b (b balanced) or A_FF⁻¹ b_F; `relative` is the residual asked
+    /// of multigrid (a factorization solves to its rounding).
+    fn solve(&self, b: &[f64], relative: f64) -> Result<Vec<f64>, EnergySolveError> {
+        match self {
+            Inverse::Factor(f) => Ok(f.solve(b)),
+            Inverse::Multigrid(m) => m.solve(b, relative),
+        }
+    }
+}
+
 /// One way of reading an answer: its forces as given or as its
 /// displacements imply them, and the displacements shifted along the
 /// rigid mode or not.
@@ -173,16 +254,25 @@ struct Reading<'r> {
 }
 
 impl<'a> ErrorBounder<'a> {
-    /// Factors A (one pinned unknown per rigid mode) and A without the
-    /// contact unknowns, refusing if either factor would take more than
+    /// Prepares the solves with A (one pinned unknown per rigid mode) and
+    /// with A without the contact unknowns, by factorization or multigrid
+    /// ([`BoundSolve::Auto`]), refusing if either would take more than
     /// `room` bytes.
     pub fn new(problem: &'a ContactProblem, room: f64) -> Result<Self, BoundError> {
+        Self::solving(problem, room, BoundSolve::Auto)
+    }
+
+    /// The same, with the solve chosen (to compare the two).
+    pub fn solving(
+        problem: &'a ContactProblem,
+        room: f64,
+        how: BoundSolve,
+    ) -> Result<Self, BoundError> {
         let modes = problem.rigid_modes();
         if modes.len() > 1 {
             return Err(BoundError::RigidModes(modes.len()));
         }
-        let pinned = super::problem_checks::pinned_unknowns(modes);
-        let solve = EnergySolve::new(problem, &pinned, room)?;
+        let solve = Inverse::new(problem, room, how)?;
         let mut contact_of = vec![0u32; problem.n()];
         for (i, c) in problem.contacts().iter().enumerate() {
             contact_of[c.t] = 2 * i as u32 + 1;
@@ -191,7 +281,7 @@ impl<'a> ErrorBounder<'a> {
         let mut out = Self {
             problem,
             solve,
-            interior: std::cell::OnceCell::new(),
+            interior: std::sync::OnceLock::new(),
             room,
             rigid_energy: 0.0,
             contact_of,
@@ -223,20 +313,23 @@ impl<'a> ErrorBounder<'a> {
             .map(|(i, c)| friction.bound(i, c.coefficient, p[i]))
             .collect();
         let implied = implied_forces(problem, v);
-        let mut best: Option<f64> = None;
-        let mut overflow = false;
+        let mut readings = Vec::with_capacity(4);
         for (pr, qr) in [(p, q), (&implied.0[..], &implied.1[..])] {
             for shift in [false, true] {
-                let reading = Reading {
+                readings.push(Reading {
                     p: pr,
                     q: qr,
                     shift,
-                };
-                match self.energy(v, &g, &reading) {
-                    Some(e) if e.is_nan() => overflow = true,
-                    Some(e) if best.is_none_or(|b| e < b) => best = Some(e),
-                    _ => {}
-                }
+                });
+            }
+        }
+        let mut best: Option<f64> = None;
+        let mut overflow = false;
+        for energy in self.energies(v, &g, &readings) {
+            match energy? {
+                Some(e) if e.is_nan() => overflow = true,
+                Some(e) if best.is_none_or(|b| e < b) => best = Some(e),
+                _ => {}
             }
         }
         let energy = best.ok_or(if overflow {
@@ -267,6 +360,41 @@ impl<'a> ErrorBounder<'a> {
         })
     }
 
+    /// Each reading's bound ([`Self::energy`]): by multigrid, where each
+    /// takes a few dozen V-cycles, the readings are shared among the cores
+    /// (they are independent); a factorization's solves are parallel
+    /// themselves.
+    fn energies(
+        &self,
+        v: &[f64],
+        g: &[f64],
+        readings: &[Reading<'_>],
+    ) -> Vec<Result<Option<f64>, EnergySolveError>> {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let workers = cores.min(readings.len());
+        if workers < 2 || !matches!(self.solve, Inverse::Multigrid(_)) {
+            return readings.iter().map(|r| self.energy(v, g, r)).collect();
+        }
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..workers)
+                .map(|w| {
+                    scope.spawn(move || {
+                        readings
+                            .iter()
+                            .skip(w)
+                            .step_by(workers)
+                            .map(|r| self.energy(v, g, r))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
+        })
+    }
+
     /// The bound ‖v_c − v‖_A + √(2 (J(v_c) − D(p̂, q̂))) of one reading:
     /// (p, q) repaired into the dual-feasible set, v moved to an admissible
     /// v_c; None if the pressures cannot balance the load.
@@ -278,7 +406,12 @@ impl<'a> ErrorBounder<'a> {
     /// ½ (w p̂)²/A_tt if the pressure is dropped (in ρ); likewise a traction
     /// short of its bound at a slipping node. The cheapest is taken. The
     /// choice only sharpens the bound: any choice gives an upper bound.
-    fn energy(&self, v: &[f64], g: &[f64], reading: &Reading<'_>) -> Option<f64> {
+    fn energy(
+        &self,
+        v: &[f64],
+        g: &[f64],
+        reading: &Reading<'_>,
+    ) -> Result<Option<f64>, EnergySolveError> {
         let problem = self.problem;
         let contacts = problem.contacts();
         // The jump past the initial gap, t_i − d_i ≤ 0, is the cone's
@@ -321,7 +454,7 @@ impl<'a> ErrorBounder<'a> {
             let second = mean_shift(&force);
             let tau = if second.is_finite() { second } else { first };
             if !(tau.is_finite()) {
-                return None;
+                return Ok(None);
             }
             vs.iter_mut().zip(z).for_each(|(x, zk)| *x += tau * zk);
             // ‖v − v_s‖_A ≤ |τ| ‖z‖_A + ‖e‖_A, e the rounding of v + τ z
@@ -363,8 +496,10 @@ impl<'a> ErrorBounder<'a> {
                 }
             }
         }
-        if let Some(z) = z {
-            balance(problem, z, &mut ph, &qh)?;
+        if let Some(z) = z
+            && balance(problem, z, &mut ph, &qh).is_none()
+        {
+            return Ok(None);
         }
         // v_c: complementary to (p̂, q̂) at every node, so that the gap's
         // C is zero: a jump closed where a pressure acts on it or where it
@@ -382,7 +517,7 @@ impl<'a> ErrorBounder<'a> {
                 d[c.s] = -s;
             }
         }
-        self.extend(&mut d).ok()?;
+        self.extend(&mut d)?;
         let correction = self.energy_upper(&d);
         // ρ = A (v_s + d) − f + Σ w p̂ e_t − Σ w q̂ e_s, each row by Dot2 with
         // a bound on its rounding.
@@ -392,7 +527,7 @@ impl<'a> ErrorBounder<'a> {
             orthogonal_to(z, &mut rho);
             orthogonal_to(z, &mut rounding);
         }
-        let y = self.solve.solve(&rho);
+        let y = self.solve.solve(&rho, MAIN_ACCURACY)?;
         // One refinement: the residual ρ − A y (by Dot2) solved again; its
         // change to ρᵀy is counted as rounding allowance.
         let residual: Vec<f64> = (0..rho.len())
@@ -406,7 +541,7 @@ impl<'a> ErrorBounder<'a> {
                 acc.value().0
             })
             .collect();
-        let dy = self.solve.solve(&residual);
+        let dy = self.solve.solve(&residual, CORRECTION_ACCURACY)?;
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         let first = dot(&rho, &y);
         let change = dot(&rho, &dy);
@@ -415,9 +550,9 @@ impl<'a> ErrorBounder<'a> {
         // ρ's rounding, measured as ρ is: ‖b‖_{A⁺} for the rows' error
         // bounds b (an estimate of ‖δρ‖_{A⁺} over |δρ| ≤ b: its signs taken
         // alike, which A⁺ damps least).
-        let by = self.solve.solve(&rounding);
+        let by = self.solve.solve(&rounding, CORRECTION_ACCURACY)?;
         let allowance = dot(&rounding, &by).max(0.0).sqrt();
-        Some(quadratic.sqrt() + allowance + correction + shifted)
+        Ok(Some(quadratic.sqrt() + allowance + correction + shifted))
     }
 
     /// Extends `d`, given at the contact unknowns (zero elsewhere on
@@ -436,13 +571,13 @@ impl<'a> ErrorBounder<'a> {
                     .iter()
                     .flat_map(|c| [c.t, c.s])
                     .collect();
-                EnergySolve::new(self.problem, &contact, self.room)
+                self.solve.pinned(self.problem, &contact, self.room)
             })
             .as_ref()
             .map_err(Clone::clone)?;
         let mut rhs = self.product_on(d, &support);
         rhs.iter_mut().for_each(|x| *x = -*x);
-        let inside = interior.solve(&rhs);
+        let inside = interior.solve(&rhs, MAIN_ACCURACY)?;
         for (k, x) in inside.iter().enumerate() {
             if *x != 0.0 {
                 d[k] = *x;
@@ -621,13 +756,16 @@ pub fn error_bound(
     ErrorBounder::new(problem, room)?.bound(friction, v, p, q)
 }
 
-/// The largest problem whose bound `solve` computes beside its answer
-/// (h = 1/128 has 33 282 unknowns): the bound takes one or two sparse
-/// factorizations, which at finer h cost more than the fast solvers: at
-/// 1/256 they took a relaxation solve from 213 MB (its estimate) to 339
-/// MB, and at 1/512 they add 4.6 s and 1.3 GB to tnnmg's 0.7 s and 0.16 GB. `certify`
-/// bounds an answer at any h whose factors fit in memory.
-pub const SOLVE_BOUND_MAX_UNKNOWNS: usize = 40_000;
+/// The largest problem whose bound `solve` and every trial compute beside
+/// the answer (h = 1/512 has 526 082 unknowns). Above 40 000 unknowns
+/// ([`FACTOR_MAX_UNKNOWNS`]) the bound solves by multigrid, O(n): on
+/// problem 1 with tnnmg (wall time and peak memory of the whole `solve`,
+/// without → with the bound) 1/256: 0.35 → 1.11 s, 28 → 127 MB; 1/512:
+/// 1.46 → 4.75 s, 83 → 412 MB; 1/1024: 3.5 → 16.9 s, 0.30 → 1.57 GB
+/// (by factorization it had added 4.6 s and 1.3 GB at 1/512). Finer, the
+/// bound costs several times the fastest solve; `certify` bounds an answer
+/// at any h that fits in memory.
+pub const SOLVE_BOUND_MAX_UNKNOWNS: usize = 600_000;
 
 /// The fixed point's part of a Coulomb answer's error, estimated from the
 /// fixed point's observed contraction factor k (paper (9): g ↦ 𝓕 p(S(g)),

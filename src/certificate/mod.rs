@@ -41,12 +41,13 @@
 //! is an infinite violation: every maximum here counts a NaN as infinite.
 
 pub mod accurate_sum;
+pub mod energy_multigrid;
 pub mod energy_solve;
 pub mod error_bound;
 pub mod problem_checks;
 
 pub use error_bound::{
-    BoundError, BoundKind, BoundReport, ErrorBound, ErrorBounder, FixedPointEstimate,
+    BoundError, BoundKind, BoundReport, BoundSolve, ErrorBound, ErrorBounder, FixedPointEstimate,
     SOLVE_BOUND_MAX_UNKNOWNS, bound_room, error_bound,
 };
 

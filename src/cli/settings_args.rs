@@ -140,7 +140,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .action(ArgAction::Append)
                     .allow_hyphen_values(true)
                     .help(format!(
-                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable). Each solver's settings are also flags (--relaxation-r 1e8); `contactlab settings [SOLVER]` lists them all. All settings flags apply in the order given: when two set the same setting (--set stopping=paper --stopping relative), the later one wins. --set certificate.bound_max_unknowns=N bounds the error of answers up to N unknowns (default {}, h = 1/128; 0: none)",
+                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable). Each solver's settings are also flags (--relaxation-r 1e8); `contactlab settings [SOLVER]` lists them all. All settings flags apply in the order given: when two set the same setting (--set stopping=paper --stopping relative), the later one wins. --set certificate.bound_max_unknowns=N bounds the error of answers up to N unknowns (default {}, h = 1/512; 0: none)",
                         crate::settings::example_path(),
                         crate::certificate::SOLVE_BOUND_MAX_UNKNOWNS
                     )),

@@ -151,7 +151,7 @@ pub fn bound_within_limit(
 /// Why an answer of `n` unknowns gets no bound, and the way to one.
 pub fn too_large_to_bound(n: usize, settings: &CertificateSettings) -> String {
     format!(
-        "{n} unknowns, more than certificate.bound_max_unknowns = {} (default {SOLVE_BOUND_MAX_UNKNOWNS}, h = 1/128); raise it with --set certificate.bound_max_unknowns=N, or `certify` an answer written by `solve --out`",
+        "{n} unknowns, more than certificate.bound_max_unknowns = {} (default {SOLVE_BOUND_MAX_UNKNOWNS}, h = 1/512); raise it with --set certificate.bound_max_unknowns=N, or `certify` an answer written by `solve --out`",
         settings.bound_max_unknowns
     )
 }
