@@ -283,6 +283,13 @@ pub struct SweepArgs {
     /// solve a point).
     #[arg(long, value_enum, default_value = "coulomb", requires = "grid")]
     pub law: MapLaw,
+    /// A tuning map's time limit per solve: each point's solve stops after
+    /// SECONDS with the status time_limit (its answer certified or not as
+    /// it stands, and drawn as not certified when it fails), so that a map
+    /// of the paper's form at h = 1/128 and finer fits a budget of at most
+    /// points × runs × SECONDS, which the map states before it starts.
+    #[arg(long = "time-limit", value_name = "SECONDS", value_parser = positive_seconds, requires = "grid")]
+    pub time_limit: Option<f64>,
     /// Skip the work-precision diagram.
     #[arg(long)]
     pub no_work_precision: bool,

@@ -128,3 +128,42 @@ fn the_readmes_map_runs_at_the_default_law_and_two_problems_write_two_maps() {
         .collect();
     assert_eq!(maps.len(), 2, "{maps:?}");
 }
+
+/// `--time-limit` caps each point's solve: a map of points that cannot
+/// finish in it still ends, states its budget and its form before it starts,
+/// and writes each point with the status time_limit (not certified).
+#[test]
+fn a_time_limited_map_states_its_budget_and_ends_with_every_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("map");
+    let o = sweep(
+        &[
+            "--h",
+            "1/32",
+            "--grid",
+            "relaxation.r=1e3,1e5",
+            "--grid",
+            "relaxation.epsilon=1e-8,1e-9",
+            "--runs",
+            "0",
+            "--time-limit",
+            "0.02",
+        ],
+        &out,
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("mapping relaxation (inner = sweeps)")
+            && stderr.contains("4 solves")
+            && stderr.contains("at most 0 s with --time-limit 0.02 s a solve"),
+        "{stderr}"
+    );
+    let map = std::fs::read_to_string(out.join("tuning_map_relaxation_coulomb_h32.csv")).unwrap();
+    let rows: Vec<&str> = map.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{map}");
+    assert!(
+        rows.iter().all(|r| r.contains(",time_limit,false,")),
+        "{map}"
+    );
+}

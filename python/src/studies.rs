@@ -248,6 +248,7 @@ pub fn _tuning_map<'py>(
         axes,
         repeats,
         tag: None,
+        point_seconds: None,
     };
     run(py, study, settings, out)
 }

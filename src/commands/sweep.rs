@@ -163,7 +163,9 @@ fn map(args: &SweepArgs, scenes: Vec<Scene>, base: Settings) -> Result<()> {
                 axes: axes.clone(),
                 repeats: args.repeats as usize,
                 tag,
+                point_seconds: args.time_limit,
             };
+            eprintln!("{}", study.plan_line(&settings)?);
             let (found, artifacts) = run_study(&study, settings.clone())?;
             write_artifacts(folder.path(), &artifacts)?;
             lines.push(format!(

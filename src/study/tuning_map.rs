@@ -26,6 +26,7 @@ use serde::Serialize;
 use crate::io::csv::fixed;
 use crate::io::heatmap::{Cell, HeatMap, Mark};
 use crate::mechanics::scene::Scene;
+use crate::settings::Settings;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::plans;
 use crate::study::runner::{Keep, Measured};
@@ -184,6 +185,8 @@ pub struct TuningMap {
     /// Added to the file names when one run maps several scenes
     /// (`sweep --grid --problem 1,2`), so that no map overwrites another.
     pub tag: Option<String>,
+    /// Each point's solve stops after this many seconds (`--time-limit`).
+    pub point_seconds: Option<f64>,
 }
 
 /// One point of the map, measured and ranked.
@@ -225,8 +228,8 @@ pub struct MapFindings {
 impl TuningMap {
     /// The settings every point shares, and the fast form's settings when
     /// the mesh is finer than [`OWN_FORM_FINEST`].
-    fn base(&self, lab: &Lab) -> Result<(crate::settings::Settings, Form)> {
-        let mut settings = lab.settings.clone();
+    fn base(&self, shared: &Settings) -> Result<(Settings, Form)> {
+        let mut settings = shared.clone();
         let mut form = Vec::new();
         if self.scene.finest().level() > OWN_FORM_FINEST
             && let Some(fine) = plans::plan(self.solver).fine
@@ -267,8 +270,8 @@ impl TuningMap {
     /// value of each setting that chooses the solver's form at fine h
     /// (`inner = sweeps`, the paper's, or `inner = multigrid`), as the
     /// points run it; empty for a solver with one form.
-    fn shown_form(&self, lab: &Lab) -> Result<Form> {
-        let (settings, _) = self.base(lab)?;
+    fn shown_form(&self, shared: &Settings) -> Result<Form> {
+        let (settings, _) = self.base(shared)?;
         let Some(fine) = plans::plan(self.solver).fine else {
             return Ok(Vec::new());
         };
@@ -298,7 +301,7 @@ impl TuningMap {
                 self.axes.len()
             );
         }
-        let (base, form) = self.base(lab)?;
+        let (base, form) = self.base(&lab.settings)?;
         let fine = self.scene.finest().level() > OWN_FORM_FINEST;
         let paths: Vec<&str> = self.axes.iter().map(|a| a.path.as_str()).collect();
         let mut out = Vec::new();
@@ -318,6 +321,7 @@ impl TuningMap {
                 &settings,
             )
             .with_work(work_cap(self.solver, 1.0))
+            .with_seconds(self.point_seconds)
             .with_repeats(self.repeats);
             t.setting = Some(Setting::new(&paths.join(" × "), &values.join(" × ")));
             if fine && self.law == Law::Coulomb {
@@ -326,6 +330,75 @@ impl TuningMap {
             out.push(t);
         }
         Ok((out, form))
+    }
+
+    /// The solves the map runs: each point once and `repeats` times more.
+    fn solves(&self) -> usize {
+        let points: usize = self.axes.iter().map(|a| a.values.len()).product();
+        points * (1 + self.repeats)
+    }
+
+    /// What one solve of a point takes, from a few seconds to many (the
+    /// work varies with the settings mapped), measured on problem 1 on the
+    /// 2-core machine and scaled with the mesh: the paper's form (`inner =
+    /// sweeps`) at ε = 1e-4 and 1e-6, 8 and 140 s a Coulomb solve at
+    /// 1/128, 0.34 and 1.6 s a given-friction one at 1/64, growing as
+    /// (1/h)³ (sweeps of n unknowns, their count growing as 1/h); the
+    /// multigrid form 0.6 to 1.6 s a Coulomb solve at 1/256, as (1/h)²;
+    /// another solver 1 to 3 s at 1/64, as (1/h)².
+    fn solve_seconds(&self, shared: &Settings) -> (f64, f64) {
+        let n = self.scene.finest().divisions() as f64;
+        let form = self.shown_form(shared).unwrap_or_default();
+        let inner = form
+            .iter()
+            .find(|(k, _)| k == "inner")
+            .map(|(_, v)| v.as_str());
+        let (low, high, at, power) = match (inner, self.law) {
+            (Some("sweeps"), Law::Coulomb) => (8.0, 140.0, 128.0, 3),
+            (Some("sweeps"), Law::GivenFriction) => (0.34, 1.6, 64.0, 3),
+            (Some(_), _) => (0.6, 1.6, 256.0, 2),
+            (None, _) => (1.0, 3.0, 64.0, 2),
+        };
+        let scale = (n / at).powi(power);
+        (low * scale, high * scale)
+    }
+
+    /// What the map will run and may take, stated before it starts: the
+    /// solver and the form mapped, the solves, the estimate's range and,
+    /// with a time limit per solve, the most it can take.
+    pub fn plan_line(&self, shared: &Settings) -> Result<String> {
+        let form = self.shown_form(shared)?;
+        let form = if form.is_empty() {
+            String::new()
+        } else {
+            let named: Vec<String> = form.iter().map(|(k, v)| format!("{k} = {v}")).collect();
+            format!(" ({})", named.join(", "))
+        };
+        let (low, high) = self.solve_seconds(shared);
+        let solves = self.solves() as f64;
+        let mut line = format!(
+            "mapping {}{form} on the {} problem of {} at h = {}: {} solves, about {} to {} (estimated from measured solves of this form; the settings mapped move it)",
+            self.solver.name,
+            self.law.as_str(),
+            self.scene.name,
+            self.scene.finest(),
+            self.solves(),
+            crate::study::reproduce::duration(low * solves),
+            crate::study::reproduce::duration(high * solves),
+        );
+        match self.point_seconds {
+            Some(limit) => {
+                line += &format!(
+                    "; at most {} with --time-limit {limit} s a solve",
+                    crate::study::reproduce::duration(limit * solves)
+                )
+            }
+            None if high * solves > 600.0 => {
+                line += "; --time-limit SECONDS caps each solve";
+            }
+            None => {}
+        }
+        Ok(line)
     }
 
     /// The trials' group: `relaxation.r × relaxation.epsilon`.
@@ -619,12 +692,8 @@ impl Study for TuningMap {
     }
 
     fn estimated_seconds(&self, length: RunLength) -> f64 {
-        let points: usize = self.axes.iter().map(|a| a.values.len()).product();
-        let n = self.scene.finest().divisions() as f64;
-        // About 1.3 s a given-friction point at 1/64 and 2 s a Coulomb
-        // point at 1/256 with multigrid inside, on this machine.
-        let per = 1.5 * (n / 64.0).powi(2).min(2.0);
-        let s = per * (points * (1 + self.repeats)) as f64;
+        let (low, high) = self.solve_seconds(&Settings::default());
+        let s = (low * high).sqrt() * self.solves() as f64;
         if length == RunLength::Quick {
             s / 10.0
         } else {
@@ -634,7 +703,7 @@ impl Study for TuningMap {
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<MapFindings>> {
         let (specs, form) = self.plan(lab)?;
-        let shown = self.shown_form(lab)?;
+        let shown = self.shown_form(&lab.settings)?;
         let measured = lab.measure(&specs, Keep::default())?;
         let mut points: Vec<Point> = measured
             .iter()

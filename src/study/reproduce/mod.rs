@@ -278,6 +278,7 @@ fn tuning_maps(spec: &ReproduceSpec) -> TuningMaps {
                 },
                 repeats: spec.map_repeats,
                 tag: None,
+                point_seconds: None,
             }
         })
         .collect();
