@@ -383,14 +383,14 @@ impl TuningMap {
             self.scene.name,
             self.scene.finest(),
             self.solves(),
-            crate::study::reproduce::duration(low * solves),
-            crate::study::reproduce::duration(high * solves),
+            crate::io::duration(low * solves),
+            crate::io::duration(high * solves),
         );
         match self.point_seconds {
             Some(limit) => {
                 line += &format!(
                     "; at most {} with --time-limit {limit} s a solve",
-                    crate::study::reproduce::duration(limit * solves)
+                    crate::io::duration(limit * solves)
                 )
             }
             None if high * solves > 600.0 => {

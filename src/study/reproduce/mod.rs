@@ -285,16 +285,7 @@ fn tuning_maps(spec: &ReproduceSpec) -> TuningMaps {
     TuningMaps { maps }
 }
 
-/// A duration for people: seconds, minutes or hours.
-pub fn duration(seconds: f64) -> String {
-    if seconds < 90.0 {
-        format!("{seconds:.0} s")
-    } else if seconds < 5400.0 {
-        format!("{:.0} min", seconds / 60.0)
-    } else {
-        format!("{:.1} h", seconds / 3600.0)
-    }
-}
+pub use crate::io::duration;
 
 /// What a run expects to take, stated as it starts: its studies from the
 /// `done`-th on (the ones before it were finished by an earlier process).
