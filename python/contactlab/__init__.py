@@ -1147,6 +1147,7 @@ def tuning_map(
     repeats: int = 2,
     settings: Optional[Mapping[str, object]] = None,
     out: Optional[PathLike] = None,
+    time_limit: Optional[float] = None,
 ) -> StudyResult:
     """A solver on a joint grid of two or three of its settings:
     ``contactlab sweep --grid ...``.
@@ -1164,6 +1165,9 @@ def tuning_map(
     law : "coulomb" or "given_friction"
     repeats : int
         Timed runs of each point after the first (``--runs``).
+    time_limit : float, optional
+        Seconds each point's solve may take (``--time-limit``): a point
+        that hits it has the status ``time_limit`` and is not certified.
 
     Returns
     -------
@@ -1178,7 +1182,14 @@ def tuning_map(
         raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
     grid = [(str(path), [str(v) for v in values]) for path, values in axes.items()]
     d = _contactlab._tuning_map(
-        problem._p, str(solver), grid, str(law), int(repeats), _settings(settings), _out(out)
+        problem._p,
+        str(solver),
+        grid,
+        str(law),
+        int(repeats),
+        _settings(settings),
+        _out(out),
+        _number(time_limit, "time_limit"),
     )
     files = dict(d["files"])
     main = next(f for f in files if f.startswith("tuning_map_") and f.endswith(".csv") and "_trials" not in f)

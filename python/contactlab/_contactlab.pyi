@@ -112,6 +112,7 @@ def _tuning_map(
     repeats: int,
     settings: Sequence[Tuple[str, str]] = ...,
     out: Optional[str] = ...,
+    time_limit: Optional[float] = ...,
 ) -> Dict[str, Any]: ...
 def _benchmark(
     problems: List[Problem],

@@ -198,7 +198,7 @@ pub fn _side_by_side<'py>(
 
 /// `contactlab sweep --grid ... --grid ...`: a tuning map of one solver.
 #[pyfunction]
-#[pyo3(signature = (problem, solver, axes, law, repeats, settings=Vec::new(), out=None))]
+#[pyo3(signature = (problem, solver, axes, law, repeats, settings=Vec::new(), out=None, time_limit=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn _tuning_map<'py>(
     py: Python<'py>,
@@ -209,7 +209,15 @@ pub fn _tuning_map<'py>(
     repeats: usize,
     settings: Vec<(String, String)>,
     out: Option<PathBuf>,
+    time_limit: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if let Some(t) = time_limit
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(input_error(format!(
+            "time_limit = {t}: give the seconds each point's solve may take, a number > 0 (or None)"
+        )));
+    }
     let (scene, _) = problem.scene("tuning_map")?;
     let entry = solver_entry(&solver).map_err(crate::error_of)?;
     if !(2..=3).contains(&axes.len()) {
@@ -248,7 +256,7 @@ pub fn _tuning_map<'py>(
         axes,
         repeats,
         tag: None,
-        point_seconds: None,
+        point_seconds: time_limit,
     };
     run(py, study, settings, out)
 }

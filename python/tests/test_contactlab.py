@@ -422,6 +422,13 @@ def test_side_by_side_and_tuning_map_are_the_command_lines(tmp_path):
 
     assert table(tmp_path / "map") == table(tmp_path / "mapcli")
     assert "Least work, certified" in m.report
+    # --time-limit: each point's solve stops there, with its status.
+    limited = cl.tuning_map(p, "relaxation", {"relaxation.r": ["1e5", "1e7"], "relaxation.epsilon": ["1e-8", "1e-9"]},
+                            repeats=0, time_limit=0.001)
+    assert [row["status"] for row in limited.rows] == ["time_limit"] * 4
+    with pytest.raises(cl.InputError, match="time_limit"):
+        cl.tuning_map(p, "relaxation", {"relaxation.r": ["1e5", "1e7"], "relaxation.epsilon": ["1e-5", "1e-6"]},
+                      time_limit=-1)
     with pytest.raises(cl.InputError, match="two or three"):
         cl.tuning_map(p, "relaxation", {"relaxation.r": [1e5, 1e7]})
     # A reference the user names is the reference of every row.
