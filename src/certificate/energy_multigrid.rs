@@ -206,12 +206,7 @@ impl MultigridSolve {
     /// b made to lie in the space solved in: zero on the mask, or
     /// orthogonal to the rigid mode.
     fn restrict_to_space(&self, x: &mut [f64]) {
-        if let Some(mask) = &self.mask {
-            x.iter_mut()
-                .zip(mask)
-                .filter(|(_, m)| **m)
-                .for_each(|(v, _)| *v = 0.0);
-        }
+        zero_on(self.mask.as_deref(), x);
         if let Some(z) = &self.mode {
             let c = dot(x, z);
             axpy(-c, z, x);
@@ -222,12 +217,7 @@ impl MultigridSolve {
     fn apply(&self, x: &[f64], out: &mut [f64]) {
         let fine = &self.hierarchy.levels.last().expect("a level").a;
         multiply(fine, x, out);
-        if let Some(mask) = &self.mask {
-            out.iter_mut()
-                .zip(mask)
-                .filter(|(_, m)| **m)
-                .for_each(|(v, _)| *v = 0.0);
-        }
+        zero_on(self.mask.as_deref(), out);
     }
 
     /// out = Q B Q r: one V-cycle, in the space solved in.
@@ -266,13 +256,7 @@ impl MultigridSolve {
             .iter_mut()
             .zip(&s.rhs)
             .for_each(|(d, b)| *d = b - *d);
-        if let Some(mask) = mask {
-            s.residual
-                .iter_mut()
-                .zip(mask)
-                .filter(|(_, m)| **m)
-                .for_each(|(v, _)| *v = 0.0);
-        }
+        zero_on(mask, &mut s.residual);
         let coarse = &mut below[l - 1];
         multiply(&h.restrictions[l - 1], &s.residual, &mut coarse.rhs);
         self.cycle(l - 1, below);
@@ -391,6 +375,16 @@ fn gauss_seidel(level: &Level, b: &[f64], x: &mut [f64], mask: Option<&[bool]>, 
             sum -= vals[k] * x[cols[k]];
         }
         x[i] += sum * inverse;
+    }
+}
+
+/// x set to zero on the masked unknowns (none without a mask).
+fn zero_on(mask: Option<&[bool]>, x: &mut [f64]) {
+    if let Some(mask) = mask {
+        x.iter_mut()
+            .zip(mask)
+            .filter(|(_, m)| **m)
+            .for_each(|(v, _)| *v = 0.0);
     }
 }
 
