@@ -592,3 +592,13 @@ fn trials_that_do_not_converge_are_marked_not_dropped() {
         assert!(row(knob, value).certified(), "{knob} = {value}");
     }
 }
+
+/// The committed `results/` hold the tables a paper would include: each
+/// compiles into a default one-column article without an overfull box
+/// (issue 75), as a fresh run's do above. A table format changed without
+/// regenerating `results/` fails here.
+#[test]
+fn the_committed_latex_tables_compile() {
+    let results = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("results");
+    common::latex_tables_compile(&results);
+}
