@@ -63,15 +63,16 @@ pub enum Command {
     /// The main job: Table 1, the comparison of every solver on the paper's
     /// three problems, profiles, a sweep, the stability map, the speed
     /// measurements of `bench`, the benchmark, the discretization error, the
-    /// oracle at 1/128 and 1/256, the error bound's validity and sharpness, a
-    /// side-by-side at 1/128, r × ε maps, the verification against closed
-    /// forms (h = 1/32 ... 1/1024, 30 s a solve; --long: verify's own
-    /// ladder), charts, a manifest and a README,
-    /// all into --out (default results/).
-    /// About 75 min on 2 cores (72 measured for the committed results/, verify 9 of them); --long adds the studies that take hours (the
-    /// paper's method by sweeps at equal accuracy on 1/128 and 1/256, the
-    /// whole benchmark collection): about 2.5 h. It states its estimate as it
-    /// starts; the manifest records each study's time (--quick: a minute).
+    /// oracle at 1/128, the error bound's validity and sharpness, a
+    /// side-by-side at 1/64, r × ε maps, the verification against closed
+    /// forms (h = 1/32 ... 1/512, 10 s a solve), charts, a manifest and a
+    /// README, all into --out (default results/). About 30 min on 2
+    /// cores (30.5 measured); --long adds what takes longer (each
+    /// study's long budget: the paper's method by sweeps at equal accuracy
+    /// on 1/128 and 1/256, bench to 1/8192, the whole benchmark collection,
+    /// the oracle at 1/256, the error bound and the closed forms to 1/1024):
+    /// about 2.5 h. It states its estimate as it starts; the manifest
+    /// records each study's time (--quick: a minute).
     Reproduce(ReproduceArgs),
     /// The stability map: each solver across stress conditions (its registry
     /// entry's, the friction coefficient, loads near and past condition
@@ -140,7 +141,7 @@ pub enum Command {
     /// Cattaneo–Mindlin, the stick zone and the traction) compared with the
     /// half-plane closed form (L2 and max error, half-width, p₀, the
     /// observed order). Writes verification.csv, profiles/ (each run's
-    /// profile) and charts into --out (--quick: h = 1/64, 1/128).
+    /// profile) and charts into --out (--quick: h = 1/32, 1/64, 5 s a solve).
     Verify(VerifyArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
@@ -352,7 +353,7 @@ pub struct ErrorBoundArgs {
 
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
-    /// A small run for tests (h = 1/64 and 1/128, 30 s a solve).
+    /// A small run for tests (h = 1/32 and 1/64, 5 s a solve).
     #[arg(long)]
     pub quick: bool,
     /// Solvers to verify [default: every registered solver].
@@ -398,9 +399,10 @@ pub struct ReproduceArgs {
     pub quick: bool,
     /// Also the studies that take hours (about 2.5 h on a 2-core machine):
     /// the paper's method by sweeps at equal accuracy on 1/128 and 1/256,
-    /// bench's solvers with three timed runs each and 15 s per run, and the whole
-    /// benchmark collection (81 instances, not its core 46 up to h = 1/32).
-    /// Without it the run takes about 75 min (72 measured).
+    /// bench's solvers with three timed runs each and 15 s per run and its
+    /// multigrid to 1/8192, the whole benchmark collection (81 instances,
+    /// not its core 46 up to h = 1/32), and every study at its long budget.
+    /// Without it the run takes about 30 min (30.5 measured).
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:

@@ -1033,9 +1033,10 @@ def verify(
 ) -> StudyResult:
     """The classical scenes against their closed forms: ``contactlab verify``.
 
-    Hertz's line contact and a flat punch (``scenes/hertz.toml``,
-    ``scenes/flat_punch.toml``) at h = 1/128 … 1/1024 (``quick``: 1/64,
-    1/128), each solver's certified answer beside the half-plane closed form.
+    Hertz's line contact, a flat punch and Cattaneo–Mindlin sheared by its
+    sides and free to slide (``scenes/``) at h = 1/64 … 1/1024 (``quick``:
+    1/32, 1/64, 5 s a solve), each solver's certified answer beside the
+    half-plane closed form.
 
     Returns
     -------

@@ -618,7 +618,7 @@ def test_a_slip_offset_far_past_the_displacements_slides_every_node(p32):
 
 def test_verify_runs_the_classical_scenes_from_python():
     # The study behind `contactlab verify`, from Python: Hertz's pressure
-    # error falls from h = 1/64 to 1/128 for each solver named, and every
+    # error falls from h = 1/32 to 1/64 for each solver named, and every
     # answer is certified. A closed form with a wrong E*, or a gap lost on
     # the way to a solver, keeps the error from falling.
     r = cl.verify(quick=True, solvers=["newton-coulomb", "tnnmg"])
@@ -628,5 +628,5 @@ def test_verify_runs_the_classical_scenes_from_python():
         assert t["status"] == "converged", t
     for s in ("newton-coulomb", "tnnmg"):
         e = {t["h"]: t["l2_error"] for t in hertz if t["solver"] == s}
-        assert e["1/128"] < 0.6 * e["1/64"], e
-    assert any(f.startswith("profiles/hertz_h128_") for f in r.files)
+        assert e["1/64"] < 0.6 * e["1/32"], e
+    assert any(f.startswith("profiles/hertz_h64_") for f in r.files)

@@ -71,6 +71,10 @@ pub struct BenchSpec {
     pub accuracy_target: f64,
     /// The mesh of the oracle's time goal (run once, without the budget).
     pub oracle_mesh: Option<MeshSize>,
+    /// Seconds a run on a large mesh may take: beyond, it is stopped (a
+    /// cross on the performance chart), and a solver whose last two meshes
+    /// predict more is not run there.
+    pub large_budget: f64,
 }
 
 impl BenchSpec {
@@ -93,6 +97,7 @@ impl BenchSpec {
                 .collect(),
             accuracy_target: 1e-6,
             oracle_mesh: MeshSize::from_level(8).ok(),
+            large_budget: LARGE_BUDGET,
         }
     }
 
@@ -109,6 +114,7 @@ impl BenchSpec {
             equal_accuracy: vec![MeshSize::from_level(3).expect("in range")],
             accuracy_target: 1e-6,
             oracle_mesh: MeshSize::from_level(4).ok(),
+            large_budget: LARGE_BUDGET,
         }
     }
 }
@@ -281,7 +287,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
     // The large meshes get every solver certified on the whole Coulomb
     // problem on the finest mesh above, fastest first, so that the
     // performance chart follows each of them as far as it goes: each run
-    // stopped at LARGE_BUDGET seconds, and not run where its last two
+    // stopped at `spec.large_budget` seconds, and not run where its last two
     // meshes predict more (the regular meshes' rule). One whose answer is
     // not certified (a failure is a row too) is not run on the finer ones.
     let finest = spec
@@ -308,11 +314,12 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         let (mut run, mut skipped) = (Vec::new(), Vec::new());
         for (e, past) in &candidates {
             match past[..] {
-                [.., a, b] if b * (b / a).max(4.0) > LARGE_BUDGET => skipped.push((
+                [.., a, b] if b * (b / a).max(4.0) > spec.large_budget => skipped.push((
                     e.name,
                     format!(
-                        "predicted {:.0} s > budget {LARGE_BUDGET} s",
-                        b * (b / a).max(4.0)
+                        "predicted {:.0} s > budget {} s",
+                        b * (b / a).max(4.0),
+                        spec.large_budget
                     ),
                 )),
                 _ => run.push(*e),
@@ -321,7 +328,15 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         if run.is_empty() {
             break;
         }
-        let times = large_mesh(spec.problem, h, (&run, &skipped), settings, &mut rows, log)?;
+        let times = large_mesh(
+            spec.problem,
+            h,
+            (&run, &skipped),
+            spec.large_budget,
+            settings,
+            &mut rows,
+            log,
+        )?;
         candidates.retain_mut(|(e, past)| match times.iter().find(|t| t.0 == e.name) {
             Some((_, Some(seconds))) => {
                 past.push(*seconds);
@@ -345,9 +360,8 @@ pub fn certified_by_speed(rows: &[PerfRow], h: &str) -> Vec<&'static str> {
     found.into_iter().map(|(name, _)| name).collect()
 }
 
-/// The seconds a run on a large mesh may take: beyond, it is stopped (a
-/// cross on the performance chart), and a solver predicted slower is not
-/// run.
+/// The long run's seconds a run on a large mesh may take
+/// ([`BenchSpec::large_budget`]).
 pub const LARGE_BUDGET: f64 = 60.0;
 
 /// The solvers of the Coulomb law itself (no fixed point around them)
@@ -414,7 +428,7 @@ impl FastestDirect {
 pub const LARGE_FACTORIZATION_RUNS: usize = 3;
 
 /// On a large mesh: assembly and each of `solvers` on the whole Coulomb
-/// problem, each timed once within [`LARGE_BUDGET`] (no warm-up, no
+/// problem, each timed once within `budget` seconds (no warm-up, no
 /// reference: the certificate alone judges the answer), and the
 /// factorization, the ratios' unit, as the median of
 /// [`LARGE_FACTORIZATION_RUNS`] after a warm-up. Returns each solver's
@@ -423,6 +437,7 @@ fn large_mesh(
     problem: u32,
     h: MeshSize,
     (solvers, skipped): (&[&'static registry::Entry], &[(&'static str, String)]),
+    budget: f64,
     settings: &Settings,
     rows: &mut Vec<PerfRow>,
     log: &dyn Fn(&str),
@@ -450,7 +465,7 @@ fn large_mesh(
     for &solver in solvers {
         log(&format!("h = {h}: {} coulomb", solver.name));
         let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings)
-            .with_seconds(Some(LARGE_BUDGET));
+            .with_seconds(Some(budget));
         let m = measure(&t, None, Keep::default())?;
         let tr = &m.trial;
         let note = format!(

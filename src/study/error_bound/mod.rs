@@ -79,6 +79,15 @@ impl BoundSpec {
         }
     }
 
+    /// The main job's (`reproduce`, 20 minutes): the ladder to h = 1/256
+    /// (about 3 min with the core part); 1/512 and 1/1024 (8 min more)
+    /// are the long run's.
+    pub fn main() -> Self {
+        let mut s = Self::standard();
+        s.ladder_meshes.retain(|h| h.level() <= 8);
+        s
+    }
+
     pub fn quick() -> Self {
         Self {
             quick: true,
@@ -392,8 +401,12 @@ impl Study for ErrorBoundStudy {
     }
 
     fn estimated_seconds(&self, length: RunLength) -> f64 {
-        match length {
-            RunLength::Quick => 10.0,
+        // Measured alone: the core part about 100 s, the ladder to 1/256
+        // 100 s more, 1/512 4 min and 1/1024 7 min more.
+        let finest = self.spec.ladder_meshes.iter().map(|h| h.level()).max();
+        match (length, finest) {
+            (RunLength::Quick, _) => 10.0,
+            (_, Some(k)) if k <= 8 => 200.0,
             _ => 1200.0,
         }
     }
