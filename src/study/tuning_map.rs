@@ -523,13 +523,20 @@ pub fn verdict(axes: &[Axis], points: &[Point]) -> String {
     let Some(best) = points.iter().find(|p| p.mark == "best") else {
         return "No point of the grid was certified.".into();
     };
+    // `--runs 0` times each point once: no median to speak of.
+    let timed = if best.runs > 1 {
+        format!(
+            "median of {} runs, the fastest {:.3} s",
+            best.runs, best.seconds_min
+        )
+    } else {
+        "one timed run".to_string()
+    };
     let mut s = format!(
-        "Least work, certified: {} with {} work in {:.3} s (median of {} runs, the fastest {:.3} s).",
+        "Least work, certified: {} with {} work in {:.3} s ({timed}).",
         name(best),
         best.work,
         best.seconds_median,
-        best.runs,
-        best.seconds_min
     );
     let effects: Vec<String> = axes
         .iter()
@@ -991,7 +998,9 @@ mod tests {
         }
         rank(&mut points);
         assert_eq!(points[0].mark, "equal work");
-        assert!(verdict(&axes, &points).contains("no time can be told from noise"));
+        let v = verdict(&axes, &points);
+        assert!(v.contains("no time can be told from noise"), "{v}");
+        assert!(v.contains("in 1.250 s (one timed run)"), "{v}");
     }
 
     #[test]
