@@ -61,7 +61,7 @@ impl Oracle {
         }
     }
 
-    /// The main job's (`reproduce`, 20 minutes): every variant at 1/128 on
+    /// The main job's (`reproduce`): every variant at 1/128 on
     /// problems 1 and 3 (problem 2 gives problem 1's runs to the digit
     /// there: its load differs only where neither body is in contact),
     /// about 90 s; 1/256 (8 min) is the long run's.

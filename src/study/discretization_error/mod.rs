@@ -76,7 +76,7 @@ impl ErrorSpec {
         }
     }
 
-    /// The main job's (`reproduce`, 20 minutes): h = 1/16 … 1/512 against
+    /// The main job's (`reproduce`): h = 1/16 … 1/512 against
     /// 1/2048 (a reference four times finer than the finest mesh: its own
     /// error, O(h²) in L2, is a sixteenth of the finest mesh's), about a
     /// minute; the long run's goes to 1/1024 against 1/4096 (5 min).
@@ -215,12 +215,8 @@ fn zone_start(run: &Solved) -> f64 {
 /// coarse field lost its u_x on the fine roller nodes of that edge, and
 /// the energy of that layer grew as h_coarse/h_ref: the energy error of
 /// problem 3 at h = 1/16 read 0.43 against 1/2048 and 0.61 against 1/4096.
-fn errors(
-    problem: u32,
-    material: &Material,
-    coarse: &Solved,
-    (reference, uf, norms): (&Solved, &[[f64; 2]], [f64; 2]),
-) -> ErrorRow {
+fn errors(problem: u32, material: &Material, coarse: &Solved, fine: &ReferenceField) -> ErrorRow {
+    let (reference, uf) = (fine.solved, &fine.u);
     let (dc, df) = (&coarse.finest, &reference.finest);
     let uc = dc.displacements(&coarse.outcome.solution.v);
     let e: Vec<[f64; 2]> = (0..df.mesh.num_nodes())
@@ -231,10 +227,9 @@ fn errors(
             [at[0] - uf[node][0], at[1] - uf[node][1]]
         })
         .collect();
-    let [l2_ref, energy_ref] = norms;
     let (l2, energy) = (
-        l2_norm(df, &e) / l2_ref,
-        energy_norm(df, material, &e) / energy_ref,
+        l2_norm(df, &e) / fine.l2,
+        energy_norm(df, material, &e) / fine.energy,
     );
     // Coarse contact node i sits at reference contact node i·ratio.
     let ratio = 1usize << (df.h().level() - dc.h().level());
@@ -279,6 +274,29 @@ fn errors(
         energy_rate: f64::NAN,
         pressure_rate: f64::NAN,
         pressure_l2_rate: f64::NAN,
+    }
+}
+
+/// The reference answer with its nodal field and both its norms, computed
+/// once for every coarse mesh compared with it (on 1/4096 the norms took
+/// seconds a mesh).
+struct ReferenceField<'a> {
+    solved: &'a Solved,
+    u: Vec<[f64; 2]>,
+    l2: f64,
+    energy: f64,
+}
+
+impl<'a> ReferenceField<'a> {
+    fn of(solved: &'a Solved, material: &Material) -> Self {
+        let d = &solved.finest;
+        let u = d.displacements(&solved.outcome.solution.v);
+        Self {
+            l2: l2_norm(d, &u),
+            energy: energy_norm(d, material, &u),
+            solved,
+            u,
+        }
     }
 }
 
@@ -347,20 +365,12 @@ pub fn run(spec: &ErrorSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<
             spec.reference,
             reference.outcome.certificate.summary()
         );
-        // The reference's field and norms, once for every mesh (on 1/4096
-        // the norms took seconds a mesh).
-        let uf = reference
-            .finest
-            .displacements(&reference.outcome.solution.v);
-        let norms = [
-            l2_norm(&reference.finest, &uf),
-            energy_norm(&reference.finest, &material, &uf),
-        ];
+        let fine = ReferenceField::of(&reference, &material);
         let mut previous: Option<ErrorRow> = None;
         for &h in &spec.meshes {
             log(&format!("problem {problem}: h = {h}"));
             let coarse = solve(problem, h, solver, settings)?;
-            let mut row = errors(problem, &material, &coarse, (&reference, &uf, norms));
+            let mut row = errors(problem, &material, &coarse, &fine);
             if let Some(prev) = &previous {
                 let rate = |a: f64, b: f64| (a / b).log2();
                 row.l2_rate = rate(prev.l2_error, row.l2_error);

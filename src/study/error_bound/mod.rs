@@ -79,7 +79,7 @@ impl BoundSpec {
         }
     }
 
-    /// The main job's (`reproduce`, 20 minutes): the ladder to h = 1/256
+    /// The main job's (`reproduce`): the ladder to h = 1/256
     /// (about 3 min with the core part); 1/512 and 1/1024 (8 min more)
     /// are the long run's.
     pub fn main() -> Self {
