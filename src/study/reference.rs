@@ -82,27 +82,44 @@ pub fn reference_settings(entry: &Entry, base: &Settings) -> Result<Settings> {
 /// exact solver's answer passes the certificate (then trials carry no
 /// differences, only their certificates).
 pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Reference>> {
-    earn_among(scene, base, seconds, None)
+    earn_among(scene, base, seconds, None, None)
+}
+
+/// The exact solvers a reference is earned among, per law (see
+/// [`earn_among`]).
+#[derive(Clone, Debug, Default)]
+pub struct Among {
+    pub coulomb: Vec<&'static str>,
+    pub given_friction: Vec<&'static str>,
 }
 
 /// [`earn`], or with `named` the reference the user named: that solver
 /// alone, at its tightest settings, and only if certified. (The
 /// given-friction reference is earned among the exact solvers as usual
-/// when the named one does not solve that law.)
+/// when the named one does not solve that law.) With `among`, per law the
+/// exact solvers of those names only: a study that already knows the
+/// others cannot finish within `seconds` there (`bench` stops a solver
+/// whose times predict more than its budget) does not run them to their
+/// cap.
 pub fn earn_among(
     scene: &Scene,
     base: &Settings,
     seconds: f64,
     named: Option<&'static Entry>,
+    among: Option<&Among>,
 ) -> Result<Option<Reference>> {
-    let exact: Vec<&'static Entry> = registry::solvers()
-        .into_iter()
-        .filter(|e| e.accuracy.exact)
-        .collect();
-    let coulomb_candidates: Vec<&'static Entry> = named.map_or_else(|| exact.clone(), |e| vec![e]);
+    let exact = |names: Option<&Vec<&'static str>>| -> Vec<&'static Entry> {
+        registry::solvers()
+            .into_iter()
+            .filter(|e| e.accuracy.exact)
+            .filter(|e| names.is_none_or(|n| n.contains(&e.name)))
+            .collect()
+    };
+    let coulomb_candidates: Vec<&'static Entry> =
+        named.map_or_else(|| exact(among.map(|a| &a.coulomb)), |e| vec![e]);
     let friction_candidates: Vec<&'static Entry> = match named {
         Some(e) if e.solves(Law::GivenFriction) => vec![e],
-        _ => exact.clone(),
+        _ => exact(among.map(|a| &a.given_friction)),
     };
     let caps = Caps {
         work: None,
@@ -229,6 +246,9 @@ pub struct References {
     /// The reference the user named (None: earned among the exact
     /// solvers).
     pub named: Option<&'static Entry>,
+    /// The exact solvers a reference is earned among (None: all of them;
+    /// see [`earn_among`]).
+    pub among: Option<Among>,
 }
 
 impl Default for References {
@@ -238,6 +258,7 @@ impl Default for References {
             enabled: true,
             candidate_seconds: CANDIDATE_SECONDS,
             named: None,
+            among: None,
         }
     }
 }
@@ -260,7 +281,13 @@ impl References {
         let index = match self.earned.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let r = earn_among(scene, base, self.candidate_seconds, self.named)?;
+                let r = earn_among(
+                    scene,
+                    base,
+                    self.candidate_seconds,
+                    self.named,
+                    self.among.as_ref(),
+                )?;
                 self.earned.push((key, r));
                 self.earned.len() - 1
             }

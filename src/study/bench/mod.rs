@@ -37,7 +37,7 @@ use crate::io::csv::fixed;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::reference::References;
+use crate::study::reference::{Among, References};
 use crate::study::runner::{Keep, measure, median};
 use crate::study::trial::TrialSpec;
 
@@ -55,10 +55,14 @@ pub struct BenchSpec {
     /// on the next) is not run on finer meshes; also each run's deadline.
     pub budget: f64,
     /// Finer meshes where only assembly, the factorization (the median of
-    /// [`LARGE_FACTORIZATION_RUNS`] after a warm-up) and the registry's
+    /// `large_factorization_runs` after a warm-up) and the registry's
     /// direct Coulomb solver are timed, the others once each and cold (a
     /// solve at 1/1024 takes a minute and 6 GB).
     pub large: Vec<MeshSize>,
+    /// Timed runs of the factorization on a large mesh after its warm-up
+    /// (the long run's [`LARGE_FACTORIZATION_RUNS`]; at 1/1024 each is
+    /// 5-8 s a thread count).
+    pub large_factorization_runs: usize,
     /// Meshes finer still, where only the multigrid solver runs (the
     /// others factor A and are refused there: `Entry::max_unknowns`), on
     /// the whole Coulomb problem, once, in a fresh process.
@@ -89,6 +93,7 @@ impl BenchSpec {
             large: (9..=10)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
+            large_factorization_runs: LARGE_FACTORIZATION_RUNS,
             multigrid_only: (11..=crate::mechanics::mesh_size::MAX_LEVEL)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
@@ -110,6 +115,7 @@ impl BenchSpec {
             runs: 1,
             budget: 5.0,
             large: Vec::new(),
+            large_factorization_runs: 1,
             multigrid_only: Vec::new(),
             equal_accuracy: vec![MeshSize::from_level(3).expect("in range")],
             accuracy_target: 1e-6,
@@ -188,6 +194,20 @@ impl PerfRow {
 /// A solver's median seconds on the meshes so far, or why it was stopped.
 type Past = (Vec<f64>, Option<String>);
 
+/// Whether `solver` is not run on the next mesh for `law`: it was stopped,
+/// or its last two meshes predict more than `budget` (the rule of the
+/// loop in [`bench`]).
+fn stopped(
+    history: &std::collections::HashMap<(Law, &str), Past>,
+    law: Law,
+    solver: &str,
+    budget: f64,
+) -> bool {
+    history.get(&(law, solver)).is_some_and(|(past, why)| {
+        why.is_some() || matches!(past[..], [.., a, b] if b * (b / a).max(4.0) > budget)
+    })
+}
+
 /// Runs every measurement; `log` gets a line per mesh and solver.
 pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Result<Vec<PerfRow>> {
     faer::set_global_parallelism(faer::Par::Seq);
@@ -235,6 +255,23 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             "h = {h}: factorization {:.4} s",
             mesh.factorization
         ));
+        // The reference is earned among the solvers still timed here, per
+        // law: one stopped on a coarser mesh (its times predict more than
+        // the budget) would run to its cap for nothing but the reference
+        // (at 1/128 and 1/256 earning it took 50 s and 80 s of the main
+        // job's bench, most of it the conic variants).
+        let timed = |law: Law| -> Vec<&'static str> {
+            registry::solvers()
+                .into_iter()
+                .filter(|e| law == Law::Coulomb || e.solves(law))
+                .filter(|e| !stopped(&history, law, e.name, spec.budget))
+                .map(|e| e.name)
+                .collect()
+        };
+        references.among = Some(Among {
+            coulomb: timed(Law::Coulomb),
+            given_friction: timed(Law::GivenFriction),
+        });
         for entry in registry::solvers() {
             for law in [Law::GivenFriction, Law::Coulomb] {
                 if law == Law::GivenFriction && !entry.solves(law) {
@@ -328,15 +365,7 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
         if run.is_empty() {
             break;
         }
-        let times = large_mesh(
-            spec.problem,
-            h,
-            (&run, &skipped),
-            spec.large_budget,
-            settings,
-            &mut rows,
-            log,
-        )?;
+        let times = large_mesh(spec, h, (&run, &skipped), settings, &mut rows, log)?;
         candidates.retain_mut(|(e, past)| match times.iter().find(|t| t.0 == e.name) {
             Some((_, Some(seconds))) => {
                 past.push(*seconds);
@@ -428,25 +457,26 @@ impl FastestDirect {
 pub const LARGE_FACTORIZATION_RUNS: usize = 3;
 
 /// On a large mesh: assembly and each of `solvers` on the whole Coulomb
-/// problem, each timed once within `budget` seconds (no warm-up, no
-/// reference: the certificate alone judges the answer), and the
-/// factorization, the ratios' unit, as the median of
-/// [`LARGE_FACTORIZATION_RUNS`] after a warm-up. Returns each solver's
+/// problem, each timed once within the spec's `large_budget` seconds (no
+/// warm-up, no reference: the certificate alone judges the answer), and
+/// the factorization, the ratios' unit, as the median of the spec's
+/// `large_factorization_runs` after a warm-up. Returns each solver's
 /// seconds if its answer was certified.
 fn large_mesh(
-    problem: u32,
+    spec: &BenchSpec,
     h: MeshSize,
     (solvers, skipped): (&[&'static registry::Entry], &[(&'static str, String)]),
-    budget: f64,
     settings: &Settings,
     rows: &mut Vec<PerfRow>,
     log: &dyn Fn(&str),
 ) -> Result<Vec<(&'static str, Option<f64>)>> {
-    let scene = Scene::paper_problem_to(problem, h)?;
+    let (budget, runs) = (spec.large_budget, spec.large_factorization_runs);
+    let scene = Scene::paper_problem_to(spec.problem, h)?;
     log(&format!(
-        "h = {h}: assembly and the factorization ({LARGE_FACTORIZATION_RUNS} runs after a warm-up)"
+        "h = {h}: assembly and the factorization ({runs} run{} after a warm-up)",
+        if runs == 1 { "" } else { "s" }
     ));
-    let (d, set_up) = assemble_and_factor(&scene, h, 0, LARGE_FACTORIZATION_RUNS)?;
+    let (d, set_up) = assemble_and_factor(&scene, h, 0, runs)?;
     let unknowns = d.problem.n();
     let product = memory::product_seconds(d.problem.a());
     drop(d);

@@ -163,12 +163,10 @@ pub(super) fn push_set_up(mesh: &mut MeshRows<'_>, times: &SetUp, large: bool) {
         (true, _) => format!("{note}, once"),
         (false, _) => note.to_string(),
     };
-    let runs = |t: &[f64], what: String| {
-        if large && t.len() > 1 {
-            format!("{what}, median of {} after a warm-up", t.len())
-        } else {
-            once(&what)
-        }
+    let runs = |t: &[f64], what: String| match (large, t.len()) {
+        (true, n) if n > 1 => format!("{what}, median of {n} after a warm-up"),
+        (true, 1) => format!("{what}, once after a warm-up"),
+        _ => once(&what),
     };
     let (best, other) = (
         threads_label(times.factorization_threads),
