@@ -12,6 +12,7 @@ use contactlab::study::lab::{Content, Lab, Quiet};
 use contactlab::study::reproduce::{ReproduceSpec, studies};
 
 #[test]
+#[ignore = "heavy (every study of a smoke run: 60-90 s): `cargo test --release -- --ignored` runs it, and CI does"]
 fn every_chart_of_a_run_has_a_legend_of_at_most_twelve() {
     let settings = Settings::default();
     let spec = ReproduceSpec::quick();

@@ -252,6 +252,7 @@ fn peak_of(args: &[&str]) -> (u64, Output) {
 /// the interior-point oracles at 1/128, where one friction step is
 /// seconds), and so do `info`, `export` and `certify`.
 #[test]
+#[ignore = "heavy (every solver in a fresh process: 50-70 s): `cargo test --release -- --ignored` runs it, and CI does"]
 fn the_estimates_hold_the_measured_peaks() {
     use contactlab::mechanics::mesh_size::MeshSize;
     use contactlab::memory;
@@ -447,6 +448,7 @@ fn the_readme_states_each_solvers_memory() {
 /// assembly, the coarse level `info` measures the kernel on), which saw
 /// the room that the run's own first allocations had taken.
 #[test]
+#[ignore = "heavy (fresh processes under address-space limits: 70-100 s): `cargo test --release -- --ignored` runs it, and CI does"]
 fn a_run_admitted_by_its_estimate_is_not_refused_by_a_later_check() {
     let cases: [(&[&str], &str); 2] = [
         (
