@@ -127,25 +127,12 @@ pub enum Command {
     /// displacements, contact forces per node, or both. Prints every
     /// condition's violation; an answer that fails is a non-zero exit.
     Certify(CertifyArgs),
-    /// Does the error bound hold, and how sharp is it? Every solver's answers
-    /// on the benchmark's core collection (given friction, targets 1e-4,
-    /// 1e-6, 1e-8) and on problem 1 from h = 1/16 to 1/1024 (both laws),
-    /// each bound beside its measured distance from a reference. Writes
-    /// error_bound.csv, error_bound_sharpness.csv, error_bound_trials.csv
-    /// and charts into --out (about 20 min; --quick: seconds).
-    ErrorBound(ErrorBoundArgs),
-    /// Verify against closed forms: the classical scenes of scenes/ (Hertz's
-    /// line contact, a flat punch, Cattaneo–Mindlin sheared by its sides and
-    /// free to slide) at h = 1/64 ... 1/1024 (a/2 ... a/32), every solver,
-    /// each answer certified and its contact pressure (and, for
-    /// Cattaneo–Mindlin, the stick zone and the traction) compared with the
-    /// half-plane closed form (L2 and max error, half-width, p₀, the
-    /// observed order). Writes verification.csv, profiles/ (each run's
-    /// profile) and charts into --out (--quick: h = 1/32, 1/64, 5 s a solve).
-    Verify(VerifyArgs),
     /// (internal) Solve one scene and print time and peak memory as JSON.
     #[command(hide = true)]
     BenchOne(BenchOneArgs),
+    /// The catalogued studies, one command each (`study::catalog`).
+    #[command(flatten)]
+    Study(crate::commands::study::StudyCommand),
 }
 
 /// The names of the registered solvers, for clap.
@@ -331,34 +318,6 @@ pub struct StabilityArgs {
     /// A small map for tests (h = 1/8, few values).
     #[arg(long)]
     pub quick: bool,
-    /// Output folder (replaced whole).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
-    #[command(flatten)]
-    pub settings: SettingsArgs,
-}
-
-#[derive(Debug, Args)]
-pub struct ErrorBoundArgs {
-    /// A small run for tests (the quick collection at h = 1/8, the ladder
-    /// to 1/16).
-    #[arg(long)]
-    pub quick: bool,
-    /// Output folder (replaced whole).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
-    #[command(flatten)]
-    pub settings: SettingsArgs,
-}
-
-#[derive(Debug, Args)]
-pub struct VerifyArgs {
-    /// A small run for tests (h = 1/32 and 1/64, 5 s a solve).
-    #[arg(long)]
-    pub quick: bool,
-    /// Solvers to verify [default: every registered solver].
-    #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
-    pub solvers: Vec<String>,
     /// Output folder (replaced whole).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -606,8 +565,21 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::BenchmarkMerge(a) => c::benchmark::merge(&a),
         Command::Export(a) => c::export::run(&a),
         Command::Certify(a) => c::certify::run(&a),
-        Command::ErrorBound(a) => c::error_bound::run(&a),
-        Command::Verify(a) => c::verify::run(&a),
         Command::BenchOne(a) => c::bench::run_one(&a),
+        Command::Study(a) => c::study::run(&a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap's own checks of the whole command line, every command with
+    /// its flags (the catalogued studies' made from their specs beside the
+    /// settings' flags): a flag two sources declare, a default that does
+    /// not parse, or a conflict naming no flag fails here, in release too.
+    #[test]
+    fn the_command_line_passes_clap_s_checks() {
+        super::Cli::command().debug_assert();
     }
 }

@@ -47,7 +47,7 @@ fn the_energy_error_is_a_distance_between_the_answers() {
             problems: vec![3],
             meshes: vec![level(h)],
             reference: level(reference),
-            solver: Some("newton-coulomb"),
+            solver: Some("newton-coulomb".into()),
             schedule: None,
         };
         run(&spec, &Settings::default(), &|_| {}).unwrap()[0].energy_error
@@ -100,7 +100,7 @@ fn the_multigrid_study_measures_the_direct_solvers_errors() {
     let settings = Settings::default();
     let direct = run(&spec(None, None), &settings, &|_| {}).unwrap();
     let multigrid = run(
-        &spec(Some("tnnmg"), Some(Schedule::Nested)),
+        &spec(Some("tnnmg".into()), Some(Schedule::Nested)),
         &settings,
         &|_| {},
     )

@@ -12,8 +12,9 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// The engine: modules every study may use and that use no study.
-const ENGINE: [&str; 8] = [
+const ENGINE: [&str; 9] = [
     "agreement",
+    "catalog",
     "class",
     "lab",
     "plans",

@@ -19,14 +19,12 @@ and scipy, types and documentation.
 
 from __future__ import annotations
 
-import csv
 import enum
 import functools
-import io
+import json
 import numbers
 import os
-import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -47,6 +45,8 @@ __all__ = [
     "Result",
     "StudyResult",
     "BenchmarkResult",
+    "studies",
+    "study",
     "solvers",
     "register",
     "solve",
@@ -731,57 +731,67 @@ def certify(
     return Certificate._of(d)
 
 
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|NaN|-?inf")
-
-
-def _value(text: str):
-    """A CSV cell as Python reads it: int, float (as the files write them:
-    digits, ``NaN``, ``inf``), bool, or text (None if empty); a word such
-    as a solver's name stays text."""
-    if text == "":
-        return None
-    if text in ("true", "false"):
-        return text == "true"
-    if _NUMBER.fullmatch(text):
-        try:
-            return int(text)
-        except ValueError:
-            return float(text)
-    return text
-
-
-def _rows(data: bytes) -> List[Dict[str, object]]:
-    """The rows of a CSV file the study wrote, typed."""
-    return [
-        {k: _value(v) for k, v in row.items()}
-        for row in csv.DictReader(io.StringIO(data.decode("utf-8")))
-    ]
-
-
 @dataclass(frozen=True, repr=False)
 class StudyResult:
-    """What a study gave: the rows of its main table, every file it wrote
-    (the bytes the command line writes for the same inputs), its charts
-    (SVG) and its report (its README section, Markdown).
+    """What a study gave: the rows of its main table, every table it wrote
+    as rows, every file it wrote (the bytes the command line writes for the
+    same inputs), its charts (SVG) and its report (its README section,
+    Markdown).
 
-    ``rows`` is the main CSV (``compare.csv``, ``benchmark.csv``,
-    ``work_precision.csv``) as dicts, typed; ``table(path)`` reads any
-    other CSV it wrote.
+    ``rows`` is the main table (``compare.csv``, ``benchmark.csv``,
+    ``work_precision.csv``, ...) as one dict per row, in the file's column
+    order, typed as the library computed them (numbers as numbers, a value
+    the file leaves empty as None): the data itself, not the file read
+    back. ``table(path)`` gives any other table it wrote; ``frame(path)``
+    the same as a pandas DataFrame (``pip install ./python[pandas]``).
     """
 
     rows: List[Dict[str, object]]
     files: Dict[str, bytes]
     charts: Dict[str, bytes]
     report: str
+    tables: Dict[str, List[Dict[str, object]]] = field(default_factory=dict)
+    main: str = ""
 
     def table(self, path: str) -> List[Dict[str, object]]:
-        """The rows of the CSV file ``path`` the study wrote."""
-        if path not in self.files:
-            raise InputError(f"{path}: the study wrote {', '.join(sorted(self.files))}")
-        return _rows(self.files[path])
+        """The rows of the table the study wrote as the CSV file ``path``."""
+        if path not in self.tables:
+            raise InputError(f"{path}: the study's tables are {', '.join(sorted(self.tables))}")
+        return self.tables[path]
+
+    def frame(self, path: Optional[str] = None):
+        """The table ``path`` (the main one if None) as a pandas DataFrame,
+        its columns in the file's order."""
+        try:
+            import pandas
+        except ImportError:
+            raise ImportError(
+                "frame() needs pandas: pip install pandas (or ./python[pandas]); "
+                "table() gives the same rows as dicts"
+            ) from None
+        path = self.main if path is None else path
+        rows = self.table(path)
+        columns = list(rows[0]) if rows else None
+        return pandas.DataFrame.from_records(rows, columns=columns)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({len(self.rows)} rows, files: {', '.join(sorted(self.files))})"
+
+
+def _result(d, main: str, cls=None, **extra) -> "StudyResult":
+    """A study's result from what the library gave: its tables as the
+    typed records the library serialized (JSON of the Rust rows), never a
+    CSV file parsed back."""
+    tables = {path: json.loads(text) for path, text in dict(d["tables"]).items()}
+    return (cls or StudyResult)(
+        rows=tables[main],
+        files=dict(d["files"]),
+        charts=dict(d["charts"]),
+        report=d["report"],
+        tables=tables,
+        main=main,
+        **extra,
+    )
 
 
 @dataclass(frozen=True, repr=False)
@@ -881,8 +891,7 @@ def compare(
         _out(out),
         None if reference is None else str(reference),
     )
-    files = dict(d["files"])
-    return StudyResult(rows=_rows(files["compare.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+    return _result(d, "compare.csv")
 
 
 def benchmark(
@@ -919,13 +928,9 @@ def benchmark(
         _settings(settings),
         _out(out),
     )
-    files = dict(d["files"])
-    return BenchmarkResult(
-        rows=_rows(files["benchmark.csv"]),
-        files=files,
-        charts=dict(d["charts"]),
-        report=d["report"],
-        summaries=_rows(files["benchmark_summary.csv"]),
+    tables = dict(d["tables"])
+    return _result(
+        d, "benchmark.csv", BenchmarkResult, summaries=json.loads(tables["benchmark_summary.csv"])
     )
 
 
@@ -980,7 +985,6 @@ def work_precision(
         int(repeats),
         _out(out),
     )
-    files = dict(d["files"])
     charts = dict(d["charts"])
     if chart is not None:
         name = charts_of_x[x]
@@ -994,49 +998,53 @@ def work_precision(
                 fh.write(charts[name])
         except OSError as e:
             raise FileError(f"cannot write {chart}: {e.strerror}") from None
-    return StudyResult(rows=_rows(files["work_precision.csv"]), files=files, charts=charts, report=d["report"])
+    return _result(d, "work_precision.csv")
 
 
 def error_bound(
     quick: bool = False,
+    long: bool = False,
     settings: Optional[Mapping[str, object]] = None,
     out: Optional[PathLike] = None,
+    **spec,
 ) -> StudyResult:
     """Does the certificate's error bound hold, and how sharp is it?
-    ``contactlab error-bound``.
+    ``contactlab error-bound`` (the catalogued study ``study("error-bound")``).
 
     Every solver's answers on the benchmark's core collection (given
-    friction, targets 1e-4, 1e-6, 1e-8) and on problem 1 from h = 1/16 to
-    1/1024 (both laws), each answer's bound on ‖v − v*‖_A beside its
-    measured distance from a reference (about 20 minutes; ``quick``: the
-    quick collection and h to 1/16, seconds).
+    friction, targets 1e-4, 1e-6, 1e-8) and on problem 1 refined (both
+    laws; the main job's ladder to h = 1/256, ``long``: to 1/1024), each
+    answer's bound on ‖v − v*‖_A beside its measured distance from a
+    reference (``quick``: the quick collection and h to 1/16, seconds).
+    ``spec``: ``targets``, ``ladder_problem``, ``ladder_meshes``,
+    ``ladder_targets``, ``time_limit``.
 
     Returns
     -------
     StudyResult
         ``rows``: ``error_bound.csv`` (one answer per row: its bound, its
-        measured error, the reference's own bound); ``files`` also holds
+        measured error, the reference's own bound); ``table`` also gives
         ``error_bound_sharpness.csv``.
     """
-    if not isinstance(quick, bool):
-        raise InputError(f"quick = {quick!r}: give True or False")
-    d = _contactlab._error_bound(bool(quick), _settings(settings), _out(out))
-    files = dict(d["files"])
-    return StudyResult(rows=_rows(files["error_bound.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+    return study("error-bound", quick=quick, long=long, settings=settings, out=out, **spec)
 
 
 def verify(
     quick: bool = False,
+    long: bool = False,
     solvers: Optional[Sequence[str]] = None,
     settings: Optional[Mapping[str, object]] = None,
     out: Optional[PathLike] = None,
+    **spec,
 ) -> StudyResult:
-    """The classical scenes against their closed forms: ``contactlab verify``.
+    """The classical scenes against their closed forms: ``contactlab verify``
+    (the catalogued study ``study("verify")``).
 
     Hertz's line contact, a flat punch and Cattaneo–Mindlin sheared by its
-    sides and free to slide (``scenes/``) at h = 1/64 … 1/1024 (``quick``:
-    1/32, 1/64, 5 s a solve), each solver's certified answer beside the
-    half-plane closed form.
+    sides and free to slide (``scenes/``) at h = 1/32 … 1/512, 10 s a solve
+    (``long``: 1/64 … 1/1024, 300 s; ``quick``: 1/32, 1/64, 5 s), each
+    solver's certified answer beside the half-plane closed form.
+    ``spec``: ``meshes``, ``time_limit``.
 
     Returns
     -------
@@ -1046,12 +1054,77 @@ def verify(
         and p₀ beside their closed forms); ``files`` also holds each
         profile, ``profiles/SCENE_hN_SOLVER.csv``.
     """
-    if not isinstance(quick, bool):
-        raise InputError(f"quick = {quick!r}: give True or False")
-    names = [] if solvers is None else [str(s) for s in solvers]
-    d = _contactlab._verify(bool(quick), names, _settings(settings), _out(out))
-    files = dict(d["files"])
-    return StudyResult(rows=_rows(files["verification.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+    if solvers is not None:
+        spec["solvers"] = [str(s) for s in solvers]
+    r = study("verify", quick=quick, long=long, settings=settings, out=out, **spec)
+    return replace(r, rows=r.tables["verification.csv"], main="verification.csv")
+
+
+def studies() -> Dict[str, str]:
+    """The catalogued studies: each one's name (its command,
+    ``contactlab NAME``) and what it measures. Each is a call here too:
+    ``study(NAME, ...)``, and a function of its own (``NAME`` with ``_``
+    for ``-``) unless one of the calls above has that name."""
+    return {command: about for command, about, _ in _contactlab._studies()}
+
+
+def study(
+    name: str,
+    quick: bool = False,
+    long: bool = False,
+    settings: Optional[Mapping[str, object]] = None,
+    out: Optional[PathLike] = None,
+    **spec,
+) -> StudyResult:
+    """A catalogued study (``studies()``), as ``contactlab NAME`` runs it.
+
+    Parameters
+    ----------
+    name : str
+        The study's command, such as ``"discretization-error"``.
+    quick, long : bool
+        The run length whose budget it takes (``--quick``, ``--long``;
+        neither: the main job's).
+    **spec
+        Its parameters, each a field of its spec (the command's flags,
+        ``_`` for ``-``): ``meshes=["1/16", "1/32"]``. An unknown one is an
+        ``InputError`` naming the parameters there are; each is checked in
+        the library, where the command line's are.
+
+    Returns
+    -------
+    StudyResult
+        ``rows``: its main table (the one named after it, else its first);
+        ``table(path)`` and ``frame(path)`` the others, all as the library
+        computed them.
+    """
+    for flag, value in (("quick", quick), ("long", long)):
+        if not isinstance(value, bool):
+            raise InputError(f"{flag} = {value!r}: give True or False")
+    if quick and long:
+        raise InputError("quick and long: give one of them, or neither")
+    length = "quick" if quick else "long" if long else "standard"
+    d = _contactlab._study(str(name), length, json.dumps(spec), _settings(settings), _out(out))
+    tables = list(dict(d["tables"]))
+    if not tables:
+        raise Error(f"{name}: the study wrote no table")
+    # Its main table: the one named after it, else the first it wrote.
+    main = name.replace("-", "_") + ".csv"
+    return _result(d, main if main in tables else tables[0])
+
+
+def _catalogued(command: str, about: str, spec: str):
+    """The call of the catalogued study ``command``."""
+
+    def call(quick: bool = False, long: bool = False, settings=None, out=None, **kwargs) -> StudyResult:
+        return study(command, quick=quick, long=long, settings=settings, out=out, **kwargs)
+
+    call.__name__ = call.__qualname__ = command.replace("-", "_")
+    call.__doc__ = (
+        f"{about}\n\n``contactlab {command}``: see ``study``. Its parameters at the main job's "
+        f"budget: {spec}."
+    )
+    return call
 
 
 def sweep(
@@ -1097,8 +1170,7 @@ def sweep(
         int(repeats),
         _out(out),
     )
-    files = dict(d["files"])
-    return StudyResult(rows=_rows(files["sweep.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+    return _result(d, "sweep.csv")
 
 
 def side_by_side(
@@ -1136,8 +1208,7 @@ def side_by_side(
     _problem(problem)
     pairs = [(str(a), str(b)) for a, b in pairs]
     d = _contactlab._side_by_side(problem._p, pairs, _settings(settings), _out(out))
-    files = dict(d["files"])
-    return StudyResult(rows=_rows(files["side_by_side.csv"]), files=files, charts=dict(d["charts"]), report=d["report"])
+    return _result(d, "side_by_side.csv")
 
 
 def tuning_map(
@@ -1192,6 +1263,12 @@ def tuning_map(
         _out(out),
         _number(time_limit, "time_limit"),
     )
-    files = dict(d["files"])
-    main = next(f for f in files if f.startswith("tuning_map_") and f.endswith(".csv") and "_trials" not in f)
-    return StudyResult(rows=_rows(files[main]), files=files, charts=dict(d["charts"]), report=d["report"])
+    main = next(f for f in dict(d["tables"]) if f.startswith("tuning_map_") and "_trials" not in f)
+    return _result(d, main)
+
+
+for _command, _about, _spec in _contactlab._studies():
+    _name = _command.replace("-", "_")
+    if _name not in globals():
+        globals()[_name] = _catalogued(_command, _about, _spec)
+        __all__.append(_name)

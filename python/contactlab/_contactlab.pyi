@@ -130,14 +130,11 @@ def _work_precision(
     repeats: int = ...,
     out: Optional[str] = ...,
 ) -> Dict[str, Any]: ...
-def _error_bound(
-    quick: bool = ...,
-    settings: Sequence[Tuple[str, str]] = ...,
-    out: Optional[str] = ...,
-) -> Dict[str, Any]: ...
-def _verify(
-    quick: bool = ...,
-    solvers: List[str] = ...,
+def _studies() -> List[Tuple[str, str, str]]: ...
+def _study(
+    command: str,
+    length: str,
+    spec: str,
     settings: Sequence[Tuple[str, str]] = ...,
     out: Optional[str] = ...,
 ) -> Dict[str, Any]: ...

@@ -605,10 +605,10 @@ fn _contactlab(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(export, m)?)?;
     m.add_function(wrap_pyfunction!(studies::register, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_compare, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_studies, m)?)?;
+    m.add_function(wrap_pyfunction!(studies::_study, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_benchmark, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_work_precision, m)?)?;
-    m.add_function(wrap_pyfunction!(studies::_error_bound, m)?)?;
-    m.add_function(wrap_pyfunction!(studies::_verify, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_sweep, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_side_by_side, m)?)?;
     m.add_function(wrap_pyfunction!(studies::_tuning_map, m)?)?;

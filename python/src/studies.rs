@@ -14,12 +14,11 @@ use contactlab::solve::solver_entry;
 use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
-use contactlab::study::error_bound::{BoundSpec, ErrorBoundStudy};
-use contactlab::study::lab::{Content, Lab, Study, Tracker, write_artifacts};
+use contactlab::study::studies as catalog;
+use contactlab::study::lab::{Content, Lab, Planned, RunLength, Study, Tracker, write_artifacts};
 use contactlab::study::side_by_side::{SideBySide, parse_side, solvers_of};
 use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::tuning_map::{Axis, TuningMap};
-use contactlab::study::verify::{VerifySpec, VerifyStudy};
 use contactlab::study::work_precision::WorkPrecision;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -66,7 +65,10 @@ fn resolved(
 
 /// Runs `study` at `settings` on a thread of its own (Ctrl-C returns at
 /// once), writes its files into `out` as the command line does, and gives
-/// `{files: {path: bytes}, report: markdown, charts: {name: svg bytes}}`.
+/// `{files: {path: bytes}, tables: {path: JSON records}, report: markdown,
+/// charts: {name: svg bytes}}`: each CSV file's rows as typed records
+/// (JSON text of the Rust rows, [`contactlab::io::csv::records`]), so
+/// that Python reads data, never a file back.
 /// A study's progress as Python sees it: nothing shown, and Ctrl-C (the
 /// waiting call's [`crate::Cancel`]) read after every trial, so that an
 /// interrupted study stops at the next trial instead of computing on in
@@ -91,50 +93,63 @@ fn run<S>(
 where
     S: Study + Send + 'static,
 {
+    run_planned(py, Box::new(study), settings, out)
+}
+
+/// [`run`] for a study whose type is erased (a catalogued one).
+fn run_planned(
+    py: Python<'_>,
+    study: Box<dyn Planned + Send>,
+    settings: Settings,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'_, PyDict>> {
     let folder = out
         .map(|o| RunFolder::create(&o).map_err(crate::error_of))
         .transpose()?;
-    let (files, charts, report) = interruptible(py, move |cancel| {
+    let (files, tables, charts, report) = interruptible(py, move |cancel| {
         let log = |_: &str| {};
         let tracker = Interruptible(cancel);
         let mut lab = Lab::new(settings, &log, &tracker);
-        let ran = lab.run(&study)?;
+        let (artifacts, section) = study.run_for_report(&mut lab)?;
         if tracker.interrupted() {
             anyhow::bail!("interrupted: the study wrote nothing");
         }
-        let names: Vec<String> = ran
-            .artifacts
-            .iter()
-            .filter_map(|a| a.chart_name().map(str::to_string))
-            .collect();
-        let section = study.section(&ran.findings, &lab, &names)?;
         if let Some(folder) = folder {
-            write_artifacts(folder.path(), &ran.artifacts)?;
+            write_artifacts(folder.path(), &artifacts)?;
             folder.commit()?;
         }
         let mut files = Vec::new();
+        let mut tables = Vec::new();
         let mut charts = Vec::new();
-        for a in &ran.artifacts {
+        for a in &artifacts {
             if let Content::Bytes(b) = &a.content {
                 files.push((a.path.clone(), b.clone()));
+            }
+            if let Some(r) = &a.records {
+                tables.push((a.path.clone(), r.clone()));
             }
             if let Some(svg) = a.content.svg() {
                 let name = a.chart_name().unwrap_or_default().to_string();
                 charts.push((name, svg?.into_bytes()));
             }
         }
-        Ok((files, charts, section.markdown))
+        Ok((files, tables, charts, section.markdown))
     })?;
     let d = PyDict::new(py);
     let f = PyDict::new(py);
     for (path, bytes) in files {
         f.set_item(path, PyBytes::new(py, &bytes))?;
     }
+    let t = PyDict::new(py);
+    for (path, json) in tables {
+        t.set_item(path, json)?;
+    }
     let c = PyDict::new(py);
     for (name, bytes) in charts {
         c.set_item(name, PyBytes::new(py, &bytes))?;
     }
     d.set_item("files", f)?;
+    d.set_item("tables", t)?;
     d.set_item("charts", c)?;
     d.set_item("report", report)?;
     Ok(d)
@@ -322,53 +337,6 @@ pub fn _work_precision<'py>(
     run(py, study, settings, out)
 }
 
-/// `contactlab error-bound`: the certificate's error bound beside the
-/// measured error of every solver's answers (issue 51).
-#[pyfunction]
-#[pyo3(signature = (quick=false, settings=Vec::new(), out=None))]
-pub fn _error_bound(
-    py: Python<'_>,
-    quick: bool,
-    settings: Vec<(String, String)>,
-    out: Option<PathBuf>,
-) -> PyResult<Bound<'_, PyDict>> {
-    let solvers = contactlab::solvers::registry::solvers();
-    let settings = resolved(&Settings::default(), settings, &solvers)?;
-    let spec = if quick {
-        BoundSpec::quick()
-    } else {
-        BoundSpec::standard()
-    };
-    run(py, ErrorBoundStudy { spec }, settings, out)
-}
-
-/// `contactlab verify`: the classical scenes against their closed forms
-/// (issue 74), by the solvers named (all if none).
-#[pyfunction]
-#[pyo3(signature = (quick=false, solvers=Vec::new(), settings=Vec::new(), out=None))]
-pub fn _verify(
-    py: Python<'_>,
-    quick: bool,
-    solvers: Vec<String>,
-    settings: Vec<(String, String)>,
-    out: Option<PathBuf>,
-) -> PyResult<Bound<'_, PyDict>> {
-    let solvers = if solvers.is_empty() {
-        contactlab::solvers::registry::solvers()
-    } else {
-        entries(&solvers)?
-    };
-    let settings = resolved(&Settings::default(), settings, &solvers)?;
-    let spec = if quick {
-        VerifySpec::quick()
-    } else {
-        VerifySpec::standard()
-    };
-    let mut study = VerifyStudy::new(spec);
-    study.solvers = solvers;
-    run(py, study, settings, out)
-}
-
 /// `contactlab sweep` on the problem's scene and mesh: each solver's
 /// registry variations of the Coulomb problem and its accuracy knob on the
 /// subproblem (work-precision), against the earned reference.
@@ -412,6 +380,60 @@ pub fn _sweep<'py>(
         references_file: "references.csv",
     };
     run(py, study, settings, out)
+}
+
+/// The catalogued studies: (command, help, its spec at the default run
+/// length as JSON), what Python makes a call of each from.
+#[pyfunction]
+pub fn _studies() -> PyResult<Vec<(String, String, String)>> {
+    catalog::catalog()
+        .into_iter()
+        .map(|e| {
+            let spec = e
+                .spec_json(RunLength::Standard)
+                .map_err(crate::error_of)?
+                .to_string();
+            Ok((e.command().to_string(), e.about().to_string(), spec))
+        })
+        .collect()
+}
+
+/// The catalogued study `command` at the run length `length` (`quick`,
+/// `standard` or `long`), its spec's fields replaced by the JSON object
+/// `spec` (Python's keyword arguments), at `settings`.
+#[pyfunction]
+#[pyo3(signature = (command, length, spec, settings=Vec::new(), out=None))]
+pub fn _study<'py>(
+    py: Python<'py>,
+    command: &str,
+    length: &str,
+    spec: &str,
+    settings: Vec<(String, String)>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let entry = catalog::by_command(command).ok_or_else(|| {
+        let known: Vec<&str> = catalog::catalog().iter().map(|e| e.command()).collect();
+        input_error(format!(
+            "no study called {command:?}; the studies are {}",
+            known.join(", ")
+        ))
+    })?;
+    let length = match length {
+        "quick" => RunLength::Quick,
+        "standard" => RunLength::Standard,
+        "long" => RunLength::Long,
+        other => {
+            return Err(input_error(format!(
+                "length = {other:?}: give \"quick\", \"standard\" or \"long\""
+            )));
+        }
+    };
+    let study = entry
+        .planned_with_json(length, spec)
+        .map_err(|e| input_error(format!("{e:#}")))?;
+    let solvers = contactlab::solvers::registry::solvers();
+    let settings = resolved(&Settings::default(), settings, &solvers)?;
+    run_planned(py, study, settings, out)
 }
 
 /// Registers the Python function `f` as the solver `name` (see

@@ -630,3 +630,79 @@ def test_verify_runs_the_classical_scenes_from_python():
         e = {t["h"]: t["l2_error"] for t in hertz if t["solver"] == s}
         assert e["1/64"] < 0.6 * e["1/32"], e
     assert any(f.startswith("profiles/hertz_h64_") for f in r.files)
+
+
+def test_a_studys_tables_are_the_data_of_its_files():
+    # Python gets each table as the typed rows the library serialized, not
+    # the CSV file parsed back: every cell of every file must be the same
+    # value (numbers to the file's 10 digits, an empty field as None, the
+    # columns in the file's order). Rows from another table, a column
+    # dropped or renamed, a number left as text or a file that drifts from
+    # its rows fail here.
+    import csv
+    import io
+
+    r = cl.compare(cl.Problem.paper(1, h="1/8"), ["newton-coulomb", "tnnmg"])
+    csvs = [path for path in r.files if path.endswith(".csv")]
+    assert set(r.tables) == set(csvs) and "compare.csv" in r.tables
+    assert r.rows is r.tables["compare.csv"] and r.main == "compare.csv"
+    checked = 0
+    for path in csvs:
+        text = r.files[path].decode("utf-8")
+        header = next(csv.reader(io.StringIO(text)))
+        rows = r.table(path)
+        for row in rows:
+            assert list(row) == header, path
+        lines = list(csv.DictReader(io.StringIO(text)))
+        assert len(lines) == len(rows), path
+        for line, row in zip(lines, rows):
+            for k, cell in line.items():
+                v = row[k]
+                if cell == "":
+                    assert v is None or v == "", (path, k, v)
+                elif isinstance(v, bool):
+                    assert cell == str(v).lower(), (path, k, cell, v)
+                elif isinstance(v, (int, float)):
+                    assert float(cell) == pytest.approx(v, rel=1e-9, abs=0), (path, k, cell, v)
+                else:
+                    assert isinstance(v, str) and cell == v, (path, k, cell, v)
+                checked += 1
+    assert checked > 200  # every column of every row of every table
+    assert isinstance(r.rows[0]["certificate"], float)
+    assert isinstance(r.rows[0]["friction_iterations"], int)
+    with pytest.raises(cl.InputError, match="compare.csv"):
+        r.table("nothing.csv")
+    pandas = pytest.importorskip("pandas")
+    frame = r.frame()
+    assert isinstance(frame, pandas.DataFrame)
+    assert list(frame.columns) == list(r.rows[0]) and len(frame) == len(r.rows)
+    assert frame["certificate"].dtype.kind == "f"
+
+
+def test_a_catalogued_study_is_one_call_with_the_command_lines_bytes(tmp_path):
+    # Each catalogued study is a command and a call made from one entry:
+    # the same spec from keywords as from flags gives the same file, byte
+    # for byte; an unknown keyword is refused naming the parameters there
+    # are. A call that wired its own defaults, or dropped a keyword, fails
+    # here.
+    assert {"discretization-error", "oracle", "error-bound", "verify"} <= set(cl.studies())
+    r = cl.discretization_error(quick=True, problems=[1], meshes=["1/8"], reference="1/16")
+    (row,) = r.rows
+    assert r.main == "discretization_error.csv"
+    assert row["problem"] == 1 and row["h"] == "1/8" and 0 < row["l2_error"] < 1
+    subprocess.run(
+        [str(cli()), "discretization-error", "--quick", "--problem", "1", "--meshes", "1/8",
+         "--reference", "1/16", "--out", str(tmp_path / "cli")],
+        check=True,
+        capture_output=True,
+    )
+    name = "discretization_error.csv"
+    assert r.files[name] == (tmp_path / "cli" / name).read_bytes()
+    with pytest.raises(cl.InputError, match="its parameters are .*meshes"):
+        cl.study("discretization-error", quick=True, mesh=["1/8"])
+    with pytest.raises(cl.InputError, match="finer than the reference"):
+        cl.study("discretization-error", quick=True, meshes=["1/64"], reference="1/32")
+    with pytest.raises(cl.InputError, match="the studies are"):
+        cl.study("no-such-study")
+    with pytest.raises(cl.InputError, match="quick and long"):
+        cl.oracle(quick=True, long=True)

@@ -5,16 +5,15 @@ pub mod bench;
 pub mod benchmark;
 pub mod certify;
 pub mod compare;
-pub mod error_bound;
 pub mod export;
 pub mod info;
 pub mod reproduce;
 pub mod settings;
 pub mod solve;
 pub mod stability;
+pub mod study;
 pub mod sweep;
 pub mod table1;
-pub mod verify;
 
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};

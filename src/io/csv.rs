@@ -15,14 +15,65 @@ pub fn format_fixed(x: f64) -> String {
     }
 }
 
-/// serde `serialize_with` for an f64 field.
+thread_local! {
+    /// Whether rows are being serialized as typed records ([`records`])
+    /// rather than as CSV text: [`fixed`] then gives the number itself.
+    static TYPED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// serde `serialize_with` for an f64 field: the fixed format in a CSV
+/// file; the number itself (none if not finite) in [`records`].
 pub fn fixed<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+    if TYPED.get() {
+        return match x.is_finite() {
+            true => s.serialize_f64(*x),
+            false => s.serialize_none(),
+        };
+    }
     s.serialize_str(&format_fixed(*x))
 }
 
 /// serde `serialize_with` for an `Option<f64>` field (empty when none).
 pub fn fixed_opt<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_str(&x.map(format_fixed).unwrap_or_default())
+    match x {
+        Some(x) => fixed(x, s),
+        None if TYPED.get() => s.serialize_none(),
+        None => s.serialize_str(""),
+    }
+}
+
+/// serde `serialize_with` for a setting's value (`1e-4`, `multigrid`):
+/// its text in a CSV file; in [`records`] the number when it is one (a
+/// finite f64, as the settings read it), none when empty, else the text.
+pub fn setting_value<S: Serializer>(v: &str, s: S) -> Result<S::Ok, S::Error> {
+    if TYPED.get() {
+        if v.is_empty() {
+            return s.serialize_none();
+        }
+        if let Ok(x) = v.trim().parse::<f64>()
+            && x.is_finite()
+        {
+            return s.serialize_f64(x);
+        }
+    }
+    s.serialize_str(v)
+}
+
+/// Rows as typed records, the values a CSV file of them holds as text:
+/// a JSON array of one object per row, its keys in the file's column
+/// order, numbers as numbers (a non-finite one, an empty field in the
+/// file, as null), so that Python gets the data without parsing the file
+/// back.
+pub fn records<T: Serialize + ?Sized>(rows: &T) -> Result<String> {
+    struct Reset;
+    impl Drop for Reset {
+        fn drop(&mut self) {
+            TYPED.set(false);
+        }
+    }
+    TYPED.set(true);
+    let _reset = Reset;
+    Ok(serde_json::to_string(rows)?)
 }
 
 /// Rows as CSV bytes (header from the first row's fields; a header alone

@@ -12,7 +12,7 @@ use anyhow::{Result, bail};
 use serde::{Deserialize, Serialize};
 
 use crate::io::charts::{Chart, Panels};
-use crate::io::csv::to_csv;
+use crate::io::csv::{records, to_csv};
 use crate::io::heatmap::HeatMap;
 use crate::io::output::write_atomic;
 use crate::mechanics::scene::Scene;
@@ -25,6 +25,11 @@ use crate::study::trial::TrialSpec;
 pub struct Artifact {
     pub path: String,
     pub content: Content,
+    /// A table's rows as typed records (a JSON array of objects in column
+    /// order, numbers as numbers: [`crate::io::csv::records`]), the data its CSV file
+    /// holds as text: what Python's studies return, so that no caller
+    /// parses a file back.
+    pub records: Option<String>,
 }
 
 /// What an artifact holds: bytes as written, or a chart or heat map drawn
@@ -39,14 +44,25 @@ pub enum Content {
 impl Artifact {
     /// A CSV table of `rows` (with `header` when there are none).
     pub fn csv<T: Serialize>(path: &str, rows: &[T], header: &[&str]) -> Result<Self> {
-        Ok(Self::bytes(path, to_csv(rows, header)?))
+        Ok(Self::bytes(path, to_csv(rows, header)?).with_records(records(rows)?))
     }
 
     pub fn bytes(path: &str, bytes: Vec<u8>) -> Self {
+        Self::of(path, Content::Bytes(bytes))
+    }
+
+    fn of(path: &str, content: Content) -> Self {
         Self {
             path: path.to_string(),
-            content: Content::Bytes(bytes),
+            content,
+            records: None,
         }
+    }
+
+    /// This file with its rows as typed records (see [`Artifact::records`]).
+    pub fn with_records(mut self, records: String) -> Self {
+        self.records = Some(records);
+        self
     }
 
     pub fn text(path: &str, text: &str) -> Self {
@@ -55,26 +71,17 @@ impl Artifact {
 
     /// A chart, drawn as `charts/NAME.svg`.
     pub fn chart(name: &str, chart: Chart) -> Self {
-        Self {
-            path: format!("charts/{name}.svg"),
-            content: Content::Chart(chart),
-        }
+        Self::of(&format!("charts/{name}.svg"), Content::Chart(chart))
     }
 
     /// A heat map, drawn as `charts/NAME.svg`.
     pub fn heat_map(name: &str, map: HeatMap) -> Self {
-        Self {
-            path: format!("charts/{name}.svg"),
-            content: Content::HeatMap(map),
-        }
+        Self::of(&format!("charts/{name}.svg"), Content::HeatMap(map))
     }
 
     /// Small multiples, drawn as `charts/NAME.svg`.
     pub fn panels(name: &str, panels: Panels) -> Self {
-        Self {
-            path: format!("charts/{name}.svg"),
-            content: Content::Panels(panels),
-        }
+        Self::of(&format!("charts/{name}.svg"), Content::Panels(panels))
     }
 
     /// Charts given as (name, chart).

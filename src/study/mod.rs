@@ -6,6 +6,7 @@
 pub mod agreement;
 pub mod bench;
 pub mod benchmark;
+pub mod catalog;
 pub mod class;
 pub mod compare;
 pub mod discretization_error;
@@ -18,6 +19,7 @@ pub mod reproduce;
 pub mod runner;
 pub mod side_by_side;
 pub mod stability;
+pub mod studies;
 pub mod sweep;
 pub mod table1;
 pub mod trial;

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
+use crate::study::catalog::Catalogued;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::TrialSpec;
@@ -21,7 +22,8 @@ use crate::study::trial::TrialSpec;
 /// The study's name in trial records.
 pub const STUDY: &str = "oracle";
 
-/// Which variants run on which mesh.
+/// Which variants run on which mesh: `H` (every variant) or
+/// `H:V1+V2` on the command line.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct OracleMesh {
     pub h: MeshSize,
@@ -29,11 +31,73 @@ pub struct OracleMesh {
     pub variants: Vec<String>,
 }
 
-/// The oracle family on `problems` at `meshes`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+impl std::str::FromStr for OracleMesh {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (h, variants) = s.split_once(':').unwrap_or((s, ""));
+        let h = h.parse().map_err(|e| {
+            format!("{e}: give a mesh such as 1/128, or 1/256:clarabel+clarabel-faer")
+        })?;
+        let variants = variants
+            .split('+')
+            .map(str::trim)
+            .filter(|v| !v.is_empty())
+            .map(String::from)
+            .collect();
+        Ok(Self { h, variants })
+    }
+}
+
+/// The oracle family on `problems` at `meshes`: the study's parameters
+/// (its flags, and Python's keywords).
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
 pub struct Oracle {
+    /// The paper's problems (1, 2, 3), such as 1,3.
+    #[arg(long = "problem", value_delimiter = ',', value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3))]
     pub problems: Vec<u32>,
+    /// The meshes, each with the variants run there: such as
+    /// 1/128,1/256:clarabel+clarabel-condensed (a mesh alone: every
+    /// variant of the oracle family).
+    #[arg(long, value_delimiter = ',', value_name = "H[:VARIANTS]")]
     pub meshes: Vec<OracleMesh>,
+}
+
+impl Catalogued for Oracle {
+    const COMMAND: &'static str = "oracle";
+    const ABOUT: &'static str = "Each variant of the conic oracle on the whole Coulomb problem of the paper's \
+        problems at meshes finer than the comparison's, at its default settings, certified: where an interior \
+        point loses accuracy as h falls and what tightening it cost. Writes oracle.csv into --out.";
+    type Spec = Oracle;
+
+    fn spec(length: RunLength) -> Oracle {
+        match length {
+            RunLength::Quick => Oracle::quick(),
+            RunLength::Standard => Oracle::main(),
+            RunLength::Long => Oracle::standard(),
+        }
+    }
+
+    fn of(spec: Oracle) -> Result<Self> {
+        anyhow::ensure!(
+            !spec.problems.is_empty() && spec.problems.iter().all(|p| (1..=3).contains(p)),
+            "problems = {:?}: give the paper's problems, 1, 2 or 3, at least one",
+            spec.problems
+        );
+        anyhow::ensure!(
+            !spec.meshes.is_empty(),
+            "meshes: give at least one mesh, such as 1/128"
+        );
+        let family: Vec<&str> = registry::oracle_family().iter().map(|e| e.name).collect();
+        for v in spec.meshes.iter().flat_map(|m| &m.variants) {
+            anyhow::ensure!(
+                family.contains(&v.as_str()),
+                "meshes: {v:?} is not a variant of the oracle; its variants are {}",
+                family.join(", ")
+            );
+        }
+        Ok(spec)
+    }
 }
 
 impl Oracle {

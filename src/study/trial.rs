@@ -396,6 +396,7 @@ pub struct TrialRow {
     pub law: Law,
     /// The setting varied and its value (empty when none).
     pub knob: String,
+    #[serde(serialize_with = "crate::io::csv::setting_value")]
     pub value: String,
     pub stopping: String,
     pub status: Status,
@@ -510,6 +511,7 @@ pub struct TrialTiming {
     pub solver: String,
     pub law: Law,
     pub knob: String,
+    #[serde(serialize_with = "crate::io::csv::setting_value")]
     pub value: String,
     /// The timed runs: those after the first, warm-up run, or that one
     /// run when the trial has no repeats.

@@ -23,7 +23,7 @@ use contactlab_solvers::Law;
 use contactlab_solvers::registry::Entry;
 use serde::Serialize;
 
-use crate::io::csv::fixed;
+use crate::io::csv::{fixed, records};
 use crate::io::heatmap::{Cell, HeatMap, Mark};
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
@@ -208,6 +208,39 @@ pub struct Point {
     pub pressure_error: f64,
     /// `best`, `tie` (within the noise of the best) or empty.
     pub mark: String,
+}
+
+/// A point as a typed record of the map's table: each axis's value under
+/// its path (a number when it is one, as the setting reads it), then the
+/// point's own fields, in the file's column order.
+struct MapRow<'a> {
+    axes: &'a [Axis],
+    point: &'a Point,
+}
+
+impl Serialize for MapRow<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let p = self.point;
+        let mut m = s.serialize_map(None)?;
+        for (axis, value) in self.axes.iter().zip(&p.values) {
+            match value.parse::<f64>() {
+                Ok(x) if x.is_finite() => m.serialize_entry(&axis.path, &x)?,
+                _ => m.serialize_entry(&axis.path, value)?,
+            }
+        }
+        m.serialize_entry("status", &p.status)?;
+        m.serialize_entry("certified", &p.certified)?;
+        let number = |x: f64| x.is_finite().then_some(x);
+        m.serialize_entry("seconds_median", &number(p.seconds_median))?;
+        m.serialize_entry("seconds_min", &number(p.seconds_min))?;
+        m.serialize_entry("runs", &p.runs)?;
+        m.serialize_entry("work", &p.work)?;
+        m.serialize_entry("certificate", &number(p.certificate))?;
+        m.serialize_entry("pressure_error", &number(p.pressure_error))?;
+        m.serialize_entry("mark", &p.mark)?;
+        m.end()
+    }
 }
 
 impl Point {
@@ -770,10 +803,20 @@ impl Study for TuningMap {
             ]);
             table.write_record(&row)?;
         }
-        artifacts.push(Artifact::bytes(
-            &format!("{stem}.csv"),
-            table.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?,
-        ));
+        let rows: Vec<MapRow> = points
+            .iter()
+            .map(|point| MapRow {
+                axes: &self.axes,
+                point,
+            })
+            .collect();
+        artifacts.push(
+            Artifact::bytes(
+                &format!("{stem}.csv"),
+                table.into_inner().map_err(|e| anyhow::anyhow!("{e}"))?,
+            )
+            .with_records(records(&rows)?),
+        );
         let slices: Vec<Option<&str>> = match self.axes.get(2) {
             Some(a) => a.values.iter().map(|v| Some(v.as_str())).collect(),
             None => vec![None],

@@ -32,7 +32,7 @@
 //! the speed study).
 
 use anyhow::{Context, Result};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::coulomb::continuation::Schedule;
 use crate::io::csv::fixed;
@@ -45,20 +45,33 @@ use crate::settings::Settings;
 use crate::solve::{Solved, solve_scene, solver_entry};
 use crate::solvers::{Friction, Law, Silent, registry};
 use crate::study::bench::FastestDirect;
+use crate::study::catalog::Catalogued;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 
 mod views;
 pub use views::{PAPERS_ZONE_START, charts, findings, markdown};
 
-/// Which problems, on which meshes, against which reference mesh.
-#[derive(Clone, Debug, Serialize)]
+/// Which problems, on which meshes, against which reference mesh: the
+/// study's parameters (its flags, and Python's keywords).
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
 pub struct ErrorSpec {
+    /// The paper's problems measured (1, 2, 3), such as 1,3.
+    #[arg(long = "problem", value_delimiter = ',', value_name = "N", value_parser = clap::value_parser!(u32).range(1..=3))]
     pub problems: Vec<u32>,
+    /// The meshes measured, such as 1/16,1/32,1/64: each coarser than the
+    /// reference.
+    #[arg(long, value_delimiter = ',', value_name = "H")]
     pub meshes: Vec<MeshSize>,
+    /// The reference mesh, such as 1/2048: its answer stands in for the
+    /// exact one.
+    #[arg(long, value_name = "H", required = false)]
     pub reference: MeshSize,
-    /// The solver (None: the registry's first direct Coulomb solver).
-    pub solver: Option<&'static str>,
+    /// The solver [default: tnnmg under the nested schedule; --quick: the
+    /// registry's first direct Coulomb solver].
+    #[arg(long, value_name = "SOLVER", value_parser = crate::study::catalog::registered_solver)]
+    pub solver: Option<String>,
     /// The mesh continuation it runs with (None: the settings').
+    #[arg(skip)]
     pub schedule: Option<Schedule>,
 }
 
@@ -71,7 +84,7 @@ impl ErrorSpec {
             problems: vec![1, 3],
             meshes: (4..=10).map(level).collect(),
             reference: level(12),
-            solver: Some(MULTIGRID),
+            solver: Some(MULTIGRID.into()),
             schedule: Some(Schedule::Nested),
         }
     }
@@ -97,6 +110,35 @@ impl ErrorSpec {
             solver: None,
             schedule: None,
         }
+    }
+}
+
+impl ErrorSpec {
+    /// The spec's own consistency: a one-line error naming the field.
+    pub fn check(&self) -> Result<()> {
+        anyhow::ensure!(
+            !self.problems.is_empty() && self.problems.iter().all(|p| (1..=3).contains(p)),
+            "problems = {:?}: give the paper's problems, 1, 2 or 3, at least one",
+            self.problems
+        );
+        anyhow::ensure!(
+            !self.meshes.is_empty(),
+            "meshes: give at least one mesh, such as 1/16,1/32"
+        );
+        if let Some(h) = self
+            .meshes
+            .iter()
+            .find(|h| h.level() > self.reference.level())
+        {
+            anyhow::bail!(
+                "meshes: {h} is finer than the reference {}: give meshes no finer than the reference, or a finer reference",
+                self.reference
+            );
+        }
+        if let Some(name) = &self.solver {
+            solver_entry(name)?;
+        }
+        Ok(())
     }
 }
 
@@ -170,7 +212,7 @@ pub fn solver_note(solver: &str) -> &'static str {
 /// through the friction fixed point), or the registry's first direct
 /// Coulomb solver.
 fn solver(spec: &ErrorSpec) -> Result<&'static str> {
-    if let Some(name) = spec.solver {
+    if let Some(name) = spec.solver.as_deref() {
         let e = registry::by_name(name).context("unknown solver")?;
         anyhow::ensure!(
             e.solves(Law::Coulomb) || e.solves(Law::GivenFriction),
@@ -393,6 +435,27 @@ pub struct Errors {
     pub spec: ErrorSpec,
 }
 
+impl Catalogued for Errors {
+    const COMMAND: &'static str = "discretization-error";
+    const ABOUT: &'static str = "How the discrete solution converges as h → 0 on the paper's problems: the errors of \
+        the displacement (L2, energy), of the pressure and of the separated zone's start on each mesh against a finer \
+        reference mesh, with the observed orders. Writes discretization_error.csv and charts into --out.";
+    type Spec = ErrorSpec;
+
+    fn spec(length: RunLength) -> ErrorSpec {
+        match length {
+            RunLength::Quick => ErrorSpec::quick(),
+            RunLength::Standard => ErrorSpec::main(),
+            RunLength::Long => ErrorSpec::standard(),
+        }
+    }
+
+    fn of(spec: ErrorSpec) -> Result<Self> {
+        spec.check()?;
+        Ok(Self { spec })
+    }
+}
+
 impl Study for Errors {
     /// One row per mesh.
     type Findings = Vec<ErrorRow>;
@@ -444,7 +507,8 @@ impl Study for Errors {
             spec.solver = lab
                 .handoff
                 .get::<FastestDirect>()
-                .and_then(|f| f.at_or_finest(&spec.reference.to_string()));
+                .and_then(|f| f.at_or_finest(&spec.reference.to_string()))
+                .map(String::from);
         }
         let log = lab.logger();
         let errors = run(&spec, &lab.settings, &|l| {

@@ -27,7 +27,7 @@ pub mod views;
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};
 use contactlab_solvers::{Friction, Law};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::certificate::{BoundReport, bound_room};
 use crate::io::csv::{fixed, fixed_opt};
@@ -36,6 +36,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::benchmark::collection::{collection, in_core};
 use crate::study::benchmark::target_settings;
+use crate::study::catalog::Catalogued;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::reference::{Reference, References};
 use crate::study::runner::{Keep, Measured, measure};
@@ -47,20 +48,65 @@ pub const STUDY: &str = "error_bound";
 /// The solver whose answer is the ladder's reference.
 pub const LADDER_REFERENCE: &str = "newton";
 
-/// What the study runs.
-#[derive(Clone, Debug, Serialize)]
+/// What the study runs: its parameters (its flags, and Python's keywords).
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
 pub struct BoundSpec {
-    /// The quick collection (6 instances at h = 1/8) instead of the core.
+    /// The quick collection (6 instances at h = 1/8) instead of the core
+    /// (`--quick`).
+    #[arg(skip)]
     pub quick: bool,
-    /// Target accuracies of the core part.
+    /// Target accuracies of the core part, such as 1e-4,1e-6,1e-8.
+    #[arg(long, value_delimiter = ',', value_name = "TOL")]
     pub targets: Vec<f64>,
-    /// The ladder's problem, meshes and targets.
+    /// The ladder's problem (1, 2, 3): one problem refined, every solver
+    /// at each of the ladder's targets.
+    #[arg(long, value_name = "N", required = false, value_parser = clap::value_parser!(u32).range(1..=3))]
     pub ladder_problem: u32,
+    /// The ladder's meshes, such as 1/16,1/32,1/64 (none: no ladder).
+    #[arg(long, value_delimiter = ',', value_name = "H")]
     pub ladder_meshes: Vec<MeshSize>,
+    /// The ladder's target accuracies, such as 1e-4,1e-6.
+    #[arg(long, value_delimiter = ',', value_name = "TOL")]
     pub ladder_targets: Vec<f64>,
     /// Wall-clock seconds a run may take (a run stopped by it is an answer
     /// like any other: it gets a bound).
+    #[arg(long = "time-limit", value_name = "SECONDS", required = false)]
+    #[serde(rename = "time_limit")]
     pub budget: f64,
+}
+
+impl BoundSpec {
+    /// The spec's own consistency: a one-line error naming the field.
+    pub fn check(&self) -> Result<()> {
+        anyhow::ensure!(
+            !self.targets.is_empty(),
+            "targets: give at least one accuracy, such as 1e-4,1e-8"
+        );
+        for (name, targets) in [
+            ("targets", &self.targets),
+            ("ladder-targets", &self.ladder_targets),
+        ] {
+            for t in targets {
+                crate::certificate::check_tolerance(*t)
+                    .map_err(|m| anyhow::anyhow!("{name}: {m}"))?;
+            }
+        }
+        anyhow::ensure!(
+            (1..=3).contains(&self.ladder_problem),
+            "ladder-problem = {}: give the paper's problem 1, 2 or 3",
+            self.ladder_problem
+        );
+        anyhow::ensure!(
+            self.ladder_meshes.is_empty() || !self.ladder_targets.is_empty(),
+            "ladder-targets: give at least one accuracy for the ladder's meshes, such as 1e-6"
+        );
+        anyhow::ensure!(
+            self.budget.is_finite() && self.budget > 0.0,
+            "time-limit = {}: give the seconds a run may take, a number > 0",
+            self.budget
+        );
+        Ok(())
+    }
 }
 
 impl BoundSpec {
@@ -84,6 +130,7 @@ impl BoundSpec {
     /// are the long run's.
     pub fn main() -> Self {
         let mut s = Self::standard();
+        s.targets = vec![1e-4, 1e-8];
         s.ladder_meshes.retain(|h| h.level() <= 8);
         s
     }
@@ -393,6 +440,28 @@ impl ErrorBoundStudy {
     }
 }
 
+impl Catalogued for ErrorBoundStudy {
+    const COMMAND: &'static str = "error-bound";
+    const ABOUT: &'static str = "Whether the certificate's error bound holds, and how sharp it is: every solver's \
+        answers at several target accuracies on the benchmark's core collection and on a ladder of meshes, each \
+        bound beside the measured error against the reference. Writes error_bound.csv, \
+        error_bound_sharpness.csv, the trials and charts into --out.";
+    type Spec = BoundSpec;
+
+    fn spec(length: RunLength) -> BoundSpec {
+        match length {
+            RunLength::Quick => BoundSpec::quick(),
+            RunLength::Standard => BoundSpec::main(),
+            RunLength::Long => BoundSpec::standard(),
+        }
+    }
+
+    fn of(spec: BoundSpec) -> Result<Self> {
+        spec.check()?;
+        Ok(Self { spec })
+    }
+}
+
 impl Study for ErrorBoundStudy {
     type Findings = Vec<BoundPoint>;
 
@@ -412,6 +481,10 @@ impl Study for ErrorBoundStudy {
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<BoundPoint>>> {
+        anyhow::ensure!(
+            lab.settings.certificate.bound_max_unknowns > 0,
+            "certificate.bound_max_unknowns = 0 turns off the error bounds, which are all this study measures (it bounds every answer, whatever its size): drop the setting"
+        );
         let (mut measured, mut points) = self.core(lab)?;
         let (ladder_measured, ladder_points) = self.ladder(lab)?;
         measured.extend(ladder_measured);

@@ -28,17 +28,14 @@ use crate::study::bench::BenchSpec;
 use crate::study::bench::goals::Bench;
 use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
-use crate::study::discretization_error::{ErrorSpec, Errors};
-use crate::study::error_bound::{BoundSpec, ErrorBoundStudy};
 use crate::study::lab::{Lab, Planned, RunLength, Section, write_artifacts};
-use crate::study::oracle::Oracle;
 use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
 use crate::study::side_by_side::{Side, SideBySide};
 use crate::study::stability::{Stability, StabilitySpec};
+use crate::study::studies::catalog;
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
 use crate::study::tuning_map::{Axis, TuningMap, TuningMaps};
-use crate::study::verify::{VerifySpec, VerifyStudy};
 
 /// What `reproduce` runs.
 #[derive(Clone, Serialize)]
@@ -61,14 +58,6 @@ pub struct ReproduceSpec {
     /// The benchmark over the problem collection (its solvers: all).
     #[serde(skip)]
     pub benchmark: BenchmarkSpec,
-    /// The discretization-error study.
-    pub errors: ErrorSpec,
-    /// The oracle family on meshes finer than the comparison's.
-    pub oracle: Oracle,
-    /// The error bound's sharpness and validity (issue 51).
-    pub error_bound: BoundSpec,
-    /// The classical scenes against their closed forms (issue 74).
-    pub verify: VerifySpec,
     /// The mesh of the side-by-side of the paper's method against the
     /// oracle and against the reference (problem 1).
     pub side_by_side_h: MeshSize,
@@ -80,36 +69,36 @@ pub struct ReproduceSpec {
 }
 
 impl ReproduceSpec {
-    /// The default run, the main job (30.5 min measured; issue 76 asks for
-    /// 20): every study, each at its own main budget. What it leaves to the long
-    /// run: the paper's method by sweeps at equal accuracy beyond 1/64 (at
-    /// 1/1024 it runs by multigrid in `bench`); the comparison timed once
-    /// (its times are not the speed study's) and the sweep's
-    /// work-precision trials twice; `bench`'s solvers timed once after a
-    /// warm-up, 5 s a run (a solver predicted slower is not run on the
-    /// finer meshes) and 20 s a run on 1/512 and 1/1024, its multigrid
-    /// alone to 1/2048 (1/4096 and 1/8192 take 7 min); the benchmark on its
-    /// core collection; the oracle at 1/128 on problems 1 and 3; the error
-    /// bound's ladder to 1/256; the discretization error to 1/512 against
-    /// 1/2048; the side-by-side at 1/64; each map point timed twice; the
-    /// closed forms to 1/512 at 10 s a solve.
+    /// The default run, the main job (issue 76 asks for 20 min): every
+    /// study, each at its own main budget (the catalogued ones at their
+    /// `Catalogued::spec(Standard)`). What it leaves to the long run: the
+    /// paper's method by sweeps at equal accuracy beyond 1/32 (at 1/1024
+    /// it runs by multigrid in `bench`); the comparison and the sweep's
+    /// trials timed once (their times are not the speed study's);
+    /// `bench`'s solvers timed once after a warm-up, 5 s a run (a solver
+    /// predicted slower is not run on the finer meshes) and 20 s a run on
+    /// 1/512 and 1/1024, where the factorization is timed once after its
+    /// warm-up, its multigrid alone to 1/2048 (1/4096 and 1/8192 take 7
+    /// min); the benchmark on its core collection at 10 s a run; the
+    /// oracle at 1/128 on problems 1 and 3; the error bound at two targets
+    /// and its ladder to 1/256; the discretization error to 1/512 against
+    /// 1/2048; the side-by-side at 1/64; each map point timed once; the
+    /// closed forms to 1/256 at 10 s a solve.
     pub fn standard() -> Self {
         let mut spec = Self::long();
         spec.long = false;
         spec.repeats = 0;
-        spec.sweep.repeats = 1;
-        spec.bench.equal_accuracy.retain(|h| h.level() <= 6);
+        spec.sweep.repeats = 0;
+        spec.bench.equal_accuracy.retain(|h| h.level() <= 5);
+        spec.bench.large_factorization_runs = 1;
         spec.bench.runs = 1;
         spec.bench.budget = 5.0;
         spec.bench.large_budget = 20.0;
         spec.bench.multigrid_only.retain(|h| h.level() <= 11);
         spec.benchmark.core = true;
-        spec.oracle = Oracle::main();
-        spec.error_bound = BoundSpec::main();
-        spec.errors = ErrorSpec::main();
+        spec.benchmark.time_limit = 10.0;
         spec.side_by_side_h = MeshSize::from_level(6).expect("in range");
-        spec.map_repeats = 1;
-        spec.verify = VerifySpec::main();
+        spec.map_repeats = 0;
         spec
     }
 
@@ -133,10 +122,6 @@ impl ReproduceSpec {
             stability: StabilitySpec::standard(),
             bench: BenchSpec::standard(),
             benchmark: BenchmarkSpec::new(false, registry::solvers()),
-            errors: ErrorSpec::standard(),
-            oracle: Oracle::standard(),
-            error_bound: BoundSpec::standard(),
-            verify: VerifySpec::standard(),
             side_by_side_h: MeshSize::from_level(7).expect("in range"),
             // The paper's own form (sweeps) at 1/64, where a point takes
             // about a second; multigrid inside at 1/256 (tuning_map).
@@ -172,10 +157,6 @@ impl ReproduceSpec {
             stability: StabilitySpec::quick(),
             bench: BenchSpec::quick(),
             benchmark: BenchmarkSpec::new(true, registry::solvers()),
-            errors: ErrorSpec::quick(),
-            oracle: Oracle::quick(),
-            error_bound: BoundSpec::quick(),
-            verify: VerifySpec::quick(),
             side_by_side_h: h,
             maps: vec![
                 (h, Law::GivenFriction),
@@ -203,7 +184,7 @@ impl ReproduceSpec {
 pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned>> {
     let mut paper = Settings::paper();
     paper.certificate = settings.certificate;
-    vec![
+    let mut out: Vec<Box<dyn Planned>> = vec![
         Box::new(PaperCompare {
             h: spec.h,
             problems: spec.problems.clone(),
@@ -231,18 +212,45 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
         Box::new(Benchmark {
             spec: spec.benchmark.clone(),
         }),
-        Box::new(Errors {
-            spec: spec.errors.clone(),
-        }),
-        Box::new(spec.oracle.clone()),
-        Box::new(ErrorBoundStudy {
-            spec: spec.error_bound.clone(),
-        }),
+    ];
+    // The catalogued studies, each at its own budget for this run's length
+    // (`Catalogued::spec`), in the catalog's order.
+    out.extend(catalog().into_iter().map(|e| {
+        let s: Box<dyn Planned> = e
+            .planned(spec.length())
+            .expect("a catalogued study's own spec is valid");
+        s
+    }));
+    out.extend::<[Box<dyn Planned>; 2]>([
         Box::new(side_by_side(spec)),
         Box::new(tuning_maps(spec)),
-        Box::new(VerifyStudy::new(spec.verify.clone())),
-    ]
+    ]);
+    // In the README's order; a study it does not name (one a program
+    // added to the catalog) comes last.
+    out.sort_by_key(|s| {
+        ORDER
+            .iter()
+            .position(|&n| n == s.name())
+            .unwrap_or(ORDER.len())
+    });
+    out
 }
+
+/// The order of a run's studies (and of its README's sections), by name.
+const ORDER: [&str; 12] = [
+    "compare",
+    "table1",
+    "sweep",
+    "stability",
+    "bench",
+    "benchmark",
+    "discretization_error",
+    "oracle",
+    "error_bound",
+    "side_by_side",
+    "tuning_map",
+    "verify",
+];
 
 /// The paper's method beside the oracle and beside the reference, node by
 /// node, on problem 1.

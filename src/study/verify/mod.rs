@@ -27,7 +27,7 @@ pub mod views;
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};
 use contactlab_solvers::{Law, Status};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::mechanics::closed_forms::{
     CattaneoMindlin, FlatPunch, Hertz, effective_modulus, pressure_error, traction_error,
@@ -36,6 +36,7 @@ use crate::mechanics::contact_zone::ProfileRow;
 use crate::mechanics::gap::Gap;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
+use crate::study::catalog::Catalogued;
 use crate::study::error_bound::predicted;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, ticked};
 use crate::study::runner::{Keep, measure};
@@ -183,14 +184,22 @@ impl ClosedForm {
     }
 }
 
-/// What the study runs.
-#[derive(Clone, Debug, Serialize)]
+/// What the study runs: its parameters (its flags, and Python's keywords).
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
 pub struct VerifySpec {
+    /// The meshes, coarse to fine, such as 1/32,1/64,1/128.
+    #[arg(long, value_delimiter = ',', value_name = "H")]
     pub meshes: Vec<MeshSize>,
     /// Seconds one solve may take; a solver is not run on a finer mesh once
     /// a solve took longer, failed to certify, or its last two predict one
     /// that would.
+    #[arg(long, value_name = "SECONDS", required = false)]
     pub time_limit: f64,
+    /// The solvers verified, such as tnnmg,newton-coulomb [default: every
+    /// registered solver].
+    #[arg(long, value_delimiter = ',', value_name = "SOLVERS", value_parser = crate::study::catalog::registered_solver)]
+    #[serde(default)]
+    pub solvers: Vec<String>,
 }
 
 impl VerifySpec {
@@ -201,18 +210,20 @@ impl VerifySpec {
         Self {
             meshes: levels(6..=10),
             time_limit: 300.0,
+            solvers: Vec::new(),
         }
     }
 
-    /// The main job's (`reproduce`): h = 1/32 … 1/512 (a …
-    /// a/16), 10 s a solve. The fast solvers reach a/16; each slow one
-    /// certifies on the coarse meshes and stops where its times predict
-    /// (or a solve takes) more than 10 s. To 1/1024 at 30 s a solve it
-    /// took 9 min.
+    /// The main job's (`reproduce`): h = 1/32 … 1/256 (a … a/8), 10 s a
+    /// solve. The fast solvers reach a/8 (an order from four meshes); each
+    /// slow one certifies on the coarse meshes and stops where its times
+    /// predict (or a solve takes) more than 10 s. To 1/512 it took 271 s,
+    /// to 1/1024 at 30 s a solve 9 min; the long run's goes to a/32.
     pub fn main() -> Self {
         Self {
-            meshes: levels(5..=9),
+            meshes: levels(5..=8),
             time_limit: 10.0,
+            solvers: Vec::new(),
         }
     }
 
@@ -225,6 +236,7 @@ impl VerifySpec {
         Self {
             meshes: levels(5..=6),
             time_limit: 5.0,
+            solvers: Vec::new(),
         }
     }
 }
@@ -296,11 +308,48 @@ pub struct VerifyStudy {
 }
 
 impl VerifyStudy {
-    pub fn new(spec: VerifySpec) -> Self {
-        Self {
-            spec,
-            solvers: registry::solvers(),
+    /// The study of `spec`, its solvers resolved (every registered one if
+    /// it names none).
+    pub fn new(spec: VerifySpec) -> Result<Self> {
+        anyhow::ensure!(
+            !spec.meshes.is_empty(),
+            "meshes: give at least one mesh, such as 1/32,1/64"
+        );
+        anyhow::ensure!(
+            spec.time_limit.is_finite() && spec.time_limit > 0.0,
+            "time-limit = {}: give the seconds a solve may take, a number > 0",
+            spec.time_limit
+        );
+        let solvers = if spec.solvers.is_empty() {
+            registry::solvers()
+        } else {
+            spec.solvers
+                .iter()
+                .map(|n| crate::solve::solver_entry(n))
+                .collect::<Result<_>>()?
+        };
+        Ok(Self { spec, solvers })
+    }
+}
+
+impl Catalogued for VerifyStudy {
+    const COMMAND: &'static str = "verify";
+    const ABOUT: &'static str = "Verify against closed forms: the classical scenes of scenes/ (Hertz's line contact, \
+        a flat punch, Cattaneo-Mindlin), each solver's certified answer beside the half-plane closed form (L2 and \
+        max error, half-width, p0, the observed order). Writes verification.csv, profiles/ (each run's profile) and \
+        charts into --out.";
+    type Spec = VerifySpec;
+
+    fn spec(length: RunLength) -> VerifySpec {
+        match length {
+            RunLength::Quick => VerifySpec::quick(),
+            RunLength::Standard => VerifySpec::main(),
+            RunLength::Long => VerifySpec::standard(),
         }
+    }
+
+    fn of(spec: VerifySpec) -> Result<Self> {
+        Self::new(spec)
     }
 }
 
