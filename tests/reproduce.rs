@@ -523,6 +523,25 @@ fn reproduce_quick_writes_every_file_and_matches_the_reference() {
     assert!(seen >= 12 + 3 + 1 + 2 + 3 + 2 + 2, "only {seen} charts");
     let readme = std::fs::read_to_string(out.join("README.md")).unwrap();
     assert!(readme.contains("## Does the paper's solver agree with the reference?"));
+    // Each study's section opens with its own heading, in the run's order:
+    // the classical scenes once had none and read as the last tuning map's.
+    let at = |heading: &str| {
+        readme
+            .find(&format!("\n## {heading}"))
+            .unwrap_or_else(|| panic!("no section {heading:?}"))
+    };
+    let order = [
+        at("Speed"),
+        at("Benchmark over a problem collection"),
+        at("Discretization error"),
+        at("The oracle at every h"),
+        at("The error bound: does it hold"),
+        at("Tuning map"),
+        at("Verification against closed forms"),
+        at("Files"),
+    ];
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "{order:?}");
+    assert!(readme.find("\n### hertz").unwrap() > order[6]);
     assert!(
         !readme.contains("{{") && !readme.contains("{%"),
         "unrendered template"

@@ -329,7 +329,7 @@ impl Study for Bench {
     fn estimated_seconds(&self, length: RunLength) -> f64 {
         match length {
             RunLength::Quick => 5.3,
-            RunLength::Standard => 530.0,
+            RunLength::Standard => 450.0,
             RunLength::Long => 5700.0,
         }
     }

@@ -475,7 +475,7 @@ impl Study for ErrorBoundStudy {
         let finest = self.spec.ladder_meshes.iter().map(|h| h.level()).max();
         match (length, finest) {
             (RunLength::Quick, _) => 10.0,
-            (_, Some(k)) if k <= 8 => 200.0,
+            (_, Some(k)) if k <= 8 => 215.0,
             _ => 1200.0,
         }
     }

@@ -172,7 +172,9 @@ fn opt(x: Option<f64>) -> String {
 
 /// The README section: what was verified, and a table per scene.
 pub fn section(found: &Verified, charts: &[String]) -> String {
-    let mut md = String::new();
+    // Its own heading: without it the scenes' tables read as the section
+    // before's (a run's README had them under the last tuning map).
+    let mut md = String::from("## Verification against closed forms: the classical scenes\n\n");
     md.push_str(&format!(
         "Each classical scene of `scenes/` at h = {}, every registered solver at its defaults, the Coulomb law (frictionless, 𝓕 = 0, but for Cattaneo–Mindlin's 0.3), a time limit of {:.0} s a solve. Errors are those of the nodal pressures against the half-plane closed form: L2 relative over Γ_K (the punch: over |x − x₀| ≤ 0.8 b, away from its singular edges), max over p₀. `order` is log₂ of the L2 error's fall from the next coarser mesh. The bodies are 16 half-widths wide on either side and deep: the closed forms, for half-planes, differ from them by a finite-size error, the floor the errors fall towards.\n\n",
         found.spec.meshes.iter().map(|h| h.to_string()).collect::<Vec<_>>().join(", "),
