@@ -74,12 +74,6 @@ pub enum Command {
     /// about 2.5 h. It states its estimate as it starts; the manifest
     /// records each study's time (--quick: a minute).
     Reproduce(ReproduceArgs),
-    /// The stability map: each solver across stress conditions (its registry
-    /// entry's, the friction coefficient, loads near and past condition
-    /// (13)), every trial classified converged, slow, stalled, diverged, wrong
-    /// or refused. Writes stability.csv, stability_friction.csv and charts
-    /// into --out.
-    Stability(StabilityArgs),
     /// Speed against the mesh size on problem 1 (not to be confused with
     /// `benchmark`, success over a collection): assembly, each solver's inner kernel against one SpMV,
     /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
@@ -311,18 +305,6 @@ impl MapLaw {
             MapLaw::GivenFriction => contactlab_solvers::Law::GivenFriction,
         }
     }
-}
-
-#[derive(Debug, Args)]
-pub struct StabilityArgs {
-    /// A small map for tests (h = 1/8, few values).
-    #[arg(long)]
-    pub quick: bool,
-    /// Output folder (replaced whole).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
-    #[command(flatten)]
-    pub settings: SettingsArgs,
 }
 
 #[derive(Debug, Args)]
@@ -559,7 +541,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(a) => c::compare::run(&a),
         Command::Sweep(a) => c::sweep::run(&a),
         Command::Reproduce(a) => c::reproduce::run(&a),
-        Command::Stability(a) => c::stability::run(&a),
         Command::Bench(a) => c::bench::run(&a),
         Command::Benchmark(a) => c::benchmark::run(&a),
         Command::BenchmarkMerge(a) => c::benchmark::merge(&a),

@@ -685,7 +685,10 @@ def test_a_catalogued_study_is_one_call_with_the_command_lines_bytes(tmp_path):
     # for byte; an unknown keyword is refused naming the parameters there
     # are. A call that wired its own defaults, or dropped a keyword, fails
     # here.
-    assert {"discretization-error", "oracle", "error-bound", "verify"} <= set(cl.studies())
+    assert {"stability", "discretization-error", "oracle", "error-bound", "verify"} <= set(cl.studies())
+    m = cl.stability(quick=True, friction_values=[0.0, 0.5], uniqueness_values=[])
+    assert m.main == "stability.csv" and {row["class"] for row in m.rows} >= {"converged"}
+    assert {row["value"] for row in m.rows if row["knob"] == "friction"} >= {0.0, 0.5}
     r = cl.discretization_error(quick=True, problems=[1], meshes=["1/8"], reference="1/16")
     (row,) = r.rows
     assert r.main == "discretization_error.csv"

@@ -10,7 +10,6 @@ pub mod info;
 pub mod reproduce;
 pub mod settings;
 pub mod solve;
-pub mod stability;
 pub mod study;
 pub mod sweep;
 pub mod table1;

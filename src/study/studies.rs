@@ -8,6 +8,7 @@ use crate::study::catalog::{Entry, Of};
 use crate::study::discretization_error::Errors;
 use crate::study::error_bound::ErrorBoundStudy;
 use crate::study::oracle::Oracle;
+use crate::study::stability::Stability;
 use crate::study::verify::VerifyStudy;
 
 /// Every catalogued study, in the order `reproduce` runs them: the
@@ -22,6 +23,7 @@ pub fn catalog() -> Vec<&'static dyn Entry> {
 /// The library's own studies.
 fn library() -> Vec<&'static dyn Entry> {
     vec![
+        &Of::<Stability>::ENTRY,
         &Of::<Errors>::ENTRY,
         &Of::<Oracle>::ENTRY,
         &Of::<ErrorBoundStudy>::ENTRY,

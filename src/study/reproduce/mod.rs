@@ -31,7 +31,6 @@ use crate::study::compare::paper::PaperCompare;
 use crate::study::lab::{Lab, Planned, RunLength, Section, write_artifacts};
 use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
 use crate::study::side_by_side::{Side, SideBySide};
-use crate::study::stability::{Stability, StabilitySpec};
 use crate::study::studies::catalog;
 use crate::study::sweep::{Sweep, SweepSpec};
 use crate::study::table1::Table1;
@@ -53,7 +52,6 @@ pub struct ReproduceSpec {
     #[serde(skip)]
     pub sweep: SweepSpec,
     pub sweep_h: MeshSize,
-    pub stability: StabilitySpec,
     pub bench: BenchSpec,
     /// The benchmark over the problem collection (its solvers: all).
     #[serde(skip)]
@@ -119,7 +117,6 @@ impl ReproduceSpec {
                 ..SweepSpec::default()
             },
             sweep_h,
-            stability: StabilitySpec::standard(),
             bench: BenchSpec::standard(),
             benchmark: BenchmarkSpec::new(false, registry::solvers()),
             side_by_side_h: MeshSize::from_level(7).expect("in range"),
@@ -154,7 +151,6 @@ impl ReproduceSpec {
                 ..SweepSpec::default()
             },
             sweep_h: h,
-            stability: StabilitySpec::quick(),
             bench: BenchSpec::quick(),
             benchmark: BenchmarkSpec::new(true, registry::solvers()),
             side_by_side_h: h,
@@ -201,10 +197,6 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
             spec: spec.sweep.clone(),
             extra: Vec::new(),
             references_file: "sweep_references.csv",
-        }),
-        Box::new(Stability {
-            spec: spec.stability.clone(),
-            references_file: Some("stability_references.csv"),
         }),
         Box::new(Bench {
             spec: spec.bench.clone(),

@@ -22,7 +22,7 @@ pub mod views;
 use anyhow::Result;
 use contactlab_solvers::registry;
 use contactlab_solvers::{Law, Status};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::io::csv::{fixed, fixed_opt};
@@ -30,6 +30,7 @@ use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
+use crate::study::catalog::Catalogued;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
@@ -39,28 +40,41 @@ use classify::{Class, Context, classify, trend};
 /// The study's name in trial records.
 pub const STUDY: &str = "stability";
 
-/// What the map runs.
-#[derive(Clone, Debug, Serialize)]
+/// What the map runs: its parameters (its flags, and Python's keywords).
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
 pub struct StabilitySpec {
-    /// Mesh of the default, stress, load and refused groups.
+    /// Mesh of the default, stress, load and refused groups, such as 1/16.
+    #[arg(long, value_name = "H", required = false)]
     pub h: MeshSize,
-    /// Mesh of the friction scan.
+    /// Mesh of the friction scan, such as 1/16.
+    #[arg(long, value_name = "H", required = false)]
     pub h_friction: MeshSize,
-    /// Mesh of the classical scenes (their contact half-width is 1/32).
+    /// Mesh of the classical scenes (their contact half-width is 1/32),
+    /// such as 1/32.
+    #[arg(long, value_name = "H", required = false)]
     pub h_scenes: MeshSize,
-    /// The registry's short value lists.
+    /// The registry's short value lists (`--quick`).
+    #[arg(skip)]
     pub quick: bool,
-    /// Multiplies each solver's study work cap.
+    /// Multiplies each solver's study work cap, a number > 0.
+    #[arg(long, value_name = "FACTOR", required = false)]
     pub work_scale: f64,
+    /// The friction coefficients of the scan, such as 0,0.5,16.
+    #[arg(long, value_delimiter = ',', value_name = "F")]
     pub friction_values: Vec<f64>,
     /// Bisection steps for the largest certified friction coefficient.
-    pub bisection_steps: usize,
-    /// |total vertical load| values approaching 0 (problem 1 is 20).
+    #[arg(long, value_name = "N", required = false, value_parser = clap::value_parser!(u64).range(0..=20))]
+    pub bisection_steps: u64,
+    /// |total vertical load| values approaching 0 (problem 1 is 20), such
+    /// as 20,2e-4.
+    #[arg(long, value_delimiter = ',', value_name = "P")]
     pub load_totals: Vec<f64>,
     /// Upward totals that violate condition (13) (0: no load at all).
+    #[arg(long, value_delimiter = ',', value_name = "P")]
     pub violating_totals: Vec<f64>,
     /// Friction coefficients of the uniqueness study (solvers of the
     /// Coulomb problem itself, from several starts, on problem 1).
+    #[arg(long, value_delimiter = ',', value_name = "F")]
     pub uniqueness_values: Vec<f64>,
 }
 
@@ -155,6 +169,58 @@ pub fn lifted_problem(total: f64, h: MeshSize) -> Result<Scene> {
 pub struct Stability {
     pub spec: StabilitySpec,
     pub references_file: Option<&'static str>,
+}
+
+impl StabilitySpec {
+    /// The spec's own consistency: a one-line error naming the field.
+    pub fn check(&self) -> Result<()> {
+        anyhow::ensure!(
+            self.work_scale.is_finite() && self.work_scale > 0.0,
+            "work-scale = {}: give a factor > 0",
+            self.work_scale
+        );
+        for (name, values, least) in [
+            ("friction-values", &self.friction_values, 0.0),
+            ("uniqueness-values", &self.uniqueness_values, 0.0),
+            ("violating-totals", &self.violating_totals, 0.0),
+        ] {
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v >= least)) {
+                anyhow::bail!("{name}: {v} is not a number ≥ 0");
+            }
+        }
+        if let Some(v) = self
+            .load_totals
+            .iter()
+            .find(|v| !(v.is_finite() && **v > 0.0))
+        {
+            anyhow::bail!("load-totals: {v} is not a load > 0 (violating-totals holds 0)");
+        }
+        Ok(())
+    }
+}
+
+impl Catalogued for Stability {
+    const COMMAND: &'static str = "stability";
+    const ABOUT: &'static str = "The stability map: each solver across stress conditions (its registry entry's, \
+        the friction coefficient, loads near and past condition (13), the classical scenes), every trial classified \
+        converged, slow, stalled, diverged, wrong or refused, with the reason. Writes stability.csv, \
+        stability_friction.csv, stability_summary.md, stability_references.csv and charts into --out.";
+    type Spec = StabilitySpec;
+
+    fn spec(length: RunLength) -> StabilitySpec {
+        match length {
+            RunLength::Quick => StabilitySpec::quick(),
+            _ => StabilitySpec::standard(),
+        }
+    }
+
+    fn of(spec: StabilitySpec) -> Result<Self> {
+        spec.check()?;
+        Ok(Self {
+            spec,
+            references_file: Some("stability_references.csv"),
+        })
+    }
 }
 
 impl Study for Stability {
