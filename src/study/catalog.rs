@@ -43,6 +43,26 @@ pub trait Catalogued: Planned + Send + Sized + 'static {
     fn of(spec: Self::Spec) -> Result<Self>;
 }
 
+/// The spec of a run of `length` from a study's three budgets: the
+/// smoke run's, the main job's and the long run's.
+pub fn by_length<T>(length: RunLength, quick: fn() -> T, main: fn() -> T, long: fn() -> T) -> T {
+    match length {
+        RunLength::Quick => quick(),
+        RunLength::Standard => main(),
+        RunLength::Long => long(),
+    }
+}
+
+/// A spec's list of the paper's problems: at least one, each 1, 2 or 3
+/// (a one-line error naming the field otherwise).
+pub fn check_paper_problems(problems: &[u32]) -> Result<()> {
+    anyhow::ensure!(
+        !problems.is_empty() && problems.iter().all(|p| (1..=3).contains(p)),
+        "problems = {problems:?}: give the paper's problems, 1, 2 or 3, at least one"
+    );
+    Ok(())
+}
+
 /// A catalogued study with its types erased, as the list holds it.
 pub trait Entry: Sync {
     /// Its command's name.

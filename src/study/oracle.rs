@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
-use crate::study::catalog::Catalogued;
+use crate::study::catalog::{Catalogued, by_length, check_paper_problems};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::trial::TrialSpec;
@@ -71,19 +71,11 @@ impl Catalogued for Oracle {
     type Spec = Oracle;
 
     fn spec(length: RunLength) -> Oracle {
-        match length {
-            RunLength::Quick => Oracle::quick(),
-            RunLength::Standard => Oracle::main(),
-            RunLength::Long => Oracle::standard(),
-        }
+        by_length(length, Oracle::quick, Oracle::main, Oracle::standard)
     }
 
     fn of(spec: Oracle) -> Result<Self> {
-        anyhow::ensure!(
-            !spec.problems.is_empty() && spec.problems.iter().all(|p| (1..=3).contains(p)),
-            "problems = {:?}: give the paper's problems, 1, 2 or 3, at least one",
-            spec.problems
-        );
+        check_paper_problems(&spec.problems)?;
         anyhow::ensure!(
             !spec.meshes.is_empty(),
             "meshes: give at least one mesh, such as 1/128"

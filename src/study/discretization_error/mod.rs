@@ -45,7 +45,7 @@ use crate::settings::Settings;
 use crate::solve::{Solved, solve_scene, solver_entry};
 use crate::solvers::{Friction, Law, Silent, registry};
 use crate::study::bench::FastestDirect;
-use crate::study::catalog::Catalogued;
+use crate::study::catalog::{Catalogued, by_length, check_paper_problems};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 
 mod views;
@@ -116,11 +116,7 @@ impl ErrorSpec {
 impl ErrorSpec {
     /// The spec's own consistency: a one-line error naming the field.
     pub fn check(&self) -> Result<()> {
-        anyhow::ensure!(
-            !self.problems.is_empty() && self.problems.iter().all(|p| (1..=3).contains(p)),
-            "problems = {:?}: give the paper's problems, 1, 2 or 3, at least one",
-            self.problems
-        );
+        check_paper_problems(&self.problems)?;
         anyhow::ensure!(
             !self.meshes.is_empty(),
             "meshes: give at least one mesh, such as 1/16,1/32"
@@ -443,11 +439,12 @@ impl Catalogued for Errors {
     type Spec = ErrorSpec;
 
     fn spec(length: RunLength) -> ErrorSpec {
-        match length {
-            RunLength::Quick => ErrorSpec::quick(),
-            RunLength::Standard => ErrorSpec::main(),
-            RunLength::Long => ErrorSpec::standard(),
-        }
+        by_length(
+            length,
+            ErrorSpec::quick,
+            ErrorSpec::main,
+            ErrorSpec::standard,
+        )
     }
 
     fn of(spec: ErrorSpec) -> Result<Self> {

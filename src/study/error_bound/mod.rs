@@ -36,7 +36,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::benchmark::collection::{collection, in_core};
 use crate::study::benchmark::target_settings;
-use crate::study::catalog::Catalogued;
+use crate::study::catalog::{Catalogued, by_length};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::reference::{Reference, References};
 use crate::study::runner::{Keep, Measured, measure};
@@ -449,11 +449,12 @@ impl Catalogued for ErrorBoundStudy {
     type Spec = BoundSpec;
 
     fn spec(length: RunLength) -> BoundSpec {
-        match length {
-            RunLength::Quick => BoundSpec::quick(),
-            RunLength::Standard => BoundSpec::main(),
-            RunLength::Long => BoundSpec::standard(),
-        }
+        by_length(
+            length,
+            BoundSpec::quick,
+            BoundSpec::main,
+            BoundSpec::standard,
+        )
     }
 
     fn of(spec: BoundSpec) -> Result<Self> {

@@ -30,7 +30,7 @@ use crate::mechanics::discretization::Discretization;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
-use crate::study::catalog::Catalogued;
+use crate::study::catalog::{Catalogued, by_length};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
@@ -208,10 +208,13 @@ impl Catalogued for Stability {
     type Spec = StabilitySpec;
 
     fn spec(length: RunLength) -> StabilitySpec {
-        match length {
-            RunLength::Quick => StabilitySpec::quick(),
-            _ => StabilitySpec::standard(),
-        }
+        // One map for the main job and the long run.
+        by_length(
+            length,
+            StabilitySpec::quick,
+            StabilitySpec::standard,
+            StabilitySpec::standard,
+        )
     }
 
     fn of(spec: StabilitySpec) -> Result<Self> {

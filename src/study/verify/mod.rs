@@ -36,7 +36,7 @@ use crate::mechanics::contact_zone::ProfileRow;
 use crate::mechanics::gap::Gap;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
-use crate::study::catalog::Catalogued;
+use crate::study::catalog::{Catalogued, by_length};
 use crate::study::error_bound::predicted;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, ticked};
 use crate::study::runner::{Keep, measure};
@@ -341,11 +341,12 @@ impl Catalogued for VerifyStudy {
     type Spec = VerifySpec;
 
     fn spec(length: RunLength) -> VerifySpec {
-        match length {
-            RunLength::Quick => VerifySpec::quick(),
-            RunLength::Standard => VerifySpec::main(),
-            RunLength::Long => VerifySpec::standard(),
-        }
+        by_length(
+            length,
+            VerifySpec::quick,
+            VerifySpec::main,
+            VerifySpec::standard,
+        )
     }
 
     fn of(spec: VerifySpec) -> Result<Self> {
