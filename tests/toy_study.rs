@@ -28,6 +28,20 @@ use contactlab::study::studies;
 use contactlab::study::trial::TrialSpec;
 use serde::{Deserialize, Serialize};
 
+/// The toys' trials: the solvers named on problem 1 at `h`, the Coulomb
+/// law, measured by the lab against its reference.
+fn measure_toy(lab: &mut Lab, h: MeshSize, solvers: &[impl AsRef<str>]) -> Result<Vec<Measured>> {
+    let scene = Scene::paper_problem_to(1, h)?;
+    let specs: Vec<TrialSpec> = solvers
+        .iter()
+        .map(|n| {
+            let entry = registry::by_name(n.as_ref()).unwrap();
+            TrialSpec::new("toy", "toy", &scene, entry, Law::Coulomb, &lab.settings)
+        })
+        .collect();
+    lab.measure(&specs, Keep::default())
+}
+
 /// What the toy hands on to the studies after it.
 #[derive(Debug, PartialEq, Serialize, Deserialize)]
 struct Fastest(String);
@@ -50,15 +64,7 @@ impl Study for Toy<'_> {
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<Measured>>> {
         self.runs.set(self.runs.get() + 1);
-        let scene = Scene::paper_problem_to(1, MeshSize::from_level(3)?)?;
-        let specs: Vec<TrialSpec> = ["newton-coulomb", "tnnmg"]
-            .iter()
-            .map(|n| {
-                let entry = registry::by_name(n).unwrap();
-                TrialSpec::new("toy", "toy", &scene, entry, Law::Coulomb, &lab.settings)
-            })
-            .collect();
-        let measured = lab.measure(&specs, Keep::default())?;
+        let measured = measure_toy(lab, MeshSize::from_level(3)?, &["newton-coulomb", "tnnmg"])?;
         let fastest = measured
             .iter()
             .min_by(|a, b| a.timing.seconds_min.total_cmp(&b.timing.seconds_min))
@@ -249,17 +255,7 @@ impl Study for Listed {
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<Measured>>> {
-        let scene = Scene::paper_problem_to(1, self.spec.h)?;
-        let specs: Vec<TrialSpec> = self
-            .spec
-            .solvers
-            .iter()
-            .map(|n| {
-                let entry = registry::by_name(n).unwrap();
-                TrialSpec::new("toy", "toy", &scene, entry, Law::Coulomb, &lab.settings)
-            })
-            .collect();
-        let measured = lab.measure(&specs, Keep::default())?;
+        let measured = measure_toy(lab, self.spec.h, &self.spec.solvers)?;
         let artifacts = Artifact::trials("toy", &measured)?;
         Ok(Ran {
             findings: measured,
@@ -274,7 +270,7 @@ impl Study for Listed {
     }
 }
 
-static LISTED: Of<Listed> = Of::new();
+static LISTED: Of<Listed> = Of::ENTRY;
 
 /// One line (`catalog::register` here, a line of `catalog::catalog` for
 /// the library's studies) makes the toy a command with its spec's flags

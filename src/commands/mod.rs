@@ -287,13 +287,25 @@ impl Tracker for Bars {
 /// Runs one study in a lab of its own at `settings`, with progress on
 /// stderr: its findings and its artifacts.
 pub fn run_study<S: Study>(study: &S, settings: Settings) -> Result<(S::Findings, Vec<Artifact>)> {
-    let bars = Bars::new(study.name());
-    let name = study.name();
+    in_lab(study.name(), settings, |lab| {
+        let ran = lab.run(study)?;
+        Ok((ran.findings, ran.artifacts))
+    })
+}
+
+/// `f` in a lab of its own for the study `name` at `settings`, with its
+/// progress bars and log lines on stderr.
+pub fn in_lab<T>(
+    name: &'static str,
+    settings: Settings,
+    f: impl FnOnce(&mut Lab) -> Result<T>,
+) -> Result<T> {
+    let bars = Bars::new(name);
     let log_line = move |l: &str| log(format!("{name}: {l}"));
     let mut lab = Lab::new(settings, &log_line, &bars);
-    let ran = lab.run(study)?;
+    let out = f(&mut lab)?;
     bars.finish();
-    Ok((ran.findings, ran.artifacts))
+    Ok(out)
 }
 
 /// The solvers named (all registered ones if none).

@@ -11,12 +11,11 @@ use anyhow::Result;
 use clap::{Arg, ArgAction, ArgMatches, Command, FromArgMatches, Subcommand};
 
 use crate::cli::SettingsArgs;
-use crate::commands::Bars;
-use crate::io::output::{log, print};
+use crate::commands::in_lab;
+use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
-use crate::settings::Settings;
 use crate::study::catalog::Entry;
-use crate::study::lab::{Lab, Planned, RunLength, Tracker, write_artifacts};
+use crate::study::lab::{RunLength, write_artifacts};
 use crate::study::studies::{by_command, catalog};
 
 /// A catalogued study's command, as parsed: its entry and its arguments.
@@ -129,7 +128,7 @@ pub fn run(c: &StudyCommand) -> Result<()> {
         .get_one("out")
         .ok_or_else(|| anyhow::anyhow!("--out DIR: give the output folder"))?;
     let folder = RunFolder::create(out)?;
-    let (artifacts, section) = run_planned(study.as_ref(), settings)?;
+    let (artifacts, section) = in_lab(study.name(), settings, |lab| study.run_for_report(lab))?;
     let files = write_artifacts(folder.path(), &artifacts)?;
     let target = folder.commit()?;
     let count = |prefix: &str| files.iter().filter(|f| f.starts_with(prefix)).count();
@@ -152,19 +151,4 @@ pub fn run(c: &StudyCommand) -> Result<()> {
         section.markdown,
         target.display()
     ))
-}
-
-/// Runs `study` in a lab of its own at `settings`, with progress on
-/// stderr: its files and its README section.
-fn run_planned(
-    study: &dyn Planned,
-    settings: Settings,
-) -> Result<(Vec<crate::study::lab::Artifact>, crate::study::lab::Section)> {
-    let name = study.name();
-    let bars = Bars::new(name);
-    let log_line = move |l: &str| log(format!("{name}: {l}"));
-    let mut lab = Lab::new(settings, &log_line, &bars);
-    let ran = study.run_for_report(&mut lab)?;
-    bars.finish();
-    Ok(ran)
 }

@@ -1,5 +1,5 @@
-//! The studies as the command line, Python and `reproduce` see them: one
-//! list ([`catalog`]). A study in it is a [`Study`] that also says how it
+//! The studies as the command line, Python and `reproduce` see them. A
+//! study in the catalog is a [`Study`] that also says how it
 //! is called ([`Catalogued`]): its command's name and help, and its
 //! parameters as one typed [`Catalogued::Spec`], from which its flags
 //! (clap), its JSON form (serde: Python's keyword arguments, the
@@ -98,16 +98,6 @@ impl<S> Of<S> {
     /// The entry, as a constant: `&Of::<MyStudy>::ENTRY` is a
     /// `&'static dyn Entry`, the one line of a study in the catalog.
     pub const ENTRY: Self = Self(PhantomData);
-
-    pub const fn new() -> Self {
-        Self(PhantomData)
-    }
-}
-
-impl<S> Default for Of<S> {
-    fn default() -> Self {
-        Self::new()
-    }
 }
 
 impl<S: Catalogued> Entry for Of<S> {

@@ -194,17 +194,16 @@ impl PerfRow {
 /// A solver's median seconds on the meshes so far, or why it was stopped.
 type Past = (Vec<f64>, Option<String>);
 
-/// Whether `solver` is not run on the next mesh for `law`: it was stopped,
-/// or its last two meshes predict more than `budget` (the rule of the
-/// loop in [`bench`]).
-fn stopped(
-    history: &std::collections::HashMap<(Law, &str), Past>,
-    law: Law,
-    solver: &str,
-    budget: f64,
-) -> bool {
-    history.get(&(law, solver)).is_some_and(|(past, why)| {
-        why.is_some() || matches!(past[..], [.., a, b] if b * (b / a).max(4.0) > budget)
+/// Why a solver with this past is not run on the next mesh: it was
+/// stopped, or its last two meshes (a, b seconds) predict b·max(b/a, 4)
+/// seconds, more than `budget`. None: it runs.
+fn why_not_run((past, stopped): &Past, budget: f64) -> Option<String> {
+    stopped.clone().or_else(|| match past[..] {
+        [.., a, b] if b * (b / a).max(4.0) > budget => Some(format!(
+            "predicted {:.0} s > budget {budget} s",
+            b * (b / a).max(4.0)
+        )),
+        _ => None,
     })
 }
 
@@ -264,7 +263,12 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
             registry::solvers()
                 .into_iter()
                 .filter(|e| law == Law::Coulomb || e.solves(law))
-                .filter(|e| !stopped(&history, law, e.name, spec.budget))
+                .filter(|e| {
+                    history
+                        .get(&(law, e.name))
+                        .and_then(|p| why_not_run(p, spec.budget))
+                        .is_none()
+                })
                 .map(|e| e.name)
                 .collect()
         };
@@ -278,15 +282,9 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
                     continue;
                 }
                 let key = (law, entry.name);
-                let (past, stopped) = history.entry(key).or_default().clone();
-                let why = stopped.or_else(|| match past[..] {
-                    [.., a, b] if b * (b / a).max(4.0) > spec.budget => Some(format!(
-                        "predicted {:.0} s > budget {} s",
-                        b * (b / a).max(4.0),
-                        spec.budget
-                    )),
-                    _ => None,
-                });
+                let so_far = history.entry(key).or_default().clone();
+                let why = why_not_run(&so_far, spec.budget);
+                let past = so_far.0;
                 if let Some(why) = why {
                     history.insert(key, (past, Some(why.clone())));
                     mesh.push(law.as_str(), entry.name, &[f64::NAN], "skipped", why);
