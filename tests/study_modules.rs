@@ -12,10 +12,11 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// The engine: modules every study may use and that use no study.
-const ENGINE: [&str; 9] = [
+const ENGINE: [&str; 10] = [
     "agreement",
     "catalog",
     "class",
+    "cores",
     "lab",
     "plans",
     "reference",

@@ -278,7 +278,11 @@ impl<'a> Lab<'a> {
         study.run(self)
     }
 
-    fn ask(&mut self, scene: &Scene) -> Result<()> {
+    /// Records that the current study asked for `scene`'s reference (its
+    /// references file lists the candidates of each, in the order asked):
+    /// for work that earned it elsewhere, on both cores
+    /// (the `cores` module).
+    pub fn ask(&mut self, scene: &Scene) -> Result<()> {
         let key = References::key(scene)?;
         if !self.asked.contains(&key) {
             self.asked.push(key);

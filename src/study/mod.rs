@@ -9,6 +9,7 @@ pub mod benchmark;
 pub mod catalog;
 pub mod class;
 pub mod compare;
+pub mod cores;
 pub mod discretization_error;
 pub mod error_bound;
 pub mod lab;

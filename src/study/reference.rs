@@ -8,6 +8,8 @@
 //! the given-friction trials; the given-friction reference is earned the same
 //! way on the subproblem at that g.
 
+use std::sync::Arc;
+
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};
 use contactlab_solvers::{Friction, Law, Silent, Status};
@@ -238,7 +240,9 @@ fn mark_chosen(candidates: &mut [Candidate], law: Law, solver: &str) {
 /// References keyed by the whole scene (its material, friction, loads and
 /// levels, not only its name), earned once per study.
 pub struct References {
-    earned: Vec<(String, Option<Reference>)>,
+    /// Shared, so that trials measured on both cores can hold theirs
+    /// ([`References::shared`]).
+    earned: Vec<(String, Option<Arc<Reference>>)>,
     /// False for studies that measure counts, not differences (Table 1).
     enabled: bool,
     /// Wall-clock seconds a candidate may take.
@@ -288,11 +292,23 @@ impl References {
                     self.named,
                     self.among.as_ref(),
                 )?;
-                self.earned.push((key, r));
+                self.earned.push((key, r.map(Arc::new)));
                 self.earned.len() - 1
             }
         };
-        Ok(self.earned[index].1.as_ref())
+        Ok(self.earned[index].1.as_deref())
+    }
+
+    /// The same reference, held: for work that measures on several
+    /// threads while the references stay in one place.
+    pub fn shared(&mut self, scene: &Scene, base: &Settings) -> Result<Option<Arc<Reference>>> {
+        self.get(scene, base)?;
+        let key = Self::key(scene)?;
+        Ok(self
+            .earned
+            .iter()
+            .find(|(k, _)| *k == key)
+            .and_then(|(_, r)| r.clone()))
     }
 
     /// The key of a scene's references: the whole scene (material,
@@ -306,7 +322,7 @@ impl References {
     pub fn candidates_for(&self, keys: &[String]) -> Vec<Candidate> {
         keys.iter()
             .filter_map(|k| self.earned.iter().find(|(key, _)| key == k))
-            .filter_map(|(_, r)| r.as_ref())
+            .filter_map(|(_, r)| r.as_deref())
             .flat_map(|r| r.candidates.clone())
             .collect()
     }
@@ -315,7 +331,7 @@ impl References {
     pub fn candidates(&self) -> Vec<Candidate> {
         self.earned
             .iter()
-            .filter_map(|(_, r)| r.as_ref())
+            .filter_map(|(_, r)| r.as_deref())
             .flat_map(|r| r.candidates.clone())
             .collect()
     }
@@ -325,11 +341,11 @@ impl References {
     pub fn of<'a>(&'a self, keys: &'a [String]) -> impl Iterator<Item = &'a Reference> {
         keys.iter()
             .filter_map(|k| self.earned.iter().find(|(key, _)| key == k))
-            .filter_map(|(_, r)| r.as_ref())
+            .filter_map(|(_, r)| r.as_deref())
     }
 
     /// The references earned, in order.
     pub fn all(&self) -> impl Iterator<Item = &Reference> {
-        self.earned.iter().filter_map(|(_, r)| r.as_ref())
+        self.earned.iter().filter_map(|(_, r)| r.as_deref())
     }
 }

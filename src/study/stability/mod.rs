@@ -20,7 +20,7 @@ pub mod uniqueness;
 pub mod views;
 
 use anyhow::Result;
-use contactlab_solvers::registry;
+use contactlab_solvers::registry::{self, Entry};
 use contactlab_solvers::{Law, Status};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -31,6 +31,7 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
 use crate::study::catalog::{Catalogued, by_length};
+use crate::study::cores::{Shared, on_both_cores};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
@@ -286,119 +287,70 @@ impl Study for Stability {
     }
 }
 
-/// Runs the whole map in `lab` (at its settings): the lab's log hears of
-/// each group, its progress of each trial.
+/// Where a trial goes in the map's order: its group (defaults and stress,
+/// the friction scan, loads, classical scenes, refused loads), its place
+/// in the group (which load, which scene), then its solver; within that,
+/// the order it ran in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Place {
+    group: u8,
+    within: usize,
+    solver: usize,
+}
+
+/// One solver's part of the map: its classified trials, each with its
+/// place and the scene whose reference it asked for, and its friction
+/// scan's steps.
+#[derive(Default)]
+struct Part {
+    trials: Vec<(Place, Trial, Option<Scene>)>,
+    steps: Vec<FrictionStep>,
+}
+
+/// Runs the whole map in `lab` (at its settings): each solver's part on
+/// one of the machine's cores ([`on_both_cores`]: every trial is stopped
+/// by a work cap, never the clock, and nothing here is timed), the parts
+/// put back in the map's order; then the uniqueness study. The lab's log
+/// hears of each stage, its progress of each trial.
 pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
     let base = &lab.settings.clone();
-    let (log, tracker) = (lab.logger(), lab.tracker());
+    let log = lab.logger();
     let log = |line: &str| log(&format!("stability: {line}"));
     let mut map = Map {
         trials: Vec::new(),
         steps: Vec::new(),
         uniqueness: Vec::new(),
     };
-    let mut one = |map: &mut Map, spec: TrialSpec, cx: Context| -> Result<Measured> {
-        let reference = if spec.wants_reference() {
-            lab.reference(&spec.scene, &spec.settings)?
-        } else {
-            None
-        };
-        let m = measure(&spec, reference, Keep::default())?;
-        let contractions: Vec<Option<f64>> = m.friction().iter().map(|f| f.contraction).collect();
-        let cx = Context {
-            trend: trend(&contractions),
-            ..cx
-        };
-        let mut t = m.trial.clone();
-        let (class, reason) = classify(&t, &cx);
-        t.class = Some(class);
-        t.reason = reason;
-        map.trials.push(t);
-        crate::study::lab::ticked(tracker, &spec)?;
-        Ok(m)
-    };
-    log("each solver at its defaults and under its stress conditions");
-    let p1 = Scene::paper_problem_to(1, spec.h)?;
-    for entry in registry::solvers() {
-        let cap = work_cap(entry, spec.work_scale);
-        let trial = |group: &str| {
-            TrialSpec::new(STUDY, group, &p1, entry, Law::Coulomb, base).with_work(cap)
-        };
-        let solvable = Context {
-            solvable: true,
-            ..Context::default()
-        };
-        let default = one(&mut map, trial(DEFAULT), solvable)?;
-        let default_work = Some(default.trial.work).filter(|_| default.trial.certified());
-        for v in crate::study::plans::plan(entry).stress {
-            let path = format!("{}.{}", entry.name, v.knob);
-            for value in if spec.quick { v.quick } else { v.values } {
-                let cx = Context {
-                    default_work,
-                    ..solvable
-                };
-                one(&mut map, trial(STRESS).varying(&path, value)?, cx)?;
-            }
-        }
+    let solvers: Vec<(usize, &'static Entry)> =
+        registry::solvers().into_iter().enumerate().collect();
+    log(&format!(
+        "{} solvers, each on one core: at its defaults and under its stress conditions, the friction coefficient, \
+         loads approaching and violating condition (13), the classical scenes",
+        solvers.len()
+    ));
+    let finest = spec.h.max(spec.h_friction).max(spec.h_scenes);
+    let need = solvers
+        .iter()
+        .map(|(_, e)| {
+            crate::memory::solve(finest, e)
+                + crate::memory::error_bound(crate::memory::unknowns(finest))
+        })
+        .fold(0.0, f64::max);
+    let parts = on_both_cores(lab, &solvers, need, |&(i, entry), shared| {
+        solver_part(spec, base, i, entry, shared)
+    })?;
+    let mut placed = Vec::new();
+    for part in parts {
+        placed.extend(part.trials);
+        map.steps.extend(part.steps);
     }
-    log("the friction coefficient");
-    friction_group(spec, base, &mut map, &mut one)?;
-    log("loads approaching condition (13)");
-    for &total in &spec.load_totals {
-        let scene = lifted_problem(total, spec.h)?;
-        for entry in registry::solvers() {
-            let t = TrialSpec::new(STUDY, LOAD, &scene, entry, Law::Coulomb, base)
-                .with_work(work_cap(entry, spec.work_scale));
-            let cx = Context {
-                solvable: true,
-                ..Context::default()
-            };
-            one(&mut map, t, cx)?;
+    // Stable: within a place, the order each part ran its trials in.
+    placed.sort_by_key(|(place, ..)| *place);
+    for (_, trial, asked) in placed {
+        if let Some(scene) = asked {
+            lab.ask(&scene)?;
         }
-    }
-    log("the classical scenes");
-    for (name, _) in crate::formats::classical::SCENES {
-        let mut scene = crate::formats::classical::scene(name)?;
-        scene.set_finest(spec.h_scenes);
-        for entry in registry::solvers() {
-            let t = TrialSpec::new(STUDY, SCENES, &scene, entry, Law::Coulomb, base)
-                .with_work(work_cap(entry, spec.work_scale));
-            let cx = Context {
-                solvable: true,
-                ..Context::default()
-            };
-            one(&mut map, t, cx)?;
-        }
-    }
-    log("loads that violate condition (13)");
-    for &total in &spec.violating_totals {
-        let scene = lifted_problem(-total, spec.h)?;
-        let refusal = scene
-            .validate()
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default();
-        for entry in registry::solvers() {
-            let t = TrialSpec::new(STUDY, REFUSED, &scene, entry, Law::GivenFriction, base)
-                .with_work(work_cap(entry, spec.work_scale));
-            let mut refused = Trial::not_run(&t, Status::NotRun, refusal.clone());
-            refused.class = Some(Class::Refused);
-            refused.reason = format!("our check of condition (13): {refusal}");
-            map.trials.push(refused);
-            let mut bypass = t.unchecked();
-            bypass.group = BYPASSED.into();
-            // A load that balances to rounding is refused by the algebraic
-            // problem's own check too (its net load is no scale to measure
-            // the contact in): recorded as refused, not solved.
-            if let Err(e) = Discretization::new_unchecked(&scene, spec.h) {
-                let mut refused = Trial::not_run(&bypass, Status::NotRun, e.to_string());
-                refused.class = Some(Class::Refused);
-                refused.reason = format!("the algebraic problem's check: {e}");
-                map.trials.push(refused);
-                continue;
-            }
-            one(&mut map, bypass, Context::default())?;
-        }
+        map.trials.push(trial);
     }
     log("past the fixed point's limit: solvers of the Coulomb problem from several starts");
     if !spec.uniqueness_values.is_empty() {
@@ -428,67 +380,175 @@ pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
     Ok(map)
 }
 
-/// The friction scan: every solver on problems 1-3 for each coefficient,
-/// then bisection between the largest certified one and the next.
-fn friction_group(
+/// Measures `trial` against its reference, classifies it in context and
+/// files it in `part` at `place`.
+fn one(
+    shared: &Shared,
+    part: &mut Part,
+    place: Place,
+    trial: TrialSpec,
+    cx: Context,
+) -> Result<Measured> {
+    let reference = shared.reference(&trial)?;
+    let m = measure(&trial, reference.as_deref(), Keep::default())?;
+    let contractions: Vec<Option<f64>> = m.friction().iter().map(|f| f.contraction).collect();
+    let cx = Context {
+        trend: trend(&contractions),
+        ..cx
+    };
+    let mut t = m.trial.clone();
+    let (class, reason) = classify(&t, &cx);
+    t.class = Some(class);
+    t.reason = reason;
+    let asked = trial.wants_reference().then(|| trial.scene.clone());
+    part.trials.push((place, t, asked));
+    shared.tick(&trial)?;
+    Ok(m)
+}
+
+/// One solver's whole part of the map, in the order of the groups.
+fn solver_part(
     spec: &StabilitySpec,
     base: &Settings,
-    map: &mut Map,
-    one: &mut dyn FnMut(&mut Map, TrialSpec, Context) -> Result<Measured>,
+    solver: usize,
+    entry: &'static Entry,
+    shared: &Shared,
+) -> Result<Part> {
+    let mut part = Part::default();
+    let place = |group: u8, within: usize| Place {
+        group,
+        within,
+        solver,
+    };
+    let cap = work_cap(entry, spec.work_scale);
+    let solvable = Context {
+        solvable: true,
+        ..Context::default()
+    };
+    let p1 = Scene::paper_problem_to(1, spec.h)?;
+    let trial =
+        |group: &str| TrialSpec::new(STUDY, group, &p1, entry, Law::Coulomb, base).with_work(cap);
+    let default = one(shared, &mut part, place(0, 0), trial(DEFAULT), solvable)?;
+    let default_work = Some(default.trial.work).filter(|_| default.trial.certified());
+    for v in crate::study::plans::plan(entry).stress {
+        let path = format!("{}.{}", entry.name, v.knob);
+        for value in if spec.quick { v.quick } else { v.values } {
+            let cx = Context {
+                default_work,
+                ..solvable
+            };
+            one(
+                shared,
+                &mut part,
+                place(0, 0),
+                trial(STRESS).varying(&path, value)?,
+                cx,
+            )?;
+        }
+    }
+    friction_scan(spec, base, entry, shared, &mut part, place(1, 0))?;
+    for (k, &total) in spec.load_totals.iter().enumerate() {
+        let scene = lifted_problem(total, spec.h)?;
+        let t = TrialSpec::new(STUDY, LOAD, &scene, entry, Law::Coulomb, base).with_work(cap);
+        one(shared, &mut part, place(2, k), t, solvable)?;
+    }
+    for (k, (name, _)) in crate::formats::classical::SCENES.iter().enumerate() {
+        let mut scene = crate::formats::classical::scene(name)?;
+        scene.set_finest(spec.h_scenes);
+        let t = TrialSpec::new(STUDY, SCENES, &scene, entry, Law::Coulomb, base).with_work(cap);
+        one(shared, &mut part, place(3, k), t, solvable)?;
+    }
+    for (k, &total) in spec.violating_totals.iter().enumerate() {
+        let scene = lifted_problem(-total, spec.h)?;
+        let refusal = scene
+            .validate()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        let t =
+            TrialSpec::new(STUDY, REFUSED, &scene, entry, Law::GivenFriction, base).with_work(cap);
+        let mut refused = Trial::not_run(&t, Status::NotRun, refusal.clone());
+        refused.class = Some(Class::Refused);
+        refused.reason = format!("our check of condition (13): {refusal}");
+        part.trials.push((place(4, k), refused, None));
+        let mut bypass = t.unchecked();
+        bypass.group = BYPASSED.into();
+        // A load that balances to rounding is refused by the algebraic
+        // problem's own check too (its net load is no scale to measure
+        // the contact in): recorded as refused, not solved.
+        if let Err(e) = Discretization::new_unchecked(&scene, spec.h) {
+            let mut refused = Trial::not_run(&bypass, Status::NotRun, e.to_string());
+            refused.class = Some(Class::Refused);
+            refused.reason = format!("the algebraic problem's check: {e}");
+            part.trials.push((place(4, k), refused, None));
+            continue;
+        }
+        one(shared, &mut part, place(4, k), bypass, Context::default())?;
+    }
+    Ok(part)
+}
+
+/// The friction scan of one solver: problems 1-3 for each coefficient,
+/// then bisection between the largest certified one and the next.
+fn friction_scan(
+    spec: &StabilitySpec,
+    base: &Settings,
+    entry: &'static Entry,
+    shared: &Shared,
+    part: &mut Part,
+    place: Place,
 ) -> Result<()> {
     let mut settings = base.clone();
     settings
         .set("coulomb.max_iterations", Value::from(200u64))
         .map_err(anyhow::Error::msg)?;
-    for entry in registry::solvers() {
-        for n in [1, 2, 3] {
-            let mut default_iterations = None;
-            let mut attempt = |map: &mut Map, f: f64, group: &str| -> Result<bool> {
-                let mut scene = Scene::paper_problem_to(n, spec.h_friction)?;
-                scene.friction = f;
-                let mut t = TrialSpec::new(STUDY, group, &scene, entry, Law::Coulomb, &settings)
-                    .with_work(work_cap(entry, spec.work_scale));
-                t.setting = Some(Setting::new(FRICTION, &format!("{f}")));
-                let cx = Context {
-                    solvable: true,
-                    default_friction_iterations: default_iterations,
-                    ..Context::default()
-                };
-                let m = one(map, t, cx)?;
-                if (f - 0.5).abs() < 1e-12 {
-                    default_iterations = Some(m.trial.friction_iterations.max(1));
-                }
-                let certified = m.trial.certified();
-                map.steps.extend(m.friction().iter().map(|s| FrictionStep {
-                    scene: scene.name.clone(),
-                    solver: entry.name.into(),
-                    friction_coefficient: f,
-                    iteration: s.iteration,
-                    change: s.change,
-                    contraction: s.contraction,
-                    certified,
-                }));
-                Ok(certified)
+    for n in [1, 2, 3] {
+        let mut default_iterations = None;
+        let mut attempt = |part: &mut Part, f: f64, group: &str| -> Result<bool> {
+            let mut scene = Scene::paper_problem_to(n, spec.h_friction)?;
+            scene.friction = f;
+            let mut t = TrialSpec::new(STUDY, group, &scene, entry, Law::Coulomb, &settings)
+                .with_work(work_cap(entry, spec.work_scale));
+            t.setting = Some(Setting::new(FRICTION, &format!("{f}")));
+            let cx = Context {
+                solvable: true,
+                default_friction_iterations: default_iterations,
+                ..Context::default()
             };
-            let (mut last_ok, mut first_bad) = (None, None);
-            for &f in &spec.friction_values {
-                let ok = attempt(map, f, FRICTION)?;
-                if first_bad.is_none() {
-                    if ok {
-                        last_ok = Some(f);
-                    } else {
-                        first_bad = Some(f);
-                    }
+            let m = one(shared, part, place, t, cx)?;
+            if (f - 0.5).abs() < 1e-12 {
+                default_iterations = Some(m.trial.friction_iterations.max(1));
+            }
+            let certified = m.trial.certified();
+            part.steps.extend(m.friction().iter().map(|s| FrictionStep {
+                scene: scene.name.clone(),
+                solver: entry.name.into(),
+                friction_coefficient: f,
+                iteration: s.iteration,
+                change: s.change,
+                contraction: s.contraction,
+                certified,
+            }));
+            Ok(certified)
+        };
+        let (mut last_ok, mut first_bad) = (None, None);
+        for &f in &spec.friction_values {
+            let ok = attempt(part, f, FRICTION)?;
+            if first_bad.is_none() {
+                if ok {
+                    last_ok = Some(f);
+                } else {
+                    first_bad = Some(f);
                 }
             }
-            if let (Some(mut lo), Some(mut hi)) = (last_ok, first_bad) {
-                for _ in 0..spec.bisection_steps {
-                    let mid = 0.5 * (lo + hi);
-                    if attempt(map, mid, FRICTION_BISECTION)? {
-                        lo = mid
-                    } else {
-                        hi = mid
-                    }
+        }
+        if let (Some(mut lo), Some(mut hi)) = (last_ok, first_bad) {
+            for _ in 0..spec.bisection_steps {
+                let mid = 0.5 * (lo + hi);
+                if attempt(part, mid, FRICTION_BISECTION)? {
+                    lo = mid
+                } else {
+                    hi = mid
                 }
             }
         }

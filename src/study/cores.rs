@@ -1,0 +1,194 @@
+//! Work measured on both cores: a study's independent parts (such as each
+//! solver's trials of the stability map) run on as many threads as the
+//! machine has cores, at most two of them at once in memory, and come back
+//! in their own order, so that the files they make are the ones a run on
+//! one core makes.
+//!
+//! Only for work that reports no time: two trials at once each take
+//! longer than one alone, so work whose trials are timed, or stopped by
+//! the clock, runs in a [`Lab`] on one core (the guide's "time alone what
+//! you report as a time"). Trials stopped by a work cap (a count) give the
+//! same answer on any number of cores.
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc::{Sender, channel};
+use std::sync::{Arc, Mutex};
+
+use anyhow::{Result, anyhow};
+
+use crate::study::lab::{Lab, ticked};
+use crate::study::reference::{Reference, References};
+use crate::study::trial::TrialSpec;
+
+/// What a part of the work shares with the others: the lab's references
+/// (earned on first use, one at a time) and its progress.
+pub struct Shared<'s, 'r> {
+    references: &'s Mutex<&'r mut References>,
+    ticks: Sender<TrialSpec>,
+    stop: &'s AtomicBool,
+}
+
+impl Shared<'_, '_> {
+    /// The reference `trial` is measured against (None if it asks for
+    /// none), earned on first use.
+    pub fn reference(&self, trial: &TrialSpec) -> Result<Option<Arc<Reference>>> {
+        if !trial.wants_reference() {
+            return Ok(None);
+        }
+        let mut references = self
+            .references
+            .lock()
+            .map_err(|_| anyhow!("the references were left half-earned by a failed part"))?;
+        references.shared(&trial.scene, &trial.settings)
+    }
+
+    /// Tells the lab's progress that `trial` is done; an error once the
+    /// run was asked to stop (interrupted, or another part failed).
+    pub fn tick(&self, trial: &TrialSpec) -> Result<()> {
+        if self.stop.load(Ordering::Relaxed) {
+            return Err(Stopped.into());
+        }
+        // The receiver lives until every part is done.
+        let _ = self.ticks.send(trial.clone());
+        Ok(())
+    }
+}
+
+/// A part's error when it stopped because another failed (not its own).
+#[derive(Debug, thiserror::Error)]
+#[error("stopped: another part of the work failed")]
+struct Stopped;
+
+/// The parts run at once: the machine's cores, at most the number of
+/// parts, and one if that many of `need_each` bytes do not fit in what the
+/// process may use.
+fn workers(parts: usize, need_each: f64) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let at_once = cores.min(parts).max(1);
+    match crate::memory::room() {
+        Some(room) if at_once as f64 * need_each > room.bytes => 1,
+        _ => at_once,
+    }
+}
+
+/// Runs `work` on each of `parts` on the machine's cores (see [`workers`];
+/// each part needing `need_each` bytes), each part whole on one thread, and
+/// gives the results in the parts' order. The lab's progress hears of
+/// every trial a part ticks ([`Shared::tick`]), on this thread; a part's
+/// error stops the others at their next trial and is the error returned
+/// (the first in the parts' order if several failed).
+pub fn on_both_cores<T: Sync, R: Send>(
+    lab: &mut Lab,
+    parts: &[T],
+    need_each: f64,
+    work: impl Fn(&T, &Shared) -> Result<R> + Sync,
+) -> Result<Vec<R>> {
+    let tracker = lab.tracker();
+    let references = Mutex::new(&mut lab.references);
+    let stop = AtomicBool::new(false);
+    let next = AtomicUsize::new(0);
+    let results: Vec<Mutex<Option<Result<R>>>> = parts.iter().map(|_| Mutex::new(None)).collect();
+    let (ticks, heard) = channel::<TrialSpec>();
+    let mut interrupted = None;
+    std::thread::scope(|scope| {
+        for _ in 0..workers(parts.len(), need_each) {
+            let shared = Shared {
+                references: &references,
+                ticks: ticks.clone(),
+                stop: &stop,
+            };
+            let (next, results, work, stop) = (&next, &results, &work, &stop);
+            scope.spawn(move || {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= parts.len() || stop.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let result = work(&parts[i], &shared);
+                    if result.is_err() {
+                        stop.store(true, Ordering::Relaxed);
+                    }
+                    if let Ok(mut slot) = results[i].lock() {
+                        *slot = Some(result);
+                    }
+                }
+            });
+        }
+        drop(ticks);
+        for trial in heard {
+            if interrupted.is_none()
+                && let Err(e) = ticked(tracker, &trial)
+            {
+                stop.store(true, Ordering::Relaxed);
+                interrupted = Some(e);
+            }
+        }
+    });
+    if let Some(e) = interrupted {
+        return Err(e);
+    }
+    let results: Vec<Option<Result<R>>> = results
+        .into_iter()
+        .map(|slot| slot.into_inner().ok().flatten())
+        .collect();
+    // The failure itself, not a part it stopped.
+    let failed = results
+        .iter()
+        .position(|r| matches!(r, Some(Err(e)) if !e.is::<Stopped>()));
+    let mut out = Vec::with_capacity(parts.len());
+    for (i, result) in results.into_iter().enumerate() {
+        match result {
+            Some(Ok(r)) if failed.is_none() => out.push(r),
+            Some(Err(e)) if failed == Some(i) => return Err(e),
+            _ => {}
+        }
+    }
+    match failed {
+        None if out.len() == parts.len() => Ok(out),
+        _ => Err(Stopped.into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::Settings;
+    use crate::study::lab::Quiet;
+
+    fn lab_run<R: Send>(
+        parts: &[usize],
+        work: impl Fn(&usize, &Shared) -> Result<R> + Sync,
+    ) -> Result<Vec<R>> {
+        let log = |_: &str| {};
+        let mut lab = Lab::new(Settings::default(), &log, &Quiet);
+        on_both_cores(&mut lab, parts, 0.0, work)
+    }
+
+    /// The results come back in the parts' order whichever finishes first
+    /// (the early parts here take longest).
+    #[test]
+    fn results_keep_the_parts_order() {
+        let parts: Vec<usize> = (0..9).collect();
+        let out = lab_run(&parts, |&i, _| {
+            std::thread::sleep(std::time::Duration::from_millis(3 * (9 - i as u64)));
+            Ok(i * i)
+        })
+        .unwrap();
+        assert_eq!(out, parts.iter().map(|i| i * i).collect::<Vec<_>>());
+    }
+
+    /// A failing part's own error is the one returned, not the "stopped"
+    /// of a part it cut short.
+    #[test]
+    fn the_failure_is_reported_not_what_it_stopped() {
+        let parts: Vec<usize> = (0..6).collect();
+        let err = lab_run(&parts, |&i, _| -> Result<usize> {
+            if i == 3 {
+                anyhow::bail!("part 3 failed");
+            }
+            Ok(i)
+        })
+        .unwrap_err();
+        assert_eq!(err.to_string(), "part 3 failed");
+    }
+}
