@@ -227,7 +227,8 @@ pub fn trial_row(
 
 /// The trial's error bound (issue 51), under the law it solved: none for
 /// a trial that skips the check of condition (13) (its problem may have
-/// no solution to be near), or a given-friction trial without the
+/// no solution to be near), one whose study reads no bound
+/// ([`TrialSpec::bounded`]), or a given-friction trial without the
 /// reference's g; `none:` and why for a problem larger than
 /// `certificate.bound_max_unknowns`.
 fn trial_bound(
@@ -236,7 +237,7 @@ fn trial_bound(
     finest: &Discretization,
     s: &Solution,
 ) -> Option<BoundReport> {
-    if !spec.check_solvable {
+    if !spec.check_solvable || !spec.bounded {
         return None;
     }
     let friction = match (spec.law, reference) {

@@ -74,6 +74,10 @@ pub struct TrialSpec {
     pub against_reference: bool,
     /// Extra runs for the time (their minimum or median is reported).
     pub repeats: usize,
+    /// Whether its answer's error bound is computed beside its certificate
+    /// (false: a study none of whose views reads it, `bench`, where at
+    /// h = 1/256 the bound took longer than a fast solve).
+    pub bounded: bool,
 }
 
 impl TrialSpec {
@@ -99,6 +103,7 @@ impl TrialSpec {
             check_solvable: true,
             against_reference: true,
             repeats: 0,
+            bounded: true,
         }
     }
 
@@ -132,6 +137,12 @@ impl TrialSpec {
     /// Whether the trial asks for its scene's reference.
     pub fn wants_reference(&self) -> bool {
         self.check_solvable && self.against_reference
+    }
+
+    /// The same trial without its error bound (see [`TrialSpec::bounded`]).
+    pub fn unbounded(mut self) -> Self {
+        self.bounded = false;
+        self
     }
 
     /// The same trial stopped after `work` events of the solver's work stage.

@@ -79,7 +79,8 @@ fn run_once(
     log: &dyn Fn(&str),
 ) -> Result<PerfRow> {
     let mut t = TrialSpec::new(STUDY, what, scene, entry, Law::Coulomb, settings)
-        .with_seconds(Some(DEADLINE));
+        .with_seconds(Some(DEADLINE))
+        .unbounded();
     for (path, value) in varied {
         t = t.varying(path, value)?;
     }

@@ -293,7 +293,8 @@ pub fn bench(spec: &BenchSpec, settings: &Settings, log: &dyn Fn(&str)) -> Resul
                 log(&format!("h = {h}: {} {}", entry.name, law.as_str()));
                 let t = TrialSpec::new(STUDY, law.as_str(), &scene, entry, law, settings)
                     .with_seconds(Some(spec.budget))
-                    .with_repeats(spec.runs);
+                    .with_repeats(spec.runs)
+                    .unbounded();
                 let reference = references.get(&scene, settings)?;
                 let m = measure(&t, reference, Keep::default())?;
                 let seconds = m.timing.seconds_median;
@@ -493,7 +494,8 @@ fn large_mesh(
     for &solver in solvers {
         log(&format!("h = {h}: {} coulomb", solver.name));
         let t = TrialSpec::new(STUDY, "coulomb", &scene, solver, Law::Coulomb, settings)
-            .with_seconds(Some(budget));
+            .with_seconds(Some(budget))
+            .unbounded();
         let m = measure(&t, None, Keep::default())?;
         let tr = &m.trial;
         let note = format!(
