@@ -125,13 +125,13 @@ impl BoundSpec {
         }
     }
 
-    /// The main job's (`reproduce`): the ladder to h = 1/256
-    /// (about 3 min with the core part); 1/512 and 1/1024 (8 min more)
-    /// are the long run's.
+    /// The main job's (`reproduce`): the ladder to h = 1/128
+    /// (about 2 min with the core part); 1/256 (a minute), 1/512 and
+    /// 1/1024 (8 min more) are the long run's.
     pub fn main() -> Self {
         let mut s = Self::standard();
         s.targets = vec![1e-4, 1e-8];
-        s.ladder_meshes.retain(|h| h.level() <= 8);
+        s.ladder_meshes.retain(|h| h.level() <= 7);
         s
     }
 

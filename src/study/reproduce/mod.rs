@@ -74,12 +74,13 @@ impl ReproduceSpec {
     /// it runs by multigrid in `bench`); the comparison and the sweep's
     /// trials timed once (their times are not the speed study's);
     /// `bench`'s solvers timed once after a warm-up, 5 s a run (a solver
-    /// predicted slower is not run on the finer meshes) and 20 s a run on
-    /// 1/512 and 1/1024, where the factorization is timed once after its
+    /// predicted slower is not run on the finer meshes) and 10 s a run on
+    /// 1/512 and 1/1024 (a solver whose last two meshes predict more is
+    /// not run there), where the factorization is timed once after its
     /// warm-up, its multigrid alone to 1/2048 (1/4096 and 1/8192 take 7
     /// min); the benchmark on its core collection at 10 s a run; the
     /// oracle at 1/128 on problems 1 and 3; the error bound at two targets
-    /// and its ladder to 1/256; the discretization error to 1/512 against
+    /// and its ladder to 1/128; the discretization error to 1/512 against
     /// 1/2048; the side-by-side at 1/64; each map point timed once; the
     /// closed forms to 1/256 at 10 s a solve.
     pub fn standard() -> Self {
@@ -91,7 +92,7 @@ impl ReproduceSpec {
         spec.bench.large_factorization_runs = 1;
         spec.bench.runs = 1;
         spec.bench.budget = 5.0;
-        spec.bench.large_budget = 20.0;
+        spec.bench.large_budget = 10.0;
         spec.bench.multigrid_only.retain(|h| h.level() <= 11);
         spec.benchmark.core = true;
         spec.benchmark.time_limit = 10.0;
