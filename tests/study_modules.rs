@@ -12,12 +12,13 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// The engine: modules every study may use and that use no study.
-const ENGINE: [&str; 10] = [
+const ENGINE: [&str; 11] = [
     "agreement",
     "catalog",
     "class",
     "cores",
     "lab",
+    "parallel",
     "plans",
     "reference",
     "runner",

@@ -10,13 +10,15 @@
 //! you report as a time"). Trials stopped by a work cap (a count) give the
 //! same answer on any number of cores.
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Sender, channel};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use anyhow::{Result, anyhow};
 
 use crate::study::lab::{Lab, ticked};
+use crate::study::parallel::each_on_cores;
 use crate::study::reference::{Reference, References};
 use crate::study::trial::TrialSpec;
 
@@ -59,19 +61,8 @@ impl Shared<'_, '_> {
 #[error("stopped: another part of the work failed")]
 struct Stopped;
 
-/// The parts run at once: the machine's cores, at most the number of
-/// parts, and one if that many of `need_each` bytes do not fit in what the
-/// process may use.
-fn workers(parts: usize, need_each: f64) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let at_once = cores.min(parts).max(1);
-    match crate::memory::room() {
-        Some(room) if at_once as f64 * need_each > room.bytes => 1,
-        _ => at_once,
-    }
-}
-
-/// Runs `work` on each of `parts` on the machine's cores (see [`workers`];
+/// Runs `work` on each of `parts` on the machine's cores (see
+/// [`crate::study::parallel::workers`];
 /// each part needing `need_each` bytes), each part whole on one thread, and
 /// gives the results in the parts' order. The lab's progress hears of
 /// every trial a part ticks ([`Shared::tick`]), on this thread; a part's
@@ -86,51 +77,41 @@ pub fn on_both_cores<T: Sync, R: Send>(
     let tracker = lab.tracker();
     let references = Mutex::new(&mut lab.references);
     let stop = AtomicBool::new(false);
-    let next = AtomicUsize::new(0);
-    let results: Vec<Mutex<Option<Result<R>>>> = parts.iter().map(|_| Mutex::new(None)).collect();
     let (ticks, heard) = channel::<TrialSpec>();
+    let shared = Shared {
+        references: &references,
+        ticks,
+        stop: &stop,
+    };
     let mut interrupted = None;
-    std::thread::scope(|scope| {
-        for _ in 0..workers(parts.len(), need_each) {
-            let shared = Shared {
-                references: &references,
-                ticks: ticks.clone(),
-                stop: &stop,
-            };
-            let (next, results, work, stop) = (&next, &results, &work, &stop);
-            scope.spawn(move || {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= parts.len() || stop.load(Ordering::Relaxed) {
-                        break;
-                    }
-                    let result = work(&parts[i], &shared);
-                    if result.is_err() {
-                        stop.store(true, Ordering::Relaxed);
-                    }
-                    if let Ok(mut slot) = results[i].lock() {
-                        *slot = Some(result);
-                    }
+    let results = each_on_cores(
+        parts,
+        need_each,
+        &stop,
+        |part| work(part, &shared),
+        |running| {
+            // Until every part is done, then what is left in the channel.
+            let mut hear = |trial: TrialSpec| {
+                if interrupted.is_none()
+                    && let Err(e) = ticked(tracker, &trial)
+                {
+                    stop.store(true, Ordering::Relaxed);
+                    interrupted = Some(e);
                 }
-            });
-        }
-        drop(ticks);
-        for trial in heard {
-            if interrupted.is_none()
-                && let Err(e) = ticked(tracker, &trial)
-            {
-                stop.store(true, Ordering::Relaxed);
-                interrupted = Some(e);
+            };
+            while running() {
+                if let Ok(trial) = heard.recv_timeout(Duration::from_millis(50)) {
+                    hear(trial);
+                }
             }
-        }
-    });
+            while let Ok(trial) = heard.try_recv() {
+                hear(trial);
+            }
+        },
+    );
     if let Some(e) = interrupted {
         return Err(e);
     }
-    let results: Vec<Option<Result<R>>> = results
-        .into_iter()
-        .map(|slot| slot.into_inner().ok().flatten())
-        .collect();
     // The failure itself, not a part it stopped.
     let failed = results
         .iter()

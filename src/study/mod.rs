@@ -14,6 +14,7 @@ pub mod discretization_error;
 pub mod error_bound;
 pub mod lab;
 pub mod oracle;
+pub mod parallel;
 pub mod plans;
 pub mod reference;
 pub mod reproduce;

@@ -20,6 +20,7 @@ use crate::io::csv::fixed;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{Assembled, Caps, Outcome, Solved, TooLarge, refuse_too_large, solve};
+use crate::study::parallel::map_on_cores;
 
 /// The fixed point's relative tolerance for reference solves.
 pub const REFERENCE_COULOMB_EPSILON: f64 = 1e-11;
@@ -127,24 +128,33 @@ pub fn earn_among(
         work: None,
         seconds: Some(seconds),
     };
+    // A candidate's own clock is what two at once could change: with the
+    // default cap, far above a candidate's time on a mesh that fits twice
+    // in memory, they run on both cores; a study that caps them tighter
+    // (bench, at twice its budget) has them run one at a time.
+    let on_cores = seconds >= CANDIDATE_SECONDS;
+    let need = coulomb_candidates
+        .iter()
+        .chain(&friction_candidates)
+        .map(|e| crate::memory::solve(scene.finest(), e))
+        .fold(0.0, f64::max);
     let mut candidates = Vec::new();
     let mut best: Option<(&'static Entry, Solved)> = None;
-    for &entry in &coulomb_candidates {
-        // A candidate that cannot run on this mesh does not compete.
-        if let Err(e) = refuse_too_large(scene, entry) {
-            candidates.push(refused(scene, Law::Coulomb, entry, &e));
-            continue;
-        }
-        let settings = reference_settings(entry, base)?;
-        let problem = Assembled::for_solver(scene, entry)?;
-        let solved = solve(
-            problem,
-            Friction::Coulomb,
-            entry,
-            &settings,
-            caps,
-            &mut Silent,
-        )?;
+    for (&entry, solved) in coulomb_candidates.iter().zip(run_candidates(
+        scene,
+        base,
+        caps,
+        &coulomb_candidates,
+        Friction::Coulomb,
+        on_cores.then_some(need),
+    )?) {
+        let solved = match solved {
+            Ok(solved) => solved,
+            Err(refused) => {
+                candidates.push(refused);
+                continue;
+            }
+        };
         let outcome = &solved.outcome;
         candidates.push(candidate(scene, Law::Coulomb, entry, outcome));
         let better = best
@@ -159,26 +169,27 @@ pub fn earn_among(
     };
     mark_chosen(&mut candidates, Law::Coulomb, entry.name);
     let g = coulomb.outcome.bound.clone();
-    let mut gf_best: Option<GivenFrictionReference> = None;
-    for &e in friction_candidates
+    let given: Vec<&'static Entry> = friction_candidates
         .iter()
+        .copied()
         .filter(|e| e.solves(Law::GivenFriction))
-    {
-        if let Err(refusal) = refuse_too_large(scene, e) {
-            candidates.push(refused(scene, Law::GivenFriction, e, &refusal));
-            continue;
-        }
-        let settings = reference_settings(e, base)?;
-        let problem = Assembled::for_solver(scene, e)?;
-        let outcome = solve(
-            problem,
-            Friction::Given(&g),
-            e,
-            &settings,
-            caps,
-            &mut Silent,
-        )?
-        .outcome;
+        .collect();
+    let mut gf_best: Option<GivenFrictionReference> = None;
+    for (&e, solved) in given.iter().zip(run_candidates(
+        scene,
+        base,
+        caps,
+        &given,
+        Friction::Given(&g),
+        on_cores.then_some(need),
+    )?) {
+        let outcome = match solved {
+            Ok(solved) => solved.outcome,
+            Err(refused) => {
+                candidates.push(refused);
+                continue;
+            }
+        };
         candidates.push(candidate(scene, Law::GivenFriction, e, &outcome));
         let better = gf_best
             .as_ref()
@@ -201,6 +212,40 @@ pub fn earn_among(
         given_friction: gf_best,
         candidates,
     }))
+}
+
+/// Each of `entries` solving `scene` under `friction` as a candidate (its
+/// answer, or why it could not run there), in the entries' order: on the
+/// machine's cores with `on_cores` (each needing that many bytes), else
+/// one at a time.
+fn run_candidates(
+    scene: &Scene,
+    base: &Settings,
+    caps: Caps,
+    entries: &[&'static Entry],
+    friction: Friction<'_>,
+    on_cores: Option<f64>,
+) -> Result<Vec<Result<Solved, Candidate>>> {
+    let run = |&entry: &&'static Entry| -> Result<Result<Solved, Candidate>> {
+        // A candidate that cannot run on this mesh does not compete.
+        if let Err(e) = refuse_too_large(scene, entry) {
+            return Ok(Err(refused(scene, friction.law(), entry, &e)));
+        }
+        let settings = reference_settings(entry, base)?;
+        let problem = Assembled::for_solver(scene, entry)?;
+        Ok(Ok(solve(
+            problem,
+            friction,
+            entry,
+            &settings,
+            caps,
+            &mut Silent,
+        )?))
+    };
+    match on_cores {
+        Some(need) => map_on_cores(entries, need, run),
+        None => entries.iter().map(run).collect(),
+    }
 }
 
 fn candidate(scene: &Scene, law: Law, entry: &Entry, outcome: &Outcome) -> Candidate {
