@@ -20,6 +20,7 @@ use anyhow::{Result, anyhow};
 use crate::study::lab::{Lab, ticked};
 use crate::study::parallel::each_on_cores;
 use crate::study::reference::{Reference, References};
+use crate::study::runner::{Keep, Measured, measure};
 use crate::study::trial::TrialSpec;
 
 /// What a part of the work shares with the others: the lab's references
@@ -128,6 +129,34 @@ pub fn on_both_cores<T: Sync, R: Send>(
         None if out.len() == parts.len() => Ok(out),
         _ => Err(Stopped.into()),
     }
+}
+
+/// Measures trials that need no reference and report no time (their
+/// times are written nowhere), each on one of the machine's cores, in the
+/// trials' order, as [`Lab::measure_alone`] does on one (the comparison's
+/// frictionless profiles).
+pub fn measure_alone_on_cores(
+    lab: &mut Lab,
+    specs: &[TrialSpec],
+    keep: Keep,
+) -> Result<Vec<Measured>> {
+    let need = specs
+        .iter()
+        .map(|s| crate::memory::solve(s.scene.finest(), s.solver))
+        .fold(0.0, f64::max);
+    let tracker = lab.tracker();
+    tracker.start(lab.current(), vec![1.0; specs.len()], f64::INFINITY);
+    let measured = on_both_cores(lab, specs, need, |spec, shared| {
+        let m = measure(spec, None, keep)?;
+        shared.tick(spec)?;
+        Ok(m)
+    });
+    tracker.finish();
+    let mut measured = measured?;
+    for (i, m) in measured.iter_mut().enumerate() {
+        m.timing.trial = i;
+    }
+    Ok(measured)
 }
 
 #[cfg(test)]

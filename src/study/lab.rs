@@ -266,6 +266,11 @@ impl<'a> Lab<'a> {
         self.tracker
     }
 
+    /// The study running now (what progress is reported under).
+    pub fn current(&self) -> &'static str {
+        self.study
+    }
+
     /// Starts study `name`: the references it asks for are listed anew.
     pub fn begin(&mut self, name: &'static str) {
         self.asked.clear();

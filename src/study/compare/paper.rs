@@ -19,6 +19,7 @@ use crate::study::compare::charts::{
     ProfilePair, convergence_charts, inner_convergence_panels, profile_charts,
 };
 use crate::study::compare::{STUDY, plan};
+use crate::study::cores::measure_alone_on_cores;
 use crate::study::error_bound::views::{bound_against_error_chart, trial_points};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
@@ -202,7 +203,8 @@ impl PaperCompare {
             history: false,
             solution: true,
         };
-        let without = lab.measure_alone(&specs, keep)?;
+        // Profiles, not times: on both cores.
+        let without = measure_alone_on_cores(lab, &specs, keep)?;
         let mut artifacts = Vec::new();
         let mut profiles = Vec::new();
         for (&e, w) in solvers.iter().zip(&without) {
