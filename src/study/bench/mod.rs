@@ -63,6 +63,10 @@ pub struct BenchSpec {
     /// (the long run's [`LARGE_FACTORIZATION_RUNS`]; at 1/1024 each is
     /// 5-8 s a thread count).
     pub large_factorization_runs: usize,
+    /// Fresh-process runs of the multigrid's whole Coulomb problem on each
+    /// large mesh, and on one thread on the last (the median is reported;
+    /// the long run's [`multigrid::COULOMB_RUNS`]).
+    pub fresh_runs: usize,
     /// Meshes finer still, where only the multigrid solver runs (the
     /// others factor A and are refused there: `Entry::max_unknowns`), on
     /// the whole Coulomb problem, once, in a fresh process.
@@ -94,6 +98,7 @@ impl BenchSpec {
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
             large_factorization_runs: LARGE_FACTORIZATION_RUNS,
+            fresh_runs: multigrid::COULOMB_RUNS,
             multigrid_only: (11..=crate::mechanics::mesh_size::MAX_LEVEL)
                 .map(|k| MeshSize::from_level(k).expect("in range"))
                 .collect(),
@@ -116,6 +121,7 @@ impl BenchSpec {
             budget: 5.0,
             large: Vec::new(),
             large_factorization_runs: 1,
+            fresh_runs: 1,
             multigrid_only: Vec::new(),
             equal_accuracy: vec![MeshSize::from_level(3).expect("in range")],
             accuracy_target: 1e-6,

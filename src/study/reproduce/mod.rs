@@ -77,12 +77,14 @@ impl ReproduceSpec {
     /// predicted slower is not run on the finer meshes) and 10 s a run on
     /// 1/512 and 1/1024 (a solver whose last two meshes predict more is
     /// not run there), where the factorization is timed once after its
-    /// warm-up, its multigrid alone to 1/2048 (1/4096 and 1/8192 take 7
+    /// warm-up and the multigrid once in a fresh process (the long run:
+    /// the median of 3, and the multigrid alone on 1/2048 to 1/8192, 8
     /// min); the benchmark on its core collection at 10 s a run; the
     /// oracle at 1/128 on problems 1 and 3; the error bound at two targets
     /// and its ladder to 1/128; the discretization error to 1/512 against
-    /// 1/2048; the side-by-side at 1/64; each map point timed once; the
-    /// closed forms to 1/256 at 10 s a solve.
+    /// 1/2048; the side-by-side at 1/64; the Coulomb tuning map at 1/128
+    /// (the long run's at 1/256), each map point timed once; the closed
+    /// forms to 1/128 at 10 s a solve.
     pub fn standard() -> Self {
         let mut spec = Self::long();
         spec.long = false;
@@ -90,14 +92,22 @@ impl ReproduceSpec {
         spec.sweep.repeats = 0;
         spec.bench.equal_accuracy.retain(|h| h.level() <= 5);
         spec.bench.large_factorization_runs = 1;
+        spec.bench.fresh_runs = 1;
         spec.bench.runs = 1;
         spec.bench.budget = 5.0;
         spec.bench.large_budget = 10.0;
-        spec.bench.multigrid_only.retain(|h| h.level() <= 11);
+        spec.bench.multigrid_only.clear();
         spec.benchmark.core = true;
         spec.benchmark.time_limit = 10.0;
         spec.side_by_side_h = MeshSize::from_level(6).expect("in range");
         spec.map_repeats = 0;
+        spec.maps = vec![
+            (
+                MeshSize::from_level(6).expect("in range"),
+                Law::GivenFriction,
+            ),
+            (MeshSize::from_level(7).expect("in range"), Law::Coulomb),
+        ];
         spec
     }
 
