@@ -65,9 +65,9 @@ pub enum Command {
     /// measurements of `bench`, the benchmark, the discretization error, the
     /// oracle at 1/128, the error bound's validity and sharpness, a
     /// side-by-side at 1/64, r × ε maps, the verification against closed
-    /// forms (h = 1/32 ... 1/256, 10 s a solve), charts, a manifest and a
-    /// README, all into --out (default results/). About 30 min on 2
-    /// cores (31 measured); --long adds what takes longer (each
+    /// forms (h = 1/32 ... 1/128, 10 s a solve), charts, a manifest and a
+    /// README, all into --out (default results/). About 22 min on 2
+    /// cores (21.7 measured); --long adds what takes longer (each
     /// study's long budget: the paper's method by sweeps at equal accuracy
     /// on 1/128 and 1/256, bench to 1/8192, the whole benchmark collection,
     /// the oracle at 1/256, the error bound and the closed forms to 1/1024):
@@ -343,7 +343,7 @@ pub struct ReproduceArgs {
     /// bench's solvers with three timed runs each and 15 s per run and its
     /// multigrid to 1/8192, the whole benchmark collection (81 instances,
     /// not its core 46 up to h = 1/32), and every study at its long budget.
-    /// Without it the run takes about 30 min (31 measured).
+    /// Without it the run takes about 22 min (21.7 measured).
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:

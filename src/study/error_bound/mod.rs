@@ -471,12 +471,14 @@ impl Study for ErrorBoundStudy {
     }
 
     fn estimated_seconds(&self, length: RunLength) -> f64 {
-        // Measured alone: the core part about 100 s, the ladder to 1/256
-        // 100 s more, 1/512 4 min and 1/1024 7 min more.
+        // Measured alone: the core part about 80 s (its references on both
+        // cores), the ladder to 1/128 55 s more (135 s in the main job on
+        // 7ffa5e6), 1/256 a minute, 1/512 4 min and 1/1024 7 min more.
         let finest = self.spec.ladder_meshes.iter().map(|h| h.level()).max();
         match (length, finest) {
             (RunLength::Quick, _) => 10.0,
-            (_, Some(k)) if k <= 8 => 215.0,
+            (_, Some(k)) if k <= 7 => 135.0,
+            (_, Some(8)) => 200.0,
             _ => 1200.0,
         }
     }

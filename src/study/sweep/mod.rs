@@ -224,7 +224,7 @@ impl Study for Sweep {
     fn estimated_seconds(&self, length: RunLength) -> f64 {
         match length {
             RunLength::Quick => 1.05,
-            RunLength::Standard => 105.0,
+            RunLength::Standard => 115.0,
             RunLength::Long => 205.0,
         }
     }

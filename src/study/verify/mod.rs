@@ -365,10 +365,11 @@ impl Study for VerifyStudy {
     fn estimated_seconds(&self, length: RunLength) -> f64 {
         // Measured alone on the 2-core machine: the standard ladder (300 s
         // a solve) took 19 and 20 min on Hertz and the punch; the main
-        // job's 166 s (to 1/256; 271 s to 1/512), the smoke run's 41 s.
+        // job's 85 s (to 1/128; 132 s to 1/256, 271 s to 1/512), the smoke
+        // run's 41 s.
         match length {
             RunLength::Quick => 40.0,
-            RunLength::Standard => 165.0,
+            RunLength::Standard => 85.0,
             RunLength::Long => 5000.0,
         }
     }
