@@ -18,7 +18,9 @@ pub mod scene_args;
 pub mod settings_args;
 
 pub use scene_args::SceneArgs;
-pub use settings_args::{AllSolvers, PapersMethod, SettingsArgs, SolverSet, knob_flag, with_flag};
+pub use settings_args::{
+    AllSolvers, PapersMethod, SettingsArgs, SolverSet, knob_set, old_spelling, with_flag,
+};
 
 /// contactlab: verify a fast iterative contact solver against a conic oracle on
 /// the semicoercive two-body contact problem with Coulomb friction of
@@ -492,6 +494,11 @@ pub struct BenchOneArgs {
 /// non-zero exit code.
 pub fn main() -> ExitCode {
     crate::allocator::keep_freed_memory();
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(hint) = settings_args::old_spelling(&args[1..]) {
+        crate::io::output::log(format!("error: {hint}"));
+        return ExitCode::from(2);
+    }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

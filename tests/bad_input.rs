@@ -119,12 +119,22 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             "friction",
         ),
         (
+            Input::Args(&["solve", "--problem", "1", "--set", "relaxation.r=0"]),
+            "relaxation.r = '0' is invalid",
+        ),
+        // The flags once generated per knob: refused, with the --set
+        // they stand for.
+        (
             Input::Args(&["solve", "--problem", "1", "--relaxation-r", "0"]),
-            "relaxation.r (--relaxation-r)",
+            "--relaxation-r is no longer a flag: write --set relaxation.r=0",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--relaxation-r", "-1e12"]),
-            "--relaxation-r",
+            Input::Args(&["solve", "--problem", "1", "--clarabel-max-iter=5"]),
+            "write --set clarabel.max_iter=5",
+        ),
+        (
+            Input::Args(&["solve", "--problem", "1", "--set", "relaxation.r=-1e12"]),
+            "relaxation.r = '-1e12' is invalid",
         ),
         (
             Input::Args(&["solve", "--problem", "1", "--epsilon", "0"]),
@@ -143,20 +153,26 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
             "--max-friction-iterations",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--relaxation-max-uzawa", "0"]),
-            "--relaxation-max-uzawa",
+            Input::Args(&["solve", "--problem", "1", "--set", "relaxation.max_uzawa=0"]),
+            "relaxation.max_uzawa",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--relaxation-max-sweeps", "0"]),
-            "--relaxation-max-sweeps",
+            Input::Args(&[
+                "solve",
+                "--problem",
+                "1",
+                "--set",
+                "relaxation.max_sweeps=0",
+            ]),
+            "relaxation.max_sweeps",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--clarabel-max-iter", "0"]),
-            "--clarabel-max-iter",
+            Input::Args(&["solve", "--problem", "1", "--set", "clarabel.max_iter=0"]),
+            "clarabel.max_iter",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--clarabel-tol", "-1e-8"]),
-            "--clarabel-tol",
+            Input::Args(&["solve", "--problem", "1", "--set", "clarabel.tol=-1e-8"]),
+            "clarabel.tol",
         ),
         // A valid setting of a solver the run does not use would be
         // ignored: an error that names the flag for the solver run.
@@ -167,10 +183,10 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
                 "1",
                 "--solver",
                 "clarabel-faer",
-                "--clarabel-tol",
-                "1e-8",
+                "--set",
+                "clarabel.tol=1e-8",
             ]),
-            "use --clarabel-faer-tol instead",
+            "use --set clarabel-faer.tol= instead",
         ),
         (
             Input::Args(&[
@@ -192,10 +208,10 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
                 "1",
                 "--solvers",
                 "newton",
-                "--relaxation-omega",
-                "1.5",
+                "--set",
+                "relaxation.omega=1.5",
             ]),
-            "--relaxation-omega sets a setting of relaxation, but this run uses newton",
+            "--set relaxation.omega sets a setting of relaxation, but this run uses newton",
         ),
         (
             Input::Args(&[
@@ -214,20 +230,26 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
                 "benchmark",
                 "--solvers",
                 "clarabel-faer",
-                "--clarabel-tol",
-                "1e-9",
+                "--set",
+                "clarabel.tol=1e-9",
                 "--out",
                 "/tmp/contactlab-never-written",
             ]),
-            "use --clarabel-faer-tol instead",
+            "use --set clarabel-faer.tol= instead",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--relaxation-smoothing", "abc"]),
-            "--relaxation-smoothing",
+            Input::Args(&[
+                "solve",
+                "--problem",
+                "1",
+                "--set",
+                "relaxation.smoothing=abc",
+            ]),
+            "relaxation.smoothing",
         ),
         (
-            Input::Args(&["solve", "--problem", "1", "--relaxation-proximal", "-1"]),
-            "--relaxation-proximal",
+            Input::Args(&["solve", "--problem", "1", "--set", "relaxation.proximal=-1"]),
+            "relaxation.proximal",
         ),
         (
             Input::Args(&[

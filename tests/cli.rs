@@ -195,7 +195,7 @@ fn table1_takes_the_problem_list_its_help_shows() {
 fn the_later_of_a_flag_and_a_set_of_one_setting_wins() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let cases: [(&str, &str, &str, &str, &str); 6] = [
+    let cases: [(&str, &str, &str, &str, &str); 5] = [
         (
             "--stopping",
             "relative",
@@ -230,13 +230,6 @@ fn the_later_of_a_flag_and_a_set_of_one_setting_wins() {
             "coulomb.max_iterations",
             "30",
             "/settings/coulomb/max_iterations",
-        ),
-        (
-            "--tnnmg-max-iter",
-            "300",
-            "tnnmg.max_iter",
-            "200",
-            "/settings/solvers/tnnmg/max_iter",
         ),
     ];
     for (flag, flag_value, path, set_value, pointer) in cases {

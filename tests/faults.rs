@@ -17,7 +17,7 @@ const SOLVE: [&str; 5] = ["solve", "--problem", "1", "--h", "1/8"];
 fn a_failing_certificate_turns_convergence_into_inaccurate_and_a_nonzero_exit() {
     let o = contactlab()
         .args(SOLVE)
-        .args(["--solver", "clarabel", "--clarabel-tol", "1"])
+        .args(["--solver", "clarabel", "--set", "clarabel.tol=1"])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -156,8 +156,8 @@ fn extreme_values_and_counts_get_one_line_naming_the_field() {
                 "solve",
                 "--problem",
                 "1",
-                "--relaxation-smoothing",
-                "-1e-10",
+                "--set",
+                "relaxation.smoothing=-1e-10",
             ]
             .map(String::from)
             .to_vec(),

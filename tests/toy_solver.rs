@@ -7,7 +7,7 @@
 //! on the study side (`plans::register`) gives it a stress condition of
 //! its own.
 
-use clap::CommandFactory;
+use clap::Parser;
 use contactlab::cli::Cli;
 use contactlab::mechanics::mesh_size::MeshSize;
 use contactlab::mechanics::scene::Scene;
@@ -229,14 +229,23 @@ fn a_toy_solver_registered_at_run_time_flows_through_every_study() {
         from_file.get("toy.tolerance"),
         Some(serde_json::Value::from(1e-9))
     );
-    // The command line's flags come from the registry.
-    let cli = Cli::command();
-    let solve = cli.find_subcommand("solve").unwrap();
-    assert!(
-        solve
-            .get_arguments()
-            .any(|a| a.get_long() == Some("toy-tolerance"))
-    );
+    // The command line sets its settings by path, from the registry
+    // (`--set toy.tolerance=`), and the per-solver flag it once had is
+    // refused with that hint.
+    let cli = Cli::try_parse_from([
+        "contactlab",
+        "solve",
+        "--problem",
+        "1",
+        "--solver",
+        "toy",
+        "--set",
+        "toy.tolerance=1e-9",
+    ]);
+    assert!(cli.is_ok());
+    let old: Vec<String> = ["--toy-tolerance", "1e-9"].map(String::from).to_vec();
+    let hint = contactlab::cli::old_spelling(&old).expect("a hint for the old flag");
+    assert!(hint.contains("write --set toy.tolerance=1e-9"), "{hint}");
     // The comparison: the toy's subproblem and Coulomb trials, certified,
     // against the earned reference.
     let settings = Settings::default();

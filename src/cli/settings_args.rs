@@ -1,6 +1,10 @@
-//! Settings on the command line: the harness's own flags, one flag
-//! `--SOLVER-KNOB` for every knob of every registered solver (generated from
-//! the registry, with its help), and `--set PATH=VALUE` for any setting.
+//! Settings on the command line: the harness's own flags (those a user
+//! types daily: --stopping, --epsilon, --max-friction-iterations,
+//! --certify-tol, --schedule) and `--set PATH=VALUE` for any setting, the
+//! one spelling of a solver's knob (`contactlab settings SOLVER` lists
+//! them, with their help, from the registry). The flags once generated per
+//! knob (`--relaxation-r 1e8`) are refused with the `--set` they stand for
+//! ([`old_spelling`]).
 
 use anyhow::{Result, bail};
 use clap::{Arg, ArgAction, ArgMatches, Command};
@@ -71,13 +75,43 @@ fn coulomb_default(name: &str) -> String {
         .unwrap_or_default()
 }
 
-/// The flag of a solver's knob: `--relaxation-r`, `--clarabel-max-iter`.
-pub fn knob_flag(solver: &str, knob: &Knob) -> String {
+/// The flag a solver's knob once had (`relaxation-r`, `clarabel-max-iter`):
+/// the old spelling [`old_spelling`] recognizes.
+fn knob_flag(solver: &str, knob: &Knob) -> String {
     format!("{solver}-{}", knob.name.replace('_', "-"))
 }
 
-fn knob_id(solver: &str, knob: &Knob) -> String {
-    format!("knob:{solver}.{}", knob.name)
+/// The one spelling of a solver's knob: `--set relaxation.r=`.
+pub fn knob_set(solver: &str, knob: &Knob) -> String {
+    format!("--set {solver}.{}=", knob.name)
+}
+
+/// A one-line hint for an argument that is a knob's old flag
+/// (`--relaxation-r 1e8`, `--relaxation-r=1e8`): the `--set` to write
+/// instead. None for any other argument (clap then says what it says).
+pub fn old_spelling(args: &[String]) -> Option<String> {
+    for (i, arg) in args.iter().enumerate() {
+        let Some(flag) = arg.strip_prefix("--") else {
+            continue;
+        };
+        let (flag, inline) = match flag.split_once('=') {
+            Some((f, v)) => (f, Some(v.to_string())),
+            None => (flag, None),
+        };
+        for e in registry::solvers() {
+            if let Some(k) = e.knobs.iter().find(|k| knob_flag(e.name, k) == flag) {
+                let value = inline
+                    .or_else(|| args.get(i + 1).cloned())
+                    .unwrap_or_else(|| "VALUE".into());
+                return Some(format!(
+                    "--{flag} is no longer a flag: write {}{value} (every solver setting is set by --set; `contactlab settings {}` lists them)",
+                    knob_set(e.name, k),
+                    e.name
+                ));
+            }
+        }
+    }
+    None
 }
 
 fn number<T: std::str::FromStr>(
@@ -140,7 +174,7 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .action(ArgAction::Append)
                     .allow_hyphen_values(true)
                     .help(format!(
-                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable). Each solver's settings are also flags (--relaxation-r 1e8); `contactlab settings [SOLVER]` lists them all. All settings flags apply in the order given: when two set the same setting (--set stopping=paper --stopping relative), the later one wins. --set certificate.bound_max_unknowns=N bounds the error of answers up to N unknowns (default {}, h = 1/512; 0: none)",
+                        "Any setting by path, e.g. --set coulomb.stall_window=8 or --set {}=VALUE (repeatable): the one spelling of a solver's settings (--set relaxation.r=1e8); `contactlab settings [SOLVER]` lists them all. All settings flags apply in the order given: when two set the same setting (--set stopping=paper --stopping relative), the later one wins. --set certificate.bound_max_unknowns=N bounds the error of answers up to N unknowns (default {}, h = 1/512; 0: none)",
                         crate::settings::example_path(),
                         crate::certificate::SOLVE_BOUND_MAX_UNKNOWNS
                     )),
@@ -153,20 +187,6 @@ impl<S: SolverSet> clap::Args for SettingsArgs<S> {
                     .value_parser(Schedule::ALL.map(Schedule::name))
                     .help("Mesh continuation for solvers that warm-start: revisit the coarse levels in every friction iteration, or only in the first, or nested: the whole Coulomb problem on each level in turn, each started from the level below and the coarse ones solved to coulomb.coarse_epsilon [default: each solver's fastest, nested for tnnmg, revisit (the paper's) for relaxation with its sweeps, nested for relaxation.inner = multigrid]"),
             );
-        }
-        for e in S::solvers() {
-            for k in e.knobs {
-                cmd = cmd.arg(
-                    Arg::new(knob_id(e.name, k))
-                        .long(knob_flag(e.name, k))
-                        .value_name("VALUE")
-                        .allow_hyphen_values(true)
-                        // Listed by `contactlab settings`, not in every
-                        // command's help (which they made 150 lines long).
-                        .hide(true)
-                        .help(e.help(k)),
-                );
-            }
         }
         cmd
     }
@@ -219,15 +239,6 @@ impl<S: SolverSet> clap::FromArgMatches for SettingsArgs<S> {
         };
         for (id, path) in FLAG_PATHS {
             add(id, path, format!("--{id}"));
-        }
-        for e in S::solvers() {
-            for k in e.knobs {
-                add(
-                    &knob_id(e.name, k),
-                    &format!("{}.{}", e.name, k.name),
-                    format!("--{}", knob_flag(e.name, k)),
-                );
-            }
         }
         add(SET, "", "--set".into());
         given.sort_by_key(|(index, _)| *index);
@@ -305,10 +316,10 @@ impl<S: SolverSet> SettingsArgs<S> {
     }
 }
 
-/// Settings named by their flags (`use --tnnmg-tolerance instead`).
+/// Settings named as they are set (`use --set tnnmg.tolerance= instead`).
 const AS_FLAGS: Spelling = Spelling {
     verb: "use",
-    name: |e, k| format!("--{}", knob_flag(e.name, k)),
+    name: |e, k| knob_set(e.name, k),
 };
 
 /// Adds the command-line flag to a message that starts with a settings path.
@@ -321,13 +332,9 @@ pub fn with_flag(message: String) -> String {
         Some(("coulomb", "max_iterations")) => Some("--max-friction-iterations".to_string()),
         Some(("certificate", "tolerance")) => Some("--certify-tol".to_string()),
         Some(("coulomb", field)) => Some(format!("--set coulomb.{field}=")),
-        Some((owner, field)) => registry::by_name(owner).and_then(|e| {
-            e.knobs
-                .iter()
-                .find(|k| k.fields.contains(&field))
-                .map(|k| format!("--{}", knob_flag(e.name, k)))
-        }),
-        None => None,
+        // A solver's setting is spelt by its path (`--set relaxation.r=`):
+        // the message names it already.
+        Some(_) | None => None,
     };
     match flag {
         Some(f) => format!("{path} ({f}) {rest}"),

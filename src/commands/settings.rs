@@ -1,12 +1,11 @@
-//! `contactlab settings [SOLVER]`: every setting, by path, with its flag,
-//! its default and the paper's value, from the registry (so a new solver's
+//! `contactlab settings [SOLVER]`: every setting, by path (as `--set`
+//! and scene files spell it), its default and the paper's value, from the registry (so a new solver's
 //! settings are listed without a line here).
 
 use anyhow::Result;
 use contactlab_solvers::registry;
 
 use crate::cli::SettingsListArgs;
-use crate::cli::settings_args::knob_flag;
 use crate::coulomb::fixed_point;
 use crate::io::output::print;
 
@@ -33,13 +32,7 @@ pub fn run(args: &SettingsListArgs) -> Result<()> {
     {
         text += &format!("\n{} ({})\n", e.name, e.about);
         for k in e.knobs {
-            text += &format!(
-                "  --{} VALUE  (--set {}.{}=VALUE)\n      {}\n",
-                knob_flag(e.name, k),
-                e.name,
-                k.name,
-                e.help(k)
-            );
+            text += &format!("  --set {}.{}=VALUE\n      {}\n", e.name, k.name, e.help(k));
         }
     }
     print(&text)

@@ -130,7 +130,7 @@ impl Changes {
 }
 
 /// How a front names a setting it suggests: the verb and the name
-/// (`set tnnmg.tolerance`, `use --tnnmg-tolerance`).
+/// (`set tnnmg.tolerance`, `use --set tnnmg.tolerance=`).
 pub struct Spelling {
     pub verb: &'static str,
     pub name: fn(&'static Entry, &'static Knob) -> String,
@@ -154,7 +154,8 @@ impl Change {
 
     /// A message about this change that names how it was given, once: a
     /// flag of its own after the path the message starts with
-    /// (`relaxation.r (--relaxation-r) = '0' is invalid: …`), anything else
+    /// (`coulomb.max_iterations (--max-friction-iterations) = '0' is
+    /// invalid: …`), anything else
     /// before it (`--set: …`, `settings["relaxation.r"]: …`).
     fn blame(&self, message: &str) -> String {
         if message.contains(self.given_as.as_str()) {
@@ -258,7 +259,6 @@ mod tests {
                 "9",
                 "--max-friction-iterations",
             ),
-            ("relaxation.r", "1e5", "1e7", "--relaxation-r"),
         ];
         for (path, a, b, flag) in pairs {
             for (first, second) in [("--set", flag), (flag, "--set")] {
