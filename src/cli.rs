@@ -178,9 +178,8 @@ pub struct Table1Args {
     /// Finest mesh (continuation runs 1/8, ..., h).
     #[arg(long, value_name = "1/2^k", default_value = "1/64")]
     pub h: MeshSize,
-    /// The paper's problems to run, `1,3` (or `1 3`); `--problems` is the
-    /// older spelling.
-    #[arg(long = "problem", alias = "problems", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1, 2, 3])]
+    /// The paper's problems to run, `1,3` (or `1 3`).
+    #[arg(long = "problem", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1, 2, 3])]
     pub problems: Vec<u32>,
     /// Continuation schedules to run (`revisit finest-only` or with commas).
     #[arg(long, value_parser = choices::schedule(), value_delimiter = ',', num_args = 1.., default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
@@ -203,8 +202,8 @@ pub struct CompareArgs {
     #[arg(long, value_delimiter = ',', value_parser = clap::builder::PossibleValuesParser::new(solver_names()))]
     pub solvers: Vec<String>,
     /// Timed runs per trial after the first, warm-up run (times: their
-    /// minimum and median). Formerly `--repeats`.
-    #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
+    /// minimum and median).
+    #[arg(long = "runs", value_name = "RUNS", default_value_t = 3, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
     /// Folder for compare.csv, compare_timing.csv, compare_given_friction.tex and compare_coulomb.tex (LaTeX, one table per law) and references.csv (replaced whole); with --side-by-side for side_by_side.csv, side_by_side_<A>_<B>.csv and charts/.
     #[arg(long, value_name = "DIR")]
@@ -223,9 +222,8 @@ pub struct CompareArgs {
 
 #[derive(Debug, Args)]
 pub struct SweepArgs {
-    /// The paper's problems to sweep, `1,3` (or `1 3`); `--problems` is
-    /// the older spelling.
-    #[arg(long = "problem", alias = "problems", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1], conflicts_with = "scene")]
+    /// The paper's problems to sweep, `1,3` (or `1 3`).
+    #[arg(long = "problem", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1], conflicts_with = "scene")]
     pub problems: Vec<u32>,
     /// A scene file to sweep instead (its settings are the base settings).
     #[arg(long, value_name = "FILE")]
@@ -281,8 +279,8 @@ pub struct SweepArgs {
     #[arg(long)]
     pub quick: bool,
     /// Timed runs of each work-precision trial after the first, warm-up
-    /// run. Formerly `--repeats`.
-    #[arg(long = "runs", alias = "repeats", value_name = "RUNS", default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
+    /// run.
+    #[arg(long = "runs", value_name = "RUNS", default_value_t = 2, value_parser = clap::value_parser!(u64).range(0..=100))]
     pub repeats: u64,
     #[command(flatten)]
     pub material: crate::cli::scene_args::MaterialArgs,
@@ -315,15 +313,14 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Timed runs after the first, warm-up run (the median is reported)
-    /// [default: 3; quick: 1]. Formerly `--repeats`.
-    #[arg(long, alias = "repeats", value_name = "RUNS", value_parser = clap::value_parser!(u64).range(1..=100))]
+    /// [default: 3; quick: 1].
+    #[arg(long, value_name = "RUNS", value_parser = clap::value_parser!(u64).range(1..=100))]
     pub runs: Option<u64>,
     /// Wall-clock limit per run in seconds; a solver slower than this on one
     /// mesh (or predicted to be on the next) is not run on finer meshes
-    /// [default: 15; quick: 5]. Formerly `--budget`.
+    /// [default: 15; quick: 5].
     #[arg(
         long = "time-limit",
-        alias = "budget",
         value_name = "SECONDS",
         allow_hyphen_values = true
     )]
@@ -474,8 +471,8 @@ pub struct CertifyArgs {
     pub given_friction: bool,
     /// The certificate's tolerance: the largest violation of any condition,
     /// in the problem's scales, that certifies the answer (as `--certify-tol`
-    /// everywhere else; `--tolerance` is kept as an alias).
-    #[arg(long = "certify-tol", alias = "tolerance", value_name = "TOL", default_value = "1e-5", value_parser = positive_tolerance)]
+    /// everywhere else).
+    #[arg(long = "certify-tol", value_name = "TOL", default_value = "1e-5", value_parser = positive_tolerance)]
     pub tolerance: f64,
 }
 

@@ -67,7 +67,7 @@ fn every_bad_input_gets_a_one_line_error_and_a_nonzero_exit() {
         (
             Input::Args(&[
                 "sweep",
-                "--problems",
+                "--problem",
                 "7",
                 "--out",
                 "/tmp/contactlab-never-written",

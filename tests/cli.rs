@@ -150,16 +150,12 @@ fn every_subcommand_has_help() {
 }
 
 /// `table1 --problem 1 3` (the form its help's `[default: 1 2 3]` shows)
-/// runs those two problems, as `--problem 1,3` and the older `--problems`
-/// do; and its help states the stopping mode it uses, the paper's (it
+/// runs those two problems, as `--problem 1,3` does (the older
+/// `--problems` is refused with a hint naming `--problem`); and its help states the stopping mode it uses, the paper's (it
 /// said `[default: relative]`).
 #[test]
 fn table1_takes_the_problem_list_its_help_shows() {
-    for (flag, list) in [
-        ("--problem", &["1", "3"][..]),
-        ("--problem", &["1,3"][..]),
-        ("--problems", &["1,3"][..]),
-    ] {
+    for (flag, list) in [("--problem", &["1", "3"][..]), ("--problem", &["1,3"][..])] {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("t");
         let mut args = vec!["table1", "--h", "1/8", "--schedules", "revisit", flag];
@@ -267,7 +263,7 @@ fn the_later_of_a_flag_and_a_set_of_one_setting_wins() {
 }
 
 /// One spelling per concept: the timed runs are `--runs RUNS` in every
-/// command that times (`--repeats` accepted, as the README says), and
+/// command that times (`--repeats` refused with a hint naming it), and
 /// `certify`'s default tolerance is the certificate's own, written as the
 /// help of every other command writes it (1e-5, not 0.00001).
 #[test]
@@ -284,7 +280,11 @@ fn runs_are_spelled_alike_and_certify_states_its_default_as_written() {
             .unwrap_or_else(|| panic!("{cmd} has --runs"));
         assert_eq!(help.as_deref(), Some("RUNS"), "{cmd}");
     }
-    Cli::try_parse_from(["contactlab", "bench", "--repeats", "2", "--out", "x"]).unwrap();
+    let hint = contactlab::cli::old_spelling(&["--repeats".to_string(), "2".to_string()]);
+    assert_eq!(
+        hint.as_deref(),
+        Some("--repeats is no longer a flag: write --runs")
+    );
     let parsed = Cli::try_parse_from([
         "contactlab",
         "certify",
@@ -313,7 +313,7 @@ fn help_names_every_file_a_command_writes() {
             "compare",
             vec!["--problem", "1", "--h", "1/8", "--runs", "0"],
         ),
-        ("table1", vec!["--h", "1/8", "--problems", "1"]),
+        ("table1", vec!["--h", "1/8", "--problem", "1"]),
     ] {
         let out = dir.path().join(cmd);
         let mut all = vec![cmd];
@@ -346,7 +346,7 @@ fn sweep_takes_the_scene_overrides() {
         let out = dir.path().join(out);
         let mut args = vec![
             "sweep",
-            "--problems",
+            "--problem",
             "1",
             "--h",
             "1/8",

@@ -131,7 +131,7 @@ fn extreme_values_and_counts_get_one_line_naming_the_field() {
                 "compare",
                 "--problem",
                 "1",
-                "--repeats",
+                "--runs",
                 "18446744073709551615",
             ]
             .map(String::from)

@@ -94,7 +94,7 @@ fn solve_and_compare_report_the_same_counts_and_zone() {
         "1/16",
         "--solvers",
         "relaxation,newton-coulomb",
-        "--repeats",
+        "--runs",
         "0",
         "--out",
         compare.to_str().unwrap(),

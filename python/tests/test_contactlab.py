@@ -372,7 +372,7 @@ def test_sweep_writes_the_command_lines_sweep(tmp_path):
     p = cl.Problem.paper(1, h="1/8")
     r = cl.sweep(p, ["relaxation", "tnnmg"], quick=True, repeats=0, out=tmp_path / "py")
     subprocess.run(
-        [str(cli()), "sweep", "--problems", "1", "--h", "1/8", "--solvers", "relaxation,tnnmg",
+        [str(cli()), "sweep", "--problem", "1", "--h", "1/8", "--solvers", "relaxation,tnnmg",
          "--quick", "--runs", "0", "--out", str(tmp_path / "cli")],
         check=True,
         capture_output=True,

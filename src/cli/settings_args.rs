@@ -86,9 +86,18 @@ pub fn knob_set(solver: &str, knob: &Knob) -> String {
     format!("--set {solver}.{}=", knob.name)
 }
 
-/// A one-line hint for an argument that is a knob's old flag
-/// (`--relaxation-r 1e8`, `--relaxation-r=1e8`): the `--set` to write
-/// instead. None for any other argument (clap then says what it says).
+/// Flags that had another spelling once, with the one they have now.
+const RENAMED: [(&str, &str); 4] = [
+    ("problems", "--problem"),
+    ("repeats", "--runs"),
+    ("budget", "--time-limit"),
+    ("tolerance", "--certify-tol"),
+];
+
+/// A one-line hint for an argument in an old spelling: a knob's old flag
+/// (`--relaxation-r 1e8`, `--relaxation-r=1e8`: the `--set` to write
+/// instead) or a renamed flag (`--repeats`: `--runs`). None for any other
+/// argument (clap then says what it says).
 pub fn old_spelling(args: &[String]) -> Option<String> {
     for (i, arg) in args.iter().enumerate() {
         let Some(flag) = arg.strip_prefix("--") else {
@@ -98,6 +107,9 @@ pub fn old_spelling(args: &[String]) -> Option<String> {
             Some((f, v)) => (f, Some(v.to_string())),
             None => (flag, None),
         };
+        if let Some((_, now)) = RENAMED.iter().find(|(old, _)| *old == flag) {
+            return Some(format!("--{flag} is no longer a flag: write {now}"));
+        }
         for e in registry::solvers() {
             if let Some(k) = e.knobs.iter().find(|k| knob_flag(e.name, k) == flag) {
                 let value = inline
