@@ -16,6 +16,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Result, anyhow};
+use contactlab_solvers::registry::Entry;
 
 use crate::study::lab::{Lab, ticked};
 use crate::study::parallel::each_on_cores;
@@ -131,6 +132,13 @@ pub fn on_both_cores<T: Sync, R: Send>(
     }
 }
 
+/// What one trial of `entry` at mesh `h` needs while another runs beside
+/// it: its solve and its error bound's factors (every trial bounds its
+/// answer unless told not to).
+pub fn trial_need(h: crate::mechanics::mesh_size::MeshSize, entry: &Entry) -> f64 {
+    crate::memory::solve(h, entry) + crate::memory::error_bound(crate::memory::unknowns(h))
+}
+
 /// Measures trials that need no reference and report no time (their
 /// times are written nowhere), each on one of the machine's cores, in the
 /// trials' order, as [`Lab::measure_alone`] does on one (the comparison's
@@ -142,7 +150,7 @@ pub fn measure_alone_on_cores(
 ) -> Result<Vec<Measured>> {
     let need = specs
         .iter()
-        .map(|s| crate::memory::solve(s.scene.finest(), s.solver))
+        .map(|s| trial_need(s.scene.finest(), s.solver))
         .fold(0.0, f64::max);
     let tracker = lab.tracker();
     tracker.start(lab.current(), vec![1.0; specs.len()], f64::INFINITY);

@@ -323,6 +323,18 @@ impl References {
 
     /// The reference of `scene` on its finest level, earned on first use.
     pub fn get(&mut self, scene: &Scene, base: &Settings) -> Result<Option<&Reference>> {
+        Ok(self.slot(scene, base)?.and_then(Option::as_deref))
+    }
+
+    /// The same reference, held: for work that measures on several
+    /// threads while the references stay in one place.
+    pub fn shared(&mut self, scene: &Scene, base: &Settings) -> Result<Option<Arc<Reference>>> {
+        Ok(self.slot(scene, base)?.and_then(Clone::clone))
+    }
+
+    /// The earned entry of `scene` (earned now if it was not), None when
+    /// references are never earned.
+    fn slot(&mut self, scene: &Scene, base: &Settings) -> Result<Option<&Option<Arc<Reference>>>> {
         if !self.enabled {
             return Ok(None);
         }
@@ -341,19 +353,7 @@ impl References {
                 self.earned.len() - 1
             }
         };
-        Ok(self.earned[index].1.as_deref())
-    }
-
-    /// The same reference, held: for work that measures on several
-    /// threads while the references stay in one place.
-    pub fn shared(&mut self, scene: &Scene, base: &Settings) -> Result<Option<Arc<Reference>>> {
-        self.get(scene, base)?;
-        let key = Self::key(scene)?;
-        Ok(self
-            .earned
-            .iter()
-            .find(|(k, _)| *k == key)
-            .and_then(|(_, r)| r.clone()))
+        Ok(Some(&self.earned[index].1))
     }
 
     /// The key of a scene's references: the whole scene (material,

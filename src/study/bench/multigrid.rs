@@ -105,10 +105,10 @@ pub const COULOMB_RUNS: usize = 3;
 
 /// "median of 3 runs, each in a fresh process" or "one run, in a fresh
 /// process".
-fn runs_text(runs: usize, each: &str) -> String {
+fn runs_text(runs: usize) -> String {
     match runs {
-        1 => format!("one run, in a fresh process{each}"),
-        n => format!("median of {n} runs, each in a fresh process{each}"),
+        1 => "one run, in a fresh process".to_string(),
+        n => format!("median of {n} runs, each in a fresh process"),
     }
 }
 
@@ -491,7 +491,7 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
                 f.map_or("not measured".into(), |f| format!("{f:.2} s")),
                 used.peak_kb as f64 / GIB_KB,
                 used.status,
-                runs_text(m.runs, ""),
+                runs_text(m.runs),
             ),
             pass: Some(used.status == "converged" && ratio <= DEFAULT_GOAL),
         });

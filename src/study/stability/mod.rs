@@ -31,7 +31,7 @@ use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
 use crate::study::catalog::{Catalogued, by_length};
-use crate::study::cores::{Shared, on_both_cores};
+use crate::study::cores::{Shared, on_both_cores, trial_need};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
@@ -333,10 +333,7 @@ pub fn run(spec: &StabilitySpec, lab: &mut Lab) -> Result<Map> {
     let finest = spec.h.max(spec.h_friction).max(spec.h_scenes);
     let need = solvers
         .iter()
-        .map(|(_, e)| {
-            crate::memory::solve(finest, e)
-                + crate::memory::error_bound(crate::memory::unknowns(finest))
-        })
+        .map(|(_, e)| trial_need(finest, e))
         .fold(0.0, f64::max);
     let parts = on_both_cores(lab, &solvers, need, |&(i, entry), shared| {
         solver_part(spec, base, i, entry, shared)
