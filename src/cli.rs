@@ -67,7 +67,7 @@ pub enum Command {
     /// measurements of `bench`, the benchmark, the discretization error, the
     /// oracle at 1/128, the error bound's validity and sharpness, a
     /// side-by-side at 1/64, r × ε maps, the verification against closed
-    /// forms (h = 1/32 ... 1/128, 10 s a solve), charts, a manifest and a
+    /// forms (h = 1/32 ... 1/128, 6 s a solve), charts, a manifest and a
     /// README, all into --out (default results/). About 22 min on 2
     /// cores (21.7 measured); --long adds what takes longer (each
     /// study's long budget: the paper's method by sweeps at equal accuracy

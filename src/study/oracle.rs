@@ -118,12 +118,13 @@ impl Oracle {
     }
 
     /// The main job's (`reproduce`): every variant at 1/128 on
-    /// problems 1 and 3 (problem 2 gives problem 1's runs to the digit
-    /// there: its load differs only where neither body is in contact),
-    /// about 90 s; 1/256 (8 min) is the long run's.
+    /// problem 1, about 2 min; problem 2 gives problem 1's runs to the
+    /// digit there (twice the load: the problem is homogeneous in it), and
+    /// problem 3, whose runs need no tightening (13 s on 7ffa5e6's run),
+    /// is the long run's with 1/256 (8 min).
     pub fn main() -> Self {
         let mut o = Self::standard();
-        o.problems = vec![1, 3];
+        o.problems = vec![1];
         o.meshes.truncate(1);
         o
     }

@@ -85,7 +85,24 @@ pub fn reference_settings(entry: &Entry, base: &Settings) -> Result<Settings> {
 /// exact solver's answer passes the certificate (then trials carry no
 /// differences, only their certificates).
 pub fn earn(scene: &Scene, base: &Settings, seconds: f64) -> Result<Option<Reference>> {
-    earn_among(scene, base, seconds, None, None)
+    let on_cores = seconds >= CANDIDATE_SECONDS;
+    earn_among(scene, base, Cap { seconds, on_cores }, None, None)
+}
+
+/// What a reference's candidates may take: `seconds` each on the clock,
+/// and whether two run at once (`on_cores`).
+///
+/// A candidate's own clock is what two at once could change. With the
+/// default cap, far above a candidate's time on a mesh that fits twice in
+/// memory, they run on both cores. A study that caps them tighter and
+/// reports only the reference chosen, not the candidates' statuses (bench,
+/// at twice its budget: the winner, a Newton solver, takes a fraction of
+/// the cap), may still run them on both cores; one that reports them runs
+/// them one at a time.
+#[derive(Clone, Copy, Debug)]
+pub struct Cap {
+    pub seconds: f64,
+    pub on_cores: bool,
 }
 
 /// The exact solvers a reference is earned among, per law (see
@@ -101,13 +118,13 @@ pub struct Among {
 /// given-friction reference is earned among the exact solvers as usual
 /// when the named one does not solve that law.) With `among`, per law the
 /// exact solvers of those names only: a study that already knows the
-/// others cannot finish within `seconds` there (`bench` stops a solver
+/// others cannot finish within the cap there (`bench` stops a solver
 /// whose times predict more than its budget) does not run them to their
 /// cap.
 pub fn earn_among(
     scene: &Scene,
     base: &Settings,
-    seconds: f64,
+    cap: Cap,
     named: Option<&'static Entry>,
     among: Option<&Among>,
 ) -> Result<Option<Reference>> {
@@ -126,13 +143,9 @@ pub fn earn_among(
     };
     let caps = Caps {
         work: None,
-        seconds: Some(seconds),
+        seconds: Some(cap.seconds),
     };
-    // A candidate's own clock is what two at once could change: with the
-    // default cap, far above a candidate's time on a mesh that fits twice
-    // in memory, they run on both cores; a study that caps them tighter
-    // (bench, at twice its budget) has them run one at a time.
-    let on_cores = seconds >= CANDIDATE_SECONDS;
+    let on_cores = cap.on_cores;
     let need = coulomb_candidates
         .iter()
         .chain(&friction_candidates)
@@ -292,6 +305,9 @@ pub struct References {
     enabled: bool,
     /// Wall-clock seconds a candidate may take.
     pub candidate_seconds: f64,
+    /// Whether a scene's candidates run two at once (see [`Cap`]); by
+    /// default when their cap is [`CANDIDATE_SECONDS`] or more.
+    pub candidates_on_cores: Option<bool>,
     /// The reference the user named (None: earned among the exact
     /// solvers).
     pub named: Option<&'static Entry>,
@@ -306,6 +322,7 @@ impl Default for References {
             earned: Vec::new(),
             enabled: true,
             candidate_seconds: CANDIDATE_SECONDS,
+            candidates_on_cores: None,
             named: None,
             among: None,
         }
@@ -342,13 +359,13 @@ impl References {
         let index = match self.earned.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let r = earn_among(
-                    scene,
-                    base,
-                    self.candidate_seconds,
-                    self.named,
-                    self.among.as_ref(),
-                )?;
+                let cap = Cap {
+                    seconds: self.candidate_seconds,
+                    on_cores: self
+                        .candidates_on_cores
+                        .unwrap_or(self.candidate_seconds >= CANDIDATE_SECONDS),
+                };
+                let r = earn_among(scene, base, cap, self.named, self.among.as_ref())?;
                 self.earned.push((key, r.map(Arc::new)));
                 self.earned.len() - 1
             }

@@ -154,7 +154,7 @@ impl Study for Benchmark {
     fn estimated_seconds(&self, length: RunLength) -> f64 {
         match length {
             RunLength::Quick => 1.3,
-            RunLength::Standard => 210.0,
+            RunLength::Standard => 170.0,
             RunLength::Long => 2400.0,
         }
     }
