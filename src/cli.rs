@@ -68,8 +68,8 @@ pub enum Command {
     /// oracle at 1/128, the error bound's validity and sharpness, a
     /// side-by-side at 1/64, r × ε maps, the verification against closed
     /// forms (h = 1/32 ... 1/128, 6 s a solve), charts, a manifest and a
-    /// README, all into --out (default results/). About 22 min on 2
-    /// cores (21.7 measured); --long adds what takes longer (each
+    /// README, all into --out (default results/). About 20 min on 2
+    /// cores (19.8 measured); --long adds what takes longer (each
     /// study's long budget: the paper's method by sweeps at equal accuracy
     /// on 1/128 and 1/256, bench to 1/8192, the whole benchmark collection,
     /// the oracle at 1/256, the error bound and the closed forms to 1/1024):
@@ -342,7 +342,7 @@ pub struct ReproduceArgs {
     /// bench's solvers with three timed runs each and 15 s per run and its
     /// multigrid to 1/8192, the whole benchmark collection (81 instances,
     /// not its core 46 up to h = 1/32), and every study at its long budget.
-    /// Without it the run takes about 22 min (21.7 measured).
+    /// Without it the run takes about 20 min (19.8 measured).
     #[arg(long)]
     pub long: bool,
     /// Output folder (replaced whole) [default: results; with --quick:
