@@ -12,7 +12,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// The engine: modules every study may use and that use no study.
-const ENGINE: [&str; 11] = [
+const ENGINE: [&str; 12] = [
     "agreement",
     "catalog",
     "class",
@@ -22,6 +22,7 @@ const ENGINE: [&str; 11] = [
     "plans",
     "reference",
     "runner",
+    "template",
     "trial",
     "mod",
 ];

@@ -24,6 +24,7 @@ pub mod stability;
 pub mod studies;
 pub mod sweep;
 pub mod table1;
+pub mod template;
 pub mod trial;
 pub mod tuning_map;
 pub mod verify;

@@ -17,6 +17,7 @@ use crate::mechanics::scene::Scene;
 use crate::study::catalog::{Catalogued, by_length, check_paper_problems};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
+use crate::study::template;
 use crate::study::trial::TrialSpec;
 
 /// The study's name in trial records.
@@ -211,7 +212,7 @@ impl Study for Oracle {
 
     fn section(&self, measured: &Vec<Measured>, _: &Lab, _: &[String]) -> Result<Section> {
         Ok(Section {
-            markdown: markdown(measured),
+            markdown: markdown(measured)?,
         })
     }
 }
@@ -225,34 +226,44 @@ fn tightened(detail: &str) -> String {
         .unwrap_or_default()
 }
 
-/// The section: per problem, mesh and variant, the certified status, the
-/// certificate, the friction iterations, what was tightened, the time.
-pub fn markdown(measured: &[Measured]) -> String {
+/// One run of the section's table.
+#[derive(Serialize)]
+struct Run<'a> {
+    scene: &'a str,
+    h: String,
+    variant: &'a str,
+    status: &'a str,
+    certificate: f64,
+    friction_iterations: usize,
+    /// What the fixed point tightened (empty: nothing).
+    tightened: String,
+    seconds: f64,
+}
+
+/// The section (`templates/oracle.md`): per problem, mesh and variant, the
+/// certified status, the certificate, the friction iterations, what was
+/// tightened, the time; and how many runs are certified.
+pub fn markdown(measured: &[Measured]) -> Result<String> {
+    let runs: Vec<Run> = measured
+        .iter()
+        .map(|m| {
+            let t = &m.trial;
+            Run {
+                scene: &t.scene,
+                h: t.h.to_string(),
+                variant: t.solver.name,
+                status: t.status.as_str(),
+                certificate: t.residual(),
+                friction_iterations: t.friction_iterations,
+                tightened: tightened(&t.detail),
+                seconds: m.timing.seconds_min,
+            }
+        })
+        .collect();
     let certified = measured.iter().filter(|m| m.trial.certified()).count();
-    let mut s = format!(
-        "## The oracle at every h\n\nEach variant of the conic oracle on the whole Coulomb problem at its default settings \
-         (`oracle.csv`), certified; no reference on these meshes (the certificate measures each answer). At a fixed \
-         tolerance an interior point's answers lose accuracy as h falls; when the friction fixed point stalls at their \
-         noise, or the certificate rejects a converged answer, the solver tightens its tolerance tenfold (to 1e-12 at \
-         most) and goes on: the last column says where. **{certified} of {} runs certified.**\n\n\
-         | problem | h | variant | status | certificate | friction iterations | tightened | time (s) |\n\
-         |---|---|---|---|---|---|---|---|\n",
-        measured.len()
-    );
-    for m in measured {
-        let t = &m.trial;
-        let what = tightened(&t.detail);
-        s += &format!(
-            "| {} | {} | {} | {} | {:.1e} | {} | {} | {:.1} |\n",
-            t.scene,
-            t.h,
-            t.solver.name,
-            t.status,
-            t.residual(),
-            t.friction_iterations,
-            if what.is_empty() { "–".into() } else { what },
-            m.timing.seconds_min
-        );
-    }
-    s + "\n"
+    template::render(
+        "oracle",
+        include_str!("templates/oracle.md"),
+        minijinja::context! { certified, runs },
+    )
 }

@@ -46,10 +46,10 @@ use crate::solve::{Solved, solve_scene, solver_entry};
 use crate::solvers::{Friction, Law, Silent, registry};
 use crate::study::bench::FastestDirect;
 use crate::study::catalog::{Catalogued, by_length, check_paper_problems};
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 
 mod views;
-pub use views::{PAPERS_ZONE_START, charts, findings, markdown};
+pub use views::{PAPERS_ZONE_START, charts, findings};
 
 /// Which problems, on which meshes, against which reference mesh: the
 /// study's parameters (its flags, and Python's keywords).
@@ -194,15 +194,6 @@ pub struct ErrorRow {
 
 /// The solver of the standard study: the one that reaches its reference.
 pub const MULTIGRID: &str = "tnnmg";
-
-/// What the report says of the study's solver (after its name).
-pub fn solver_note(solver: &str) -> &'static str {
-    if solver == MULTIGRID {
-        ", under the nested schedule, the one solver that reaches the reference mesh here; its friction fixed point ends at the default ε = 1e-7 of 𝓕P, far below the smallest error measured, and it agrees with `newton-coulomb` to about 1e-11 of P (the speed study's goal row)"
-    } else {
-        ", the fastest direct Coulomb solver of the speed study, so that no fixed-point tolerance enters"
-    }
-}
 
 /// The solver the study uses: the spec's (the Coulomb law directly or
 /// through the friction fixed point), or the registry's first direct
@@ -473,25 +464,9 @@ impl Study for Errors {
     }
 
     fn section(&self, errors: &Vec<ErrorRow>, _: &Lab, charts: &[String]) -> Result<Section> {
-        let solver = errors.first().map_or("", |r| r.solver.as_str());
-        let mut s = format!(
-            "## Discretization error\n\nHow the discrete solution converges as h → 0, against h = {} as the \
-             reference (`discretization_error.csv`), with `{solver}`{}: errors of the displacement in L2 and in the \
-             energy norm (both exact on these nested meshes, relative to the reference's norms), of the pressure at \
-             the contact nodes (relative to its maximum) and along Γ_K in L2 (relative to its norm), and of the \
-             start of the separated zone, with the observed orders log₂(e(2h)/e(h)).\n\n{}{}\n",
-            self.spec.reference,
-            solver_note(solver),
-            markdown(errors),
-            findings(errors)
-        );
-        for c in charts {
-            s += &chart_markdown(
-                c,
-                "How fast each error falls as h → 0 against the finest mesh: on log–log axes the slope is the observed order.",
-            );
-        }
-        Ok(Section { markdown: s })
+        Ok(Section {
+            markdown: views::section(errors, &self.spec.reference.to_string(), charts)?,
+        })
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<ErrorRow>>> {

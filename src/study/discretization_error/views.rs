@@ -1,8 +1,11 @@
 //! The discretization error's views: its charts (errors against h with
 //! reference slopes), its markdown table and the report's sentences.
 
+use serde::Serialize;
+
 use crate::io::charts::{Chart, Series};
 use crate::mechanics::mesh_size::MeshSize;
+use crate::study::template;
 
 use super::{ErrorRow, level};
 
@@ -72,57 +75,104 @@ fn guide(name: &str, points: &[(f64, f64)], order: i32) -> Option<Series> {
     Some(Series::line(name, vec![at(h1), at(h0)]).dashed())
 }
 
-/// A Markdown table of the rows.
-pub fn markdown(rows: &[ErrorRow]) -> String {
-    let num = |x: f64| {
-        if x.is_finite() {
-            format!("{x:.2e}")
-        } else {
-            "–".into()
-        }
-    };
-    let rate = |x: f64| {
-        if x.is_finite() {
-            format!("{x:.2}")
-        } else {
-            "–".into()
-        }
-    };
-    let mut out = String::from(
-        "| problem | h | L2 error | rate | energy error | rate | pressure error (max) | rate | pressure error (L2) | rate | zone start | its error | separated | certificate |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for r in rows {
-        out.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2}% | {} |\n",
-            r.problem,
-            r.h,
-            num(r.l2_error),
-            rate(r.l2_rate),
-            num(r.energy_error),
-            rate(r.energy_rate),
-            num(r.pressure_error),
-            rate(r.pressure_rate),
-            num(r.pressure_l2_error),
-            rate(r.pressure_l2_rate),
-            if r.zone_start.is_finite() {
-                format!("{:.4}", r.zone_start)
-            } else {
-                "none".into()
-            },
-            num(r.zone_start_error),
-            100.0 * r.separated_fraction,
-            num(r.certificate),
-        ));
-    }
-    out
+/// A row as the section's table shows it, in numbers (the row itself
+/// serializes them as the CSV's text): the zone's start `None` where no
+/// zone separates.
+#[derive(Serialize)]
+pub struct RowView<'a> {
+    pub problem: u32,
+    pub h: &'a str,
+    pub certificate: f64,
+    pub l2_error: f64,
+    pub l2_rate: f64,
+    pub energy_error: f64,
+    pub energy_rate: f64,
+    pub pressure_error: f64,
+    pub pressure_rate: f64,
+    pub pressure_l2_error: f64,
+    pub pressure_l2_rate: f64,
+    pub zone_start: Option<f64>,
+    pub zone_start_error: f64,
+    pub separated_fraction: f64,
 }
 
-/// A sentence when the largest nodal pressure does not settle as h falls:
-/// over the last halvings (at least two) it rises by more each time, where
-/// a converging peak rises, or falls, by less and less. The pressure is
-/// then unbounded near that point, no maximum error can converge, and the
-/// L2 error along Γ_K is the one to read.
-fn unsettled_peak(problem: u32, of: &[&ErrorRow]) -> Option<String> {
+impl<'a> From<&'a ErrorRow> for RowView<'a> {
+    fn from(r: &'a ErrorRow) -> Self {
+        Self {
+            problem: r.problem,
+            h: &r.h,
+            certificate: r.certificate,
+            l2_error: r.l2_error,
+            l2_rate: r.l2_rate,
+            energy_error: r.energy_error,
+            energy_rate: r.energy_rate,
+            pressure_error: r.pressure_error,
+            pressure_rate: r.pressure_rate,
+            pressure_l2_error: r.pressure_l2_error,
+            pressure_l2_rate: r.pressure_l2_rate,
+            zone_start: r.zone_start.is_finite().then_some(r.zone_start),
+            zone_start_error: r.zone_start_error,
+            separated_fraction: r.separated_fraction,
+        }
+    }
+}
+
+/// The observed orders on a problem's finest pair of meshes: from the
+/// coarser `from` to the row `to`.
+#[derive(Serialize)]
+pub struct Orders<'a> {
+    pub from: &'a str,
+    pub to: RowView<'a>,
+}
+
+/// The largest nodal pressure not settling as h falls ([`unsettled_peak`]).
+#[derive(Debug, Serialize)]
+pub struct UnsettledPeak {
+    pub first_peak: f64,
+    pub first_h: String,
+    pub last_peak: f64,
+    pub last_h: String,
+    pub last_x: f64,
+    pub reference_peak: f64,
+    pub reference_h: String,
+    /// The rises of the trailing run that grows, one per halving.
+    pub rises: Vec<f64>,
+    /// log₂ of the last rise's ratio: the peak grows about as h^−growth.
+    pub growth: f64,
+    /// The L2 pressure error's order over the last halving, from `before_h`.
+    pub l2_order: f64,
+    pub before_h: String,
+}
+
+/// Problem 1's separated zone at the paper's h = 1/64 against the paper's
+/// start and against the reference mesh's.
+#[derive(Serialize)]
+pub struct PapersZone {
+    pub h: String,
+    pub start: f64,
+    pub separated_fraction: f64,
+    pub papers_start: f64,
+    /// |start − the reference's start|.
+    pub error: f64,
+    /// |start − the paper's start|.
+    pub gap: f64,
+}
+
+/// What the section says of one problem.
+#[derive(Serialize)]
+pub struct ProblemFacts<'a> {
+    pub problem: u32,
+    pub orders: Option<Orders<'a>>,
+    pub unsettled: Option<UnsettledPeak>,
+    pub zone: Option<PapersZone>,
+}
+
+/// The largest nodal pressure when it does not settle as h falls: over the
+/// last halvings (at least two) it rises by more each time, where a
+/// converging peak rises, or falls, by less and less. The pressure is then
+/// unbounded near that point, no maximum error can converge, and the L2
+/// error along Γ_K is the one to read.
+fn unsettled_peak(of: &[&ErrorRow]) -> Option<UnsettledPeak> {
     let rises: Vec<f64> = of
         .windows(2)
         .map(|w| w[1].peak_pressure - w[0].peak_pressure)
@@ -142,75 +192,86 @@ fn unsettled_peak(problem: u32, of: &[&ErrorRow]) -> Option<String> {
     }
     let first = of[of.len() - 1 - run];
     let (before, last) = (of[of.len() - 2], of[of.len() - 1]);
-    let growth = (last.peak_pressure / before.peak_pressure).log2();
-    let listed: Vec<String> = rises[rises.len() - run..]
-        .iter()
-        .map(|d| format!("{d:.1}"))
-        .collect();
-    Some(format!(
-        "- Problem {problem}: the largest nodal pressure does not settle as h falls: from {:.1} at h = {} to {:.1} at {} (x = {:.3}) and {:.1} on the reference {}, rising by more over each halving ({}), about h^−{growth:.2} over the last. The pressure is unbounded there, so its largest nodal error cannot converge (the maximum error column), and its L2 error along Γ_K is the measure to read (order {:.2} from h = {} to {}).",
-        first.peak_pressure,
-        first.h,
-        last.peak_pressure,
-        last.h,
-        last.peak_x,
-        last.reference_peak_pressure,
-        last.reference_h,
-        listed.join(", "),
-        last.pressure_l2_rate,
-        before.h,
-        last.h
-    ))
+    Some(UnsettledPeak {
+        first_peak: first.peak_pressure,
+        first_h: first.h.clone(),
+        last_peak: last.peak_pressure,
+        last_h: last.h.clone(),
+        last_x: last.peak_x,
+        reference_peak: last.reference_peak_pressure,
+        reference_h: last.reference_h.clone(),
+        rises: rises[rises.len() - run..].to_vec(),
+        growth: (last.peak_pressure / before.peak_pressure).log2(),
+        l2_order: last.pressure_l2_rate,
+        before_h: before.h.clone(),
+    })
 }
 
 /// Where the paper's problem 1 separates at h = 1/64 (paper, section 5).
 pub const PAPERS_ZONE_START: f64 = 0.81;
 
-/// The study's findings as sentences computed from the rows: the observed
-/// orders on the finest pair of meshes, and where problem 1's zone starts at
-/// the paper's h = 1/64 against the reference (the paper reports 0.81, 19 %).
-pub fn findings(rows: &[ErrorRow]) -> String {
-    let papers_h = level(6);
-    let mut lines = Vec::new();
+/// The study's findings per problem, computed from the rows: the observed
+/// orders on the finest pair of meshes, a pressure peak that does not
+/// settle, and where problem 1's zone starts at the paper's h = 1/64
+/// against the reference (the paper reports 0.81, 19 %).
+pub fn findings(rows: &[ErrorRow]) -> Vec<ProblemFacts<'_>> {
+    let papers_h = level(6).to_string();
     let mut problems: Vec<u32> = rows.iter().map(|r| r.problem).collect();
     problems.dedup();
-    for problem in problems {
-        let of: Vec<&ErrorRow> = rows.iter().filter(|r| r.problem == problem).collect();
-        if let Some(last) = of.last().filter(|r| r.l2_rate.is_finite()) {
-            lines.push(format!(
-                "- Problem {problem}, from h = {} to {}: observed orders {:.2} (L2), {:.2} (energy), {:.2} (pressure, max) and {:.2} (pressure, L2); at h = {} the errors are {:.1e}, {:.1e}, {:.1e} and {:.1e}.",
-                of[of.len() - 2].h,
-                last.h,
-                last.l2_rate,
-                last.energy_rate,
-                last.pressure_rate,
-                last.pressure_l2_rate,
-                last.h,
-                last.l2_error,
-                last.energy_error,
-                last.pressure_error,
-                last.pressure_l2_error
-            ));
-        }
-        lines.extend(unsettled_peak(problem, &of));
-        let at = of.iter().find(|r| r.h == papers_h.to_string());
-        if let Some(r) = at.filter(|r| r.zone_start.is_finite() && problem == 1) {
-            let gap = (r.zone_start - PAPERS_ZONE_START).abs();
-            let verdict = if r.zone_start_error < gap {
-                "smaller than its distance from the paper's start: the mesh does not explain the difference"
-            } else {
-                "as large as its distance from the paper's start: the mesh can explain the difference"
-            };
-            lines.push(format!(
-                "- Problem 1 at the paper's h = {}: the separated zone starts at {:.4} ({:.1}% of Γ_K; the paper: {PAPERS_ZONE_START}, 19%). Its distance from the reference mesh's start, {:.1e}, is {verdict} ({gap:.1e}).",
-                r.h,
-                r.zone_start,
-                100.0 * r.separated_fraction,
-                r.zone_start_error
-            ));
-        }
-    }
-    lines.join("\n")
+    problems
+        .into_iter()
+        .map(|problem| {
+            let of: Vec<&ErrorRow> = rows.iter().filter(|r| r.problem == problem).collect();
+            let orders = of
+                .last()
+                .filter(|r| r.l2_rate.is_finite())
+                .map(|&last| Orders {
+                    from: &of[of.len() - 2].h,
+                    to: RowView::from(last),
+                });
+            let zone = of
+                .iter()
+                .find(|r| r.h == papers_h)
+                .filter(|r| r.zone_start.is_finite() && problem == 1)
+                .map(|r| PapersZone {
+                    h: r.h.clone(),
+                    start: r.zone_start,
+                    separated_fraction: r.separated_fraction,
+                    papers_start: PAPERS_ZONE_START,
+                    error: r.zone_start_error,
+                    gap: (r.zone_start - PAPERS_ZONE_START).abs(),
+                });
+            ProblemFacts {
+                problem,
+                orders,
+                unsettled: unsettled_peak(&of),
+                zone,
+            }
+        })
+        .collect()
+}
+
+/// The section (`templates/discretization_error.md`): the table, the
+/// findings and the charts.
+pub fn section(rows: &[ErrorRow], reference: &str, charts: &[String]) -> anyhow::Result<String> {
+    let solver = rows.first().map_or("", |r| r.solver.as_str());
+    let problems = findings(rows);
+    let any = problems
+        .iter()
+        .any(|p| p.orders.is_some() || p.unsettled.is_some() || p.zone.is_some());
+    template::render(
+        "discretization_error",
+        include_str!("../templates/discretization_error.md"),
+        minijinja::context! {
+            reference,
+            solver,
+            multigrid => solver == super::MULTIGRID,
+            rows => rows.iter().map(RowView::from).collect::<Vec<_>>(),
+            problems,
+            findings => any,
+            charts,
+        },
+    )
 }
 
 #[cfg(test)]
@@ -260,28 +321,72 @@ mod tests {
                 })
                 .collect()
         };
+        let unsettled = |peaks: &[f64]| {
+            let rows = with_peaks(peaks);
+            unsettled_peak(&rows.iter().collect::<Vec<_>>())
+        };
         // Problem 3's peaks at 1/32 to 1/256 in the study: the first
         // halving moves the peak to the end of Γ_K without a rise.
-        let singular = findings(&with_peaks(&[62.7, 62.7, 65.2, 72.0]));
-        assert!(singular.contains("does not settle"), "{singular}");
-        assert!(
-            singular.contains("order 0.60 from h = 1/64 to 1/128"),
-            "{singular}"
+        let u = unsettled(&[62.7, 62.7, 65.2, 72.0]).expect("reported");
+        assert_eq!((u.first_h.as_str(), u.last_h.as_str()), ("1/32", "1/128"));
+        assert_eq!(
+            (u.first_peak, u.last_peak, u.reference_peak),
+            (62.7, 72.0, 95.0)
         );
-        assert!(
-            singular.contains(
-                "from 62.7 at h = 1/32 to 72.0 at 1/128 (x = 1.000) and 95.0 on the reference 1/256, rising by more over each halving (2.5, 6.8)"
-            ),
-            "{singular}"
-        );
+        assert_eq!(u.rises.len(), 2);
+        assert!((u.rises[0] - 2.5).abs() < 1e-12 && (u.rises[1] - 6.8).abs() < 1e-12);
+        assert!((u.growth - (72.0f64 / 65.2).log2()).abs() < 1e-15);
+        assert_eq!((u.l2_order, u.before_h.as_str()), (0.6, "1/64"));
         // Converging: rises of 2, 1, 0.5.
-        let converging = findings(&with_peaks(&[52.0, 54.0, 55.0, 55.5]));
-        assert!(!converging.contains("does not settle"), "{converging}");
+        assert!(unsettled(&[52.0, 54.0, 55.0, 55.5]).is_none());
         // Nor is one whose last rise is smaller, or that stops.
-        let slowing = findings(&with_peaks(&[62.7, 65.2, 72.0, 75.0]));
-        assert!(!slowing.contains("does not settle"), "{slowing}");
-        let flat = findings(&with_peaks(&[62.7, 65.2, 72.0, 72.0]));
-        assert!(!flat.contains("does not settle"), "{flat}");
+        assert!(unsettled(&[62.7, 65.2, 72.0, 75.0]).is_none());
+        assert!(unsettled(&[62.7, 65.2, 72.0, 72.0]).is_none());
+    }
+
+    /// The template renders every fact: the orders, the unsettled peak with
+    /// its rises, the paper's zone with the verdict the numbers give, a
+    /// missing zone as `none`, and no blank lines inside the table.
+    #[test]
+    fn the_section_renders_the_facts() {
+        let mut rows = vec![
+            ErrorRow {
+                peak_pressure: 62.7,
+                ..row("1/16", 0.1)
+            },
+            ErrorRow {
+                peak_pressure: 65.2,
+                zone_start: f64::NAN,
+                ..row("1/32", 0.05)
+            },
+            ErrorRow {
+                peak_pressure: 72.0,
+                ..row("1/64", 0.025)
+            },
+        ];
+        rows[0].l2_rate = f64::NAN;
+        let s = section(&rows, "1/256", &["discretization_error_p1".into()]).unwrap();
+        assert!(
+            s.contains("observed orders 2.00 (L2), 1.00 (energy)"),
+            "{s}"
+        );
+        assert!(
+            s.contains("rising by more over each halving (2.5, 6.8)"),
+            "{s}"
+        );
+        assert!(s.contains("| 1 | 1/32 | 2.50e-3 |"), "{s}");
+        assert!(s.contains("| none | 5.00e-2 | 20.00% |"), "{s}");
+        // 0.8 against the paper's 0.81 is 1e-2 away; the reference's 2.5e-2.
+        assert!(
+            s.contains("the separated zone starts at 0.8000 (20.0% of Γ_K; the paper: 0.81, 19%)"),
+            "{s}"
+        );
+        assert!(
+            s.contains("the mesh can explain the difference (1.0e-2)"),
+            "{s}"
+        );
+        assert!(!s.contains("|\n\n|"), "{s}");
+        assert!(s.ends_with("slope is the observed order.*\n\n"), "{s:?}");
     }
 
     #[test]
