@@ -61,7 +61,7 @@ fn side_by_side(args: &CompareArgs) -> Result<()> {
         .iter()
         .filter_map(|a| a.chart_name().map(String::from))
         .collect();
-    let mut report = side_by_side::markdown(&study.scene, &pairs, &[]);
+    let mut report = side_by_side::markdown(&study.scene, &pairs, &[])?;
     if let Some(folder) = folder {
         let files = write_artifacts(folder.path(), &artifacts)?;
         let target = folder.commit()?;

@@ -25,7 +25,7 @@ pub fn run(args: &Table1Args) -> Result<()> {
         settings: settings.clone(),
     };
     let (findings, artifacts) = run_study(&study, settings)?;
-    let mut report = table1::markdown(&findings);
+    let mut report = table1::markdown(&findings)?;
     if let Some(folder) = folder {
         let files = write_artifacts(folder.path(), &artifacts)?;
         let target = folder.commit()?;

@@ -65,15 +65,21 @@ pub fn setting_value<S: Serializer>(v: &str, s: S) -> Result<S::Ok, S::Error> {
 /// file, as null), so that Python gets the data without parsing the file
 /// back.
 pub fn records<T: Serialize + ?Sized>(rows: &T) -> Result<String> {
-    struct Reset;
+    Ok(typed(|| serde_json::to_string(rows))?)
+}
+
+/// `f()` with rows serialized as typed values: [`fixed`] and its kin give
+/// the number itself (none if not finite), not the CSV text. For
+/// [`records`] and for the facts a README template reads.
+pub fn typed<R>(f: impl FnOnce() -> R) -> R {
+    struct Reset(bool);
     impl Drop for Reset {
         fn drop(&mut self) {
-            TYPED.set(false);
+            TYPED.set(self.0);
         }
     }
-    TYPED.set(true);
-    let _reset = Reset;
-    Ok(serde_json::to_string(rows)?)
+    let _reset = Reset(TYPED.replace(true));
+    f()
 }
 
 /// Rows as CSV bytes (header from the first row's fields; a header alone

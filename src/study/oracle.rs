@@ -264,6 +264,6 @@ pub fn markdown(measured: &[Measured]) -> Result<String> {
     template::render(
         "oracle",
         include_str!("templates/oracle.md"),
-        minijinja::context! { certified, runs },
+        template::facts! { certified, runs },
     )
 }

@@ -18,8 +18,9 @@ use crate::io::csv::fixed;
 use crate::mechanics::contact_zone::{ContactState, ProfileRow, contact_profile};
 use crate::mechanics::scene::Scene;
 use crate::study::class::WRONG_PRESSURE;
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::Keep;
+use crate::study::template;
 use crate::study::trial::TrialSpec;
 
 /// The study's name in trial records.
@@ -676,61 +677,26 @@ impl Study for SideBySide {
 
     fn section(&self, pairs: &Pairs, _: &Lab, charts: &[String]) -> Result<Section> {
         Ok(Section {
-            markdown: markdown(&self.scene, pairs, charts),
+            markdown: markdown(&self.scene, pairs, charts)?,
         })
     }
 }
 
-/// The section: a table of the largest differences per pair, then the
-/// charts.
-pub fn markdown(scene: &Scene, pairs: &Pairs, charts: &[String]) -> String {
-    let mut s = format!(
-        "## Side by side ({}, h = {})\n\nTwo answers of the Coulomb problem node by node along Γ_K \
-         (`side_by_side_<a>_<b>.csv`: both answers and their differences at every contact node). \
-         Differences in the problem's scales: displacements over U = F/K, pressures and tractions over P = N/L, \
-         each largest one with the x where it sits. Verdict: the two **agree** when every largest difference is within \
-         {AGREEMENT:e} (the threshold of a wrong pressure in the comparison and the stability map, here in the \
-         problem's scales) and the contact states match at every node; otherwise they **disagree**, with what is past it.\n\n\
-         | a | b | status of a, b | max\\|Δu\\|/U | max\\|Δjump\\|/U | max\\|Δslip\\|/U | max\\|Δp\\|/P | max\\|Δq\\|/P | contact states | verdict |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
-        scene.name,
-        scene.finest()
-    );
-    for p in pairs {
-        let x = &p.summary;
-        let states = if x.states_differ == 0 {
-            format!("equal at all {} nodes", x.nodes)
-        } else {
-            format!(
-                "differ at {} of {} (x = {})",
-                x.states_differ, x.nodes, x.differing_at
-            )
-        };
-        let at = |d: f64, x: f64| format!("{d:.1e} (x = {x:.4})");
-        s += &format!(
-            "| {} | {} | {}, {} | {} | {} | {} | {} | {} | {states} | **{}** |\n",
-            x.a,
-            x.b,
-            x.status_a,
-            x.status_b,
-            at(x.max_du_over_u, x.x_max_du),
-            at(x.max_djump_over_u, x.x_max_djump),
-            at(x.max_dslip_over_u, x.x_max_dslip),
-            at(x.max_dp_over_p, x.x_max_dp),
-            at(x.max_dq_over_p, x.x_max_dq),
-            x.verdict
-        );
-    }
-    s += "\n";
-    for c in charts {
-        let intent = if c.ends_with("_overlay") {
-            "Pressure and friction traction of both answers along Γ_K (the second dashed)."
-        } else {
-            "Where along Γ_K the two answers differ, in the problem's scales."
-        };
-        s += &chart_markdown(c, intent);
-    }
-    s
+/// The section (`templates/side_by_side.md`): a table of the largest
+/// differences per pair, then the charts.
+pub fn markdown(scene: &Scene, pairs: &Pairs, charts: &[String]) -> Result<String> {
+    let pairs: Vec<&PairSummary> = pairs.iter().map(|p| &p.summary).collect();
+    template::render(
+        "side_by_side",
+        include_str!("templates/side_by_side.md"),
+        template::facts! {
+            scene => scene.name,
+            h => scene.finest().to_string(),
+            agreement => AGREEMENT,
+            pairs,
+            charts,
+        },
+    )
 }
 
 /// The largest profile read: 64 MB, some 400 000 contact nodes.

@@ -17,6 +17,7 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
+use crate::study::template;
 use crate::study::trial::{Trial, TrialSpec};
 
 /// The study's name in trial records.
@@ -141,40 +142,28 @@ impl Study for Table1 {
 
     fn section(&self, rows: &Vec<Table1Row>, _: &Lab, _: &[String]) -> Result<Section> {
         Ok(Section {
-            markdown: format!(
-                "## Table 1: iteration counts of the paper's method, at the paper's settings\n\n{}{}",
-                markdown(rows),
-                verdict(rows)
-            ),
+            markdown: markdown(rows)?,
         })
     }
 }
 
-/// Which schedule matches the paper's counts better, and what the sweep
-/// counts say.
-fn verdict(rows: &[Table1Row]) -> String {
-    let score = |schedule: &str| -> f64 {
+/// Which schedule matches the paper's friction and Uzawa counts better
+/// (the smaller sum of |ln(ours / paper's)| over its rows).
+fn closer_schedule(rows: &[Table1Row]) -> Schedule {
+    let score = |schedule: Schedule| -> f64 {
         rows.iter()
-            .filter(|r| r.schedule.to_string() == schedule)
+            .filter(|r| r.schedule == schedule)
             .map(|r| {
                 (r.mpp as f64 / r.paper_mpp.max(1) as f64).ln().abs()
                     + (r.mu as f64 / r.paper_mu.max(1) as f64).ln().abs()
             })
             .sum()
     };
-    let better = if score("revisit") <= score("finest-only") {
-        "revisit"
+    if score(Schedule::Revisit) <= score(Schedule::FinestOnly) {
+        Schedule::Revisit
     } else {
-        "finest-only"
-    };
-    let fewer = rows.iter().filter(|r| r.mpr < r.paper_mpr).count();
-    format!(
-        "\nThe `{better}` schedule is the closer match to the paper's friction (MPP) and Uzawa (MU) counts. Our sweep \
-         count (MPR) is below the paper's in {fewer} of {} rows; the paper does not give its smoothing of |s|, its sweep \
-         order or its treatment of the penalty along a coordinate, all of which change it. The certificates show what \
-         the paper's stopping rules buy.\n",
-        rows.len()
-    )
+        Schedule::FinestOnly
+    }
 }
 
 /// The rows of measured Table 1 trials.
@@ -220,36 +209,18 @@ fn row(m: &Measured, schedule: Schedule, problem: u32) -> Table1Row {
     }
 }
 
-/// The table in Markdown, ours / paper in each cell.
-pub fn markdown(rows: &[Table1Row]) -> String {
-    let ran = |n: Option<usize>| n.map_or("not run".to_string(), |n| n.to_string());
-    let mut out = String::from(
-        "| problem | schedule | status (claim) | certificate | MPP | MU | MPR total | MPR at 1/32 | MPR at 1/64 |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
-    );
-    for r in rows {
-        out += &format!(
-            "| {} | {} | {} ({}) | {:.1e} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |\n",
-            r.problem,
-            r.schedule,
-            r.status,
-            r.solver_status,
-            r.certificate,
-            r.mpp,
-            r.paper_mpp,
-            r.mu,
-            r.paper_mu,
-            r.mpr,
-            r.paper_mpr,
-            ran(r.mpr_1_32),
-            r.paper_mpr_1_32,
-            ran(r.mpr_1_64),
-            r.paper_mpr_1_64
-        );
-    }
-    out + "\nEach count: ours / the paper's (Table 1). MPP: friction iterations; MU: Uzawa iterations; MPR: relaxation \
-           sweeps. Status: certified (the solver's claim in parentheses); certificate: the largest violation of the \
-           Coulomb law's conditions in the problem's scales.\n"
+/// The README section (`templates/table1.md`): the table in Markdown,
+/// ours / paper in each cell, its key, and which schedule the counts match.
+pub fn markdown(rows: &[Table1Row]) -> Result<String> {
+    template::render(
+        "table1",
+        include_str!("templates/table1.md"),
+        template::facts! {
+            rows,
+            closer => closer_schedule(rows),
+            fewer_sweeps => rows.iter().filter(|r| r.mpr < r.paper_mpr).count(),
+        },
+    )
 }
 
 /// Table 1 for a paper: a group row per problem, the paper's counts in
@@ -382,7 +353,7 @@ mod tests {
     #[test]
     fn a_level_never_run_reads_not_run_not_zero() {
         let row = row(1, Schedule::Revisit);
-        let table = markdown(&[row]);
+        let table = markdown(&[row]).unwrap();
         assert!(
             table.contains("| 700 / 5478 | not run / 21440 |"),
             "{table}"

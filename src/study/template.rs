@@ -7,15 +7,29 @@
 //! The environment is strict (a name the facts do not have is an error,
 //! not an empty string), keeps a template's trailing newline, and drops
 //! the newline after a block tag, so that `{% for %}` lines leave no blank
-//! lines in a table. Two filters format numbers as the tables always have:
-//! `x|sci(d)` is Rust's `{:.de}` (`5.6e-7`), `x|fixed(d)` is `{:.d}`; a
-//! number that is not finite (NaN: not measured) reads `–`. Facts go in
-//! as `Serialize` values or `minijinja::context!`, never through
+//! lines in a table. Filters format numbers as the tables always have:
+//! `x|sci(d)` is Rust's `{:.de}` (`5.6e-7`), `x|fixed(d)` is `{:.d}`,
+//! `x|exp` is `{:e}` (`1e-6`), `x|plain` is `{}` (`10`), `x|percent(d)` is `{:.d} %` of 100 x; a
+//! number that is not finite (NaN), or none (an `Option` not measured),
+//! reads `–`. Facts go in as a `Serialize` value or through [`facts!`]
+//! (`minijinja::context!` with rows serialized as typed values,
+//! [`crate::io::csv::typed`], so that a row whose floats a CSV file holds
+//! as text gives the template its numbers), never through
 //! `serde_json::Value`, which turns NaN into null.
 
 use anyhow::{Context, Result};
-use minijinja::{Environment, UndefinedBehavior};
+use minijinja::{Environment, UndefinedBehavior, Value};
 use serde::Serialize;
+
+/// The facts of a template: `minijinja::context!`, its values serialized
+/// as typed values (a [`crate::io::csv::fixed`] field is its number, none
+/// if not finite), as [`render`] serializes a `Serialize` value.
+macro_rules! facts {
+    ($($tt:tt)*) => {
+        $crate::io::csv::typed(|| minijinja::context! { $($tt)* })
+    };
+}
+pub(crate) use facts;
 
 /// `x` as `{:.de}`, or `–` when it is not finite.
 pub fn sci(x: f64, digits: usize) -> String {
@@ -35,17 +49,69 @@ pub fn fixed(x: f64, digits: usize) -> String {
     }
 }
 
+/// A filter's argument as a number, `None` for none (not measured); a
+/// name the facts lack (undefined) or a value that is not a number is an
+/// error, so that a misspelt fact does not read `–`.
+fn number(x: &Value) -> Result<Option<f64>, minijinja::Error> {
+    if x.is_undefined() {
+        return Err(minijinja::Error::from(minijinja::ErrorKind::UndefinedError));
+    }
+    if x.is_none() {
+        return Ok(None);
+    }
+    f64::try_from(x.clone()).map(Some)
+}
+
+/// `x` as Rust's `{:e}`, its shortest exact form (`1e-6`, `2.5e-8`): a
+/// setting's value as the user wrote it.
+pub fn exp(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:e}")
+    } else {
+        "–".into()
+    }
+}
+
+/// `x` as Rust's `{}` (`10`, `0.25`), or `–` when it is not finite: the
+/// shortest decimal form, where the template's own printing would write
+/// `10.0`.
+pub fn plain(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        "–".into()
+    }
+}
+
+/// `x` as a percentage, `{:.d} %` of 100 x, or `–` when it is not finite.
+pub fn percent(x: f64, digits: usize) -> String {
+    if x.is_finite() {
+        format!("{:.digits$} %", 100.0 * x)
+    } else {
+        "–".into()
+    }
+}
+
 /// The environment every section is rendered in.
 fn environment() -> Environment<'static> {
     let mut env = Environment::new();
     env.set_undefined_behavior(UndefinedBehavior::Strict);
     env.set_keep_trailing_newline(true);
     env.set_trim_blocks(true);
-    env.add_filter("sci", |x: f64, digits: Option<usize>| {
-        sci(x, digits.unwrap_or(1))
+    env.add_filter("sci", |x: Value, digits: Option<usize>| {
+        number(&x).map(|x| x.map_or("–".into(), |x| sci(x, digits.unwrap_or(1))))
     });
-    env.add_filter("fixed", |x: f64, digits: Option<usize>| {
-        fixed(x, digits.unwrap_or(1))
+    env.add_filter("fixed", |x: Value, digits: Option<usize>| {
+        number(&x).map(|x| x.map_or("–".into(), |x| fixed(x, digits.unwrap_or(1))))
+    });
+    env.add_filter("exp", |x: Value| {
+        number(&x).map(|x| x.map_or("–".into(), exp))
+    });
+    env.add_filter("plain", |x: Value| {
+        number(&x).map(|x| x.map_or("–".into(), plain))
+    });
+    env.add_filter("percent", |x: Value, digits: Option<usize>| {
+        number(&x).map(|x| x.map_or("–".into(), |x| percent(x, digits.unwrap_or(0))))
     });
     env
 }
@@ -56,6 +122,7 @@ pub fn render(name: &str, source: &str, facts: impl Serialize) -> Result<String>
     let mut env = environment();
     env.add_template(name, source)
         .with_context(|| format!("the template {name}"))?;
+    let facts = crate::io::csv::typed(|| Value::from_serialize(&facts));
     env.get_template(name)?
         .render(facts)
         .with_context(|| format!("rendering the template {name}"))
@@ -81,5 +148,70 @@ mod tests {
         assert_eq!(sci(f64::NAN, 2), "–");
         assert_eq!(fixed(f64::INFINITY, 1), "–");
         assert!(render("t", "{{ missing }}", minijinja::context! {}).is_err());
+        // none is "not measured"; a name the facts lack stays an error
+        // through a filter.
+        let none: Option<f64> = None;
+        let out = render("t", "{{ x|sci(2) }}", minijinja::context! { x => none }).unwrap();
+        assert_eq!(out, "–");
+        assert!(render("t", "{{ y|sci(2) }}", minijinja::context! {}).is_err());
+        assert!(
+            render(
+                "t",
+                "{{ r.y|fixed }}",
+                minijinja::context! { r => minijinja::context! {} }
+            )
+            .is_err()
+        );
+    }
+
+    /// A row whose floats a CSV file holds as text (`serialize_with =
+    /// "fixed"`) gives the template its numbers, through [`facts!`] and
+    /// through a `Serialize` value alike; a string where a number belongs
+    /// is an error. The other filters: `{:e}`, `{}` and a percentage.
+    #[test]
+    fn a_csv_row_gives_the_template_numbers() {
+        #[derive(Serialize)]
+        struct Row {
+            #[serde(serialize_with = "crate::io::csv::fixed")]
+            x: f64,
+            #[serde(serialize_with = "crate::io::csv::fixed")]
+            y: f64,
+        }
+        let row = Row {
+            x: 0.25,
+            y: f64::NAN,
+        };
+        let t = "{{ r.x|sci(1) }} {{ r.x|percent }} {{ r.y|fixed(2) }}";
+        let out = render("t", t, facts! { r => row }).unwrap();
+        assert_eq!(out, "2.5e-1 25 % –");
+        #[derive(Serialize)]
+        struct Facts {
+            r: Row,
+        }
+        let out = render(
+            "t",
+            t,
+            Facts {
+                r: Row {
+                    x: 0.25,
+                    y: f64::NAN,
+                },
+            },
+        )
+        .unwrap();
+        assert_eq!(out, "2.5e-1 25 % –");
+        assert!(render("t", "{{ s|sci }}", facts! { s => "0.25" }).is_err());
+        let out = render(
+            "t",
+            "{{ a|exp }} {{ b|plain }}",
+            facts! { a => 1e-6, b => 10.0 },
+        )
+        .unwrap();
+        assert_eq!(out, "1e-6 10");
+        // typed mode ends with the facts: the CSV text is back after.
+        let csv =
+            String::from_utf8(crate::io::csv::to_csv(&[Row { x: 0.25, y: 1.0 }], &[]).unwrap())
+                .unwrap();
+        assert!(csv.contains("2.500000000e-1"), "{csv}");
     }
 }

@@ -262,7 +262,7 @@ pub fn section(rows: &[ErrorRow], reference: &str, charts: &[String]) -> anyhow:
     template::render(
         "discretization_error",
         include_str!("../templates/discretization_error.md"),
-        minijinja::context! {
+        template::facts! {
             reference,
             solver,
             multigrid => solver == super::MULTIGRID,

@@ -514,7 +514,7 @@ impl Study for ErrorBoundStudy {
 
     fn section(&self, points: &Vec<BoundPoint>, _: &Lab, charts: &[String]) -> Result<Section> {
         Ok(Section {
-            markdown: views::section(&self.spec, points, charts),
+            markdown: views::section(&self.spec, points, charts)?,
         })
     }
 }

@@ -2,13 +2,15 @@
 //! law and mesh), the charts of bound against measured error, and the
 //! README section. Every number is computed from the points.
 
+use anyhow::Result;
 use contactlab_solvers::Law;
 use serde::Serialize;
 
 use super::{BoundPoint, BoundSpec, LADDER_REFERENCE};
 use crate::io::charts::{Chart, Series};
 use crate::io::csv::fixed;
-use crate::study::lab::{Artifact, chart_markdown};
+use crate::study::lab::Artifact;
+use crate::study::template;
 use crate::study::trial::Trial;
 
 /// The issue's goal: the bound within this factor of the error on 90 % of
@@ -304,80 +306,47 @@ pub fn charts(points: &[BoundPoint]) -> Vec<Artifact> {
     out
 }
 
-fn number(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.3}")
-    } else {
-        "–".into()
-    }
+/// A chart of the section and which of the three it is (its caption).
+#[derive(Serialize)]
+struct ChartFacts<'a> {
+    name: &'a str,
+    /// `ratio`, `given_friction` or `coulomb`.
+    shows: &'static str,
 }
 
-/// The README section: what was measured, the table, the charts.
-pub fn section(spec: &BoundSpec, points: &[BoundPoint], charts: &[String]) -> String {
-    let rows = sharpness(points);
-    let mut md = String::from("## The error bound: does it hold, and how sharp is it?\n\n");
-    md += &format!(
-        "Each answer's bound on ‖v − v*‖_A (over √K·U; `certify`'s, issue 51) beside its measured distance from a reference answer. **Core**: the given-friction subproblem of every instance of the benchmark's {} collection, every solver of it at targets {}, against the reference earned among the exact solvers. **Ladder**: problem {} at h = {} to {}, both laws, targets {}, against `{LADDER_REFERENCE}` at its reference accuracy; each solver goes to finer meshes while its last two predict a run within {} s. A bound is *below* when it is smaller than the error less the reference's own bound; for a given-friction answer this would be a failure of the bound. A Coulomb answer's bound is at its own g = 𝓕p: the fixed point's part is not included, and *below* counts where that part shows. Ratios are over answers whose error exceeds ten times the reference's bound.\n\n",
-        if spec.quick { "quick" } else { "core" },
-        spec.targets
-            .iter()
-            .map(|t| format!("{t:e}"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        spec.ladder_problem,
-        spec.ladder_meshes
-            .first()
-            .map(|h| h.to_string())
-            .unwrap_or_default(),
-        spec.ladder_meshes
-            .last()
-            .map(|h| h.to_string())
-            .unwrap_or_default(),
-        spec.ladder_targets
-            .iter()
-            .map(|t| format!("{t:e}"))
-            .collect::<Vec<_>>()
-            .join(" and "),
-        spec.budget,
-    );
-    md += "| part | law | h | answers | bounded | compared | below | median bound/error | 90th pct | max | within 30× | pressure: median | 90th pct | estimated (below) |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-    for r in &rows {
-        md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r.part,
-            r.law.as_str(),
-            r.h,
-            r.answers,
-            r.bounded,
-            r.compared,
-            r.below,
-            number(r.ratio_median),
-            number(r.ratio_p90),
-            number(r.ratio_max),
-            if r.within_goal.is_finite() {
-                format!("{:.0} %", 100.0 * r.within_goal)
+/// The README section (`templates/error_bound.md`): what was measured, the
+/// table, the charts.
+pub fn section(spec: &BoundSpec, points: &[BoundPoint], charts: &[String]) -> Result<String> {
+    let charts: Vec<ChartFacts> = charts
+        .iter()
+        .map(|c| ChartFacts {
+            name: c,
+            shows: if c.contains("ratio") {
+                "ratio"
+            } else if c.ends_with("given_friction") {
+                "given_friction"
             } else {
-                "–".into()
+                "coulomb"
             },
-            number(r.pressure_ratio_median),
-            number(r.pressure_ratio_p90),
-            if r.law == Law::Coulomb {
-                format!("{} ({})", r.estimated, r.estimate_below)
-            } else {
-                "–".into()
-            },
-        );
-    }
-    md += "\n";
-    for c in charts {
-        let intent = if c.contains("ratio") {
-            "The median and largest bound/error over the solvers' answers as the mesh is refined: whether the bound stays as sharp at fine h."
-        } else if c.ends_with("given_friction") {
-            "Bound against measured error for every given-friction answer; no point may lie below the line bound = error."
-        } else {
-            "Coulomb answers: the bound at the answer's own g = 𝓕p against the distance from the Coulomb reference; points below the line show the fixed point's part, which the bound does not include."
-        };
-        md += &chart_markdown(c, intent);
-    }
-    md
+        })
+        .collect();
+    let mesh = |h: Option<&crate::mechanics::mesh_size::MeshSize>| {
+        h.map(|h| h.to_string()).unwrap_or_default()
+    };
+    template::render(
+        "error_bound",
+        include_str!("../templates/error_bound.md"),
+        template::facts! {
+            collection => if spec.quick { "quick" } else { "core" },
+            targets => spec.targets,
+            ladder_problem => spec.ladder_problem,
+            ladder_from => mesh(spec.ladder_meshes.first()),
+            ladder_to => mesh(spec.ladder_meshes.last()),
+            ladder_targets => spec.ladder_targets,
+            ladder_reference => LADDER_REFERENCE,
+            budget => spec.budget,
+            rows => sharpness(points),
+            charts,
+        },
+    )
 }

@@ -561,7 +561,7 @@ impl Study for VerifyStudy {
 
     fn section(&self, found: &Verified, _: &Lab, charts: &[String]) -> Result<Section> {
         Ok(Section {
-            markdown: views::section(found, charts),
+            markdown: views::section(found, charts)?,
         })
     }
 }

@@ -3,9 +3,11 @@
 
 use anyhow::Result;
 use contactlab_solvers::Status;
+use serde::Serialize;
 
 use crate::io::charts::{Chart, Series, solver_color};
 use crate::mechanics::contact_zone::ProfileRow;
+use crate::study::template;
 
 use super::{ClosedForm, SCENES, Verified, VerifyRow, scene};
 
@@ -166,78 +168,76 @@ fn profile_series(
         .collect()
 }
 
-fn opt(x: Option<f64>) -> String {
-    x.map_or("–".to_string(), |v| format!("{v:.2e}"))
+/// A Cattaneo–Mindlin row of the tangential table: the row and its Q/(μP).
+#[derive(Serialize)]
+struct TangentialRow<'a> {
+    #[serde(flatten)]
+    row: &'a VerifyRow,
+    load_ratio: f64,
 }
 
-/// The README section: what was verified, and a table per scene.
-pub fn section(found: &Verified, charts: &[String]) -> String {
-    // Its own heading: without it the scenes' tables read as the section
-    // before's (a run's README had them under the last tuning map).
-    let mut md = String::from("## Verification against closed forms: the classical scenes\n\n");
-    md.push_str(&format!(
-        "Each classical scene of `scenes/` at h = {}, every registered solver at its defaults, the Coulomb law (frictionless, 𝓕 = 0, but for Cattaneo–Mindlin's 0.3), a time limit of {:.0} s a solve. Errors are those of the nodal pressures against the half-plane closed form: L2 relative over Γ_K (the punch: over |x − x₀| ≤ 0.8 b, away from its singular edges), max over p₀. `order` is log₂ of the L2 error's fall from the next coarser mesh. The bodies are 16 half-widths wide on either side and deep: the closed forms, for half-planes, differ from them by a finite-size error, the floor the errors fall towards.\n\n",
-        found.spec.meshes.iter().map(|h| h.to_string()).collect::<Vec<_>>().join(", "),
-        found.spec.time_limit
-    ));
-    for (name, _) in SCENES {
-        md.push_str(&format!("### {name}\n\n"));
-        md.push_str("| h | solver | status | L2 error | order | max error | half-width (exact) | p₀ (exact) | seconds |\n|---|---|---|---|---|---|---|---|---|\n");
-        for r in found.rows.iter().filter(|r| r.scene == name) {
-            md.push_str(&format!(
-                "| {} | {} | {} | {} | {} | {} | {} ({:.4e}) | {} ({:.4e}) | {} |\n",
-                r.h,
-                r.solver,
-                r.status,
-                opt(r.l2_error),
-                r.l2_order.map_or("–".to_string(), |o| format!("{o:.2}")),
-                opt(r.max_error),
-                opt(r.half_width),
-                r.half_width_exact,
-                opt(r.p0),
-                r.p0_exact,
-                r.seconds.map_or("–".to_string(), |s| format!("{s:.2}")),
-            ));
-        }
-        md.push('\n');
-        if found
-            .rows
-            .iter()
-            .any(|r| r.scene == name && r.tangential_load.is_some())
-        {
-            md.push_str("The tangential side: the force Q the contact carries, the stick half-width c against a √(1 − Q/(μP)), the traction's errors against Cattaneo–Mindlin's at that Q (L2 relative over Γ_K, max over μp₀), and its odd part about x₀ over ‖q‖ (the closed form is even: this part is what the finite bodies, sheared from their sides, add, apart from the discretization).\n\n| h | solver | Q | Q/(μP) | c (exact) | traction L2 error | traction max error | odd part |\n|---|---|---|---|---|---|---|---|\n");
-            for r in found.rows.iter().filter(|r| r.scene == name) {
-                let Some(q) = r.tangential_load else { continue };
-                md.push_str(&format!(
-                    "| {} | {} | {:.4} | {:.4} | {} ({}) | {} | {} | {} |\n",
-                    r.h,
-                    r.solver,
-                    q,
-                    q.abs() / (r.friction * r.load),
-                    opt(r.stick_half_width),
-                    opt(r.stick_half_width_exact),
-                    opt(r.traction_l2_error),
-                    opt(r.traction_max_error),
-                    opt(r.traction_asymmetry),
-                ));
+/// A chart of a scene, and which of the three it is (its caption).
+#[derive(Serialize)]
+struct SceneChart<'a> {
+    name: &'a str,
+    /// `pressure`, `traction` or `error`.
+    shows: &'static str,
+}
+
+/// What the section shows of one scene.
+#[derive(Serialize)]
+struct SceneFacts<'a> {
+    name: &'a str,
+    rows: Vec<&'a VerifyRow>,
+    /// The rows that carry a tangential force (Cattaneo–Mindlin's).
+    tangential: Vec<TangentialRow<'a>>,
+    charts: Vec<SceneChart<'a>>,
+}
+
+/// The README section (`templates/verify.md`): what was verified, and a
+/// table per scene with its charts.
+pub fn section(found: &Verified, charts: &[String]) -> Result<String> {
+    let scenes: Vec<SceneFacts> = SCENES
+        .iter()
+        .map(|&(name, _)| {
+            let rows: Vec<&VerifyRow> = found.rows.iter().filter(|r| r.scene == name).collect();
+            let tangential = rows
+                .iter()
+                .filter_map(|&row| {
+                    let q = row.tangential_load?;
+                    Some(TangentialRow {
+                        row,
+                        load_ratio: q.abs() / (row.friction * row.load),
+                    })
+                })
+                .collect();
+            let prefix = format!("verify_{name}_");
+            let charts = charts
+                .iter()
+                .filter(|c| c.starts_with(&prefix))
+                .map(|c| SceneChart {
+                    name: c,
+                    shows: if c.ends_with("_pressure") {
+                        "pressure"
+                    } else if c.ends_with("_traction") {
+                        "traction"
+                    } else {
+                        "error"
+                    },
+                })
+                .collect();
+            SceneFacts {
+                name,
+                rows,
+                tangential,
+                charts,
             }
-            md.push('\n');
-        }
-        for c in charts
-            .iter()
-            .filter(|c| c.starts_with(&format!("verify_{name}_")))
-        {
-            md.push_str(&crate::study::lab::chart_markdown(
-                c,
-                if c.ends_with("_pressure") {
-                    "The computed contact pressure at each mesh over the closed form: the profile should close on it as h falls."
-                } else if c.ends_with("_traction") {
-                    "The computed tangential traction at each mesh over Cattaneo–Mindlin's at the finest mesh's Q: the stick zone in the middle, μp in the slip zones at its sides."
-                } else {
-                    "The L2 error of each solver's certified pressure against h: it falls with h until the finite-size floor."
-                },
-            ));
-        }
-    }
-    md
+        })
+        .collect();
+    let meshes: Vec<String> = found.spec.meshes.iter().map(|h| h.to_string()).collect();
+    template::render(
+        "verify",
+        include_str!("../templates/verify.md"),
+        template::facts! { meshes, time_limit => found.spec.time_limit, scenes },
+    )
 }
