@@ -31,7 +31,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     };
     let (findings, artifacts) = run_study(&study, settings)?;
     let measured = &findings;
-    let mut report = compare::markdown_of(measured);
+    let mut report = compare::markdown_of(measured)?;
     if let Some(folder) = folder {
         let files = write_artifacts(folder.path(), &artifacts)?;
         let target = folder.commit()?;

@@ -171,7 +171,7 @@ fn map(args: &SweepArgs, scenes: Vec<Scene>, base: Settings) -> Result<()> {
             lines.push(format!(
                 "{}, h = {h}: {}",
                 study.scene.name,
-                crate::study::tuning_map::verdict(&axes, &found.points)
+                crate::study::tuning_map::verdict_sentence(&axes, &found.points)?
             ));
         }
     }

@@ -27,10 +27,11 @@ use crate::io::csv::{fixed, records};
 use crate::io::heatmap::{Cell, HeatMap, Mark};
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::plans;
 use crate::study::runner::{Keep, Measured};
 use crate::study::sweep::work_cap;
+use crate::study::template;
 use crate::study::trial::{Setting, TrialSpec};
 
 /// The study's name in trial records.
@@ -547,112 +548,128 @@ pub fn work_effect(axis: usize, points: &[Point]) -> Option<f64> {
         .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))))
 }
 
-/// The sentence stating the best setting: by work, with what moves the
-/// work along each axis, then by time among the points of equal work.
-pub fn verdict(axes: &[Axis], points: &[Point]) -> String {
-    let name = |p: &Point| {
-        axes.iter()
+/// A point of the grid as the verdict names it.
+#[derive(Clone, Debug, Serialize)]
+pub struct Named {
+    /// Its settings: `r = 1e5, epsilon = 1e-4`.
+    pub setting: String,
+    pub work: usize,
+    /// Median and fastest time, over `runs` timed runs.
+    pub seconds: f64,
+    pub seconds_min: f64,
+    pub runs: usize,
+}
+
+/// What an axis does to the work ([`work_effect`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct Effect {
+    pub knob: String,
+    /// The largest ratio of most to least work along it (none: no two
+    /// certified points along it), and whether that is more than
+    /// [`EQUAL_WORK`].
+    pub ratio: Option<f64>,
+    pub moves: bool,
+}
+
+/// The next least work after the best and its equals.
+#[derive(Clone, Debug, Serialize)]
+pub struct Next {
+    #[serde(flatten)]
+    pub point: Named,
+    /// Its work over the best's, less one, in percent.
+    pub more_percent: f64,
+}
+
+/// The map's verdict as facts: the best setting by work, what moves the
+/// work along each axis, the points of equal work ranked by time (ties
+/// within the noise), the next least work, and the failures.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// None when no point was certified.
+    pub best: Option<Named>,
+    pub effects: Vec<Effect>,
+    pub equal_work_percent: f64,
+    /// Points of equal work other than the best, and those of them within
+    /// twice the run's timing noise (in percent) of it.
+    pub equal: usize,
+    pub ties: Vec<Named>,
+    pub noise_percent: f64,
+    pub next: Option<Next>,
+    pub failed: usize,
+    pub points: usize,
+}
+
+/// The verdict of a map: by work, with what moves the work along each
+/// axis, then by time among the points of equal work.
+pub fn verdict(axes: &[Axis], points: &[Point]) -> Verdict {
+    let named = |p: &Point| Named {
+        setting: axes
+            .iter()
             .zip(&p.values)
             .map(|(a, v)| format!("{} = {v}", a.knob()))
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", "),
+        work: p.work,
+        seconds: p.seconds_median,
+        seconds_min: p.seconds_min,
+        runs: p.runs,
     };
-    let Some(best) = points.iter().find(|p| p.mark == "best") else {
-        return "No point of the grid was certified.".into();
-    };
-    // `--runs 0` times each point once: no median to speak of.
-    let timed = if best.runs > 1 {
-        format!(
-            "median of {} runs, the fastest {:.3} s",
-            best.runs, best.seconds_min
-        )
-    } else {
-        "one timed run".to_string()
-    };
-    let mut s = format!(
-        "Least work, certified: {} with {} work in {:.3} s ({timed}).",
-        name(best),
-        best.work,
-        best.seconds_median,
-    );
-    let effects: Vec<String> = axes
+    let best = points.iter().find(|p| p.mark == "best");
+    let effects = axes
         .iter()
         .enumerate()
-        .map(|(k, a)| match work_effect(k, points) {
-            None => format!(
-                "{}: not measured (no two certified points along it)",
-                a.knob()
-            ),
-            Some(r) if r <= 1.0 + EQUAL_WORK => format!(
-                "{} has no effect on work (within {:.0}%)",
-                a.knob(),
-                100.0 * EQUAL_WORK
-            ),
-            // Two decimals: a 2% change is not "1.0×".
-            Some(r) => format!("{} changes it up to {r:.2}×", a.knob()),
+        .map(|(k, a)| {
+            let ratio = work_effect(k, points);
+            Effect {
+                knob: a.knob().to_string(),
+                ratio,
+                moves: ratio.is_some_and(|r| r > 1.0 + EQUAL_WORK),
+            }
         })
         .collect();
-    s += &format!(
-        " Along each axis, the others fixed: {}.",
-        effects.join("; ")
-    );
-    let equal: Vec<&Point> = points
-        .iter()
-        .filter(|p| p.mark == "tie" || p.mark == "equal work")
-        .collect();
-    if !equal.is_empty() {
-        s += &format!(
-            " Of equal work (within {:.0}%), {} other {}, ranked by time only among these: ",
-            100.0 * EQUAL_WORK,
-            equal.len(),
-            if equal.len() == 1 {
-                "setting"
-            } else {
-                "settings"
-            }
-        );
-        if best.runs < 2 {
-            s += "one run a point, so the timing noise is not measured and no time can be told from noise.";
-        } else {
-            let ties: Vec<&&Point> = equal.iter().filter(|p| p.mark == "tie").collect();
-            s += &format!(
-                "{} within twice the run's timing noise ({:.1}%) of the best, a tie{}.",
-                ties.len(),
-                100.0 * noise(points),
-                if ties.is_empty() {
-                    String::new()
-                } else {
-                    format!(
-                        " ({})",
-                        ties.iter()
-                            .map(|p| format!("{}, {:.3} s", name(p), p.seconds_median))
-                            .collect::<Vec<_>>()
-                            .join("; ")
-                    )
-                }
-            );
-        }
+    let next = best.and_then(|b| {
+        points
+            .iter()
+            .filter(|p| p.certified && p.mark.is_empty())
+            .min_by_key(|p| p.work)
+            .map(|n| Next {
+                point: named(n),
+                more_percent: 100.0 * (n.work as f64 / b.work.max(1) as f64 - 1.0),
+            })
+    });
+    Verdict {
+        best: best.map(named),
+        effects,
+        equal_work_percent: 100.0 * EQUAL_WORK,
+        equal: points
+            .iter()
+            .filter(|p| p.mark == "tie" || p.mark == "equal work")
+            .count(),
+        ties: points
+            .iter()
+            .filter(|p| p.mark == "tie")
+            .map(named)
+            .collect(),
+        noise_percent: 100.0 * noise(points),
+        next,
+        failed: points.iter().filter(|p| !p.certified).count(),
+        points: points.len(),
     }
-    let next = points
-        .iter()
-        .filter(|p| p.certified && p.mark.is_empty())
-        .min_by_key(|p| p.work);
-    if let Some(n) = next {
-        s += &format!(
-            " The next least work: {} with {} work ({:.0}% more) in {:.3} s.",
-            name(n),
-            n.work,
-            100.0 * (n.work as f64 / best.work.max(1) as f64 - 1.0),
-            n.seconds_median
-        );
-    }
-    let failed = points.iter().filter(|p| !p.certified).count();
-    if failed > 0 {
-        s += &format!(" {failed} of {} points not certified.", points.len());
-    }
-    s
 }
 
+/// The verdict as a sentence (`templates/tuning_verdict.md`), for the
+/// section and for `sweep --grid`'s report.
+pub fn verdict_sentence(axes: &[Axis], points: &[Point]) -> Result<String> {
+    let text = template::render(
+        "tuning_verdict",
+        include_str!("templates/tuning_verdict.md"),
+        verdict(axes, points),
+    )?;
+    Ok(text.trim_end().to_string())
+}
+
+/// The sentence stating the best setting: by work, with what moves the
+/// work along each axis, then by time among the points of equal work.
 /// The heat maps of a two-axis slice (`third`: the value of a third axis
 /// fixed in this slice).
 fn heat_maps(
@@ -848,48 +865,29 @@ impl Study for TuningMap {
     }
 
     fn section(&self, found: &MapFindings, _: &Lab, charts: &[String]) -> Result<Section> {
-        let form = if found.form.is_empty() {
-            String::new()
-        } else {
-            let f: Vec<String> = found
-                .form
-                .iter()
-                .map(|(k, v)| format!("{k} = {v}"))
-                .collect();
-            format!(
-                " in its fast form on this mesh ({}: the paper's own form takes minutes a point here)",
-                f.join(", ")
-            )
-        };
-        let axes: Vec<String> = self
+        let axes: Vec<_> = self
             .axes
             .iter()
-            .map(|a| format!("`{}` ∈ {{{}}}", a.path, a.values.join(", ")))
+            .map(|a| template::facts! { path => a.path, values => a.values })
             .collect();
-        let mut markdown = format!(
-            "## Tuning map: {} ({}, h = {}, {} law)\n\n`{}`{form} on the joint grid {} (`{}.csv`); each point certified and timed over {}. {}\n\n",
-            self.group(),
-            self.scene.name,
-            self.scene.finest(),
-            self.law.as_str().replace('_', "-"),
-            self.solver.name,
-            axes.join(" × "),
-            self.stem(),
-            if self.repeats == 0 {
-                "one run".to_string()
-            } else {
-                format!("{} runs after a warm-up", self.repeats)
+        let verdict = verdict_sentence(&self.axes, &found.points)?;
+        let markdown = template::render(
+            "tuning_map",
+            include_str!("templates/tuning_map.md"),
+            template::facts! {
+                group => self.group(),
+                scene => self.scene.name,
+                h => self.scene.finest().to_string(),
+                law => self.law.as_str().replace('_', "-"),
+                solver => self.solver.name,
+                form => found.form,
+                axes,
+                stem => self.stem(),
+                repeats => self.repeats,
+                verdict,
+                charts,
             },
-            verdict(&self.axes, &found.points)
-        );
-        for c in charts {
-            let intent = if c.ends_with("_work") {
-                "Work at each point of the grid (exact: no timing noise), the best (least work, then least time) framed; grey cells were not certified."
-            } else {
-                "Time to a certified answer at each point of the grid; the best (least work, then least time) framed, points of equal work within the timing noise of it marked =, failures grey with their status."
-            };
-            markdown += &chart_markdown(c, intent);
-        }
+        )?;
         Ok(Section { markdown })
     }
 }
@@ -990,7 +988,7 @@ mod tests {
             Axis::parse("relaxation.r=1e3,1e5,1e7").unwrap(),
             Axis::parse("relaxation.epsilon=1e-4,1e-6").unwrap(),
         ];
-        let v = verdict(&axes, &points);
+        let v = verdict_sentence(&axes, &points).unwrap();
         assert!(
             v.starts_with("Least work, certified: r = 1e5, epsilon = 1e-4 with 10 work in 1.000 s"),
             "{v}"
@@ -1025,7 +1023,7 @@ mod tests {
             Axis::parse("relaxation.r=1e5,1e7").unwrap(),
             Axis::parse("relaxation.epsilon=1e-4,1e-6").unwrap(),
         ];
-        let v = verdict(&axes, &points);
+        let v = verdict_sentence(&axes, &points).unwrap();
         assert!(
             v.starts_with("Least work, certified: r = 1e7, epsilon = 1e-4 with 38 work"),
             "{v}"
@@ -1045,9 +1043,37 @@ mod tests {
         }
         rank(&mut points);
         assert_eq!(points[0].mark, "equal work");
-        let v = verdict(&axes, &points);
+        let v = verdict_sentence(&axes, &points).unwrap();
         assert!(v.contains("no time can be told from noise"), "{v}");
         assert!(v.contains("in 1.250 s (one timed run)"), "{v}");
+    }
+
+    /// No certified point: the verdict says so and names no best; one
+    /// certified point an axis: its effect is not measured.
+    #[test]
+    fn a_grid_without_two_certified_points_says_what_it_cannot_tell() {
+        let axes = [
+            Axis::parse("relaxation.r=1e5,1e7").unwrap(),
+            Axis::parse("relaxation.epsilon=1e-4,1e-6").unwrap(),
+        ];
+        let mut points = vec![
+            point(&["1e5", "1e-4"], false, 1.0, 1.0),
+            point(&["1e7", "1e-6"], false, 1.0, 1.0),
+        ];
+        rank(&mut points);
+        assert!(verdict(&axes, &points).best.is_none());
+        let v = verdict_sentence(&axes, &points).unwrap();
+        assert_eq!(v, "No point of the grid was certified.");
+        points[0].certified = true;
+        rank(&mut points);
+        let facts = verdict(&axes, &points);
+        assert!(facts.effects.iter().all(|e| e.ratio.is_none() && !e.moves));
+        let v = verdict_sentence(&axes, &points).unwrap();
+        assert!(
+            v.contains("r: not measured (no two certified points along it); epsilon: not measured"),
+            "{v}"
+        );
+        assert!(v.ends_with(" 1 of 2 points not certified."), "{v}");
     }
 
     #[test]

@@ -5,12 +5,14 @@
 use anyhow::Result;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::Entry;
+use serde::Serialize;
 
 use crate::certificate::BoundKind;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
+use crate::study::template;
 use crate::study::trial::{Trial, TrialSpec, intervals_text};
 
 /// The study's name in trial records.
@@ -52,12 +54,13 @@ impl Study for Compare {
     }
 
     fn section(&self, measured: &Vec<Measured>, _: &Lab, _: &[String]) -> Result<Section> {
+        let table = markdown_of(measured)?;
         Ok(Section {
-            markdown: format!(
-                "## Every solver against the reference ({})\n\n{}",
-                self.scene.name,
-                markdown_of(measured)
-            ),
+            markdown: template::render(
+                "compare",
+                include_str!("../templates/compare.md"),
+                template::facts! { scene => self.scene.name, table },
+            )?,
         })
     }
 
@@ -80,19 +83,10 @@ impl Study for Compare {
 }
 
 /// The Markdown table of measured comparison trials.
-pub fn markdown_of(measured: &[Measured]) -> String {
+pub fn markdown_of(measured: &[Measured]) -> Result<String> {
     let trials: Vec<Trial> = measured.iter().map(|m| m.trial.clone()).collect();
     let seconds: Vec<f64> = measured.iter().map(|m| m.timing.seconds_min).collect();
     markdown(&trials, &seconds)
-}
-
-/// The error bound's cell: its value, † when at the answer's own g.
-fn bound_cell(t: &Trial) -> String {
-    match t.error_bound() {
-        Some(b) if b.kind == BoundKind::AtOwnBound => format!("{:.1e}†", b.displacement),
-        Some(b) => format!("{:.1e}", b.displacement),
-        None => "–".into(),
-    }
 }
 
 /// The trials: per solver, the subproblem (if it solves it) and the Coulomb
@@ -128,75 +122,87 @@ pub fn iterations(r: &Trial) -> String {
     }
 }
 
-/// A Markdown table of comparison trials.
-pub fn markdown(trials: &[Trial], seconds: &[f64]) -> String {
-    let mut out = String::from(
-        "| problem | h | law | solver | status | claim | Δu | Δp | Δq | ‖Δv‖_A | error bound | separated | certificate | iterations | time (s) |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-    );
-    let e = |x: Option<f64>| x.map(|v| format!("{v:.1e}")).unwrap_or_else(|| "–".into());
-    for (r, t) in trials.iter().zip(seconds) {
-        let sep = if r.separated.is_empty() {
-            "none".to_string()
-        } else {
-            intervals_text(&r.separated).replace(';', ", ")
-        };
-        let failing = r.failing();
-        let certificate = if failing.is_empty() {
-            format!("{:.1e}", r.residual())
-        } else {
-            let names: Vec<&str> = failing.iter().map(|c| c.as_str()).collect();
-            format!("**{:.1e}** ({})", r.residual(), names.join(", "))
-        };
-        out += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({:.1}%) | {} | {} | {:.3} |\n",
-            r.scene,
-            r.h,
-            r.law.as_str(),
-            if r.study == STUDY {
-                r.solver.name.to_string()
-            } else {
-                format!("{} ({})", r.solver.name, r.study.replace('_', " "))
-            },
-            r.status,
-            r.solver_status,
-            e(r.displacement_error()),
-            e(r.pressure_error()),
-            e(r.agreement.map(|a| a.traction_max)),
-            e(r.agreement.map(|a| a.energy)),
-            bound_cell(r),
-            sep,
-            100.0 * r.separated_fraction,
-            certificate,
-            iterations(r),
-            t
-        );
-    }
-    let reference: Vec<String> = {
-        let mut v: Vec<String> = Vec::new();
-        for (name, r) in trials.iter().filter_map(|r| Some((r.reference?, r))) {
-            let s = format!("`{name}` ({})", r.law.as_str());
-            if !v.contains(&s) {
-                v.push(s);
-            }
+/// A row of the comparison table: a trial's numbers, none where not
+/// measured.
+#[derive(Serialize)]
+struct TableRow<'a> {
+    scene: &'a str,
+    h: String,
+    law: Law,
+    solver: &'a str,
+    study: &'a str,
+    status: String,
+    claim: String,
+    du: Option<f64>,
+    dp: Option<f64>,
+    dq: Option<f64>,
+    energy: Option<f64>,
+    /// The error bound on ‖v − v*‖_A over √K·U, and whether it is at the
+    /// answer's own g = 𝓕p (a Coulomb answer's, the fixed point's part
+    /// not included).
+    bound: Option<f64>,
+    bound_at_own_g: bool,
+    /// The separation intervals (empty: none), and Γ_K's fraction in %.
+    separated: String,
+    separated_percent: f64,
+    certificate: f64,
+    failing: Vec<&'static str>,
+    iterations: String,
+    seconds: f64,
+}
+
+/// A reference named in the table: its solver and the law it solved.
+#[derive(PartialEq, Serialize)]
+struct ReferenceUsed {
+    solver: &'static str,
+    law: Law,
+}
+
+/// A Markdown table of comparison trials, with its key
+/// (`templates/compare_table.md`).
+pub fn markdown(trials: &[Trial], seconds: &[f64]) -> Result<String> {
+    let rows: Vec<TableRow> = trials
+        .iter()
+        .zip(seconds)
+        .map(|(r, &seconds)| TableRow {
+            scene: &r.scene,
+            h: r.h.to_string(),
+            law: r.law,
+            solver: r.solver.name,
+            study: r.study,
+            status: r.status.to_string(),
+            claim: r.solver_status.to_string(),
+            du: r.displacement_error(),
+            dp: r.pressure_error(),
+            dq: r.agreement.map(|a| a.traction_max),
+            energy: r.agreement.map(|a| a.energy),
+            bound: r.error_bound().map(|b| b.displacement),
+            bound_at_own_g: r
+                .error_bound()
+                .is_some_and(|b| b.kind == BoundKind::AtOwnBound),
+            separated: intervals_text(&r.separated).replace(';', ", "),
+            separated_percent: 100.0 * r.separated_fraction,
+            certificate: r.residual(),
+            failing: r.failing().iter().map(|c| c.as_str()).collect(),
+            iterations: iterations(r),
+            seconds,
+        })
+        .collect();
+    let mut references: Vec<ReferenceUsed> = Vec::new();
+    for r in trials {
+        let Some(solver) = r.reference else { continue };
+        let used = ReferenceUsed { solver, law: r.law };
+        if !references.contains(&used) {
+            references.push(used);
         }
-        v
-    };
-    let tol = trials
+    }
+    let tolerance = trials
         .first()
         .map(|r| r.tolerance)
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
-    out + &format!(
-        "\nStatus: certified (a claim of convergence that fails the certificate is `inaccurate`); claim: the solver's own. \
-         Δ: max difference from the reference, relative to its largest value; ‖Δv‖_A: the difference in the energy seminorm over √K·U; \
-         error bound: the certificate's bound on ‖v − v*‖_A over √K·U (issue 51; † for a Coulomb answer: at its own g = 𝓕p, the fixed point's part not included; – where not computed); the reference: {} (unless named \
-         with --reference, the most accurate certified answer among the exact solvers at their tightest settings). Certificate: the largest violation of any condition \
-         of the law, in the problem's scales (tolerance {tol:e}; failing conditions named). Iterations: [friction \
-         iterations:] outer [/ inner]. Time: minimum over the runs.\n",
-        if reference.is_empty() {
-            "none could be earned".to_string()
-        } else {
-            reference.join(", ")
-        }
+    template::render(
+        "compare_table",
+        include_str!("../templates/compare_table.md"),
+        template::facts! { rows, study => STUDY, references, tolerance },
     )
 }

@@ -90,7 +90,7 @@ impl Study for PaperCompare {
                 &lab.references,
                 lab.settings.certificate.tolerance,
                 charts,
-            ),
+            )?,
         })
     }
 
