@@ -220,18 +220,3 @@ fn friction_chart(scene: &str, steps: &[FrictionStep]) -> Option<(String, Chart)
     }
     None
 }
-
-/// What the chart named `name` is for, in one sentence.
-pub fn intent(name: &str) -> &'static str {
-    match name {
-        n if n.starts_with("stability_friction") => {
-            "Where the friction fixed point stops contracting as 𝓕 grows, for each inner solver and problem (above the line at 1 it cannot converge)."
-        }
-        "stability_load" => {
-            "Whether each solver stays certified as the net load approaches zero (condition (13) barely holding)."
-        }
-        _ => {
-            "How a solver's work and outcome class change under a stress condition of its registry entry."
-        }
-    }
-}

@@ -32,7 +32,7 @@ use crate::mechanics::scene::{Scene, Traction};
 use crate::settings::Settings;
 use crate::study::catalog::{Catalogued, by_length};
 use crate::study::cores::{Shared, on_both_cores, trial_need};
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured, measure};
 use crate::study::sweep::work_cap;
 use crate::study::trial::{Setting, Trial, TrialSpec};
@@ -245,24 +245,9 @@ impl Study for Stability {
     }
 
     fn section(&self, map: &Map, _: &Lab, charts: &[String]) -> Result<Section> {
-        let mut s = String::from("## Where each method fails: the stability map\n\n");
-        s += &views::readme_section(&map.trials);
-        let lines = uniqueness::readme_lines(&map.uniqueness);
-        if !lines.is_empty() {
-            s += "\n**Past the fixed point's limit** (problem 1; a solver of the Coulomb problem itself from its \
-                  default start and from each starting point its registry entry lists; `stability_uniqueness.csv`):\n\n";
-            s += &lines.join("\n");
-            s += "\n";
-        }
-        s += "\n";
-        for c in charts {
-            s += &chart_markdown(c, charts::intent(c));
-        }
-        s += &format!(
-            "<details><summary>Every trial that did not simply converge</summary>\n\n{}\n</details>\n",
-            views::summary_markdown(&map.trials)
-        );
-        Ok(Section { markdown: s })
+        Ok(Section {
+            markdown: views::section(&map.trials, &map.uniqueness, charts)?,
+        })
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Map>> {
@@ -275,7 +260,7 @@ impl Study for Stability {
             Artifact::csv("stability_uniqueness.csv", &map.uniqueness, &[])?,
             Artifact::text(
                 "stability_summary.md",
-                &views::summary_markdown(&map.trials),
+                &views::summary_markdown(&map.trials)?,
             ),
         ];
         if let Some(file) = self.references_file {

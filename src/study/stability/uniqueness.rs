@@ -200,46 +200,6 @@ pub fn run(
     Ok((measured, rows))
 }
 
-/// The README's lines on the study.
-pub fn readme_lines(rows: &[UniquenessRow]) -> Vec<String> {
-    rows.iter()
-        .map(|r| {
-            let solutions = match (r.certified, r.spread) {
-                (0, _) => "no start gives a certified answer".to_string(),
-                (n, Some(s)) if s <= 1e-6 => format!(
-                    "certified from {n} of {} starts, all within {s:.1e} of each other: one solution",
-                    r.starts
-                ),
-                (n, Some(s)) => format!(
-                    "certified from {n} of {} starts, up to {s:.1e} apart: **several solutions**",
-                    r.starts
-                ),
-                (n, None) => format!("certified from {n} of {} starts", r.starts),
-            };
-            let condition = match (r.condition_min, r.condition_max) {
-                (Some(a), Some(b)) => format!("; condition number of the final Newton matrix {a:.1e} to {b:.1e}"),
-                _ => String::new(),
-            };
-            let fp = if r.fixed_point_solver.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    " The fixed point around `{}`: {} ({}{}){}.",
-                    r.fixed_point_solver,
-                    r.fixed_point_status,
-                    r.fixed_point_outcome.replace('_', " "),
-                    r.fixed_point_contraction
-                        .map(|q| format!(", last contraction factor {q:.2}"))
-                        .unwrap_or_default(),
-                    r.fixed_point_difference
-                        .map(|d| format!(", {d:.1e} from the direct answer"))
-                        .unwrap_or_default()
-                )
-            };
-            format!(
-                "- {}, 𝓕 = {}: `{}` {solutions}{condition}.{fp}",
-                r.scene, r.friction_coefficient, r.solver
-            )
-        })
-        .collect()
-}
+/// Certified answers whose pressures differ by at most this, relative to
+/// the largest pressure, are one solution.
+pub const ONE_SOLUTION: f64 = 1e-6;

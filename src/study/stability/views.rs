@@ -4,11 +4,15 @@
 //! coefficient), and charts.
 
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
+
+use anyhow::Result;
+use serde::Serialize;
 
 use crate::certificate::Condition;
 use crate::study::stability::classify::{Class, SLOW_FACTOR, WRONG_PRESSURE};
+use crate::study::stability::uniqueness::{ONE_SOLUTION, UniquenessRow};
 use crate::study::stability::{BYPASSED, DEFAULT, FRICTION, LOAD, SCENES, STRESS};
+use crate::study::template;
 use crate::study::trial::Trial;
 
 pub(super) fn class_of(t: &Trial) -> Class {
@@ -20,62 +24,77 @@ fn class_text(t: &Trial) -> &'static str {
     class_of(t).as_str()
 }
 
-/// The failing conditions, `, `-separated.
-fn failing_text(t: &Trial) -> String {
-    t.failing()
-        .iter()
-        .map(|c| c.as_str())
-        .collect::<Vec<_>>()
-        .join(", ")
+/// A group's count of trials in each class, in [`Class::ALL`]'s order.
+#[derive(Serialize)]
+struct GroupCounts<'a> {
+    group: &'a str,
+    counts: Vec<usize>,
+}
+
+/// A trial that did not simply converge, as the summary lists it.
+#[derive(Serialize)]
+struct Listed<'a> {
+    group: &'a str,
+    solver: &'static str,
+    scene: &'a str,
+    h: String,
+    setting: String,
+    class: &'static str,
+    /// Its reason, cut to 220 characters, `|` as `/` (a table cell).
+    reason: String,
 }
 
 /// Counts per group and class, then every trial that did not simply
-/// converge with its reason.
-pub fn summary_markdown(trials: &[Trial]) -> String {
-    let mut s = counts_markdown(trials);
-    s += "\n| group | solver | problem | h | setting | class | reason |\n|---|---|---|---|---|---|---|\n";
-    for r in trials.iter().filter(|r| class_of(r) != Class::Converged) {
-        let reason: String = r.reason.chars().take(220).collect();
-        s += &format!(
-            "| {} | {} | {} | {} | {} | **{}** | {} |\n",
-            r.group,
-            r.solver.name,
-            r.scene,
-            r.h,
-            setting(r),
-            class_text(r),
-            reason.replace('|', "/")
-        );
-    }
-    s
-}
-
-/// The trials counted per group and class, as a Markdown table.
-pub fn counts_markdown(trials: &[Trial]) -> String {
-    let mut groups: Vec<&str> = trials.iter().map(|r| r.group.as_str()).collect();
-    groups.dedup();
-    let mut s = String::from("| group | ");
-    s += &Class::ALL.map(|c| c.as_str()).join(" | ");
-    s += " |\n|---|";
-    s += &"---|".repeat(Class::ALL.len());
-    s += "\n";
-    let mut seen = Vec::new();
-    for g in groups {
-        if seen.contains(&g) {
-            continue;
+/// converge with its reason (`templates/stability_summary.md`).
+pub fn summary_markdown(trials: &[Trial]) -> Result<String> {
+    let mut groups: Vec<&str> = Vec::new();
+    for t in trials {
+        if !groups.contains(&t.group.as_str()) {
+            groups.push(&t.group);
         }
-        seen.push(g);
-        s += &format!("| {g} |");
-        for c in Class::ALL {
-            let n = trials
+    }
+    let counts: Vec<GroupCounts> = groups
+        .into_iter()
+        .map(|g| GroupCounts {
+            group: g,
+            counts: Class::ALL
                 .iter()
-                .filter(|r| r.group == g && class_of(r) == c)
-                .count();
-            s += &format!(" {n} |");
-        }
-        s += "\n";
-    }
-    s
+                .map(|&c| {
+                    trials
+                        .iter()
+                        .filter(|r| r.group == g && class_of(r) == c)
+                        .count()
+                })
+                .collect(),
+        })
+        .collect();
+    let listed: Vec<Listed> = trials
+        .iter()
+        .filter(|r| class_of(r) != Class::Converged)
+        .map(|r| Listed {
+            group: &r.group,
+            solver: r.solver.name,
+            scene: &r.scene,
+            h: r.h.to_string(),
+            setting: setting(r),
+            class: class_text(r),
+            reason: r
+                .reason
+                .chars()
+                .take(220)
+                .collect::<String>()
+                .replace('|', "/"),
+        })
+        .collect();
+    template::render(
+        "stability_summary",
+        include_str!("../templates/stability_summary.md"),
+        template::facts! {
+            classes => Class::ALL.map(|c| c.as_str()),
+            counts,
+            trials => listed,
+        },
+    )
 }
 
 fn setting(r: &Trial) -> String {
@@ -85,8 +104,23 @@ fn setting(r: &Trial) -> String {
     }
 }
 
-/// Per solver and stress knob: the values in each class, in the order run.
-pub fn stress_findings(trials: &[Trial]) -> Vec<String> {
+/// The values of a stress knob that fell in one class, in the order run.
+#[derive(Serialize)]
+pub struct ClassValues {
+    pub class: &'static str,
+    pub values: Vec<String>,
+}
+
+/// A stress knob of a solver and its values by class.
+#[derive(Serialize)]
+pub struct StressKnob {
+    pub knob: String,
+    pub classes: Vec<ClassValues>,
+}
+
+/// Per solver and stress knob: the values in each class (in
+/// [`Class::ALL`]'s order), each class's in the order run.
+pub fn stress_findings(trials: &[Trial]) -> Vec<StressKnob> {
     let mut out = Vec::new();
     for (solver, knob) in stress_keys(trials) {
         let mut by: BTreeMap<usize, (Class, Vec<String>)> = BTreeMap::new();
@@ -101,11 +135,16 @@ pub fn stress_findings(trials: &[Trial]) -> Vec<String> {
                 .1
                 .push(t.knob().1.to_string());
         }
-        let parts: Vec<String> = by
-            .values()
-            .map(|(c, v)| format!("{} at {}", c.as_str(), v.join(", ")))
-            .collect();
-        out.push(format!("`{knob}`: {}", parts.join("; ")));
+        out.push(StressKnob {
+            knob,
+            classes: by
+                .into_values()
+                .map(|(c, values)| ClassValues {
+                    class: c.as_str(),
+                    values,
+                })
+                .collect(),
+        });
     }
     out
 }
@@ -182,173 +221,215 @@ pub fn friction_limits(trials: &[Trial]) -> Vec<FrictionLimit> {
         .collect()
 }
 
-/// The README's section on the map: the thresholds, then what the trials
-/// show, each line computed from them.
-pub fn readme_section(trials: &[Trial]) -> String {
-    let mut s = String::new();
-    let tol = trials
+/// A solver at its defaults and under its stress knobs.
+#[derive(Serialize)]
+struct SolverFacts {
+    name: &'static str,
+    class: &'static str,
+    work: usize,
+    certificate: f64,
+    stress: Vec<StressKnob>,
+}
+
+/// Where the friction scan of one problem and solver stops being
+/// certified ([`FrictionLimit`], none for no coefficient certified).
+#[derive(Serialize)]
+struct FrictionFacts {
+    scene: String,
+    solver: String,
+    up_to: Option<f64>,
+    first_failure: Option<f64>,
+    again: Vec<f64>,
+}
+
+/// A trial of the load group that did not converge.
+#[derive(Serialize)]
+struct LoadFacts<'a> {
+    scene: &'a str,
+    solver: &'static str,
+    class: &'static str,
+    failing: Vec<&'static str>,
+}
+
+/// A trial named with its class and reason or status.
+#[derive(Serialize)]
+struct Other<'a> {
+    solver: &'static str,
+    scene: &'a str,
+    class: &'static str,
+    reason: &'a str,
+    status: String,
+}
+
+/// A classical scene: how many solvers converged at their defaults, and
+/// the others.
+#[derive(Serialize)]
+struct SceneFacts<'a> {
+    scene: &'a str,
+    converged: usize,
+    total: usize,
+    others: Vec<Other<'a>>,
+}
+
+/// A chart of the map and which kind it is (its caption).
+#[derive(Serialize)]
+struct ChartFacts<'a> {
+    name: &'a str,
+    /// `friction`, `load` or `stress`.
+    shows: &'static str,
+}
+
+fn other(t: &Trial) -> Other<'_> {
+    Other {
+        solver: t.solver.name,
+        scene: &t.scene,
+        class: class_text(t),
+        reason: &t.reason,
+        status: t.status.to_string(),
+    }
+}
+
+/// The README's section on the map (`templates/stability.md`): the
+/// thresholds, then what the trials show, each line computed from them,
+/// the uniqueness rows, the charts and the summary.
+pub fn section(
+    trials: &[Trial],
+    uniqueness: &[UniquenessRow],
+    charts: &[String],
+) -> Result<String> {
+    let tolerance = trials
         .first()
         .map(|t| t.tolerance)
         .unwrap_or(crate::certificate::DEFAULT_TOLERANCE);
-    let _ = writeln!(
-        s,
-        "Classes (`src/study/stability/classify.rs`): **refused**, the problem has no solution and this is said (our \
-         check of condition (13), or a solver reporting it unbounded or infeasible); **diverged**, a NaN, a numerical \
-         breakdown, a fixed point whose max|Δg| grows, or a solver that reports a solvable problem unbounded; \
-         **stalled**, stopped by a work cap, at reduced accuracy, at floating-point resolution short of its tolerance, or a fixed point that stopped contracting; **wrong**, \
-         converged by its own test but failing the certificate (tolerance {tol:e}) or with a pressure off the reference's \
-         by more than {WRONG_PRESSURE:e}; **slow**, right but more than {SLOW_FACTOR}× the work of the same solver at its \
-         defaults; **converged**. Every trial stops at a work cap (a count), so the map is the same on every machine.\n"
-    );
-    let mut solvers: Vec<&str> = trials.iter().map(|t| t.solver.name).collect();
-    solvers.dedup();
-    let mut seen = Vec::new();
-    for solver in solvers {
-        if seen.contains(&solver) {
-            continue;
-        }
-        seen.push(solver);
-        let own: Vec<Trial> = trials
-            .iter()
-            .filter(|t| t.solver.name == solver)
-            .cloned()
-            .collect();
-        let lines = stress_findings(&own);
-        if let Some(d) = own.iter().find(|t| t.group == DEFAULT) {
-            let _ = writeln!(
-                s,
-                "- **{solver}** at its defaults: {} ({} work, certificate {:.1e}). {}",
-                class_text(d),
-                d.work,
-                d.residual(),
-                lines.join("; ")
-            );
+    let mut names: Vec<&str> = Vec::new();
+    for t in trials {
+        if !names.contains(&t.solver.name) {
+            names.push(t.solver.name);
         }
     }
-    for FrictionLimit {
-        scene: p,
-        solver,
-        certified_up_to: ok,
-        first_failure: bad,
-        certified_again: again,
-    } in friction_limits(trials)
-    {
-        let _ = writeln!(
-            s,
-            "- **Friction coefficient**, {p}, {solver}: certified for every 𝓕 tried up to {}{}{}.",
-            if ok.is_finite() {
-                format!("{ok}")
-            } else {
-                "none".into()
-            },
-            match bad {
-                Some(b) => format!("; not at 𝓕 = {b}"),
-                None => " (no failure among the coefficients tried)".into(),
-            },
-            if again.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; certified again at {} (not monotone: see the reasons below)",
-                    again
-                        .iter()
-                        .map(|f| f.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            }
-        );
-    }
+    let solvers: Vec<SolverFacts> = names
+        .into_iter()
+        .filter_map(|solver| {
+            let own: Vec<Trial> = trials
+                .iter()
+                .filter(|t| t.solver.name == solver)
+                .cloned()
+                .collect();
+            let d = own.iter().find(|t| t.group == DEFAULT)?;
+            Some(SolverFacts {
+                name: d.solver.name,
+                class: class_text(d),
+                work: d.work,
+                certificate: d.residual(),
+                stress: stress_findings(&own),
+            })
+        })
+        .collect();
+    let friction: Vec<FrictionFacts> = friction_limits(trials)
+        .into_iter()
+        .map(|f| FrictionFacts {
+            scene: f.scene,
+            solver: f.solver,
+            up_to: f.certified_up_to.is_finite().then_some(f.certified_up_to),
+            first_failure: f.first_failure,
+            again: f.certified_again,
+        })
+        .collect();
     let load: Vec<&Trial> = trials
         .iter()
         .filter(|t| t.group == LOAD && class_of(t) != Class::Converged)
         .collect();
-    let listed: Vec<String> = load
+    let load_force_balance = load
         .iter()
-        .map(|t| {
-            let failing = if t.failing().is_empty() {
-                String::new()
-            } else {
-                format!(": {}", failing_text(t))
-            };
-            format!(
-                "{} with {} ({}{failing})",
-                t.scene,
-                t.solver.name,
-                class_text(t)
-            )
+        .any(|t| t.failing().first() == Some(&Condition::ForceBalance));
+    let load: Vec<LoadFacts> = load
+        .into_iter()
+        .map(|t| LoadFacts {
+            scene: &t.scene,
+            solver: t.solver.name,
+            class: class_text(t),
+            failing: t.failing().iter().map(|c| c.as_str()).collect(),
         })
         .collect();
-    let _ = writeln!(
-        s,
-        "- **Total load approaching zero** (an upward traction cancelling most of problem 1's load): {}.{}",
-        if listed.is_empty() {
-            "every solver is certified at every load tried".to_string()
-        } else {
-            listed.join("; ")
-        },
-        if load
-            .iter()
-            .any(|t| t.failing().first() == Some(&Condition::ForceBalance))
-        {
-            " The force balance is held to the net load the contact carries, while relative stopping rules are scaled \
-             by the gross load Σ|f|: as the net load falls, a solver stopped at the same relative change resolves it \
-             less and less."
-        } else {
-            ""
-        }
-    );
-    let mut scenes: Vec<&str> = Vec::new();
+    let mut scene_names: Vec<&str> = Vec::new();
     for t in trials.iter().filter(|t| t.group == SCENES) {
-        if !scenes.contains(&t.scene.as_str()) {
-            scenes.push(&t.scene);
+        if !scene_names.contains(&t.scene.as_str()) {
+            scene_names.push(&t.scene);
         }
     }
-    for scene in scenes {
-        let own: Vec<&Trial> = trials
-            .iter()
-            .filter(|t| t.group == SCENES && t.scene == scene)
-            .collect();
-        let converged = own
-            .iter()
-            .filter(|t| class_of(t) == Class::Converged)
-            .count();
-        let others: Vec<String> = own
-            .iter()
-            .filter(|t| class_of(t) != Class::Converged)
-            .map(|t| format!("{} {} ({})", t.solver.name, class_text(t), t.reason))
-            .collect();
-        let _ = writeln!(
-            s,
-            "- **Scene {scene}**: {converged} of {} solvers converged at their defaults{}.",
-            own.len(),
-            if others.is_empty() {
-                String::new()
-            } else {
-                format!("; {}", others.join("; "))
+    let scenes: Vec<SceneFacts> = scene_names
+        .into_iter()
+        .map(|scene| {
+            let own: Vec<&Trial> = trials
+                .iter()
+                .filter(|t| t.group == SCENES && t.scene == scene)
+                .collect();
+            SceneFacts {
+                scene,
+                converged: own
+                    .iter()
+                    .filter(|t| class_of(t) == Class::Converged)
+                    .count(),
+                total: own.len(),
+                others: own
+                    .iter()
+                    .filter(|t| class_of(t) != Class::Converged)
+                    .map(|t| other(t))
+                    .collect(),
             }
-        );
-    }
-    let bypassed: Vec<String> = trials
+        })
+        .collect();
+    let bypassed: Vec<Other> = trials
         .iter()
         .filter(|t| t.group == BYPASSED)
-        .map(|t| {
-            format!(
-                "{} on {}: {} ({})",
-                t.solver.name,
-                t.scene,
-                t.status,
-                class_text(t)
-            )
+        .map(other)
+        .collect();
+    let uniqueness: Vec<UniquenessFacts> = uniqueness
+        .iter()
+        .map(|row| UniquenessFacts {
+            row,
+            one_solution: row.spread.is_some_and(|s| s <= ONE_SOLUTION),
         })
         .collect();
-    if !bypassed.is_empty() {
-        let _ = writeln!(
-            s,
-            "- **Condition (13) violated**: refused with a one-line error before any solve. With the check bypassed (one \
-             given-friction solve): {}.",
-            bypassed.join("; ")
-        );
-    }
-    s
+    let charts: Vec<ChartFacts> = charts
+        .iter()
+        .map(|c| ChartFacts {
+            name: c,
+            shows: if c.starts_with("stability_friction") {
+                "friction"
+            } else if c == "stability_load" {
+                "load"
+            } else {
+                "stress"
+            },
+        })
+        .collect();
+    let summary = summary_markdown(trials)?;
+    template::render(
+        "stability",
+        include_str!("../templates/stability.md"),
+        template::facts! {
+            tolerance,
+            wrong_pressure => WRONG_PRESSURE,
+            slow_factor => SLOW_FACTOR,
+            solvers,
+            friction,
+            load,
+            load_force_balance,
+            scenes,
+            bypassed,
+            uniqueness,
+            charts,
+            summary,
+        },
+    )
+}
+
+/// A uniqueness row and whether its certified answers are one solution
+/// (their spread within [`ONE_SOLUTION`]).
+#[derive(Serialize)]
+struct UniquenessFacts<'a> {
+    #[serde(flatten)]
+    row: &'a UniquenessRow,
+    one_solution: bool,
 }
