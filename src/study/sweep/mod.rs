@@ -18,14 +18,16 @@ pub mod section;
 use anyhow::Result;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::{self, Entry};
+use serde::Serialize;
 
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::plans::{self, Fine};
 use crate::study::runner::Keep;
 use crate::study::sweep::charts::sweep_charts;
+use crate::study::template;
 use crate::study::trial::TrialSpec;
 
 /// The study's name in trial records.
@@ -235,52 +237,24 @@ impl Study for Sweep {
         _: &Lab,
         charts: &[String],
     ) -> Result<Section> {
-        let list = |meshes: &[MeshSize]| {
-            meshes
-                .iter()
-                .map(|h| h.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
+        let list = |meshes: &[MeshSize]| meshes.iter().map(|h| h.to_string()).collect::<Vec<_>>();
+        let named = |prefix: &str| -> Vec<&String> {
+            charts.iter().filter(|c| c.starts_with(prefix)).collect()
         };
-        let mut s = format!(
-            "## Speed against accuracy, and the paper's method's settings ({}, h = {}{})\n\n",
-            self.spec
-                .scenes
-                .first()
-                .map(|s| s.name.clone())
-                .unwrap_or_default(),
-            list(&self.spec.meshes),
-            if self.spec.fine_meshes.is_empty() {
-                String::new()
-            } else {
-                format!("; fine mesh h = {}", list(&self.spec.fine_meshes))
-            }
-        );
-        for c in charts.iter().filter(|c| c.starts_with("work_precision")) {
-            s += &chart_markdown(
-                c,
-                if c.starts_with("work_precision_coulomb") {
-                    "Time against accuracy on the whole Coulomb problem, certified points joined and failed claims as crosses: the cheapest solver at each accuracy."
-                } else {
-                    "Time against accuracy on one given-friction subproblem, where no outer loop blurs the comparison."
-                },
-            );
-        }
-        s += &section::work_precision_text(measured);
-        s += "\n";
-        s += &section::variations_text(measured);
-        s += "\n";
-        for c in charts.iter().filter(|c| c.starts_with("sweep_")) {
-            s += &chart_markdown(
-                c,
-                if c.contains("_error_") {
-                    "How one setting of a solver moves its error against the reference and its certificate."
-                } else {
-                    "How one setting of a solver moves its work (iterations) on the Coulomb problem."
-                },
-            );
-        }
-        Ok(Section { markdown: s })
+        let markdown = template::render(
+            "sweep",
+            include_str!("../templates/sweep.md"),
+            template::facts! {
+                scene => self.spec.scenes.first().map(|s| s.name.clone()).unwrap_or_default(),
+                meshes => list(&self.spec.meshes),
+                fine_meshes => list(&self.spec.fine_meshes),
+                work_precision_charts => named("work_precision"),
+                work_precision => section::work_precision(measured),
+                variations => section::variations(measured),
+                sweep_charts => named("sweep_"),
+            },
+        )?;
+        Ok(Section { markdown })
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<crate::study::runner::Measured>>> {
@@ -307,7 +281,7 @@ impl Study for Sweep {
         artifacts.push(Artifact::csv(self.references_file, &lab.candidates(), &[])?);
         artifacts.push(Artifact::text(
             "sweep_summary.md",
-            &summary_markdown(&measured),
+            &summary_markdown(&measured)?,
         ));
         let pairs: Vec<_> = measured.iter().map(|m| (&m.trial, &m.timing)).collect();
         artifacts.extend(Artifact::charts(sweep_charts(&pairs)));
@@ -318,34 +292,54 @@ impl Study for Sweep {
     }
 }
 
-/// The sweep as a readable table: one row per trial with the setting it
-/// varies, its certified status, the certificate, its work and its time.
-pub fn summary_markdown(measured: &[crate::study::runner::Measured]) -> String {
-    let mut s = String::from(
-        "| group | solver | problem | h | law | setting | status | certificate | iterations (friction: outer / inner) | time (s) |\n|---|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for m in measured {
-        let r = &m.trial;
-        let setting = r.setting.as_ref().map_or("defaults".to_string(), |s| {
-            format!("{} = {}", s.path, s.value)
-        });
-        s += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {:.1e} | {}: {} / {} | {:.3} |\n",
-            r.group,
-            r.solver.name,
-            r.scene,
-            r.h,
-            r.law.as_str(),
-            setting,
-            r.status,
-            r.residual(),
-            r.friction_iterations,
-            r.outer_iterations,
-            r.inner_iterations,
-            m.timing.seconds_min
-        );
-    }
-    s
+/// A row of the sweep's summary table.
+#[derive(Serialize)]
+struct SummaryRow<'a> {
+    group: &'a str,
+    solver: &'static str,
+    scene: &'a str,
+    h: String,
+    law: &'static str,
+    setting: String,
+    status: String,
+    certificate: f64,
+    friction: usize,
+    outer: usize,
+    inner: usize,
+    seconds: f64,
+}
+
+/// The sweep as a readable table (`templates/sweep_summary.md`): one row
+/// per trial with the setting it varies, its certified status, the
+/// certificate, its work and its time.
+pub fn summary_markdown(measured: &[crate::study::runner::Measured]) -> Result<String> {
+    let rows: Vec<SummaryRow> = measured
+        .iter()
+        .map(|m| {
+            let r = &m.trial;
+            SummaryRow {
+                group: &r.group,
+                solver: r.solver.name,
+                scene: &r.scene,
+                h: r.h.to_string(),
+                law: r.law.as_str(),
+                setting: r.setting.as_ref().map_or("defaults".to_string(), |s| {
+                    format!("{} = {}", s.path, s.value)
+                }),
+                status: r.status.to_string(),
+                certificate: r.residual(),
+                friction: r.friction_iterations,
+                outer: r.outer_iterations,
+                inner: r.inner_iterations,
+                seconds: m.timing.seconds_min,
+            }
+        })
+        .collect();
+    template::render(
+        "sweep_summary",
+        include_str!("../templates/sweep_summary.md"),
+        template::facts! { rows },
+    )
 }
 
 #[cfg(test)]

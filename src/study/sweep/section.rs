@@ -1,36 +1,58 @@
-//! The README's sentences about the sweeps and the work-precision diagrams,
-//! computed from the trials.
+//! The facts the sweep's README section states (`templates/sweep.md`):
+//! the work-precision ratios and the one-factor variations, computed from
+//! the trials.
 
 use contactlab_solvers::registry::{self, Role};
+use serde::Serialize;
 
 use crate::study::runner::Measured;
 use crate::study::sweep::{WORK_PRECISION, WORK_PRECISION_COULOMB};
 use crate::study::trial::Trial;
 
+/// A solver's time over the baseline's at one pressure error.
+#[derive(Debug, Serialize)]
+pub struct Ratio {
+    pub ratio: f64,
+    pub target: f64,
+}
+
+/// One solver's line of a work-precision comparison: its time over
+/// `baseline`'s at equal pressure error, at each target both curves reach
+/// (empty: no common range).
+#[derive(Debug, Serialize)]
+pub struct RatioLine {
+    pub solver: &'static str,
+    pub baseline: &'static str,
+    pub ratios: Vec<Ratio>,
+}
+
 /// Ratios of time at equal accuracy, interpolated log-log along each
 /// solver's work-precision curve, in both diagrams.
-pub(super) fn work_precision_text(sweep: &[Measured]) -> String {
-    let (Some(paper), Some(oracle)) = (
-        registry::with_role(Role::PapersMethod),
-        registry::with_role(Role::Oracle),
-    ) else {
-        return String::new();
-    };
-    format!(
-        "Each point is one value of a solver's accuracy knob, certified; errors are measured against the reference. \
-         On the given-friction subproblem at the reference's g, time at equal pressure error as a ratio (below 1: \
-         faster) of each solver over the oracle; `{}` is the paper's method:\n\n{}\n\n\
-         On the whole Coulomb problem (a solver run inside the fixed point through ε, every loop's; a solver of the \
-         Coulomb law through its own accuracy knob), the same ratios:\n\n{}\n",
-        paper.name,
-        time_ratios(sweep, WORK_PRECISION, oracle.name),
-        time_ratios(sweep, WORK_PRECISION_COULOMB, oracle.name),
-    )
+#[derive(Debug, Serialize)]
+pub struct WorkPrecision {
+    pub paper: &'static str,
+    pub given_friction: Vec<RatioLine>,
+    pub coulomb: Vec<RatioLine>,
+}
+
+/// The work-precision ratios (none without a paper's method and an oracle).
+pub(super) fn work_precision(sweep: &[Measured]) -> Option<WorkPrecision> {
+    let paper = registry::with_role(Role::PapersMethod)?;
+    let oracle = registry::with_role(Role::Oracle)?;
+    Some(WorkPrecision {
+        paper: paper.name,
+        given_friction: time_ratios(sweep, WORK_PRECISION, oracle.name),
+        coulomb: time_ratios(sweep, WORK_PRECISION_COULOMB, oracle.name),
+    })
 }
 
 /// One line per solver: its time over `baseline`'s at equal pressure error
-/// along the curves of `group`.
-pub(super) fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> String {
+/// along the curves of `group`, at 1e-2 ... 1e-11.
+pub(super) fn time_ratios(
+    sweep: &[Measured],
+    group: &str,
+    baseline: &'static str,
+) -> Vec<RatioLine> {
     let curve = |solver: &str| -> Vec<(f64, f64)> {
         let mut pts: Vec<(f64, f64)> = sweep
             .iter()
@@ -61,24 +83,22 @@ pub(super) fn time_ratios(sweep: &[Measured], group: &str, baseline: &str) -> St
         })
         .map(|other| {
             let points = curve(other);
-            let ratios: Vec<String> = (2..=11)
-                .map(|k| 10f64.powi(-k))
-                .filter_map(|target| {
-                    let (a, b) = (time_at(&points, target)?, time_at(&base, target)?);
-                    Some(format!("{:.2} at {target:.0e}", a / b))
-                })
-                .collect();
-            format!(
-                "- `{other}` over `{baseline}`: {}",
-                if ratios.is_empty() {
-                    "no common range of pressure errors".into()
-                } else {
-                    ratios.join(", ")
-                }
-            )
+            RatioLine {
+                solver: other,
+                baseline,
+                ratios: (2..=11)
+                    .map(|k| 10f64.powi(-k))
+                    .filter_map(|target| {
+                        let (a, b) = (time_at(&points, target)?, time_at(&base, target)?);
+                        Some(Ratio {
+                            ratio: a / b,
+                            target,
+                        })
+                    })
+                    .collect(),
+            }
         })
-        .collect::<Vec<_>>()
-        .join("\n")
+        .collect()
 }
 
 /// The time a solver needs for `target` error, interpolated log-log between
@@ -93,12 +113,51 @@ pub(super) fn time_at(points: &[(f64, f64)], target: f64) -> Option<f64> {
     })
 }
 
+/// The cheapest certified value of a variation.
+#[derive(Debug, Serialize)]
+pub struct Cheapest {
+    pub value: String,
+    pub work: usize,
+    pub pressure_error: Option<f64>,
+}
+
+/// A value that was not certified, with its status.
+#[derive(Debug, Serialize)]
+pub struct Failed {
+    pub value: String,
+    pub status: String,
+}
+
+/// The times of a variation measured against no reference (a fine mesh),
+/// fastest and slowest point, with its largest certificate violation.
+#[derive(Debug, Serialize)]
+pub struct Times {
+    pub fastest: f64,
+    pub slowest: f64,
+    pub certificate: f64,
+}
+
+/// One setting of one solver varied around the defaults.
+#[derive(Debug, Serialize)]
+pub struct Variation {
+    pub group: String,
+    pub solver: &'static str,
+    /// Its mesh when it is not the section's (the fine meshes).
+    pub h: Option<String>,
+    pub certified: Vec<String>,
+    pub cheapest: Option<Cheapest>,
+    pub failed: Vec<Failed>,
+    /// Whether no trial had a reference, and then the times.
+    pub unreferenced: bool,
+    pub times: Option<Times>,
+}
+
 /// For each variation: the values certified, and the cheapest certified one.
-pub(super) fn variations_text(sweep: &[Measured]) -> String {
+pub(super) fn variations(sweep: &[Measured]) -> Vec<Variation> {
     // A variation is a group of one solver: a group that varies the same
     // setting of two solvers (the schedule) is two lines, each quoting its
     // own solver's trials, since work is counted in each solver's own unit.
-    let mut groups: Vec<(&str, &str)> = Vec::new();
+    let mut groups: Vec<(&str, &'static str)> = Vec::new();
     for m in sweep {
         let key = (m.trial.group.as_str(), m.trial.solver.name);
         if key.0 != WORK_PRECISION && key.0 != WORK_PRECISION_COULOMB && !groups.contains(&key) {
@@ -106,7 +165,7 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
         }
     }
     let main_mesh = sweep.first().map(|m| m.trial.h);
-    let mut lines = Vec::new();
+    let mut out = Vec::new();
     for (g, solver) in groups {
         let measured: Vec<&Measured> = sweep
             .iter()
@@ -114,68 +173,44 @@ pub(super) fn variations_text(sweep: &[Measured]) -> String {
             .collect();
         let runs: Vec<&Trial> = measured.iter().map(|m| &m.trial).collect();
         let certified: Vec<&&Trial> = runs.iter().filter(|t| t.certified()).collect();
-        let failed: Vec<String> = runs
-            .iter()
-            .filter(|t| !t.certified())
-            .map(|t| format!("{} ({})", t.knob().1, t.status))
-            .collect();
-        let cheapest = certified.iter().min_by_key(|t| t.work);
         // A group on another mesh than the section's (the fine meshes)
         // says its mesh, and, measured against no reference, its times.
-        let h = runs.first().map(|t| t.h);
-        let elsewhere = h.filter(|h| Some(*h) != main_mesh);
+        let h = runs.first().map(|t| t.h).filter(|h| Some(*h) != main_mesh);
         let unreferenced = runs.iter().all(|t| t.reference.is_none());
         let seconds: Vec<f64> = measured.iter().map(|m| m.timing.seconds_min).collect();
         let times = (unreferenced && !seconds.is_empty()).then(|| {
-            let (lo, hi) = seconds
+            let (fastest, slowest) = seconds
                 .iter()
                 .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
-            let worst = runs.iter().map(|t| t.residual()).fold(0.0f64, f64::max);
-            format!(
-                "; {lo:.2}–{hi:.2} s a point, largest certificate {worst:.1e} (no reference on this mesh: the certificate measures each answer)"
-            )
+            Times {
+                fastest,
+                slowest,
+                certificate: runs.iter().map(|t| t.residual()).fold(0.0f64, f64::max),
+            }
         });
-        lines.push(format!(
-            "- `{g}` ({solver}{}): certified at {}; {}{}{}",
-            elsewhere.map(|h| format!(", h = {h}")).unwrap_or_default(),
-            if certified.is_empty() {
-                "no value".to_string()
-            } else {
-                certified
-                    .iter()
-                    .map(|t| t.knob().1.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            },
-            match cheapest {
-                Some(t) => format!(
-                    "the least work at {} ({} work{})",
-                    t.knob().1,
-                    t.work,
-                    match t.pressure_error() {
-                        Some(e) => format!(", pressure error {e:.1e}"),
-                        None if unreferenced => String::new(),
-                        None => ", pressure error –".into(),
-                    }
-                ),
-                None => String::new(),
-            },
-            if failed.is_empty() {
-                String::new()
-            } else {
-                format!("; not certified at {}", failed.join(", "))
-            },
-            times.unwrap_or_default()
-        ));
+        out.push(Variation {
+            group: g.to_string(),
+            solver,
+            h: h.map(|h| h.to_string()),
+            certified: certified.iter().map(|t| t.knob().1.to_string()).collect(),
+            cheapest: certified.iter().min_by_key(|t| t.work).map(|t| Cheapest {
+                value: t.knob().1.to_string(),
+                work: t.work,
+                pressure_error: t.pressure_error(),
+            }),
+            failed: runs
+                .iter()
+                .filter(|t| !t.certified())
+                .map(|t| Failed {
+                    value: t.knob().1.to_string(),
+                    status: t.status.to_string(),
+                })
+                .collect(),
+            unreferenced,
+            times,
+        });
     }
-    if lines.is_empty() {
-        String::new()
-    } else {
-        format!(
-            "One factor at a time around the defaults, on the whole Coulomb problem (every trial stops at a work cap):\n\n{}\n",
-            lines.join("\n")
-        )
-    }
+    out
 }
 
 #[cfg(test)]
@@ -211,23 +246,24 @@ mod tests {
             .map(|t| measure(t, None, keep).unwrap())
             .collect();
         assert_eq!(measured.len(), 4);
-        let text = variations_text(&measured);
+        let found = variations(&measured);
         for solver in ["relaxation", "tnnmg"] {
-            let line = text
-                .lines()
-                .find(|l| l.starts_with(&format!("- `{SCHEDULE}` ({solver})")))
-                .unwrap_or_else(|| panic!("no line for {solver} in\n{text}"));
+            let line = found
+                .iter()
+                .find(|v| v.group == SCHEDULE && v.solver == solver)
+                .unwrap_or_else(|| panic!("no line for {solver} in {found:?}"));
             let least = measured
                 .iter()
                 .filter(|m| m.trial.solver.name == solver && m.trial.certified())
                 .map(|m| m.trial.work)
                 .min()
                 .unwrap();
-            assert!(line.contains(&format!("({least} work")), "{line}");
-            assert!(
-                line.contains("certified at revisit, finest-only;"),
-                "{line}"
+            assert_eq!(
+                line.cheapest.as_ref().map(|c| c.work),
+                Some(least),
+                "{line:?}"
             );
+            assert_eq!(line.certified, ["revisit", "finest-only"], "{line:?}");
         }
     }
 }
