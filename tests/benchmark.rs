@@ -322,7 +322,7 @@ fn a_solver_claiming_success_on_a_wrong_answer_counts_as_failed() {
         assert_eq!((s.successes, s.claimed_but_failed), (0, s.runs));
     }
     assert!(
-        views::report(&rows).contains("`liar` on"),
+        views::report(&rows).unwrap().contains("`liar` on"),
         "the refused runs are listed"
     );
     // The honest solver solves every instance.

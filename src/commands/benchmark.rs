@@ -67,7 +67,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         }),
     );
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let report = views::report(&findings);
+    let report = views::report(&findings)?;
     let target = folder.commit()?;
     print(&format!(
         "{report}\nwrote {}/benchmark.csv, its tables and charts\n",
@@ -91,7 +91,7 @@ pub fn merge(args: &BenchmarkMergeArgs) -> Result<()> {
     artifacts.extend(views::artifacts(&rows)?);
     write_artifacts(dir, &artifacts)?;
     write_atomic(&dir.join("manifest.json"), &json_bytes(&manifest)?)?;
-    let report = views::report(&rows);
+    let report = views::report(&rows)?;
     let target = folder.commit()?;
     print(&format!(
         "{report}\nmerged {} shards ({} rows) into {}\n",

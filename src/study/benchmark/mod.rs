@@ -28,8 +28,9 @@ use crate::mechanics::dofs::{DofExpansion, DofMap};
 use crate::mechanics::mesh::Mesh;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::settings::Settings;
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured, measure};
+use crate::study::template;
 use crate::study::trial::{Setting, TrialSpec};
 
 pub use collection::{Instance, collection};
@@ -163,36 +164,19 @@ impl Study for Benchmark {
         let mut ids: Vec<&str> = rows.iter().map(|r| r.instance.as_str()).collect();
         ids.sort_unstable();
         ids.dedup();
-        let what = match &self.spec.instances {
-            Some(_) => format!("the {} problems given", ids.len()),
-            None => format!(
-                "{} instances{}: the collection is the paper's three problems over 𝓕 ∈ {{0, 0.25, 0.5, 1, 2}} \
-                 and h ∈ {{1/16, 1/32, 1/64}}, sideways loads (a tangential traction on the loaded part of the top \
-                 side), loads that barely satisfy condition (13), and the paper's problems at h = 1/128 and 1/256 \
-                 (`contactlab benchmark --help`)",
-                ids.len(),
-                if self.spec.core {
-                    " (its core collection: the instances finer than 1/32 are left to `--long`)"
-                } else {
-                    ""
-                }
-            ),
-        };
-        let mut s = format!(
-            "## Benchmark over a problem collection\n\n`benchmark.csv` has one row per run (instance, solver, target \
-             accuracy) over {what}. At a target accuracy τ every solver's own tolerances and ε are set to 0.1·τ and a \
-             run succeeds only if its answer passes the certificate at τ within the time limit. LaTeX (booktabs) \
-             versions of the tables: `benchmark_<τ>.tex`.\n\n{}\n\n",
-            views::report(rows)
-        );
-        for c in charts {
-            s += &chart_markdown(
-                c,
-                "Performance profile over the collection: the fraction of instances each solver solves (certified) \
-                 within τ times the fastest solver's time.",
-            );
-        }
-        Ok(Section { markdown: s })
+        let report = views::report(rows)?;
+        let markdown = template::render(
+            "benchmark",
+            include_str!("../templates/benchmark.md"),
+            template::facts! {
+                given => self.spec.instances.is_some(),
+                count => ids.len(),
+                core => self.spec.core,
+                report,
+                charts,
+            },
+        )?;
+        Ok(Section { markdown })
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<BenchmarkRow>>> {

@@ -11,6 +11,7 @@ use crate::io::charts::{Chart, Series};
 use crate::io::csv::fixed;
 use crate::study::benchmark::BenchmarkRow;
 use crate::study::lab::Artifact;
+use crate::study::template;
 
 /// The shift of the shifted geometric mean, seconds: times well below it
 /// count as about equal (a 1 ms and a 10 ms solve are both fast), so the
@@ -179,26 +180,6 @@ pub fn tag(target: f64) -> String {
     format!("{target:.0e}")
 }
 
-/// The Markdown table at one target.
-pub fn markdown(summaries: &[Summary], target: f64) -> String {
-    let mut s = String::from(
-        "| solver | success | claimed, refused by the certificate | shifted geometric mean [s] | relative to the best |\n|---|---|---|---|---|\n",
-    );
-    for x in summaries.iter().filter(|x| x.target == target) {
-        s += &format!(
-            "| {} | {}/{} ({:.0}%) | {} | {:.3} | {:.2} |\n",
-            x.solver,
-            x.successes,
-            x.runs,
-            100.0 * x.success_rate,
-            x.claimed_but_failed,
-            x.shifted_geometric_mean,
-            x.relative_to_best
-        );
-    }
-    s
-}
-
 /// The LaTeX table at one target: the Markdown table's columns, headed
 /// short enough to fit a page's width and defined in the caption.
 pub fn latex(summaries: &[Summary], target: f64) -> String {
@@ -236,23 +217,6 @@ pub fn latex(summaries: &[Summary], target: f64) -> String {
     t.render()
 }
 
-/// The runs claimed but refused, one line each.
-pub fn refused_lines(rows: &[BenchmarkRow]) -> Vec<String> {
-    rows.iter()
-        .filter(|r| r.claimed_but_failed)
-        .map(|r| {
-            format!(
-                "- `{}` on `{}` at {:.0e}: certificate {:.1e} ({})",
-                r.solver,
-                r.instance,
-                r.target,
-                r.certificate,
-                r.failing.replace(';', ", ")
-            )
-        })
-        .collect()
-}
-
 /// The views of `rows`: benchmark_summary.csv, a LaTeX table per target,
 /// benchmark.md, and the performance profiles.
 pub fn artifacts(rows: &[BenchmarkRow]) -> Result<Vec<Artifact>> {
@@ -264,51 +228,75 @@ pub fn artifacts(rows: &[BenchmarkRow]) -> Result<Vec<Artifact>> {
             &latex(&sums, t),
         ));
     }
-    out.push(Artifact::text("benchmark.md", &report(rows)));
+    out.push(Artifact::text("benchmark.md", &report(rows)?));
     out.extend(Artifact::charts(profile_charts(rows)));
     Ok(out)
 }
 
-/// The benchmark's section of a report: per target the table, the runs
-/// claimed but refused, and which solver wins by how much.
-pub fn report(rows: &[BenchmarkRow]) -> String {
+/// The fastest solver at a target and the next, with how much slower it
+/// is in shifted geometric mean.
+#[derive(Serialize)]
+struct Fastest<'a> {
+    first: &'a Summary,
+    second: &'a Summary,
+    slower: f64,
+}
+
+/// One target of the report: the table, the winner, the runs claimed but
+/// refused.
+#[derive(Serialize)]
+struct TargetFacts<'a> {
+    target: f64,
+    summaries: Vec<&'a Summary>,
+    fastest: Option<Fastest<'a>>,
+    refused: Vec<&'a BenchmarkRow>,
+}
+
+/// The benchmark's report (`templates/benchmark_report.md`): per target
+/// the table, which solver wins by how much, and the runs claimed but
+/// refused.
+pub fn report(rows: &[BenchmarkRow]) -> Result<String> {
     let sums = summaries(rows);
     let mut instances: Vec<&str> = rows.iter().map(|r| r.instance.as_str()).collect();
     instances.sort();
     instances.dedup();
-    let limit = rows.iter().map(|r| r.time_limit).fold(0.0f64, f64::max);
-    let mut s = format!(
-        "{} instances, {} solvers, {} runs; a run succeeds if its answer passes the certificate at the target accuracy; \
-         time limit {limit} s per run; shifted geometric mean of time with shift {SHIFT} s, a failure counted at the time limit.\n",
-        instances.len(),
-        solvers(rows).len(),
-        rows.len()
-    );
-    for t in targets(rows) {
-        s += &format!("\n**Target accuracy {t:.0e}**\n\n{}", markdown(&sums, t));
-        let mut ranked: Vec<&Summary> = sums.iter().filter(|x| x.target == t).collect();
-        ranked.sort_by(|a, b| a.relative_to_best.total_cmp(&b.relative_to_best));
-        if let [first, second, ..] = ranked.as_slice() {
-            s += &format!(
-                "\nFastest over the collection: `{}` ({:.0}% solved); the next, `{}`, is {:.2}× slower in shifted geometric mean ({:.0}% solved).\n",
-                first.solver,
-                100.0 * first.success_rate,
-                second.solver,
-                second.relative_to_best / first.relative_to_best,
-                100.0 * second.success_rate
-            );
-        }
-        let at_t: Vec<BenchmarkRow> = rows.iter().filter(|r| r.target == t).cloned().collect();
-        let refused = refused_lines(&at_t);
-        if !refused.is_empty() {
-            s += &format!(
-                "\nClaimed convergence, refused by the certificate ({}):\n\n{}\n",
-                refused.len(),
-                refused.join("\n")
-            );
-        }
-    }
-    s
+    let targets: Vec<TargetFacts> = targets(rows)
+        .into_iter()
+        .map(|t| {
+            let summaries: Vec<&Summary> = sums.iter().filter(|x| x.target == t).collect();
+            let mut ranked = summaries.clone();
+            ranked.sort_by(|a, b| a.relative_to_best.total_cmp(&b.relative_to_best));
+            let fastest = match ranked.as_slice() {
+                [first, second, ..] => Some(Fastest {
+                    first,
+                    second,
+                    slower: second.relative_to_best / first.relative_to_best,
+                }),
+                _ => None,
+            };
+            TargetFacts {
+                target: t,
+                summaries,
+                fastest,
+                refused: rows
+                    .iter()
+                    .filter(|r| r.target == t && r.claimed_but_failed)
+                    .collect(),
+            }
+        })
+        .collect();
+    template::render(
+        "benchmark_report",
+        include_str!("../templates/benchmark_report.md"),
+        template::facts! {
+            instances => instances.len(),
+            solvers => solvers(rows).len(),
+            runs => rows.len(),
+            limit => rows.iter().map(|r| r.time_limit).fold(0.0f64, f64::max),
+            shift => SHIFT,
+            targets,
+        },
+    )
 }
 
 #[cfg(test)]
