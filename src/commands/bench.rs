@@ -40,7 +40,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let goals = findings.goals;
     print(&format!(
         "{}\nwrote {}/performance.csv, performance_goals.md and charts\n",
-        goals_markdown(&goals),
+        goals_markdown(&goals)?,
         target.display()
     ))
 }

@@ -168,56 +168,40 @@ pub fn measure(problem: u32, h: MeshSize) -> Result<Option<ExactBound>> {
     }))
 }
 
-/// Seconds as text: three significant digits, milliseconds below 0.1 s.
-fn time(s: f64) -> String {
-    if s < 0.1 {
-        format!("{:.3} ms", s * 1e3)
-    } else {
-        format!("{s:.3} s")
-    }
+/// A row of the table (`templates/bench_exact_bound.md`): the
+/// measurement, its best case, and each time over the best factorization
+/// at its mesh (none without one).
+#[derive(Serialize)]
+struct Row<'a> {
+    #[serde(flatten)]
+    found: &'a ExactBound,
+    h: String,
+    seconds_over_factorization: Option<f64>,
+    best: Option<f64>,
+    best_over_factorization: Option<f64>,
 }
 
 /// The table, each time also over the best factorization of `rows`.
-pub fn markdown(found: &[ExactBound], rows: &[PerfRow]) -> String {
-    if found.is_empty() {
-        return String::new();
-    }
-    let over = |h: MeshSize, s: f64| {
-        factorization(rows, h).map_or(String::new(), |f| {
-            format!(" = {:.2} × factorization", s / f)
+pub fn markdown(found: &[ExactBound], rows: &[PerfRow]) -> Result<String> {
+    let table: Vec<Row> = found
+        .iter()
+        .map(|e| {
+            let f = factorization(rows, e.h);
+            let best = e.best_case_seconds();
+            Row {
+                found: e,
+                h: e.h.to_string(),
+                seconds_over_factorization: f.map(|f| e.seconds / f),
+                best,
+                best_over_factorization: best.and_then(|b| f.map(|f| b / f)),
+            }
         })
-    };
-    let mut md = String::from(
-        "\n### Coulomb without the outer loop, at best (problem 1, once each, in this process)\n\n\
-         | h | start error | fixed point: friction steps | its finest TNNMG iterations | its error | TNNMG iterations at the exact bound to that error | one finest iteration | default solve | at best without the outer loop |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
-    );
-    for e in found {
-        let exact = e
-            .exact_iterations
-            .map_or(format!("more than {MAX_ITERATIONS}"), |k| k.to_string());
-        let best = e
-            .best_case_seconds()
-            .map_or("–".into(), |s| format!("{}{}", time(s), over(e.h, s)));
-        md += &format!(
-            "| {} | {:.1e} | {} | {} | {:.1e} | {exact} | {} | {}{} | {best} |\n",
-            e.h,
-            e.start_error,
-            e.friction_steps,
-            e.finest_iterations,
-            e.error,
-            time(e.iteration_seconds),
-            time(e.seconds),
-            over(e.h, e.seconds),
-        );
-    }
-    md += "\nErrors are max|p − p*|/P against a reference solved far tighter (`tnnmg.tolerance` = 1e-12, `coulomb.epsilon` = 1e-11). \
-           Both columns of iterations start on the finest level from the nested schedule's start (the level below solved to \
-           `coulomb.coarse_epsilon`, interpolated). At the exact bound g = 𝓕p* TNNMG solves a given-friction problem whose answer \
-           is the Coulomb answer, and no friction error is left to remove: that is the best case of a method that updates the bound \
-           inside the iteration with the same linear correction, so the last column (the default solve less the iterations saved, \
-           each at the measured cost of one) estimates the most that removing the outer loop can gain.\n";
-    md
+        .collect();
+    crate::study::template::render(
+        "bench_exact_bound",
+        include_str!("../templates/bench_exact_bound.md"),
+        crate::study::template::facts! { rows => table, max_iterations => MAX_ITERATIONS },
+    )
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ use crate::study::bench::exact_bound::{self, ExactBound};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, FastestDirect, PerfRow, bench, multigrid};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
+use crate::study::template;
 
 pub use crate::study::bench::charts::{
     MIN_POINTS_FOR_SLOPE, fit_slope, performance_charts, slope_label,
@@ -251,47 +252,39 @@ fn paper_label(r: &PerfRow, paper: &Entry) -> (String, &'static str) {
     }
 }
 
-/// The equal-accuracy comparison as a table: one row per run.
-pub fn equal_accuracy_markdown(rows: &[PerfRow], problem: u32) -> String {
-    let compared: Vec<&PerfRow> = rows.iter().filter(|r| r.what == EQUAL_ACCURACY).collect();
-    if compared.is_empty() {
-        return String::new();
-    }
-    let mut s = format!(
-        "\n### The paper's method at a certified accuracy, against the oracle (problem {problem}, once each)\n\n| h | solver | settings | status | certificate | seconds | × factorization | work units (A·v) | work |\n|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for r in compared {
-        s += &format!(
-            "| {} | {} | {} | {} | {:.1e} | {:.2} | {:.0} | {:.0} | {} |\n",
-            r.h,
-            r.solver,
-            if r.variant.is_empty() {
-                "defaults"
-            } else {
-                &r.variant
-            },
-            r.status,
-            r.certificate,
-            r.median_seconds,
-            r.ratio_to_factorization,
-            r.work_units,
-            r.note.trim_start_matches("once; ")
-        );
-    }
-    s
+/// A row of the equal-accuracy table: the run and its work as the table
+/// gives it (the note without its `once; `).
+#[derive(Serialize)]
+struct EqualRow<'a> {
+    #[serde(flatten)]
+    row: &'a PerfRow,
+    work_text: &'a str,
 }
 
-pub fn goals_markdown(goals: &[Goal]) -> String {
-    let mut s = String::from("| goal | measured | result |\n|---|---|---|\n");
-    for g in goals {
-        let result = match g.pass {
-            Some(true) => "pass",
-            Some(false) => "falls short",
-            None => "not measured",
-        };
-        s += &format!("| {} | {} | {result} |\n", g.goal, g.measured);
-    }
-    s
+/// The equal-accuracy comparison as a table: one row per run.
+pub fn equal_accuracy_markdown(rows: &[PerfRow], problem: u32) -> Result<String> {
+    let compared: Vec<EqualRow> = rows
+        .iter()
+        .filter(|r| r.what == EQUAL_ACCURACY)
+        .map(|row| EqualRow {
+            row,
+            work_text: row.note.trim_start_matches("once; "),
+        })
+        .collect();
+    template::render(
+        "bench_equal_accuracy",
+        include_str!("../templates/bench_equal_accuracy.md"),
+        template::facts! { rows => compared, problem },
+    )
+}
+
+/// The goals as a table (`templates/bench_goals.md`).
+pub fn goals_markdown(goals: &[Goal]) -> Result<String> {
+    template::render(
+        "bench_goals",
+        include_str!("../templates/bench_goals.md"),
+        template::facts! { goals },
+    )
 }
 
 /// What one benchmark run wrote.
@@ -337,7 +330,7 @@ impl Study for Bench {
 
     fn section(&self, out: &BenchOutput, _: &Lab, charts: &[String]) -> Result<Section> {
         Ok(Section {
-            markdown: crate::study::bench::section::section(out, charts),
+            markdown: crate::study::bench::section::section(out, charts)?,
         })
     }
 
@@ -372,7 +365,7 @@ pub fn measure_bench(
         spec.large.clone()
     };
     // A probe that fails costs its line in the report, not the run.
-    let (mut memory, mut unmeasured) = (Vec::new(), String::new());
+    let (mut memory, mut unmeasured) = (Vec::new(), Vec::new());
     for h in measured_meshes {
         let Some(fastest) = fastest(&rows, &h.to_string()) else {
             continue;
@@ -389,7 +382,10 @@ pub fn measure_bench(
             Ok(used) => memory.push(used),
             Err(e) => {
                 log(&format!("memory at h = {h} not measured: {e:#}"));
-                unmeasured += &format!("\nMemory at h = {h} was not measured: {e:#}.\n");
+                unmeasured.push(memory::Unmeasured {
+                    h: h.to_string(),
+                    error: format!("{e:#}"),
+                });
             }
         }
     }
@@ -407,11 +403,13 @@ pub fn measure_bench(
             memory.push(used.clone());
         }
     }
-    let mut md = goals_markdown(&goals);
-    md += &memory::markdown(&memory);
-    md += &unmeasured;
-    md += &exact_bound::markdown(&multigrid.exact_bound, &rows);
-    md += &equal_accuracy_markdown(&rows, spec.problem);
+    let md = [
+        goals_markdown(&goals)?,
+        memory::markdown(&memory, &unmeasured)?,
+        exact_bound::markdown(&multigrid.exact_bound, &rows)?,
+        equal_accuracy_markdown(&rows, spec.problem)?,
+    ]
+    .concat();
     Ok(BenchOutput {
         problem: spec.problem,
         meshes: spec.meshes.clone(),

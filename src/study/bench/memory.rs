@@ -220,36 +220,54 @@ pub fn measure_in_fresh_process(
         .with_context(|| format!("bench-one for {solver} at h = {h} printed no measurement"))
 }
 
+/// A memory that could not be measured, and why.
+#[derive(Serialize)]
+pub struct Unmeasured {
+    pub h: String,
+    pub error: String,
+}
+
+/// One measurement in MiB, as the table shows it: the peak, the
+/// assembly's, the problem's, what the solver reports (none if it does
+/// not), and the rest of the peak.
+#[derive(Serialize)]
+struct Row<'a> {
+    h: String,
+    solver: &'a str,
+    status: &'a str,
+    peak: f64,
+    assembly_peak: f64,
+    problem: f64,
+    factor: Option<f64>,
+    schur: Option<f64>,
+    rest: f64,
+}
+
 /// The table of where memory goes, one row per measured solve.
-pub fn markdown(uses: &[MemoryUse]) -> String {
-    if uses.is_empty() {
-        return String::new();
-    }
-    let mib_kb = |kb: u64| format!("{:.0}", kb as f64 / 1024.0);
-    let mib_bytes = |b: Option<f64>| b.map_or("–".into(), |b| format!("{:.0}", b / 1048576.0));
-    let mut md = String::from(
-        "\n### Where the memory goes (whole Coulomb problem, each in a fresh process; MiB)\n\n\
-         | h | solver | status | peak | assembly's peak | assembled problem | factor of A_II (values) | Schur complement S | rest of the peak |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
-    );
-    for u in uses {
-        let known = u.problem_kb as f64 * 1024.0
-            + u.factor_values_bytes.unwrap_or(0.0)
-            + u.schur_bytes.unwrap_or(0.0);
-        let rest = (u.peak_kb as f64 * 1024.0 - known).max(0.0);
-        md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.0} |\n",
-            u.h,
-            u.solver,
-            u.status,
-            mib_kb(u.peak_kb),
-            mib_kb(u.assembly_peak_kb),
-            mib_kb(u.problem_kb),
-            mib_bytes(u.factor_values_bytes),
-            mib_bytes(u.schur_bytes),
-            rest / 1048576.0,
-        );
-    }
-    md += "\nThe assembled problem is the one the solver gets: with the mass matrix M only for a solver that reads it (`Entry::uses_mass`). The rest is the factor's indices and workspace, the solver's other arrays (for tnnmg its Galerkin hierarchy and vectors) and the program itself; the assembly's peak includes the program.\n";
-    md
+pub fn markdown(uses: &[MemoryUse], unmeasured: &[Unmeasured]) -> Result<String> {
+    const MIB: f64 = 1048576.0;
+    let rows: Vec<Row> = uses
+        .iter()
+        .map(|u| {
+            let known = u.problem_kb as f64 * 1024.0
+                + u.factor_values_bytes.unwrap_or(0.0)
+                + u.schur_bytes.unwrap_or(0.0);
+            Row {
+                h: u.h.to_string(),
+                solver: &u.solver,
+                status: &u.status,
+                peak: u.peak_kb as f64 / 1024.0,
+                assembly_peak: u.assembly_peak_kb as f64 / 1024.0,
+                problem: u.problem_kb as f64 / 1024.0,
+                factor: u.factor_values_bytes.map(|b| b / MIB),
+                schur: u.schur_bytes.map(|b| b / MIB),
+                rest: (u.peak_kb as f64 * 1024.0 - known).max(0.0) / MIB,
+            }
+        })
+        .collect();
+    crate::study::template::render(
+        "bench_memory",
+        include_str!("../templates/bench_memory.md"),
+        crate::study::template::facts! { uses => rows, unmeasured },
+    )
 }

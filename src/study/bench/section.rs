@@ -1,52 +1,63 @@
-//! The speed measurements' section of a run's README: the goals, the
-//! memory, the paper's method at equal accuracy, the speed table and the
-//! performance charts.
+//! The speed measurements' section of a run's README (`templates/bench.md`):
+//! the goals, the memory, the paper's method at equal accuracy, the speed
+//! table and the performance charts.
 
+use anyhow::Result;
 use contactlab_solvers::registry;
+use serde::Serialize;
 
 use crate::study::bench::goals::{BenchOutput, equal_accuracy_markdown, goals_markdown};
 use crate::study::bench::set_up::FACTORIZATION;
 use crate::study::bench::{exact_bound, memory};
-use crate::study::lab::chart_markdown;
+use crate::study::template;
 
 /// The whole section.
-pub fn section(bench: &BenchOutput, charts: &[String]) -> String {
-    let mut s = String::from(
-        "## Speed (problem 1, medians after a warm-up)\n\n\
-         Every time is also a ratio to one sparse Cholesky factorization and solve of the stiffness matrix with the \
-         semicoercive mode removed, measured in the same run (`performance.csv`, a timing file; `contactlab bench` \
-         reruns it alone), and a number of work units: the time over one product A·v with the problem's own A on \
-         the same mesh (the storage the solvers get, on the machine's cores), timed in the same run, which divides \
-         the machine's speed out (`work_units`; for `tnnmg` the goals split them by phase). A solver stops at a stated budget per run. The program keeps freed memory for reuse \
-         (`src/allocator.rs`), so a repeated run does not fault its pages in again: medians are warm, and the rows \
-         marked *once* are cold.\n\n",
-    );
-    s += &goals_markdown(&bench.goals);
-    s += "\n";
-    s += &memory::markdown(&bench.memory);
-    s += &exact_bound::markdown(&bench.exact_bound, &bench.rows);
-    s += "\n";
-    s += &equal_accuracy_markdown(&bench.rows, bench.problem);
-    s += "\n\nIn that comparison the paper's method stops by its certified rule (`relaxation.target`: the \
-          certificate's largest violation, checked every `check_every` sweeps and after every Uzawa step) instead of \
-          its rules on max|Δl| and max|Δv|, so that it delivers the same accuracy on every mesh; `relaxation.omega` = 1 \
-          is the paper's Gauss–Seidel, 1.5 the over-relaxed sweep. The oracle runs at its own settings. Each run is \
-          once and cold, without the budget; its certificate (the same code for every solver) says what accuracy it \
-          reached.\n";
-    s += &speed_table(&bench.rows);
-    s += "\n";
-    for c in charts.iter().filter(|c| c.starts_with("performance_")) {
-        s += &chart_markdown(
-            c,
-            "How each solver's time grows with the number of unknowns (slope in the legend, fitted through three or \
-             more certified runs; runs stopped or refused are crosses), beside the best sparse factorization (faer on \
-             one thread or both cores, whichever is faster on the mesh, symbolic analysis once).",
-        );
-    }
-    s
+pub fn section(bench: &BenchOutput, charts: &[String]) -> Result<String> {
+    let performance: Vec<&String> = charts
+        .iter()
+        .filter(|c| c.starts_with("performance_"))
+        .collect();
+    let goals = goals_markdown(&bench.goals)?;
+    let memory = memory::markdown(&bench.memory, &[])?;
+    let exact_bound = exact_bound::markdown(&bench.exact_bound, &bench.rows)?;
+    let equal_accuracy = equal_accuracy_markdown(&bench.rows, bench.problem)?;
+    let speed = speed_table(&bench.rows)?;
+    template::render(
+        "bench",
+        include_str!("../templates/bench.md"),
+        template::facts! {
+            goals,
+            memory,
+            exact_bound,
+            equal_accuracy,
+            speed,
+            charts => performance,
+        },
+    )
 }
 
-fn speed_table(rows: &[super::PerfRow]) -> String {
+/// A cell of the speed table: the run's median seconds (none: not
+/// finite, the status is shown instead), its ratio to the factorization,
+/// its work units (none: not measured) and its certified status.
+#[derive(Serialize)]
+struct Cell<'a> {
+    seconds: Option<f64>,
+    ratio: f64,
+    work_units: Option<f64>,
+    status: &'a str,
+}
+
+/// A line of the speed table: a solver (or the factorization) and its
+/// cell on each mesh (none: no run there).
+#[derive(Serialize)]
+struct Line<'a> {
+    name: &'a str,
+    factorization: bool,
+    cells: Vec<Option<Cell<'a>>>,
+}
+
+/// The whole-Coulomb speed table (`templates/bench_speed.md`).
+fn speed_table(rows: &[super::PerfRow]) -> Result<String> {
     // Each mesh once, in the order of its first row (later studies revisit
     // meshes).
     let mut meshes: Vec<&str> = Vec::new();
@@ -55,68 +66,39 @@ fn speed_table(rows: &[super::PerfRow]) -> String {
             meshes.push(&r.h);
         }
     }
-    let mut s = String::from(
-        "\nWhole Coulomb problem, median seconds (× the best factorization: numeric LLᵀ + one solve on the faster here of 1 and 2 threads, symbolic once; work units, WU: ÷ one product A·v), certified status:\n\n| solver |",
-    );
-    for h in &meshes {
-        s += &format!(" {h} |");
-    }
-    s += "\n|---|";
-    s += &"---|".repeat(meshes.len());
-    s += "\n";
     let mut names = vec![FACTORIZATION];
     names.extend(registry::names());
-    for name in names {
-        let cells: Vec<String> = meshes
-            .iter()
-            .map(|h| {
-                rows.iter()
-                    .find(|r| {
-                        r.solver == name
-                            && r.h == *h
-                            && (r.what == "coulomb" || r.what == "factorization")
-                    })
-                    .map(|r| {
-                        if r.median_seconds.is_finite() {
-                            let st = if r.what == "factorization" {
-                                String::new()
-                            } else {
-                                format!(", {}", r.status)
-                            };
-                            let wu = if r.work_units.is_finite() {
-                                format!(", {:.0} WU", r.work_units)
-                            } else {
-                                String::new()
-                            };
-                            format!(
-                                "{:.4} ({:.1}×{wu}{st})",
-                                r.median_seconds, r.ratio_to_factorization
-                            )
-                        } else {
-                            r.status.clone()
-                        }
-                    })
-                    .unwrap_or_default()
-            })
-            .collect();
+    let lines: Vec<Line> = names
+        .into_iter()
+        .map(|name| Line {
+            name,
+            factorization: name == FACTORIZATION,
+            cells: meshes
+                .iter()
+                .map(|h| {
+                    rows.iter()
+                        .find(|r| {
+                            r.solver == name
+                                && r.h == *h
+                                && (r.what == "coulomb" || r.what == "factorization")
+                        })
+                        .map(|r| Cell {
+                            seconds: r.median_seconds.is_finite().then_some(r.median_seconds),
+                            ratio: r.ratio_to_factorization,
+                            work_units: r.work_units.is_finite().then_some(r.work_units),
+                            status: &r.status,
+                        })
+                })
+                .collect(),
+        })
         // A solver that ran on no mesh has no row.
-        if cells.iter().all(String::is_empty) {
-            continue;
-        }
-        s += &format!(
-            "| {} |",
-            if name == FACTORIZATION {
-                "best factorization + solve (faster of 1 and 2 threads)"
-            } else {
-                name
-            }
-        );
-        for cell in cells {
-            s += &format!(" {cell} |");
-        }
-        s += "\n";
-    }
-    s
+        .filter(|l| l.cells.iter().any(Option::is_some))
+        .collect();
+    template::render(
+        "bench_speed",
+        include_str!("../templates/bench_speed.md"),
+        template::facts! { meshes, lines },
+    )
 }
 
 #[cfg(test)]
@@ -137,7 +119,7 @@ mod tests {
             r.h = "1/8".into();
         }
         rows[1].work_units = 12.4;
-        let table = speed_table(&rows);
+        let table = speed_table(&rows).unwrap();
         let body: Vec<&str> = table.lines().filter(|l| l.starts_with("| ")).collect();
         assert_eq!(body.len(), 3, "{table}");
         assert!(body[1].contains("best factorization") && body[1].contains("0.5000"));
