@@ -16,8 +16,9 @@ use crate::io::charts::{Chart, Series};
 use crate::mechanics::scene::Scene;
 use crate::study::benchmark::target_settings;
 use crate::study::error_bound::views::{bound_against_error_chart, trial_points};
-use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study, chart_markdown};
+use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
+use crate::study::template;
 use crate::study::trial::TrialSpec;
 
 /// The study's name in trial records.
@@ -175,23 +176,17 @@ impl Study for WorkPrecision {
     }
 
     fn section(&self, measured: &Vec<Measured>, _: &Lab, charts: &[String]) -> Result<Section> {
-        let certified = measured.iter().filter(|m| m.trial.certified()).count();
-        let mut markdown = format!(
-            "## Work against precision ({}, h = {})\n\n{certified} of {} runs certified at their target.\n\n",
-            self.scene.name,
-            self.scene.finest(),
-            measured.len()
-        );
-        for c in charts {
-            let intent = if c.ends_with("_bound_vs_error") {
-                "The error bound of each answer against its measured distance from the reference: no point may lie below the line bound = error (for a Coulomb answer the bound is at its own g = 𝓕p)."
-            } else if c.ends_with("_bound") {
-                "Time against the error bound on ‖v − v*‖_A: an accuracy that needs no reference."
-            } else {
-                "Time against the certificate's largest violation for each solver at each target accuracy."
-            };
-            markdown += &chart_markdown(c, intent);
-        }
+        let markdown = template::render(
+            "work_precision",
+            include_str!("templates/work_precision.md"),
+            template::facts! {
+                scene => self.scene.name,
+                h => self.scene.finest().to_string(),
+                certified => measured.iter().filter(|m| m.trial.certified()).count(),
+                runs => measured.len(),
+                charts,
+            },
+        )?;
         Ok(Section { markdown })
     }
 }
