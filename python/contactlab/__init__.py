@@ -590,6 +590,28 @@ def _settings(settings) -> List[tuple]:
     return out
 
 
+def _options(options, solver: str, name: str = "options") -> List[tuple]:
+    """A solver's own settings without its prefix, as scipy's ``options``
+    of a ``method`` (``{"tolerance": 1e-12}`` for ``newton-coulomb.tolerance``):
+    the pairs ``--set SOLVER.KNOB=VALUE`` writes. The engine validates them
+    once, as every setting: a knob the solver does not have is refused with
+    the list of those it has."""
+    if options is None:
+        return []
+    if not isinstance(options, Mapping):
+        raise InputError(f"{name} = {options!r}: give a mapping {{knob: value}}, e.g. {{\"tolerance\": 1e-10}}")
+    out = []
+    for knob, value in options.items():
+        knob = str(knob)
+        if "." in knob:
+            raise InputError(
+                f"{name}: `{knob}` is a path; give the knob alone ({knob.rsplit('.', 1)[-1]}), "
+                f"or the path in settings="
+            )
+        out.extend(_settings({f"{solver}.{knob}": value}))
+    return out
+
+
 #: A progress callback: called with ``{"stage", "iteration", "residual",
 #: "seconds"}`` for each step of the friction fixed point and of a solver's
 #: outer loop; returning ``False`` (or raising) stops the solve.
@@ -603,6 +625,7 @@ def solve(
     bound: Optional[Sequence[float]] = None,
     target: Optional[float] = None,
     callback: Optional[Callback] = None,
+    options: Optional[Mapping[str, object]] = None,
 ) -> Result:
     """Solves the problem and certifies the answer: ``contactlab solve``.
 
@@ -622,6 +645,11 @@ def solve(
         as the benchmark does.
     callback : callable, optional
         See ``Callback``; a raised exception is raised again here.
+    options : mapping, optional
+        The solver's own settings by knob, as scipy's ``options`` of a
+        ``method`` (``solver="newton-coulomb", options={"tolerance": 1e-12}``
+        is ``settings={"newton-coulomb.tolerance": 1e-12}``); applied after
+        ``settings``. Needs ``solver``.
 
     Returns
     -------
@@ -632,11 +660,13 @@ def solve(
         raise InputError(f"solver = {solver!r}: give a registered solver's name ({', '.join(solvers())})")
     if callback is not None and not callable(callback):
         raise InputError(f"callback = {callback!r}: give a function of the progress dict")
+    if options is not None and solver is None:
+        raise InputError("options: name the solver they are for (solver=...), or give paths in settings=")
     g = _array(bound, "bound")
     d = _contactlab.solve(
         problem._p,
         solver,
-        _settings(settings),
+        _settings(settings) + _options(options, solver or ""),
         None if g is None else g.tolist(),
         _number(target, "target"),
         callback,
@@ -850,6 +880,7 @@ def compare(
     repeats: int = 0,
     out: Optional[PathLike] = None,
     reference: Optional[str] = None,
+    options: Optional[Mapping[str, Mapping[str, object]]] = None,
 ) -> StudyResult:
     """Every solver against the earned reference: ``contactlab compare``.
 
@@ -874,6 +905,9 @@ def compare(
     reference : str, optional
         A solver whose answer (at its tightest settings, if certified) is
         the reference instead of the earned one (``--reference``).
+    options : mapping {solver: {knob: value}}, optional
+        Each solver's own settings by knob, as for ``solve``
+        (``{"tnnmg": {"tolerance": 1e-10}}``); applied after ``settings``.
 
     Returns
     -------
@@ -883,10 +917,17 @@ def compare(
     _problem(problem)
     if isinstance(repeats, bool) or not isinstance(repeats, numbers.Integral) or repeats < 0:
         raise InputError(f"repeats = {repeats!r}: give a count ≥ 0")
+    if options is not None and not isinstance(options, Mapping):
+        raise InputError(f"options = {options!r}: give a mapping {{solver: {{knob: value}}}}")
+    scoped = [
+        pair
+        for name, knobs in (options or {}).items()
+        for pair in _options(knobs, str(name), f"options[{name!r}]")
+    ]
     d = _contactlab._compare(
         problem._p,
         _solver_names(solvers),
-        _settings(settings),
+        _settings(settings) + scoped,
         int(repeats),
         _out(out),
         None if reference is None else str(reference),

@@ -709,3 +709,24 @@ def test_a_catalogued_study_is_one_call_with_the_command_lines_bytes(tmp_path):
         cl.study("no-such-study")
     with pytest.raises(cl.InputError, match="quick and long"):
         cl.oracle(quick=True, long=True)
+
+
+def test_options_are_a_solvers_settings_without_its_prefix(p32):
+    """scipy's ``options`` of a ``method``: the knob alone, scoped to the
+    solver named, the same setting as its path in ``settings``, validated
+    by the same code. An option that did not reach the solver, or one
+    applied to another solver, fails here."""
+    by_path = cl.solve(p32, solver="newton-coulomb", settings={"newton-coulomb.tolerance": 1e-12})
+    by_knob = cl.solve(p32, solver="newton-coulomb", options={"tolerance": 1e-12})
+    assert np.array_equal(by_path.pressure, by_knob.pressure)
+    assert by_path.iterations == by_knob.iterations
+    loose = cl.solve(p32, solver="newton-coulomb", options={"tolerance": 1e-3})
+    assert loose.iterations != by_knob.iterations or not np.array_equal(loose.pressure, by_knob.pressure)
+    with pytest.raises(cl.InputError, match="no_such_knob"):
+        cl.solve(p32, solver="newton-coulomb", options={"no_such_knob": 1})
+    with pytest.raises(cl.InputError, match="name the solver"):
+        cl.solve(p32, options={"tolerance": 1e-12})
+    with pytest.raises(cl.InputError, match="give the knob alone"):
+        cl.solve(p32, solver="newton-coulomb", options={"newton-coulomb.tolerance": 1e-12})
+    with pytest.raises(cl.InputError, match="bogus"):
+        cl.compare(cl.Problem.paper(1, h="1/8"), ["tnnmg"], options={"tnnmg": {"bogus": 1}})
