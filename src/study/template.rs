@@ -31,24 +31,6 @@ macro_rules! facts {
 }
 pub(crate) use facts;
 
-/// `x` as `{:.de}`, or `–` when it is not finite.
-pub fn sci(x: f64, digits: usize) -> String {
-    if x.is_finite() {
-        format!("{x:.digits$e}")
-    } else {
-        "–".into()
-    }
-}
-
-/// `x` as `{:.d}`, or `–` when it is not finite.
-pub fn fixed(x: f64, digits: usize) -> String {
-    if x.is_finite() {
-        format!("{x:.digits$}")
-    } else {
-        "–".into()
-    }
-}
-
 /// A filter's argument as a number, `None` for none (not measured); a
 /// name the facts lack (undefined) or a value that is not a number is an
 /// error, so that a misspelt fact does not read `–`.
@@ -62,56 +44,37 @@ fn number(x: &Value) -> Result<Option<f64>, minijinja::Error> {
     f64::try_from(x.clone()).map(Some)
 }
 
-/// `x` as Rust's `{:e}`, its shortest exact form (`1e-6`, `2.5e-8`): a
-/// setting's value as the user wrote it.
-pub fn exp(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:e}")
-    } else {
-        "–".into()
-    }
+/// `x` written by `format`, or `–` when it is none or not finite: every
+/// filter's rule for what was not measured.
+fn shown(x: &Value, format: impl Fn(f64) -> String) -> Result<String, minijinja::Error> {
+    Ok(number(x)?
+        .filter(|x| x.is_finite())
+        .map_or_else(|| "–".into(), format))
 }
 
-/// `x` as Rust's `{}` (`10`, `0.25`), or `–` when it is not finite: the
-/// shortest decimal form, where the template's own printing would write
-/// `10.0`.
-pub fn plain(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x}")
-    } else {
-        "–".into()
-    }
-}
-
-/// `x` as a percentage, `{:.d} %` of 100 x, or `–` when it is not finite.
-pub fn percent(x: f64, digits: usize) -> String {
-    if x.is_finite() {
-        format!("{:.digits$} %", 100.0 * x)
-    } else {
-        "–".into()
-    }
-}
-
-/// The environment every section is rendered in.
+/// The environment every section is rendered in, with its filters:
+/// `sci(d)` is `{:.de}`, `fixed(d)` is `{:.d}` (d = 1 when not given),
+/// `exp` is `{:e}` (its shortest exact form, a setting as the user wrote
+/// it), `plain` is `{}` (`10` where the template's own printing would
+/// write `10.0`), `percent(d)` is `{:.d} %` of 100 x (d = 0).
 fn environment() -> Environment<'static> {
     let mut env = Environment::new();
     env.set_undefined_behavior(UndefinedBehavior::Strict);
     env.set_keep_trailing_newline(true);
     env.set_trim_blocks(true);
-    env.add_filter("sci", |x: Value, digits: Option<usize>| {
-        number(&x).map(|x| x.map_or("–".into(), |x| sci(x, digits.unwrap_or(1))))
+    env.add_filter("sci", |x: Value, d: Option<usize>| {
+        let d = d.unwrap_or(1);
+        shown(&x, |x| format!("{x:.d$e}"))
     });
-    env.add_filter("fixed", |x: Value, digits: Option<usize>| {
-        number(&x).map(|x| x.map_or("–".into(), |x| fixed(x, digits.unwrap_or(1))))
+    env.add_filter("fixed", |x: Value, d: Option<usize>| {
+        let d = d.unwrap_or(1);
+        shown(&x, |x| format!("{x:.d$}"))
     });
-    env.add_filter("exp", |x: Value| {
-        number(&x).map(|x| x.map_or("–".into(), exp))
-    });
-    env.add_filter("plain", |x: Value| {
-        number(&x).map(|x| x.map_or("–".into(), plain))
-    });
-    env.add_filter("percent", |x: Value, digits: Option<usize>| {
-        number(&x).map(|x| x.map_or("–".into(), |x| percent(x, digits.unwrap_or(0))))
+    env.add_filter("exp", |x: Value| shown(&x, |x| format!("{x:e}")));
+    env.add_filter("plain", |x: Value| shown(&x, |x| format!("{x}")));
+    env.add_filter("percent", |x: Value, d: Option<usize>| {
+        let d = d.unwrap_or(0);
+        shown(&x, |x| format!("{:.d$} %", 100.0 * x))
     });
     env
 }
@@ -145,8 +108,13 @@ mod tests {
             out,
             "| a |\n| 5.6e-7 | 0.00 |\n| 3.3e-1 | 0.33 |\n| – | – |\n\n"
         );
-        assert_eq!(sci(f64::NAN, 2), "–");
-        assert_eq!(fixed(f64::INFINITY, 1), "–");
+        let inf = f64::INFINITY;
+        let out = render(
+            "t",
+            "{{ x|sci(2) }} {{ x|fixed(1) }} {{ x|plain }}",
+            minijinja::context! { x => inf },
+        );
+        assert_eq!(out.unwrap(), "– – –");
         assert!(render("t", "{{ missing }}", minijinja::context! {}).is_err());
         // none is "not measured"; a name the facts lack stays an error
         // through a filter.

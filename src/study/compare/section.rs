@@ -337,19 +337,31 @@ fn load_multiple(a: &Scene, b: &Scene) -> Option<f64> {
     (scaled == *b).then_some(k)
 }
 
-/// The paper's separated interval of `problem` with friction.
-fn paper_interval(problem: u32) -> Option<(f64, f64, f64)> {
-    PAPER_SEPARATION
-        .iter()
-        .find(|p| p.problem == problem)
-        .and_then(|p| match p.with_friction {
-            PaperZone::Interval {
-                start,
-                end,
-                fraction,
-            } => Some((start, end, fraction)),
-            _ => None,
-        })
+/// The paper's one reported separated interval (with friction): its
+/// problem, where it starts and ends, and its fraction of Γ_K.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PaperInterval {
+    pub problem: u32,
+    pub start: f64,
+    pub end: f64,
+    pub fraction: f64,
+}
+
+/// The interval of [`PAPER_SEPARATION`] (the paper reports one).
+pub fn paper_interval() -> Option<PaperInterval> {
+    PAPER_SEPARATION.iter().find_map(|p| match p.with_friction {
+        PaperZone::Interval {
+            start,
+            end,
+            fraction,
+        } => Some(PaperInterval {
+            problem: p.problem,
+            start,
+            end,
+            fraction,
+        }),
+        _ => None,
+    })
 }
 
 /// The whole section.
@@ -385,35 +397,33 @@ pub fn section(
     }
     // The paper's one reported interval: where it starts against the
     // reference's, and plane stress against plane strain.
-    let paper_problem = PAPER_SEPARATION
-        .iter()
-        .find_map(|p| paper_interval(p.problem).map(|_| p.problem));
-    let reference = paper_problem.and_then(|p| {
-        let name = Scene::paper_problem(p).ok()?.name;
-        earned.iter().find(|r| r.scene.name == name).map(|r| (p, r))
+    let reference = paper_interval().and_then(|paper| {
+        let name = Scene::paper_problem(paper.problem).ok()?.name;
+        earned
+            .iter()
+            .find(|r| r.scene.name == name)
+            .map(|r| (paper, r))
     });
-    let zone_start = reference.and_then(|(p, r)| {
-        let (paper_start, paper_end, _) = paper_interval(p)?;
+    let zone_start = reference.and_then(|(paper, r)| {
         let start = r.coulomb.separation().intervals.first().map(|i| i[0])?;
         Some(ZoneStart {
-            problem: p,
-            paper_start,
-            paper_end,
+            problem: paper.problem,
+            paper_start: paper.start,
+            paper_end: paper.end,
             start,
-            shift: start - paper_start,
-            nodes: (start - paper_start) / h.h(),
+            shift: start - paper.start,
+            nodes: (start - paper.start) / h.h(),
         })
     });
-    let plane_stress = reference.and_then(|(p, r)| {
-        let (_, _, paper) = paper_interval(p)?;
+    let plane_stress = reference.and_then(|(paper, r)| {
         let stress = out.plane_stress_fraction?;
         let strain = r.coulomb.separation().fraction;
         Some(PlaneStress {
-            problem: p,
+            problem: paper.problem,
             stress_percent: 100.0 * stress,
             strain_percent: 100.0 * strain,
-            paper_percent: 100.0 * paper,
-            strain_closer: (strain - paper).abs() < (stress - paper).abs(),
+            paper_percent: 100.0 * paper.fraction,
+            strain_closer: (strain - paper.fraction).abs() < (stress - paper.fraction).abs(),
         })
     });
     let uncertified: Vec<Uncertified> = out
@@ -477,7 +487,14 @@ mod tests {
     /// The paper's one reported interval is problem 1's [0.81, 1.00], 19 %.
     #[test]
     fn the_papers_interval_is_read_from_its_table() {
-        assert_eq!(paper_interval(1), Some((0.81, 1.0, 0.19)));
-        assert_eq!(paper_interval(3), None);
+        assert_eq!(
+            paper_interval(),
+            Some(PaperInterval {
+                problem: 1,
+                start: 0.81,
+                end: 1.0,
+                fraction: 0.19
+            })
+        );
     }
 }

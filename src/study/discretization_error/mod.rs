@@ -49,7 +49,7 @@ use crate::study::catalog::{Catalogued, by_length, check_paper_problems};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 
 mod views;
-pub use views::{PAPERS_ZONE_START, charts, findings};
+pub use views::{charts, findings};
 
 /// Which problems, on which meshes, against which reference mesh: the
 /// study's parameters (its flags, and Python's keywords).

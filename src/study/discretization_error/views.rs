@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use crate::io::charts::{Chart, Series};
 use crate::mechanics::mesh_size::MeshSize;
+use crate::study::compare::section::paper_interval;
 use crate::study::template;
 
 use super::{ErrorRow, level};
@@ -144,14 +145,16 @@ pub struct UnsettledPeak {
     pub before_h: String,
 }
 
-/// Problem 1's separated zone at the paper's h = 1/64 against the paper's
-/// start and against the reference mesh's.
+/// The separated zone at the paper's h = 1/64 of the problem the paper
+/// reports an interval for ([`paper_interval`]: problem 1), against the
+/// paper's start and fraction and against the reference mesh's start.
 #[derive(Serialize)]
 pub struct PapersZone {
     pub h: String,
     pub start: f64,
     pub separated_fraction: f64,
     pub papers_start: f64,
+    pub papers_fraction: f64,
     /// |start − the reference's start|.
     pub error: f64,
     /// |start − the paper's start|.
@@ -207,15 +210,13 @@ fn unsettled_peak(of: &[&ErrorRow]) -> Option<UnsettledPeak> {
     })
 }
 
-/// Where the paper's problem 1 separates at h = 1/64 (paper, section 5).
-pub const PAPERS_ZONE_START: f64 = 0.81;
-
 /// The study's findings per problem, computed from the rows: the observed
 /// orders on the finest pair of meshes, a pressure peak that does not
-/// settle, and where problem 1's zone starts at the paper's h = 1/64
-/// against the reference (the paper reports 0.81, 19 %).
+/// settle, and where the zone of the paper's reported interval starts at
+/// the paper's h = 1/64 against the reference ([`paper_interval`]).
 pub fn findings(rows: &[ErrorRow]) -> Vec<ProblemFacts<'_>> {
     let papers_h = level(6).to_string();
+    let paper = paper_interval();
     let mut problems: Vec<u32> = rows.iter().map(|r| r.problem).collect();
     problems.dedup();
     problems
@@ -232,14 +233,16 @@ pub fn findings(rows: &[ErrorRow]) -> Vec<ProblemFacts<'_>> {
             let zone = of
                 .iter()
                 .find(|r| r.h == papers_h)
-                .filter(|r| r.zone_start.is_finite() && problem == 1)
-                .map(|r| PapersZone {
+                .filter(|r| r.zone_start.is_finite())
+                .zip(paper.filter(|p| p.problem == problem))
+                .map(|(r, paper)| PapersZone {
                     h: r.h.clone(),
                     start: r.zone_start,
                     separated_fraction: r.separated_fraction,
-                    papers_start: PAPERS_ZONE_START,
+                    papers_start: paper.start,
+                    papers_fraction: paper.fraction,
                     error: r.zone_start_error,
-                    gap: (r.zone_start - PAPERS_ZONE_START).abs(),
+                    gap: (r.zone_start - paper.start).abs(),
                 });
             ProblemFacts {
                 problem,

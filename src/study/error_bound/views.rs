@@ -306,30 +306,9 @@ pub fn charts(points: &[BoundPoint]) -> Vec<Artifact> {
     out
 }
 
-/// A chart of the section and which of the three it is (its caption).
-#[derive(Serialize)]
-struct ChartFacts<'a> {
-    name: &'a str,
-    /// `ratio`, `given_friction` or `coulomb`.
-    shows: &'static str,
-}
-
 /// The README section (`templates/error_bound.md`): what was measured, the
 /// table, the charts.
 pub fn section(spec: &BoundSpec, points: &[BoundPoint], charts: &[String]) -> Result<String> {
-    let charts: Vec<ChartFacts> = charts
-        .iter()
-        .map(|c| ChartFacts {
-            name: c,
-            shows: if c.contains("ratio") {
-                "ratio"
-            } else if c.ends_with("given_friction") {
-                "given_friction"
-            } else {
-                "coulomb"
-            },
-        })
-        .collect();
     let mesh = |h: Option<&crate::mechanics::mesh_size::MeshSize>| {
         h.map(|h| h.to_string()).unwrap_or_default()
     };

@@ -271,14 +271,6 @@ struct SceneFacts<'a> {
     others: Vec<Other<'a>>,
 }
 
-/// A chart of the map and which kind it is (its caption).
-#[derive(Serialize)]
-struct ChartFacts<'a> {
-    name: &'a str,
-    /// `friction`, `load` or `stress`.
-    shows: &'static str,
-}
-
 fn other(t: &Trial) -> Other<'_> {
     Other {
         solver: t.solver.name,
@@ -389,19 +381,6 @@ pub fn section(
         .map(|row| UniquenessFacts {
             row,
             one_solution: row.spread.is_some_and(|s| s <= ONE_SOLUTION),
-        })
-        .collect();
-    let charts: Vec<ChartFacts> = charts
-        .iter()
-        .map(|c| ChartFacts {
-            name: c,
-            shows: if c.starts_with("stability_friction") {
-                "friction"
-            } else if c == "stability_load" {
-                "load"
-            } else {
-                "stress"
-            },
         })
         .collect();
     let summary = summary_markdown(trials)?;

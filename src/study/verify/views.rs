@@ -176,14 +176,6 @@ struct TangentialRow<'a> {
     load_ratio: f64,
 }
 
-/// A chart of a scene, and which of the three it is (its caption).
-#[derive(Serialize)]
-struct SceneChart<'a> {
-    name: &'a str,
-    /// `pressure`, `traction` or `error`.
-    shows: &'static str,
-}
-
 /// What the section shows of one scene.
 #[derive(Serialize)]
 struct SceneFacts<'a> {
@@ -191,7 +183,7 @@ struct SceneFacts<'a> {
     rows: Vec<&'a VerifyRow>,
     /// The rows that carry a tangential force (Cattaneo–Mindlin's).
     tangential: Vec<TangentialRow<'a>>,
-    charts: Vec<SceneChart<'a>>,
+    charts: Vec<&'a String>,
 }
 
 /// The README section (`templates/verify.md`): what was verified, and a
@@ -212,20 +204,7 @@ pub fn section(found: &Verified, charts: &[String]) -> Result<String> {
                 })
                 .collect();
             let prefix = format!("verify_{name}_");
-            let charts = charts
-                .iter()
-                .filter(|c| c.starts_with(&prefix))
-                .map(|c| SceneChart {
-                    name: c,
-                    shows: if c.ends_with("_pressure") {
-                        "pressure"
-                    } else if c.ends_with("_traction") {
-                        "traction"
-                    } else {
-                        "error"
-                    },
-                })
-                .collect();
+            let charts = charts.iter().filter(|c| c.starts_with(&prefix)).collect();
             SceneFacts {
                 name,
                 rows,
