@@ -17,6 +17,7 @@
 mod charts;
 pub mod equal_accuracy;
 pub mod exact_bound;
+pub mod goal;
 pub mod goals;
 pub mod memory;
 pub mod multigrid;

@@ -22,7 +22,10 @@ use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
 use crate::solve::{solve_scene, solver_entry};
 use crate::study::bench::exact_bound::{self, ExactBound};
-use crate::study::bench::goals::Goal;
+use crate::study::bench::goal::{
+    AtMesh, Count, Exceeded, FineLimit, FineOutcome, FineRun, Goal, Measured, Phase, ProductSides,
+    WorkUnits,
+};
 use crate::study::bench::memory::{MemoryUse, available_memory_kb, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, PerfRow};
 
@@ -102,15 +105,6 @@ fn meshes(spec: &BenchSpec) -> (Vec<MeshSize>, Vec<MeshSize>, MeshSize, Vec<Mesh
 /// third from one `bench` to the next (1/1024: 5.9 s, 4.2 s, 2.9 s). The
 /// main job's runs once ([`BenchSpec::fresh_runs`]).
 pub const COULOMB_RUNS: usize = 3;
-
-/// "median of 3 runs, each in a fresh process" or "one run, in a fresh
-/// process".
-fn runs_text(runs: usize) -> String {
-    match runs {
-        1 => "one run, in a fresh process".to_string(),
-        n => format!("median of {n} runs, each in a fresh process"),
-    }
-}
 
 /// The setting of the sequential runs.
 const ONE_THREAD: &str = "tnnmg.threads=1";
@@ -209,7 +203,7 @@ pub fn measure(spec: &BenchSpec, log: &dyn Fn(&str)) -> Result<MultigridRows> {
         format!("{}, {schedule} schedule", o.status),
     ));
     for h in agreement {
-        log(&format!("{SOLVER} against newton-coulomb at h = {h}"));
+        log(&format!("{SOLVER} against {AGAINST} at h = {h}"));
         out.agreement.push((h, agreement_at(spec.problem, h)?));
     }
     for &h in &large {
@@ -283,7 +277,7 @@ fn agreement_at(problem: u32, h: MeshSize) -> Result<f64> {
     };
     let (Some((mg, scale)), Some((newton, _))) = (
         run(SOLVER, &tight_settings()?)?,
-        run("newton-coulomb", &Settings::default())?,
+        run(AGAINST, &Settings::default())?,
     ) else {
         return Ok(f64::NAN);
     };
@@ -326,20 +320,26 @@ const FINEST_GOAL_GIB: f64 = 16.0;
 const FINEST_GOAL_SECONDS: f64 = 120.0;
 const PAPER_GOAL_SECONDS: f64 = 15.0;
 
+/// The solver TNNMG's Coulomb pressures are held against, and how close:
+/// max|Δp|/P at most this.
+const AGAINST: &str = "newton-coulomb";
+const AGREEMENT_GOAL: f64 = 1e-9;
+
 /// The whole Coulomb problem in work units (its seconds over one product
 /// A·v with the finest level's A, timed in the same process before and
 /// after the solve, [`MemoryUse::product_seconds`]), by phase:
 /// the solver's own phases, and the rest (the friction fixed point's
 /// updates, the continuation's transfers, the harness).
 fn work_units_goal(used: &MemoryUse) -> Goal {
-    let goal = format!(
-        "whole Coulomb problem {} at h = {} in work units (its seconds ÷ one product A·v with the problem's A, same process): at most {WORK_UNITS_GOAL}",
-        used.solver, used.h
-    );
+    let measured = |units| Measured::WorkUnits {
+        solver: used.solver.clone(),
+        h: used.h.to_string(),
+        limit: WORK_UNITS_GOAL,
+        units,
+    };
     let Some(unit) = used.product_seconds.filter(|&u| u > 0.0) else {
         return Goal {
-            goal,
-            measured: "the product was not timed".into(),
+            measured: measured(None),
             pass: Some(false),
         };
     };
@@ -349,106 +349,108 @@ fn work_units_goal(used: &MemoryUse) -> Goal {
         .iter()
         .find(|(k, _)| k == contactlab_solvers::multigrid::TOTAL_SECONDS)
         .map(|(_, s)| *s);
-    let mut parts: Vec<String> = used
+    let phases = used
         .phases
         .iter()
         .filter(|(k, _)| k != contactlab_solvers::multigrid::TOTAL_SECONDS)
-        .map(|(k, s)| {
-            let name = k
+        .map(|(k, s)| Phase {
+            name: k
                 .trim_start_matches(&format!("{}_", used.solver))
                 .trim_end_matches(crate::study::trial::SECONDS_SUFFIX)
-                .replace('_', " ");
-            format!("{name} {:.0}", s / unit)
+                .replace('_', " "),
+            units: s / unit,
         })
         .collect();
-    if let Some(inside) = solver_total {
-        parts.push(format!(
-            "friction updates, transfers and the rest {:.0}",
-            (used.seconds - inside) / unit
-        ));
-    }
     // The product's medians before and after the solve, when both were
     // timed: how far the machine's speed moved while it ran.
-    let sides = used.product_sides.map_or(String::new(), |(before, after)| {
-        format!(
-            ", the median of {} products: {:.2} ms before the solve, {:.2} ms after",
-            2 * crate::study::bench::memory::PRODUCTS,
-            before * 1e3,
-            after * 1e3
-        )
+    let sides = used.product_sides.map(|(before, after)| ProductSides {
+        products: 2 * crate::study::bench::memory::PRODUCTS,
+        before_ms: before * 1e3,
+        after_ms: after * 1e3,
     });
     Goal {
-        goal,
-        measured: format!(
-            "{total:.0} work units ({:.2} s ÷ {:.2} ms{sides}): {} ({})",
-            used.seconds,
-            unit * 1e3,
-            parts.join(", "),
-            used.status
-        ),
+        measured: measured(Some(WorkUnits {
+            total,
+            seconds: used.seconds,
+            unit_ms: unit * 1e3,
+            sides,
+            phases,
+            rest: solver_total.map(|inside| (used.seconds - inside) / unit),
+            status: used.status.clone(),
+        })),
         pass: Some(used.status == "converged" && total <= WORK_UNITS_GOAL),
     }
 }
 
-/// A goal on the multigrid-only mesh of `level`: its run judged by
-/// `within`, or why it was not run.
-fn finest_goal(
-    m: &MultigridRows,
-    level: u32,
-    within: impl Fn(&MemoryUse) -> Result<(), String>,
-    goal: &str,
-) -> Goal {
-    let describe = |u: &MemoryUse| {
-        format!(
-            "{}: {:.1} s, peak {:.2} GiB, {}",
-            u.h,
-            u.seconds,
-            u.peak_kb as f64 / GIB_KB,
-            u.status
-        )
+/// A fine mesh's run as the goals describe it.
+fn fine_run(u: &MemoryUse) -> FineRun {
+    FineRun {
+        h: u.h.to_string(),
+        seconds: u.seconds,
+        peak_gib: u.peak_kb as f64 / GIB_KB,
+        status: u.status.clone(),
+    }
+}
+
+/// What `u` exceeded of `limit`.
+fn exceeded(u: &MemoryUse, limit: &FineLimit) -> Exceeded {
+    let (gib, seconds) = match *limit {
+        FineLimit::Peak { gib } => (gib, None),
+        FineLimit::PeakAndTime { gib, seconds } => (gib, Some(seconds)),
     };
-    let coarser: Vec<String> = m
+    Exceeded {
+        peak_gib: (u.peak_kb as f64 > gib * GIB_KB).then_some(gib),
+        seconds: seconds.filter(|&s| u.seconds > s),
+    }
+}
+
+/// A goal on the multigrid-only mesh of `level`: its run held to `limit`,
+/// or why it was not run.
+fn finest_goal(m: &MultigridRows, level: u32, limit: FineLimit) -> Goal {
+    let coarser = m
         .finest
         .iter()
         .filter(|u| u.h.level() < level)
-        .map(describe)
+        .map(fine_run)
         .collect();
-    let (measured, pass) = match MeshSize::from_level(level) {
-        Err(e) => (format!("refused: {e}"), Some(false)),
+    let (outcome, pass) = match MeshSize::from_level(level) {
+        Err(e) => (FineOutcome::Refused { why: e.to_string() }, Some(false)),
         Ok(h) => match (
             m.finest.iter().find(|u| u.h == h),
             m.skipped.iter().find(|(s, _)| *s == h),
         ) {
             (Some(u), _) => {
-                let verdict = within(u);
+                let exceeded = exceeded(u, &limit);
+                let pass = u.status == "converged" && exceeded.nothing();
                 (
-                    format!(
-                        "{}{}",
-                        describe(u),
-                        verdict
-                            .as_ref()
-                            .err()
-                            .map_or(String::new(), |w| format!(" ({w})"))
-                    ),
-                    Some(u.status == "converged" && verdict.is_ok()),
+                    FineOutcome::Run {
+                        run: fine_run(u),
+                        exceeded,
+                    },
+                    Some(pass),
                 )
             }
-            (None, Some((_, why))) => (format!("{h} not run: {why}"), Some(false)),
-            (None, None) if !m.planned.contains(&h) => (
-                format!("{h} not in this run (the long run's: `reproduce --long`)"),
-                None,
+            (None, Some((_, why))) => (
+                FineOutcome::Skipped {
+                    h: h.to_string(),
+                    why: why.clone(),
+                },
+                Some(false),
             ),
-            (None, None) => (format!("{h} not measured"), Some(false)),
+            (None, None) if !m.planned.contains(&h) => {
+                (FineOutcome::NotPlanned { h: h.to_string() }, None)
+            }
+            (None, None) => (FineOutcome::NotMeasured { h: h.to_string() }, Some(false)),
         },
     };
-    let before = if coarser.is_empty() {
-        String::new()
-    } else {
-        format!(" (coarser: {})", coarser.join("; "))
-    };
     Goal {
-        goal: goal.into(),
-        measured: format!("{measured}{before}"),
+        measured: Measured::Fine {
+            solver: SOLVER,
+            h: format!("1/{}", 1u64 << level.min(63)),
+            limit,
+            outcome,
+            coarser,
+        },
         pass,
     }
 }
@@ -464,35 +466,44 @@ pub(crate) fn factorization(rows: &[PerfRow], h: MeshSize) -> Option<f64> {
 pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
     let mut out = Vec::new();
     if !m.iterations.is_empty() {
-        let list: Vec<String> = m
-            .iterations
-            .iter()
-            .map(|(h, k, ok)| format!("{h}: {k}{}", if *ok { "" } else { " (not certified)" }))
-            .collect();
         out.push(Goal {
-            goal: format!(
-                "{SOLVER} from zero to a certified {COUNT_TOLERANCE:.0e} on the given-friction subproblem (g = {BOUND_OF_SCALE}·𝓕P): at most {ITERATION_GOAL} iterations at every h"
+            measured: Measured::Iterations {
+                solver: SOLVER,
+                tolerance: COUNT_TOLERANCE,
+                bound_of_scale: BOUND_OF_SCALE,
+                limit: ITERATION_GOAL,
+                counts: m
+                    .iterations
+                    .iter()
+                    .map(|&(h, iterations, certified)| Count {
+                        h: h.to_string(),
+                        iterations,
+                        certified,
+                    })
+                    .collect(),
+            },
+            pass: Some(
+                m.iterations
+                    .iter()
+                    .all(|(_, k, ok)| *ok && *k <= ITERATION_GOAL),
             ),
-            measured: list.join(", "),
-            pass: Some(m.iterations.iter().all(|(_, k, ok)| *ok && *k <= ITERATION_GOAL)),
         });
     }
     for used in &m.coulomb {
         let f = factorization(rows, used.h);
         let ratio = f.map_or(f64::NAN, |f| used.seconds / f);
         out.push(Goal {
-            goal: format!(
-                "`solve --solver {SOLVER}` (whole Coulomb problem, default settings) at h = {}, certified: at most {DEFAULT_GOAL} × the best factorization (faer, the faster of 1 and 2 threads)",
-                used.h
-            ),
-            measured: format!(
-                "{:.2} s = {ratio:.2} × factorization ({}), peak {:.2} GiB, {} ({})",
-                used.seconds,
-                f.map_or("not measured".into(), |f| format!("{f:.2} s")),
-                used.peak_kb as f64 / GIB_KB,
-                used.status,
-                runs_text(m.runs),
-            ),
+            measured: Measured::DefaultSolve {
+                solver: SOLVER,
+                h: used.h.to_string(),
+                limit: DEFAULT_GOAL,
+                seconds: used.seconds,
+                ratio,
+                factorization: f,
+                peak_gib: used.peak_kb as f64 / GIB_KB,
+                status: used.status.clone(),
+                runs: m.runs,
+            },
             pass: Some(used.status == "converged" && ratio <= DEFAULT_GOAL),
         });
     }
@@ -502,22 +513,18 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
     if let (Some(one), Some(all)) = (&m.one_thread, m.coulomb.last()) {
         let speed_up = one.seconds / all.seconds;
         out.push(Goal {
-            goal: format!(
-                "speed-up of {SOLVER} from 1 thread (`tnnmg.threads=1`) to the machine's {} at h = {}: at least {THREADS_GOAL}",
-                contactlab_solvers::numerics::threads::cores(),
-                all.h
-            ),
-            measured: format!(
-                "{speed_up:.2}× ({:.2} s on 1 thread, {}; {:.2} s on all, {}; {})",
-                one.seconds,
-                one.status,
-                all.seconds,
-                all.status,
-                match m.runs {
-                    1 => "one fresh process each, one after the other".to_string(),
-                    n => format!("medians of {n} fresh processes each, in alternation"),
-                }
-            ),
+            measured: Measured::ThreadSpeedUp {
+                solver: SOLVER,
+                cores: contactlab_solvers::numerics::threads::cores(),
+                h: all.h.to_string(),
+                limit: THREADS_GOAL,
+                speed_up,
+                one_seconds: one.seconds,
+                one_status: one.status.clone(),
+                all_seconds: all.seconds,
+                all_status: all.status.clone(),
+                runs: m.runs,
+            },
             pass: Some(
                 one.status == "converged" && all.status == "converged" && speed_up >= THREADS_GOAL,
             ),
@@ -527,46 +534,44 @@ pub fn goals(m: &MultigridRows, rows: &[PerfRow]) -> Vec<Goal> {
         out.push(finest_goal(
             m,
             PEAK_GOAL_LEVEL,
-            |u| {
-                (u.peak_kb as f64 <= PEAK_GOAL_GIB * GIB_KB)
-                    .then_some(())
-                    .ok_or(format!("peak above {PEAK_GOAL_GIB} GiB"))
-            },
-            &format!(
-                "peak memory of {SOLVER} at h = 1/{} at most {PEAK_GOAL_GIB} GiB, certified",
-                1u32 << PEAK_GOAL_LEVEL
-            ),
+            FineLimit::Peak { gib: PEAK_GOAL_GIB },
         ));
-        out.push(finest_goal(m, FINEST_GOAL_LEVEL, |u| {
-            let over: Vec<String> = [
-                (u.peak_kb as f64 > FINEST_GOAL_GIB * GIB_KB).then(|| format!("peak above {FINEST_GOAL_GIB} GiB")),
-                (u.seconds > FINEST_GOAL_SECONDS).then(|| format!("above {FINEST_GOAL_SECONDS} s")),
-            ]
-            .into_iter()
-            .flatten()
-            .collect();
-            if over.is_empty() { Ok(()) } else { Err(over.join(", ")) }
-        }, &format!("h = 1/{} certified by {SOLVER}, peak at most {FINEST_GOAL_GIB} GiB, at most {FINEST_GOAL_SECONDS} s", 1u64 << FINEST_GOAL_LEVEL)));
+        out.push(finest_goal(
+            m,
+            FINEST_GOAL_LEVEL,
+            FineLimit::PeakAndTime {
+                gib: FINEST_GOAL_GIB,
+                seconds: FINEST_GOAL_SECONDS,
+            },
+        ));
     }
     if let Some((h, seconds, status)) = &m.paper {
         out.push(Goal {
-            goal: format!(
-                "the paper's method with relaxation.inner = multigrid and target = 1e-6 at h = {h}: at most {PAPER_GOAL_SECONDS} s, certified"
-            ),
-            measured: format!("{seconds:.2} s, {status}"),
+            measured: Measured::PaperMultigrid {
+                h: h.to_string(),
+                limit_seconds: PAPER_GOAL_SECONDS,
+                seconds: *seconds,
+                status: status.clone(),
+            },
             pass: Some(status.starts_with("converged,") && *seconds <= PAPER_GOAL_SECONDS),
         });
     }
     if !m.agreement.is_empty() {
-        let list: Vec<String> = m
-            .agreement
-            .iter()
-            .map(|(h, gap)| format!("{h}: {gap:.1e}"))
-            .collect();
         out.push(Goal {
-            goal: format!("{SOLVER} against newton-coulomb: max|Δp|/P at most 1e-9"),
-            measured: list.join(", "),
-            pass: Some(m.agreement.iter().all(|(_, gap)| *gap <= 1e-9)),
+            measured: Measured::Agreement {
+                solver: SOLVER,
+                against: AGAINST,
+                limit: AGREEMENT_GOAL,
+                gaps: m
+                    .agreement
+                    .iter()
+                    .map(|&(h, gap)| AtMesh {
+                        h: h.to_string(),
+                        value: gap,
+                    })
+                    .collect(),
+            },
+            pass: Some(m.agreement.iter().all(|(_, gap)| *gap <= AGREEMENT_GOAL)),
         });
     }
     out
@@ -641,6 +646,14 @@ mod tests {
         assert!(too_large(&done, MeshSize::from_level(11).unwrap(), 1).is_none());
     }
 
+    /// The work units of `g`, a work-units goal.
+    fn units(g: &Goal) -> Option<&WorkUnits> {
+        match &g.measured {
+            Measured::WorkUnits { units, .. } => units.as_ref(),
+            other => panic!("not a work-units goal: {other:?}"),
+        }
+    }
+
     /// Work units are seconds over the product's, each phase too, and the
     /// rest is what the solver's own total leaves; a run without a timed
     /// product fails the goal rather than dividing by nothing.
@@ -653,59 +666,101 @@ mod tests {
             (contactlab_solvers::multigrid::TOTAL_SECONDS.into(), 2.5),
         ];
         let g = work_units_goal(&used);
-        assert!(g.measured.starts_with("300 work units"), "{}", g.measured);
-        assert!(g.measured.contains("smoothing 150"), "{}", g.measured);
-        assert!(g.measured.contains("the rest 50"), "{}", g.measured);
+        let u = units(&g).unwrap();
+        assert!((u.total - 300.0).abs() < 1e-9, "{u:?}");
+        assert_eq!(u.phases.len(), 1, "{u:?}");
+        assert_eq!(u.phases[0].name, "smoothing");
+        assert!((u.phases[0].units - 150.0).abs() < 1e-9, "{u:?}");
+        assert!((u.rest.unwrap() - 50.0).abs() < 1e-9, "{u:?}");
         assert_eq!(g.pass, Some(false));
         // Both sides of the solve, when timed, are stated with the unit.
         used.product_sides = Some((0.008, 0.012));
-        let g = work_units_goal(&used);
+        let text = crate::study::bench::goals::goals_markdown(&[work_units_goal(&used)]).unwrap();
         assert!(
-            g.measured.contains(
-                "÷ 10.00 ms, the median of 22 products: 8.00 ms before the solve, 12.00 ms after)"
+            text.contains(
+                "| 300 work units (3.00 s ÷ 10.00 ms, the median of 22 products: 8.00 ms before the solve, 12.00 ms after): smoothing 150, friction updates, transfers and the rest 50 (converged) | falls short |"
             ),
-            "{}",
-            g.measured
+            "{text}"
         );
         used.seconds = 0.25;
         assert_eq!(work_units_goal(&used).pass, Some(true));
         used.product_seconds = None;
-        assert_eq!(work_units_goal(&used).pass, Some(false));
+        let g = work_units_goal(&used);
+        assert!(units(&g).is_none());
+        assert_eq!(g.pass, Some(false));
+    }
+
+    /// The outcome of `g`, a fine-mesh goal.
+    fn outcome(g: &Goal) -> &FineOutcome {
+        match &g.measured {
+            Measured::Fine { outcome, .. } => outcome,
+            other => panic!("not a fine-mesh goal: {other:?}"),
+        }
     }
 
     /// The goal on a mesh beyond the accepted range says it is refused; on
-    /// a mesh skipped for memory, why; on one run, its verdict.
+    /// a mesh skipped for memory, why; on one run, its verdict against its
+    /// limits: what it exceeded, named.
     #[test]
     fn a_finest_goal_names_refusals_and_skips() {
-        let ok = |_: &MemoryUse| Ok(());
+        let peak = FineLimit::Peak { gib: 4.0 };
         let m = MultigridRows::default();
-        let g = finest_goal(&m, crate::mechanics::mesh_size::MAX_LEVEL + 1, ok, "g");
-        assert!(g.measured.starts_with("refused"), "{}", g.measured);
+        let g = finest_goal(&m, crate::mechanics::mesh_size::MAX_LEVEL + 1, peak.clone());
+        assert!(matches!(outcome(&g), FineOutcome::Refused { .. }), "{g:?}");
+        assert_eq!(g.pass, Some(false));
         let mut m = MultigridRows::default();
         let h = MeshSize::from_level(12).unwrap();
         m.skipped.push((h, "it would need about 40 GiB".into()));
-        let g = finest_goal(&m, 12, ok, "g");
+        let g = finest_goal(&m, 12, peak.clone());
+        let text = crate::study::bench::goals::goals_markdown(std::slice::from_ref(&g)).unwrap();
         assert!(
-            g.measured.contains("40 GiB") && g.pass == Some(false),
-            "{}",
-            g.measured
+            text.contains("| 1/4096 not run: it would need about 40 GiB | falls short |")
+                && g.pass == Some(false),
+            "{text}"
         );
         let mut used = run(40.0, 100, "converged");
         used.h = h;
-        m.finest.push(used);
-        assert_eq!(finest_goal(&m, 12, ok, "g").pass, Some(true));
-        let refuse = |_: &MemoryUse| Err("peak above".to_string());
-        assert_eq!(finest_goal(&m, 12, refuse, "g").pass, Some(false));
+        m.finest.push(used.clone());
+        assert_eq!(finest_goal(&m, 12, peak.clone()).pass, Some(true));
+        // Above both limits: each is named, and the goal falls short.
+        m.finest[0].peak_kb = 5 * 1024 * 1024;
+        let both = FineLimit::PeakAndTime {
+            gib: 4.0,
+            seconds: 30.0,
+        };
+        let g = finest_goal(&m, 12, both);
+        let FineOutcome::Run { exceeded, .. } = outcome(&g) else {
+            panic!("{g:?}")
+        };
+        assert_eq!(
+            exceeded,
+            &Exceeded {
+                peak_gib: Some(4.0),
+                seconds: Some(30.0)
+            }
+        );
+        assert_eq!(g.pass, Some(false));
+        let text = crate::study::bench::goals::goals_markdown(&[g]).unwrap();
+        assert!(
+            text.contains(
+                "1/4096: 40.0 s, peak 5.00 GiB, converged (peak above 4 GiB, above 30 s)"
+            ),
+            "{text}"
+        );
         // A mesh this run did not plan (the main job's bench stops at
         // 1/2048) is the long run's, not a shortfall; planned and missing,
-        // its measurement failed.
-        let g = finest_goal(&m, 13, ok, "g");
+        // its measurement failed. The run on the coarser mesh is named.
+        m.finest[0].peak_kb = 100;
+        let g = finest_goal(&m, 13, peak.clone());
+        let text = crate::study::bench::goals::goals_markdown(std::slice::from_ref(&g)).unwrap();
         assert!(
-            g.pass.is_none() && g.measured.contains("--long"),
-            "{}",
-            g.measured
+            g.pass.is_none()
+                && text.contains(
+                    "1/8192 not in this run (the long run's: `reproduce --long`) (coarser: 1/4096: 40.0 s, peak 0.00 GiB, converged)"
+                ),
+            "{text}"
         );
         m.planned.push(MeshSize::from_level(13).unwrap());
-        assert_eq!(finest_goal(&m, 13, ok, "g").pass, Some(false));
+        assert_eq!(finest_goal(&m, 13, peak).pass, Some(false));
     }
 }
