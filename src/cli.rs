@@ -9,11 +9,8 @@ use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 use contactlab_solvers::registry;
 
-use crate::coulomb::continuation::Schedule;
-use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 
-mod choices;
 pub mod scene_args;
 pub mod settings_args;
 
@@ -46,11 +43,6 @@ pub enum Command {
     /// Prints a summary; with --out writes profile.csv, summary.json and the
     /// answer (displacements.mtx, forces.csv; field.vtu with --vtu).
     Solve(SolveArgs),
-    /// The paper's Table 1: its method with mesh continuation on problems
-    /// 1-3 at the paper's settings (--stopping paper unless told otherwise),
-    /// our iteration counts beside the paper's. Prints a Markdown table; with
-    /// --out writes table1.csv.
-    Table1(Table1Args),
     /// Compare every registered solver on one scene, against the most
     /// accurate certified answer (the reference): the given-friction
     /// subproblem at the reference's g and the whole Coulomb problem. Prints
@@ -171,27 +163,6 @@ pub struct SolveArgs {
     pub time_limit: Option<f64>,
     #[command(flatten)]
     pub settings: SettingsArgs,
-}
-
-#[derive(Debug, Args)]
-pub struct Table1Args {
-    /// Finest mesh (continuation runs 1/8, ..., h).
-    #[arg(long, value_name = "1/2^k", default_value = "1/64")]
-    pub h: MeshSize,
-    /// The paper's problems to run, `1,3` (or `1 3`).
-    #[arg(long = "problem", value_name = "N", value_delimiter = ',', num_args = 1.., default_values_t = [1, 2, 3])]
-    pub problems: Vec<u32>,
-    /// Continuation schedules to run (`revisit finest-only` or with commas).
-    #[arg(long, value_parser = choices::schedule(), value_delimiter = ',', num_args = 1.., default_values_t = [Schedule::Revisit, Schedule::FinestOnly])]
-    pub schedules: Vec<Schedule>,
-    /// Plane strain or plane stress.
-    #[arg(long, value_parser = choices::plane(), default_value_t = PlaneModel::Strain)]
-    pub plane: PlaneModel,
-    /// Folder for table1.csv, table1.tex and table1_trials.csv (replaced whole).
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub settings: SettingsArgs<PapersMethod>,
 }
 
 #[derive(Debug, Args)]
@@ -541,7 +512,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(a) => c::info::run(&a),
         Command::Settings(a) => c::settings::run(&a),
         Command::Solve(a) => c::solve::run(&a),
-        Command::Table1(a) => c::table1::run(&a),
         Command::Compare(a) => c::compare::run(&a),
         Command::Sweep(a) => c::sweep::run(&a),
         Command::Reproduce(a) => c::reproduce::run(&a),

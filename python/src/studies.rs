@@ -14,9 +14,9 @@ use contactlab::solve::solver_entry;
 use contactlab::solvers::registry::Entry;
 use contactlab::study::benchmark::{Benchmark, BenchmarkSpec, Instance};
 use contactlab::study::compare::Compare;
-use contactlab::study::studies as catalog;
 use contactlab::study::lab::{Content, Lab, Planned, RunLength, Study, Tracker, write_artifacts};
 use contactlab::study::side_by_side::{SideBySide, parse_side, solvers_of};
+use contactlab::study::studies as catalog;
 use contactlab::study::sweep::{Sweep, SweepSpec};
 use contactlab::study::tuning_map::{Axis, TuningMap};
 use contactlab::study::work_precision::WorkPrecision;
@@ -431,8 +431,16 @@ pub fn _study<'py>(
     let study = entry
         .planned_with_json(length, spec)
         .map_err(|e| input_error(format!("{e:#}")))?;
-    let solvers = contactlab::solvers::registry::solvers();
-    let settings = resolved(&Settings::default(), settings, &solvers)?;
+    // A study at the paper's settings (Table 1) offers the paper's
+    // method's knobs only, changed from the paper's settings.
+    let solvers = if entry.at_papers_settings() {
+        contactlab::solvers::registry::with_role(contactlab::solvers::registry::Role::PapersMethod)
+            .into_iter()
+            .collect()
+    } else {
+        contactlab::solvers::registry::solvers()
+    };
+    let settings = resolved(&entry.settings_base(), settings, &solvers)?;
     run_planned(py, study, settings, out)
 }
 

@@ -711,6 +711,31 @@ def test_a_catalogued_study_is_one_call_with_the_command_lines_bytes(tmp_path):
         cl.oracle(quick=True, long=True)
 
 
+def test_table1_is_catalogued_at_the_papers_settings(tmp_path):
+    # Table 1 is a catalogued study: a call returning its rows, at the
+    # paper's settings (the stopping rules the paper states), the same
+    # bytes as the command; a setting of a solver it does not run is
+    # refused. A call resolved on the defaults (relative stopping) gives
+    # other counts than the command and fails here.
+    assert "table1" in cl.studies()
+    t = cl.table1(quick=True, h="1/8", problems=[1], schedules=["revisit"])
+    (row,) = t.rows
+    assert t.main == "table1.csv"
+    assert row["problem"] == 1 and row["schedule"] == "revisit" and row["paper_mpp"] == 6
+    subprocess.run(
+        [str(cli()), "table1", "--h", "1/8", "--problem", "1", "--schedules", "revisit",
+         "--out", str(tmp_path / "cli")],
+        check=True,
+        capture_output=True,
+    )
+    assert t.files["table1.csv"] == (tmp_path / "cli" / "table1.csv").read_bytes()
+    relative = cl.table1(quick=True, h="1/8", problems=[1], schedules=["revisit"],
+                         settings={"stopping": "relative"})
+    assert relative.rows[0]["mu"] != row["mu"]
+    with pytest.raises(cl.InputError, match="this run uses relaxation"):
+        cl.table1(quick=True, h="1/8", problems=[1], settings={"clarabel.max_iter": 3})
+
+
 def test_options_are_a_solvers_settings_without_its_prefix(p32):
     """scipy's ``options`` of a ``method``: the knob alone, scoped to the
     solver named, the same setting as its path in ``settings``, validated

@@ -68,7 +68,7 @@ pub struct MaterialArgs {
     #[arg(long, value_name = "NU", allow_hyphen_values = true)]
     pub poisson: Option<f64>,
     /// Plane strain or plane stress (default strain; the paper does not say).
-    #[arg(long, value_parser = super::choices::plane())]
+    #[arg(long, value_parser = crate::study::catalog::plane_choice())]
     pub plane: Option<PlaneModel>,
     /// Coulomb friction coefficient 𝓕 ≥ 0 (default 0.5; 0 is frictionless).
     #[arg(long, value_name = "F", allow_hyphen_values = true)]

@@ -12,7 +12,6 @@ pub mod settings;
 pub mod solve;
 pub mod study;
 pub mod sweep;
-pub mod table1;
 
 use anyhow::Result;
 use contactlab_solvers::registry::{self, Entry};

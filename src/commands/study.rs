@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Arg, ArgAction, ArgMatches, Command, FromArgMatches, Subcommand};
 
-use crate::cli::SettingsArgs;
+use crate::cli::{PapersMethod, SettingsArgs};
 use crate::commands::in_lab;
 use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
@@ -56,7 +56,11 @@ fn command_of(entry: &'static dyn Entry) -> Command {
                 .value_parser(clap::value_parser!(PathBuf))
                 .help("Output folder (replaced whole)"),
         );
-    let cmd = <SettingsArgs as clap::Args>::augment_args(cmd);
+    let cmd = if entry.at_papers_settings() {
+        <SettingsArgs<PapersMethod> as clap::Args>::augment_args(cmd)
+    } else {
+        <SettingsArgs as clap::Args>::augment_args(cmd)
+    };
     // The spec's own doc comment would be the command's help: the entry's
     // is, after it.
     entry
@@ -119,9 +123,16 @@ impl StudyCommand {
 
 /// Runs the study: its folder written whole, then its section printed.
 pub fn run(c: &StudyCommand) -> Result<()> {
-    let settings = SettingsArgs::<crate::cli::AllSolvers>::from_arg_matches(&c.matches)
-        .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?
-        .resolve()?;
+    let base = c.entry.settings_base();
+    let settings = if c.entry.at_papers_settings() {
+        SettingsArgs::<PapersMethod>::from_arg_matches(&c.matches)
+            .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?
+            .resolve_on(base)?
+    } else {
+        SettingsArgs::<crate::cli::AllSolvers>::from_arg_matches(&c.matches)
+            .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?
+            .resolve_on(base)?
+    };
     let study = c.entry.planned_with_flags(c.length(), &c.matches)?;
     let out: &PathBuf = c
         .matches

@@ -15,10 +15,14 @@ use std::fmt::Debug;
 use std::marker::PhantomData;
 
 use anyhow::{Context, Result, bail};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{ArgMatches, Args, Command, FromArgMatches};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
+use crate::coulomb::continuation::Schedule;
+use crate::mechanics::material::PlaneModel;
+use crate::settings::Settings;
 use crate::study::lab::{Planned, RunLength};
 
 /// A study that can be called by name: its command, its help and its
@@ -41,6 +45,19 @@ pub trait Catalogued: Planned + Send + Sized + 'static {
 
     /// The study of `spec`, checked: a one-line error naming the field.
     fn of(spec: Self::Spec) -> Result<Self>;
+
+    /// Whether it runs at the paper's settings (Table 1): its command's
+    /// and Python's settings then change the paper's (`--stopping`
+    /// defaults to `paper`, and only the paper's method's knobs are
+    /// offered), not the defaults.
+    const AT_PAPERS_SETTINGS: bool = false;
+
+    /// The study as a run of several (`reproduce`) runs it, given the
+    /// run's settings: itself, at the run's settings; a study at the
+    /// paper's settings pins its own here.
+    fn in_run(self, _run: &Settings) -> Self {
+        self
+    }
 }
 
 /// The spec of a run of `length` from a study's three budgets: the
@@ -85,8 +102,21 @@ pub trait Entry: Sync {
         length: RunLength,
         changes: &str,
     ) -> Result<Box<dyn Planned + Send>>;
-    /// The study of a run of `length`, at its own budget for it.
-    fn planned(&self, length: RunLength) -> Result<Box<dyn Planned + Send>>;
+    /// Whether it runs at the paper's settings
+    /// ([`Catalogued::AT_PAPERS_SETTINGS`]).
+    fn at_papers_settings(&self) -> bool;
+    /// The settings its command's flags and Python's `settings=` change:
+    /// the defaults, or the paper's.
+    fn settings_base(&self) -> Settings {
+        if self.at_papers_settings() {
+            Settings::paper()
+        } else {
+            Settings::default()
+        }
+    }
+    /// The study in a run of `length` at the settings `run` (`reproduce`),
+    /// at its own budget for it ([`Catalogued::in_run`]).
+    fn planned(&self, length: RunLength, run: &Settings) -> Result<Box<dyn Planned + Send>>;
     /// The spec of a run of `length`, as JSON (what Python shows of it).
     fn spec_json(&self, length: RunLength) -> Result<serde_json::Value>;
 }
@@ -133,8 +163,12 @@ impl<S: Catalogued> Entry for Of<S> {
         Ok(Box::new(S::of(spec)?))
     }
 
-    fn planned(&self, length: RunLength) -> Result<Box<dyn Planned + Send>> {
-        Ok(Box::new(S::of(S::spec(length))?))
+    fn at_papers_settings(&self) -> bool {
+        S::AT_PAPERS_SETTINGS
+    }
+
+    fn planned(&self, length: RunLength, run: &Settings) -> Result<Box<dyn Planned + Send>> {
+        Ok(Box::new(S::of(S::spec(length))?.in_run(run)))
     }
 
     fn spec_json(&self, length: RunLength) -> Result<serde_json::Value> {
@@ -163,6 +197,27 @@ fn merged<T: Serialize + DeserializeOwned>(base: &T, changes: &str, study: &str)
         *field = value.clone();
     }
     serde_json::from_value(tree).map_err(|e| anyhow::anyhow!("{study}: {e}"))
+}
+
+/// A flag's `strain|stress` ([`PlaneModel`]), by the names the domain's
+/// enum carries itself (it knows nothing of clap).
+pub fn plane_choice() -> impl TypedValueParser<Value = PlaneModel> {
+    PossibleValuesParser::new(PlaneModel::ALL.map(PlaneModel::name)).map(|s| {
+        PlaneModel::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .expect("one of the names offered")
+    })
+}
+
+/// A flag's continuation schedule, `revisit,finest-only` ([`Schedule`]).
+pub fn schedule_choice() -> impl TypedValueParser<Value = Schedule> {
+    PossibleValuesParser::new(Schedule::ALL.map(Schedule::name)).map(|s| {
+        Schedule::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .expect("one of the names offered")
+    })
 }
 
 /// A flag's value that names a solver: the solver's name if it is

@@ -9,6 +9,7 @@ use crate::study::discretization_error::Errors;
 use crate::study::error_bound::ErrorBoundStudy;
 use crate::study::oracle::Oracle;
 use crate::study::stability::Stability;
+use crate::study::table1::Table1;
 use crate::study::verify::VerifyStudy;
 
 /// Every catalogued study, in the order `reproduce` runs them: the
@@ -23,6 +24,7 @@ pub fn catalog() -> Vec<&'static dyn Entry> {
 /// The library's own studies.
 fn library() -> Vec<&'static dyn Entry> {
     vec![
+        &Of::<Table1>::ENTRY,
         &Of::<Stability>::ENTRY,
         &Of::<Errors>::ENTRY,
         &Of::<Oracle>::ENTRY,
@@ -74,10 +76,16 @@ mod tests {
             assert!(!commands.contains(&e.command()), "{} twice", e.command());
             commands.push(e.command());
             for length in [RunLength::Quick, RunLength::Standard, RunLength::Long] {
-                e.planned(length).unwrap();
+                e.planned(length, &crate::settings::Settings::default())
+                    .unwrap();
                 let json = e.spec_json(length).unwrap();
                 let again = e.planned_with_json(length, &json.to_string()).unwrap();
-                assert_eq!(again.name(), e.planned(length).unwrap().name());
+                assert_eq!(
+                    again.name(),
+                    e.planned(length, &crate::settings::Settings::default())
+                        .unwrap()
+                        .name()
+                );
             }
         }
     }

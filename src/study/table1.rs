@@ -1,12 +1,13 @@
 //! The paper's Table 1: iteration counts of its method (the registry's
 //! [`Role::PapersMethod`]) with mesh continuation, ours beside the paper's.
-//! Its trials run with whatever settings they are given; the `table1`
-//! command and `reproduce` give the paper's absolute stopping rules.
+//! Its trials run at the paper's settings: its command and Python change
+//! the paper's (not the defaults), `reproduce` runs it at the paper's with
+//! the run's certificate. A catalogued study (`study::studies`).
 
 use anyhow::{Context, Result};
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::{self, Role};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::coulomb::continuation::Schedule;
 use crate::io::csv::fixed;
@@ -15,6 +16,7 @@ use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
+use crate::study::catalog::{Catalogued, by_length, check_paper_problems};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::runner::{Keep, Measured};
 use crate::study::template;
@@ -84,14 +86,91 @@ pub fn plan(
     Ok(out)
 }
 
+/// Table 1's parameters: its flags, and Python's keywords.
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
+pub struct Table1Spec {
+    /// Finest mesh (continuation runs 1/8, ..., h) [default: 1/64; --quick: 1/16].
+    #[arg(long, value_name = "1/2^k", required = false)]
+    pub h: MeshSize,
+    /// The paper's problems to run, `1,3` (or `1 3`) [default: 1,2,3].
+    #[arg(long = "problem", value_name = "N", value_delimiter = ',', num_args = 1.., value_parser = clap::value_parser!(u32).range(1..=3))]
+    pub problems: Vec<u32>,
+    /// Continuation schedules to run (`revisit finest-only` or with commas) [default: both].
+    #[arg(long, value_parser = crate::study::catalog::schedule_choice(), value_delimiter = ',', num_args = 1..)]
+    pub schedules: Vec<Schedule>,
+    /// Plane strain or plane stress [default: strain].
+    #[arg(long, value_parser = crate::study::catalog::plane_choice(), required = false)]
+    pub plane: PlaneModel,
+}
+
+impl Table1Spec {
+    /// The paper's table: its three problems, both schedules, plane
+    /// strain, continuation to `h`.
+    fn to(h: u32) -> Self {
+        Self {
+            h: MeshSize::from_level(h).expect("in range"),
+            problems: vec![1, 2, 3],
+            schedules: vec![Schedule::Revisit, Schedule::FinestOnly],
+            plane: PlaneModel::Strain,
+        }
+    }
+
+    /// The main job's and the long run's: to the paper's finest mesh, 1/64.
+    pub fn standard() -> Self {
+        Self::to(6)
+    }
+
+    /// A smoke run's: to 1/16.
+    pub fn quick() -> Self {
+        Self::to(4)
+    }
+}
+
 /// Table 1 as a study: table1.csv, table1.tex and table1_trials.csv.
 pub struct Table1 {
-    pub problems: Vec<u32>,
-    pub schedules: Vec<Schedule>,
-    pub h: MeshSize,
-    pub plane: PlaneModel,
-    /// The settings of its trials (the paper's, by default: not the lab's).
-    pub settings: Settings,
+    pub spec: Table1Spec,
+    /// The settings of its trials; none: the lab's (which its command and
+    /// Python resolve on the paper's, [`Catalogued::AT_PAPERS_SETTINGS`]).
+    /// In a run of several studies, the paper's with the run's
+    /// certificate ([`Catalogued::in_run`]).
+    pub settings: Option<Settings>,
+}
+
+impl Catalogued for Table1 {
+    const COMMAND: &'static str = "table1";
+    const ABOUT: &'static str = "The paper's Table 1: its method with mesh continuation on problems 1-3 at the \
+        paper's settings (--stopping paper unless told otherwise), our iteration counts beside the paper's. Prints \
+        the section; writes table1.csv, table1.tex and table1_trials.csv into --out.";
+    type Spec = Table1Spec;
+    const AT_PAPERS_SETTINGS: bool = true;
+
+    fn spec(length: RunLength) -> Table1Spec {
+        by_length(
+            length,
+            Table1Spec::quick,
+            Table1Spec::standard,
+            Table1Spec::standard,
+        )
+    }
+
+    fn of(spec: Table1Spec) -> Result<Self> {
+        check_paper_problems(&spec.problems)?;
+        anyhow::ensure!(
+            !spec.schedules.is_empty(),
+            "schedules: give at least one, such as revisit"
+        );
+        Ok(Self {
+            spec,
+            settings: None,
+        })
+    }
+
+    fn in_run(mut self, run: &Settings) -> Self {
+        let mut paper = Settings::paper();
+        paper.certificate = run.certificate;
+        self.settings = Some(paper);
+        self
+    }
 }
 
 impl Study for Table1 {
@@ -110,24 +189,26 @@ impl Study for Table1 {
     }
 
     fn run(&self, lab: &mut Lab) -> Result<Ran<Vec<Table1Row>>> {
+        let spec = &self.spec;
         lab.log(&format!(
             "Table 1 at h = {} (schedules: {})",
-            self.h,
-            self.schedules
+            spec.h,
+            spec.schedules
                 .iter()
                 .map(|s| s.to_string())
                 .collect::<Vec<_>>()
                 .join(", ")
         ));
+        let settings = self.settings.as_ref().unwrap_or(&lab.settings).clone();
         let specs = plan(
-            &self.problems,
-            &self.schedules,
-            &self.settings,
-            self.h,
-            self.plane,
+            &spec.problems,
+            &spec.schedules,
+            &settings,
+            spec.h,
+            spec.plane,
         )?;
         let measured = lab.measure_alone(&specs, Keep::default())?;
-        let rows = rows(&measured, &specs, &self.problems);
+        let rows = rows(&measured, &specs, &spec.problems);
         let trials: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
         let artifacts = vec![
             Artifact::csv("table1.csv", &rows, &[])?,
@@ -148,8 +229,19 @@ impl Study for Table1 {
 }
 
 /// Which schedule matches the paper's friction and Uzawa counts better
-/// (the smaller sum of |ln(ours / paper's)| over its rows).
-fn closer_schedule(rows: &[Table1Row]) -> Schedule {
+/// (the smaller sum of |ln(ours / paper's)| over its rows); none unless
+/// both ran on the same problems (a schedule with no rows would score 0).
+fn closer_schedule(rows: &[Table1Row]) -> Option<Schedule> {
+    let problems = |schedule: Schedule| -> Vec<u32> {
+        rows.iter()
+            .filter(|r| r.schedule == schedule)
+            .map(|r| r.problem)
+            .collect()
+    };
+    let (revisit, finest_only) = (problems(Schedule::Revisit), problems(Schedule::FinestOnly));
+    if revisit.is_empty() || revisit != finest_only {
+        return None;
+    }
     let score = |schedule: Schedule| -> f64 {
         rows.iter()
             .filter(|r| r.schedule == schedule)
@@ -159,11 +251,11 @@ fn closer_schedule(rows: &[Table1Row]) -> Schedule {
             })
             .sum()
     };
-    if score(Schedule::Revisit) <= score(Schedule::FinestOnly) {
+    Some(if score(Schedule::Revisit) <= score(Schedule::FinestOnly) {
         Schedule::Revisit
     } else {
         Schedule::FinestOnly
-    }
+    })
 }
 
 /// The rows of measured Table 1 trials.
@@ -310,6 +402,29 @@ mod tests {
             paper_mpr_1_32: 5478,
             paper_mpr_1_64: 21440,
         }
+    }
+
+    /// The closer schedule is named only when both ran on the same
+    /// problems: one alone scored the other's empty rows 0 and named the
+    /// schedule that never ran.
+    #[test]
+    fn the_closer_schedule_needs_both() {
+        let revisit = vec![row(1, Schedule::Revisit)];
+        assert_eq!(closer_schedule(&revisit), None);
+        let mut both = revisit.clone();
+        let mut far = row(1, Schedule::FinestOnly);
+        far.mpp = 40;
+        both.push(far);
+        assert_eq!(closer_schedule(&both), Some(Schedule::Revisit));
+        both[0].mu = 4000;
+        assert_eq!(closer_schedule(&both), Some(Schedule::FinestOnly));
+        let text = markdown(&revisit).unwrap();
+        assert!(!text.contains("closer match"), "{text}");
+        assert!(
+            markdown(&both)
+                .unwrap()
+                .contains("The `finest-only` schedule is the closer match")
+        );
     }
 
     /// Rows come schedule by schedule; the table groups them by problem,

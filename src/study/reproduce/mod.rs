@@ -18,9 +18,7 @@ use serde::Serialize;
 use contactlab_solvers::Law;
 use contactlab_solvers::registry::{self, Role};
 
-use crate::coulomb::continuation::Schedule;
 use crate::io::manifest::utc_now;
-use crate::mechanics::material::PlaneModel;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
@@ -33,7 +31,6 @@ use crate::study::reproduce::checkpoint::{Checkpoint, StudyRecord, WrittenFile};
 use crate::study::side_by_side::{Side, SideBySide};
 use crate::study::studies::catalog;
 use crate::study::sweep::{Sweep, SweepSpec};
-use crate::study::table1::Table1;
 use crate::study::tuning_map::{Axis, TuningMap, TuningMaps};
 
 /// What `reproduce` runs.
@@ -191,20 +188,11 @@ impl ReproduceSpec {
 /// one reference cache) and gives its artifacts and its README section.
 /// A new study is one line here.
 pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned>> {
-    let mut paper = Settings::paper();
-    paper.certificate = settings.certificate;
     let mut out: Vec<Box<dyn Planned>> = vec![
         Box::new(PaperCompare {
             h: spec.h,
             problems: spec.problems.clone(),
             repeats: spec.repeats,
-        }),
-        Box::new(Table1 {
-            problems: vec![1, 2, 3],
-            schedules: vec![Schedule::Revisit, Schedule::FinestOnly],
-            h: spec.h,
-            plane: PlaneModel::Strain,
-            settings: paper,
         }),
         Box::new(Sweep {
             spec: spec.sweep.clone(),
@@ -222,7 +210,7 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
     // (`Catalogued::spec`), in the catalog's order.
     out.extend(catalog().into_iter().map(|e| {
         let s: Box<dyn Planned> = e
-            .planned(spec.length())
+            .planned(spec.length(), settings)
             .expect("a catalogued study's own spec is valid");
         s
     }));
