@@ -68,31 +68,6 @@ pub enum Command {
     /// about 2.5 h. It states its estimate as it starts; the manifest
     /// records each study's time (--quick: a minute).
     Reproduce(ReproduceArgs),
-    /// Speed against the mesh size on problem 1 (not to be confused with
-    /// `benchmark`, success over a collection): assembly, each solver's inner kernel against one SpMV,
-    /// each solver on the subproblem and the Coulomb problem, h = 1/8 to
-    /// 1/256, as medians after a warm-up on one thread and as ratios to the
-    /// best sparse factorization here (faer's numeric LLᵀ and one solve on
-    /// one thread or both cores, whichever is faster on the mesh, symbolic
-    /// analysis once); at 1/512 and 1/1024 (not with --quick) assembly and the
-    /// fastest certified direct Coulomb solver once each, the factorization
-    /// as the median of 3 runs after a warm-up; at 1/32 to 1/256 the paper's method to a certified 1e-6 with
-    /// ω = 1 and ω = 1.5 beside the fastest oracle variant, and that oracle
-    /// at 1/256, once each without the time limit (about 2 h, 1.5 h of it the
-    /// paper's method at 1/256; --quick: seconds); and where the fastest
-    /// solver's memory goes at 1/512 and 1/1024 (the finest mesh with
-    /// --quick), each in a fresh process; the multigrid goals (about 11 min):
-    /// tnnmg's iterations from zero at every mesh, the whole Coulomb problem
-    /// by tnnmg at its defaults on the large meshes, the median of 3 runs
-    /// each in a fresh process, in work units by phase, and at 1/1024 also
-    /// on one thread (1/2048, 1/4096 and 1/8192: one run each, a mesh only
-    /// where four times the peak of the one before is available; 1/8192
-    /// takes about 16 GB and 4-5 min), the paper's method with
-    /// relaxation.inner = multigrid at 1/1024, and tnnmg against
-    /// newton-coulomb at 1/64 and 1/256. Every time is also in work units
-    /// (÷ one product A·v on its mesh). Writes performance.csv,
-    /// performance_goals.md and charts into --out.
-    Bench(BenchArgs),
     /// Success over a problem collection (not to be confused with `bench`,
     /// speed against the mesh size), the paper's problems over
     /// 𝓕 and h, sideways loads, nearly unbounded loads and fine meshes: every
@@ -279,31 +254,6 @@ impl MapLaw {
 }
 
 #[derive(Debug, Args)]
-pub struct BenchArgs {
-    /// A small run for tests (h = 1/8, 1/16, one run each).
-    #[arg(long)]
-    pub quick: bool,
-    /// Timed runs after the first, warm-up run (the median is reported)
-    /// [default: 3; quick: 1].
-    #[arg(long, value_name = "RUNS", value_parser = clap::value_parser!(u64).range(1..=100))]
-    pub runs: Option<u64>,
-    /// Wall-clock limit per run in seconds; a solver slower than this on one
-    /// mesh (or predicted to be on the next) is not run on finer meshes
-    /// [default: 15; quick: 5].
-    #[arg(
-        long = "time-limit",
-        value_name = "SECONDS",
-        allow_hyphen_values = true
-    )]
-    pub budget: Option<f64>,
-    /// Output folder (replaced whole).
-    #[arg(long, value_name = "DIR")]
-    pub out: PathBuf,
-    #[command(flatten)]
-    pub settings: SettingsArgs,
-}
-
-#[derive(Debug, Args)]
 pub struct ReproduceArgs {
     /// A small run for tests and smoke checks (h = 1/16, fewer points).
     #[arg(long, conflicts_with = "long")]
@@ -375,8 +325,7 @@ pub struct BenchmarkMergeArgs {
     pub out: PathBuf,
 }
 
-/// The longest time limit a run may be given: a week.
-pub const MAX_SECONDS: f64 = 7.0 * 24.0 * 3600.0;
+pub use crate::study::catalog::MAX_SECONDS;
 
 fn positive_seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
@@ -515,7 +464,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(a) => c::compare::run(&a),
         Command::Sweep(a) => c::sweep::run(&a),
         Command::Reproduce(a) => c::reproduce::run(&a),
-        Command::Bench(a) => c::bench::run(&a),
         Command::Benchmark(a) => c::benchmark::run(&a),
         Command::BenchmarkMerge(a) => c::benchmark::merge(&a),
         Command::Export(a) => c::export::run(&a),

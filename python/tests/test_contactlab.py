@@ -736,6 +736,21 @@ def test_table1_is_catalogued_at_the_papers_settings(tmp_path):
         cl.table1(quick=True, h="1/8", problems=[1], settings={"clarabel.max_iter": 3})
 
 
+def test_bench_is_catalogued_and_returns_its_timing_rows():
+    # The speed study is a catalogued call: its timing rows (performance.csv)
+    # typed as the library wrote them, its fresh processes run by
+    # CONTACTLAB_BIN (Python is not contactlab); a bad --runs is refused
+    # before anything runs.
+    b = cl.bench(quick=True)
+    assert b.main == "performance.csv"
+    assert {"factorization", "coulomb"} <= {r["what"] for r in b.rows}
+    assert all(isinstance(r["median_seconds"], float) for r in b.rows)
+    assert any(r["what"] == "coulomb" and r["status"] == "converged" for r in b.rows)
+    assert "performance_goals.md" in b.files
+    with pytest.raises(cl.InputError, match="--runs"):
+        cl.bench(quick=True, runs=0)
+
+
 def test_options_are_a_solvers_settings_without_its_prefix(p32):
     """scipy's ``options`` of a ``method``: the knob alone, scoped to the
     solver named, the same setting as its path in ``settings``, validated

@@ -60,6 +60,9 @@ pub trait Catalogued: Planned + Send + Sized + 'static {
     }
 }
 
+/// The longest time limit a run may be given: a week.
+pub const MAX_SECONDS: f64 = 7.0 * 24.0 * 3600.0;
+
 /// The spec of a run of `length` from a study's three budgets: the
 /// smoke run's, the main job's and the long run's.
 pub fn by_length<T>(length: RunLength, quick: fn() -> T, main: fn() -> T, long: fn() -> T) -> T {

@@ -4,6 +4,7 @@
 
 use anyhow::{Result, bail};
 
+use crate::study::bench::goals::Bench;
 use crate::study::catalog::{Entry, Of};
 use crate::study::discretization_error::Errors;
 use crate::study::error_bound::ErrorBoundStudy;
@@ -26,6 +27,7 @@ fn library() -> Vec<&'static dyn Entry> {
     vec![
         &Of::<Table1>::ENTRY,
         &Of::<Stability>::ENTRY,
+        &Of::<Bench>::ENTRY,
         &Of::<Errors>::ENTRY,
         &Of::<Oracle>::ENTRY,
         &Of::<ErrorBoundStudy>::ENTRY,

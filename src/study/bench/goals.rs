@@ -13,6 +13,7 @@ use crate::study::bench::equal_accuracy::{EQUAL_ACCURACY, ORACLE_GOAL};
 use crate::study::bench::exact_bound::{self, ExactBound};
 use crate::study::bench::memory::{self, MemoryUse, measure_in_fresh_process};
 use crate::study::bench::{BenchSpec, FastestDirect, PerfRow, bench, multigrid};
+use crate::study::catalog::{Catalogued, MAX_SECONDS, by_length};
 use crate::study::lab::{Artifact, Lab, Ran, RunLength, Section, Study};
 use crate::study::template;
 
@@ -332,6 +333,47 @@ pub struct BenchOutput {
 /// performance_goals.md and the charts.
 pub struct Bench {
     pub spec: BenchSpec,
+}
+
+impl Catalogued for Bench {
+    const COMMAND: &'static str = "bench";
+    const ABOUT: &'static str = "Speed on problem 1 from h = 1/8 to 1/256, as medians after a warm-up and as ratios \
+        to the best sparse factorization here (faer, symbolic analysis once); at 1/512 and 1/1024 assembly, the \
+        factorization and the fastest certified solvers; the paper's method at a certified accuracy beside the \
+        fastest oracle variant; where the fastest solver's memory goes, in a fresh process; the multigrid goals \
+        (tnnmg's iterations from zero, its whole Coulomb problem in a fresh process, in work units by phase and on one \
+        thread, and with --long alone at 1/2048 to 1/8192); every time also in work units (÷ one product A·v). \
+        The main job's budget takes about 4 min, --long about 2 h. Writes performance.csv, performance_goals.md \
+        and charts into --out (a fresh process is this binary, or CONTACTLAB_BIN).";
+    type Spec = BenchSpec;
+
+    fn spec(length: RunLength) -> BenchSpec {
+        by_length(length, BenchSpec::quick, BenchSpec::main, BenchSpec::long)
+    }
+
+    fn of(spec: BenchSpec) -> Result<Self> {
+        anyhow::ensure!(
+            (1..=100).contains(&spec.runs),
+            "runs = {} (--runs) is invalid: give 1 to 100 timed runs after the warm-up",
+            spec.runs
+        );
+        for (budget, name) in [
+            (spec.budget, "--time-limit"),
+            (spec.large_budget, "large_budget"),
+        ] {
+            anyhow::ensure!(
+                budget > 0.0 && budget <= MAX_SECONDS,
+                "{name} = {} is invalid: give a positive number of seconds up to a week ({MAX_SECONDS})",
+                crate::mechanics::scene::Shown::shown(&budget)
+            );
+        }
+        crate::study::catalog::check_paper_problems(&[spec.problem])?;
+        anyhow::ensure!(
+            !spec.meshes.is_empty(),
+            "meshes: give at least one mesh, such as 1/64"
+        );
+        Ok(Self { spec })
+    }
 }
 
 impl Study for Bench {

@@ -190,6 +190,16 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
 
 /// Runs `bench-one` for `solver` on problem `problem` at `h` in a fresh
 /// process and reads its answer.
+/// The binary a fresh process runs: `CONTACTLAB_BIN` if set (a program
+/// built on the library, Python among them, is not `contactlab`), else
+/// this one.
+fn fresh_process_binary() -> Result<std::path::PathBuf> {
+    match std::env::var_os("CONTACTLAB_BIN") {
+        Some(bin) if !bin.is_empty() => Ok(bin.into()),
+        _ => Ok(std::env::current_exe()?),
+    }
+}
+
 pub fn measure_in_fresh_process(
     problem: u32,
     h: MeshSize,
@@ -197,7 +207,7 @@ pub fn measure_in_fresh_process(
     schedule: Schedule,
     set: &[&str],
 ) -> Result<MemoryUse> {
-    let o = std::process::Command::new(std::env::current_exe()?)
+    let o = std::process::Command::new(fresh_process_binary()?)
         .args([
             "bench-one",
             "--problem",

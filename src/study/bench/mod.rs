@@ -45,49 +45,90 @@ use crate::study::trial::TrialSpec;
 /// The study's name in trial records.
 pub const STUDY: &str = "bench";
 
-/// What to measure.
-#[derive(Clone, Debug, Serialize)]
+/// What to measure: the study's parameters (its flags, the ones a user
+/// types: --runs and --time-limit; and Python's keywords, every field).
+#[derive(Clone, Debug, Serialize, Deserialize, clap::Args)]
 pub struct BenchSpec {
+    #[arg(skip)]
     pub problem: u32,
+    #[arg(skip)]
     pub meshes: Vec<MeshSize>,
-    /// Timed runs after the warm-up (the median is reported).
+    /// Timed runs after the first, warm-up run (the median is reported)
+    /// [default: 1; --long: 3].
+    #[arg(long, value_name = "RUNS", required = false)]
     pub runs: usize,
-    /// Seconds: a solver slower than this on one mesh (or predicted to be
-    /// on the next) is not run on finer meshes; also each run's deadline.
+    /// Wall-clock limit per run in seconds; a solver slower than this on one
+    /// mesh (or predicted to be on the next) is not run on finer meshes
+    /// [default: 5; --long: 15].
+    #[arg(
+        long = "time-limit",
+        value_name = "SECONDS",
+        allow_hyphen_values = true,
+        required = false
+    )]
+    #[serde(rename = "time_limit")]
     pub budget: f64,
     /// Finer meshes where only assembly, the factorization (the median of
     /// `large_factorization_runs` after a warm-up) and the registry's
     /// direct Coulomb solver are timed, the others once each and cold (a
     /// solve at 1/1024 takes a minute and 6 GB).
+    #[arg(skip)]
     pub large: Vec<MeshSize>,
     /// Timed runs of the factorization on a large mesh after its warm-up
     /// (the long run's [`LARGE_FACTORIZATION_RUNS`]; at 1/1024 each is
     /// 5-8 s a thread count).
+    #[arg(skip)]
     pub large_factorization_runs: usize,
     /// Fresh-process runs of the multigrid's whole Coulomb problem on each
     /// large mesh, and on one thread on the last (the median is reported;
     /// the long run's [`multigrid::COULOMB_RUNS`]).
+    #[arg(skip)]
     pub fresh_runs: usize,
     /// Meshes finer still, where only the multigrid solver runs (the
     /// others factor A and are refused there: `Entry::max_unknowns`), on
     /// the whole Coulomb problem, once, in a fresh process.
+    #[arg(skip)]
     pub multigrid_only: Vec<MeshSize>,
     /// Meshes where the paper's method runs to a certified accuracy with and
     /// without over-relaxation, beside the fastest oracle variant, once each
     /// ([`equal_accuracy`]).
+    #[arg(skip)]
     pub equal_accuracy: Vec<MeshSize>,
     /// The tolerance of that certified stop, in the certificate's measure.
+    #[arg(skip)]
     pub accuracy_target: f64,
     /// The mesh of the oracle's time goal (run once, without the budget).
+    #[arg(skip)]
     pub oracle_mesh: Option<MeshSize>,
     /// Seconds a run on a large mesh may take: beyond, it is stopped (a
     /// cross on the performance chart), and a solver whose last two meshes
     /// predict more is not run there.
+    #[arg(skip)]
     pub large_budget: f64,
 }
 
 impl BenchSpec {
-    pub fn standard() -> Self {
+    /// The main job's (issue 76: `reproduce` in 20 min): the solvers timed
+    /// once after a warm-up, 5 s a run (10 s on 1/512 and 1/1024), the
+    /// factorization there once after its warm-up, the multigrid once in a
+    /// fresh process, the paper's method at equal accuracy to 1/32, no
+    /// multigrid-only meshes.
+    pub fn main() -> Self {
+        let mut spec = Self::long();
+        spec.equal_accuracy.retain(|h| h.level() <= 5);
+        spec.large_factorization_runs = 1;
+        spec.fresh_runs = 1;
+        spec.runs = 1;
+        spec.budget = 5.0;
+        spec.large_budget = 10.0;
+        spec.multigrid_only.clear();
+        spec
+    }
+
+    /// The long run's (`--long`): three timed runs, 15 s a run, the
+    /// multigrid alone to 1/8192, the paper's method at equal accuracy to
+    /// 1/256 (about 2 h).
+    pub fn long() -> Self {
         Self {
             problem: 1,
             meshes: (3..=8)

@@ -22,8 +22,6 @@ use crate::io::manifest::utc_now;
 use crate::mechanics::mesh_size::MeshSize;
 use crate::mechanics::scene::Scene;
 use crate::settings::Settings;
-use crate::study::bench::BenchSpec;
-use crate::study::bench::goals::Bench;
 use crate::study::benchmark::{Benchmark, BenchmarkSpec};
 use crate::study::compare::paper::PaperCompare;
 use crate::study::lab::{Lab, Planned, RunLength, Section, write_artifacts};
@@ -49,7 +47,6 @@ pub struct ReproduceSpec {
     #[serde(skip)]
     pub sweep: SweepSpec,
     pub sweep_h: MeshSize,
-    pub bench: BenchSpec,
     /// The benchmark over the problem collection (its solvers: all).
     #[serde(skip)]
     pub benchmark: BenchmarkSpec,
@@ -89,13 +86,6 @@ impl ReproduceSpec {
         spec.long = false;
         spec.repeats = 0;
         spec.sweep.repeats = 0;
-        spec.bench.equal_accuracy.retain(|h| h.level() <= 5);
-        spec.bench.large_factorization_runs = 1;
-        spec.bench.fresh_runs = 1;
-        spec.bench.runs = 1;
-        spec.bench.budget = 5.0;
-        spec.bench.large_budget = 10.0;
-        spec.bench.multigrid_only.clear();
         spec.benchmark.core = true;
         spec.benchmark.time_limit = 5.0;
         spec.side_by_side_h = MeshSize::from_level(6).expect("in range");
@@ -127,7 +117,6 @@ impl ReproduceSpec {
                 ..SweepSpec::default()
             },
             sweep_h,
-            bench: BenchSpec::standard(),
             benchmark: BenchmarkSpec::new(false, registry::solvers()),
             side_by_side_h: MeshSize::from_level(7).expect("in range"),
             // The paper's own form (sweeps) at 1/64, where a point takes
@@ -161,7 +150,6 @@ impl ReproduceSpec {
                 ..SweepSpec::default()
             },
             sweep_h: h,
-            bench: BenchSpec::quick(),
             benchmark: BenchmarkSpec::new(true, registry::solvers()),
             side_by_side_h: h,
             maps: vec![
@@ -198,9 +186,6 @@ pub fn studies(spec: &ReproduceSpec, settings: &Settings) -> Vec<Box<dyn Planned
             spec: spec.sweep.clone(),
             extra: Vec::new(),
             references_file: "sweep_references.csv",
-        }),
-        Box::new(Bench {
-            spec: spec.bench.clone(),
         }),
         Box::new(Benchmark {
             spec: spec.benchmark.clone(),
