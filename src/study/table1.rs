@@ -212,7 +212,7 @@ impl Study for Table1 {
         let trials: Vec<_> = measured.iter().map(|m| m.trial.row()).collect();
         let artifacts = vec![
             Artifact::csv("table1.csv", &rows, &[])?,
-            Artifact::text("table1.tex", &latex(&rows)),
+            Artifact::text("table1.tex", &latex(&rows)?),
             Artifact::csv("table1_trials.csv", &trials, &[])?,
         ];
         Ok(Ran {
@@ -319,7 +319,7 @@ pub fn markdown(rows: &[Table1Row]) -> Result<String> {
 /// its first row and each schedule's below, one count a cell; a claim of
 /// the solver's that differs from the certified status is a letter on it,
 /// named in the caption (eight columns, to fit a page's width).
-pub fn latex(rows: &[Table1Row]) -> String {
+pub fn latex(rows: &[Table1Row]) -> Result<String> {
     let header = vec![
         "schedule".into(),
         "status".into(),
@@ -334,17 +334,12 @@ pub fn latex(rows: &[Table1Row]) -> String {
         rows.iter()
             .map(|r| (r.status.as_str(), r.solver_status.as_str())),
     );
-    let mut t = Tabular::new(
-        &format!(
-            "Table 1 of Zhiltsov & Namm (2019) beside ours: iteration counts of the paper's method, the paper's in each \
-             problem's first row. MPP: friction iterations; MU: Uzawa iterations; MPR: relaxation sweeps (in all, at \
-             h = 1/32, at 1/64); status: certified{}; certificate: the largest violation of the Coulomb law's conditions \
-             in the problem's scales (contactlab reproduce).",
-            claims.caption()
-        ),
-        "table1",
-        header,
-    );
+    let caption = template::render(
+        "table1_caption",
+        include_str!("templates/table1_caption.tex"),
+        template::facts! { claims => claims.caption() },
+    )?;
+    let mut t = Tabular::new(&caption, "table1", header);
     let ran = |n: Option<usize>| n.map_or("not run".to_string(), |n| n.to_string());
     let mut problems: Vec<_> = rows.iter().map(|r| r.problem).collect();
     problems.sort_unstable();
@@ -376,7 +371,7 @@ pub fn latex(rows: &[Table1Row]) -> String {
             ]);
         }
     }
-    t.render()
+    Ok(t.render())
 }
 
 #[cfg(test)]
@@ -436,7 +431,7 @@ mod tests {
             .into_iter()
             .flat_map(|s| (1..=3).map(move |p| row(p, s)))
             .collect();
-        let tex = latex(&rows);
+        let tex = latex(&rows).unwrap();
         for p in 1..=3 {
             assert_eq!(tex.matches(&format!("{{Problem {p}}}")).count(), 1, "{tex}");
         }
@@ -452,7 +447,7 @@ mod tests {
         let mut refused = rows.clone();
         refused[0].status = "inaccurate".into();
         refused[1].status = "inaccurate".into();
-        let tex = latex(&refused);
+        let tex = latex(&refused).unwrap();
         assert_eq!(
             tex.matches("revisit & inaccurate$^a$ &").count(),
             2,

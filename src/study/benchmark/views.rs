@@ -182,15 +182,15 @@ pub fn tag(target: f64) -> String {
 
 /// The LaTeX table at one target: the Markdown table's columns, headed
 /// short enough to fit a page's width and defined in the caption.
-pub fn latex(summaries: &[Summary], target: f64) -> String {
+pub fn latex(summaries: &[Summary], target: f64) -> anyhow::Result<String> {
     use crate::io::latex::{Tabular, text};
+    let caption = crate::study::template::render(
+        "benchmark_caption",
+        include_str!("../templates/benchmark_caption.tex"),
+        crate::study::template::facts! { target, shift => SHIFT },
+    )?;
     let mut t = Tabular::new(
-        &format!(
-            "contactlab benchmark at target accuracy {target:.0e}: solved: runs whose answer passes the certificate at \
-             the target (of all runs); refused: runs the solver claimed converged that the certificate refused; SGM: \
-             shifted geometric mean of time with shift {SHIFT} s, a failure counted at the time limit; ratio: SGM over \
-             the best solver's."
-        ),
+        &caption,
         &format!("benchmark_{}", tag(target)),
         vec![
             "solver".into(),
@@ -214,7 +214,7 @@ pub fn latex(summaries: &[Summary], target: f64) -> String {
             format!("{:.2}", x.relative_to_best),
         ]);
     }
-    t.render()
+    Ok(t.render())
 }
 
 /// The views of `rows`: benchmark_summary.csv, a LaTeX table per target,
@@ -225,7 +225,7 @@ pub fn artifacts(rows: &[BenchmarkRow]) -> Result<Vec<Artifact>> {
     for t in targets(rows) {
         out.push(Artifact::text(
             &format!("benchmark_{}.tex", tag(t)),
-            &latex(&sums, t),
+            &latex(&sums, t)?,
         ));
     }
     out.push(Artifact::text("benchmark.md", &report(rows)?));

@@ -4,12 +4,14 @@
 //! fit a page's width (the verdict and the work above, the answer against
 //! the reference below). A view of the trials, as the Markdown table is.
 
+use anyhow::Result;
 use contactlab_solvers::Law;
 
 use crate::certificate::BoundKind;
 use crate::io::latex::{ClaimMarks, Tabular, math, number, text};
 use crate::study::compare::{STUDY, iterations};
 use crate::study::runner::Measured;
+use crate::study::template;
 
 /// The file of `law`'s table.
 pub fn file_name(law: Law) -> String {
@@ -17,23 +19,17 @@ pub fn file_name(law: Law) -> String {
 }
 
 /// One table per law the trials solved, with its file name.
-pub fn tables(measured: &[Measured], source: &str) -> Vec<(String, String)> {
+pub fn tables(measured: &[Measured], source: &str) -> Result<Vec<(String, String)>> {
     [Law::GivenFriction, Law::Coulomb]
         .into_iter()
         .filter_map(|law| {
             let rows: Vec<&Measured> = measured.iter().filter(|m| m.trial.law == law).collect();
-            (!rows.is_empty()).then(|| (file_name(law), table(law, &rows, source)))
+            (!rows.is_empty()).then(|| Ok((file_name(law), table(law, &rows, source)?)))
         })
         .collect()
 }
 
-fn table(law: Law, rows: &[&Measured], source: &str) -> String {
-    let what = match law {
-        Law::GivenFriction => {
-            "the given-friction subproblem, paper (10), at g = 𝓕p of the reference"
-        }
-        Law::Coulomb => "the Coulomb problem, paper (9)",
-    };
+fn table(law: Law, rows: &[&Measured], source: &str) -> Result<String> {
     let reference = rows
         .iter()
         .find_map(|m| m.trial.reference)
@@ -52,21 +48,17 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
         }
         v
     };
-    let caption = format!(
-        "Each solver on {what} against the reference ({reference}, the most accurate certified answer of the exact solvers). \
-         Above, the verdict and the work: status: certified{}; certificate: the largest violation of the law's conditions \
-         in the problem's scales; iterations: [friction:] outer [/ inner]; time: minimum over the runs. Below, the answer: \
-         Delta: max difference from the reference over its largest value (u: displacements, p: pressures, q: friction \
-         tractions); ‖Δv‖_A: the difference in the energy seminorm over √K·U; bound: the certificate's bound on it \
-         († at the answer's own g = 𝓕p; -- where not computed); separated: the share of Γ_K where the bodies part{} \
-         ({source}).",
-        claims.caption(),
-        if studies.is_empty() {
-            String::new()
-        } else {
-            format!("; {}", studies.join(", "))
-        }
-    );
+    let caption = template::render(
+        "compare_caption",
+        include_str!("../templates/compare_caption.tex"),
+        template::facts! {
+            law => law.as_str(),
+            reference,
+            claims => claims.caption(),
+            studies,
+            source,
+        },
+    )?;
     let label = file_name(law);
     let mut verdict = Tabular::new(
         &caption,
@@ -112,7 +104,7 @@ fn table(law: Law, rows: &[&Measured], source: &str) -> String {
             answer.row(answer_cells(m));
         }
     }
-    Tabular::stacked(&[verdict, answer])
+    Ok(Tabular::stacked(&[verdict, answer]))
 }
 
 /// The solver's name, starred when the trial is another study's

@@ -71,7 +71,7 @@ impl Study for Compare {
         let specs = plan(&self.scene, &lab.settings, &self.solvers, self.repeats);
         let measured = lab.measure(&specs, Keep::default())?;
         let mut artifacts = Artifact::trials(STUDY, &measured)?;
-        for (name, tex) in latex::tables(&measured, "contactlab compare") {
+        for (name, tex) in latex::tables(&measured, "contactlab compare")? {
             artifacts.push(Artifact::text(&name, &tex));
         }
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);

@@ -152,7 +152,7 @@ impl Study for PaperCompare {
             .collect();
         artifacts.extend(Artifact::trials(STUDY, &all)?);
         artifacts.push(Artifact::csv("references.csv", &lab.candidates(), &[])?);
-        for (name, tex) in super::latex::tables(&all, "contactlab reproduce") {
+        for (name, tex) in super::latex::tables(&all, "contactlab reproduce")? {
             artifacts.push(Artifact::text(&name, &tex));
         }
         artifacts.push(Artifact::csv("separation.csv", &findings.separation, &[])?);
