@@ -431,16 +431,7 @@ pub fn _study<'py>(
     let study = entry
         .planned_with_json(length, spec)
         .map_err(|e| input_error(format!("{e:#}")))?;
-    // A study at the paper's settings (Table 1) offers the paper's
-    // method's knobs only, changed from the paper's settings.
-    let solvers = if entry.at_papers_settings() {
-        contactlab::solvers::registry::with_role(contactlab::solvers::registry::Role::PapersMethod)
-            .into_iter()
-            .collect()
-    } else {
-        contactlab::solvers::registry::solvers()
-    };
-    let settings = resolved(&entry.settings_base(), settings, &solvers)?;
+    let settings = resolved(&entry.settings_base(), settings, &entry.offered_solvers())?;
     run_planned(py, study, settings, out)
 }
 

@@ -10,10 +10,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Arg, ArgAction, ArgMatches, Command, FromArgMatches, Subcommand};
 
-use crate::cli::{PapersMethod, SettingsArgs};
+use crate::cli::{AllSolvers, PapersMethod, SettingsArgs, SolverSet};
 use crate::commands::in_lab;
 use crate::io::output::print;
 use crate::io::run_folder::RunFolder;
+use crate::settings::Settings;
 use crate::study::catalog::Entry;
 use crate::study::lab::{RunLength, write_artifacts};
 use crate::study::studies::{by_command, catalog};
@@ -121,17 +122,21 @@ impl StudyCommand {
     }
 }
 
+/// The settings flags of `matches` (those a command offering `S`'s
+/// solvers has) applied to `base`.
+fn settings_of<S: SolverSet>(matches: &ArgMatches, base: Settings) -> Result<Settings> {
+    SettingsArgs::<S>::from_arg_matches(matches)
+        .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?
+        .resolve_on(base)
+}
+
 /// Runs the study: its folder written whole, then its section printed.
 pub fn run(c: &StudyCommand) -> Result<()> {
     let base = c.entry.settings_base();
     let settings = if c.entry.at_papers_settings() {
-        SettingsArgs::<PapersMethod>::from_arg_matches(&c.matches)
-            .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?
-            .resolve_on(base)?
+        settings_of::<PapersMethod>(&c.matches, base)?
     } else {
-        SettingsArgs::<crate::cli::AllSolvers>::from_arg_matches(&c.matches)
-            .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim()))?
-            .resolve_on(base)?
+        settings_of::<AllSolvers>(&c.matches, base)?
     };
     let study = c.entry.planned_with_flags(c.length(), &c.matches)?;
     let out: &PathBuf = c

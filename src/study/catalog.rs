@@ -117,6 +117,18 @@ pub trait Entry: Sync {
             Settings::default()
         }
     }
+    /// The solvers whose settings its command and Python offer: the
+    /// paper's method alone for a study at the paper's settings, else all.
+    fn offered_solvers(&self) -> Vec<&'static contactlab_solvers::registry::Entry> {
+        use contactlab_solvers::registry::{self, Role};
+        if self.at_papers_settings() {
+            registry::with_role(Role::PapersMethod)
+                .into_iter()
+                .collect()
+        } else {
+            registry::solvers()
+        }
+    }
     /// The study in a run of `length` at the settings `run` (`reproduce`),
     /// at its own budget for it ([`Catalogued::in_run`]).
     fn planned(&self, length: RunLength, run: &Settings) -> Result<Box<dyn Planned + Send>>;
@@ -202,25 +214,30 @@ fn merged<T: Serialize + DeserializeOwned>(base: &T, changes: &str, study: &str)
     serde_json::from_value(tree).map_err(|e| anyhow::anyhow!("{study}: {e}"))
 }
 
-/// A flag's `strain|stress` ([`PlaneModel`]), by the names the domain's
-/// enum carries itself (it knows nothing of clap).
-pub fn plane_choice() -> impl TypedValueParser<Value = PlaneModel> {
-    PossibleValuesParser::new(PlaneModel::ALL.map(PlaneModel::name)).map(|s| {
-        PlaneModel::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
+/// A flag's value among a domain enum's `all`, by the names it carries
+/// itself (`name`; the domain types know nothing of clap).
+fn named_choice<T, const N: usize>(
+    all: [T; N],
+    name: fn(T) -> &'static str,
+) -> impl TypedValueParser<Value = T>
+where
+    T: Copy + Send + Sync + 'static,
+{
+    PossibleValuesParser::new(all.map(name)).map(move |s| {
+        all.into_iter()
+            .find(|&t| name(t) == s)
             .expect("one of the names offered")
     })
 }
 
+/// A flag's `strain|stress` ([`PlaneModel`]).
+pub fn plane_choice() -> impl TypedValueParser<Value = PlaneModel> {
+    named_choice(PlaneModel::ALL, PlaneModel::name)
+}
+
 /// A flag's continuation schedule, `revisit,finest-only` ([`Schedule`]).
 pub fn schedule_choice() -> impl TypedValueParser<Value = Schedule> {
-    PossibleValuesParser::new(Schedule::ALL.map(Schedule::name)).map(|s| {
-        Schedule::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
-            .expect("one of the names offered")
-    })
+    named_choice(Schedule::ALL, Schedule::name)
 }
 
 /// A flag's value that names a solver: the solver's name if it is

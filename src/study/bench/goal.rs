@@ -13,11 +13,11 @@ pub struct Goal {
     pub pass: Option<bool>,
 }
 
-/// A mesh and a number measured on it (a ratio, a gap, a count).
+/// A mesh and a number measured on it (a ratio, a gap).
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct AtMesh<T> {
+pub struct AtMesh {
     pub h: String,
-    pub value: T,
+    pub value: f64,
 }
 
 /// Iterations on one mesh, and whether the answer was certified.
@@ -169,8 +169,8 @@ pub enum Measured {
         limit: f64,
         worst: f64,
         worst_h: String,
-        ratios: Vec<AtMesh<f64>>,
-        over_output: Vec<AtMesh<f64>>,
+        ratios: Vec<AtMesh>,
+        over_output: Vec<AtMesh>,
     },
     /// The oracle's fastest variant's whole Coulomb problem at `h`.
     OracleTime {
@@ -260,6 +260,6 @@ pub enum Measured {
         solver: &'static str,
         against: &'static str,
         limit: f64,
-        gaps: Vec<AtMesh<f64>>,
+        gaps: Vec<AtMesh>,
     },
 }

@@ -188,8 +188,6 @@ pub fn measure_here(scene: &Scene, solver: &str, settings: &Settings) -> Result<
     })
 }
 
-/// Runs `bench-one` for `solver` on problem `problem` at `h` in a fresh
-/// process and reads its answer.
 /// The binary a fresh process runs: `CONTACTLAB_BIN` if set (a program
 /// built on the library, Python among them, is not `contactlab`), else
 /// this one.
@@ -200,6 +198,8 @@ fn fresh_process_binary() -> Result<std::path::PathBuf> {
     }
 }
 
+/// Runs `bench-one` for `solver` on problem `problem` at `h` in a fresh
+/// process and reads its answer.
 pub fn measure_in_fresh_process(
     problem: u32,
     h: MeshSize,
